@@ -1,0 +1,28 @@
+"""Private frames: origin at the robot, shared +Y, X axis flipped at random (no chirality)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from agent.path import Path, Point, Points, transform
+
+FRAME_STREAM = 0xF1A9  # keeps frame draws apart from other seeded streams of the same run
+
+
+def draw_flip(seed: int, robot: int) -> bool:
+    """The X mirroring of robot `robot` in a run seeded with `seed` (same in lockstep and networked)."""
+    rng = np.random.default_rng([FRAME_STREAM, seed & 0xFFFFFFFF, robot])
+    return bool(rng.random() < 0.5)
+
+
+def to_local(others_world: Points, me_world: Point, flip_x: bool) -> Points:
+    """Other robots' positions as the robot at `me_world` sees them in its own frame."""
+    view = np.asarray(others_world, dtype=np.float64) - np.asarray(me_world, dtype=np.float64)
+    if flip_x:
+        view[:, 0] = -view[:, 0]
+    return view
+
+
+def path_to_world(path_local: Path, me_world: Point, flip_x: bool) -> Path:
+    """A path computed in the robot's frame, expressed in the world frame."""
+    return transform(path_local, me_world, flip_x)

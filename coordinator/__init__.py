@@ -1,0 +1,1 @@
+"""Scheduling: who is active in each round (fsync, ssync, centralized, scripted) and the coordinator process."""

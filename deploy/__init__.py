@@ -1,0 +1,1 @@
+"""The `fatswarm` command: lockstep and networked runs, launcher, dashboard, replay."""
