@@ -1,0 +1,444 @@
+"""The world's wire protocol: key expressions and msgpack messages (versioned, validated, no zenoh).
+
+Every message is a msgpack map with `v` (protocol version) and `t` (message type). Decoders check
+type, shape, size, finiteness and version and raise `ProtocolError` (peer sent garbage) on anything
+else; services log the reason, count it and drop the message. Positions travel as little-endian
+float64 bytes, never as JSON.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import msgpack
+import numpy as np
+from numpy.typing import NDArray
+
+PROTOCOL_VERSION = 1
+ROOT = "fatswarm"
+MAX_ROBOTS = 4096  # bounds every list and array a peer can make us allocate
+MAX_MESSAGE_BYTES = 1 << 20  # 1 MiB: a 4096-robot state is ~130 KB
+MAX_COORD = 1e9  # coordinates beyond this are nonsense for unit discs and risk overflow
+STATUSES = ("running", "formed", "stalled", "max_rounds")
+_SWARM_NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
+
+Points = NDArray[np.float64]  # (n, 2)
+
+
+class ProtocolError(ValueError):
+    """A peer sent something that is not a valid message of this protocol (never applied)."""
+
+
+# --- key expressions (all under fatswarm/<swarm>/) -------------------------------------------
+
+
+def check_swarm(swarm: str) -> str:
+    """The swarm name, if it is a safe single key chunk; raises ValueError saying what to fix."""
+    if not isinstance(swarm, str) or not _SWARM_NAME.fullmatch(swarm):
+        raise ValueError(
+            f"swarm name must be 1-64 characters of letters, digits, '_', '-', '.', got {swarm!r}"
+        )
+    return swarm
+
+
+def prefix(swarm: str) -> str:
+    """`fatswarm/<swarm>`: every key of one swarm lives below it, so swarms can share a router."""
+    return f"{ROOT}/{check_swarm(swarm)}"
+
+
+def state_key(swarm: str) -> str:
+    """World -> observers: `WorldState` after every change (DROP congestion control)."""
+    return f"{prefix(swarm)}/world/state"
+
+
+def control_key(swarm: str) -> str:
+    """Coordinator -> world: queryable taking `Hello`, `Begin`, `Commit`; replies `ControlReply`."""
+    return f"{prefix(swarm)}/world/control"
+
+
+def moves_held_key(swarm: str) -> str:
+    """World -> coordinator: `MoveHeld` each time a move is accepted for the open round."""
+    return f"{prefix(swarm)}/world/moves"
+
+
+def snapshot_key(swarm: str, robot: int) -> str:
+    """Agent asks, world answers with a `Snapshot` (only while the robot is active)."""
+    return f"{prefix(swarm)}/robot/{robot}/snapshot"
+
+
+def snapshot_any_key(swarm: str) -> str:
+    """The world's one queryable for every robot's snapshot."""
+    return f"{prefix(swarm)}/robot/*/snapshot"
+
+
+_ROBOT_IN_KEY = re.compile(r"^[^/]+/[^/]+/robot/(0|[1-9][0-9]{0,8})/[a-z]+$")
+
+
+def robot_of_key(key: str) -> int | None:
+    """The robot id in `fatswarm/<swarm>/robot/<id>/<leaf>`, or None if the key has no valid id."""
+    m = _ROBOT_IN_KEY.match(key)
+    return int(m.group(1)) if m else None
+
+
+# --- field checks shared by every protocol module ---------------------------------------------
+
+
+def pack(kind: str, fields: dict[str, Any]) -> bytes:
+    """A versioned msgpack map of type `kind`."""
+    out: bytes = msgpack.packb({"v": PROTOCOL_VERSION, "t": kind, **fields}, use_bin_type=True)
+    return out
+
+
+def unpack_any(
+    data: bytes | bytearray | memoryview, kinds: Sequence[str]
+) -> tuple[str, dict[str, Any]]:
+    """The type and fields of a message whose type is one of `kinds`; raises ProtocolError."""
+    if not isinstance(data, (bytes, bytearray, memoryview)):
+        raise ProtocolError(f"payload must be bytes, got {type(data).__name__}")
+    if len(data) > MAX_MESSAGE_BYTES:
+        raise ProtocolError(f"message of {len(data)} bytes exceeds {MAX_MESSAGE_BYTES}")
+    try:
+        obj = msgpack.unpackb(bytes(data), raw=False, strict_map_key=True)
+    except Exception as exc:  # msgpack raises several unrelated types on garbage
+        raise ProtocolError(f"not msgpack: {type(exc).__name__}: {exc}") from None
+    if not isinstance(obj, dict):
+        raise ProtocolError(f"message must be a map, got {type(obj).__name__}")
+    version = obj.get("v")
+    if version != PROTOCOL_VERSION:
+        raise ProtocolError(f"protocol version {version!r}, expected {PROTOCOL_VERSION}")
+    kind = obj.get("t")
+    if kind not in kinds:
+        raise ProtocolError(f"message type {kind!r}, expected one of {tuple(kinds)}")
+    return str(kind), obj
+
+
+def unpack(data: bytes | bytearray | memoryview, kind: str) -> dict[str, Any]:
+    """The fields of a message of type `kind`; raises ProtocolError for anything else."""
+    return unpack_any(data, (kind,))[1]
+
+
+def get_int(obj: dict[str, Any], key: str, lo: int, hi: int) -> int:
+    """An integer field within [lo, hi]."""
+    v = obj.get(key)
+    if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+        raise ProtocolError(f"{key!r} must be an integer in [{lo}, {hi}], got {v!r}")
+    return v
+
+
+def get_float(
+    obj: dict[str, Any], key: str, lo: float = -MAX_COORD, hi: float = MAX_COORD
+) -> float:
+    """A finite number field within [lo, hi]."""
+    v = obj.get(key)
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise ProtocolError(f"{key!r} must be a number, got {v!r}")
+    f = float(v)
+    if not math.isfinite(f) or not lo <= f <= hi:
+        raise ProtocolError(f"{key!r} must be finite and in [{lo}, {hi}], got {v!r}")
+    return f
+
+
+def get_str(obj: dict[str, Any], key: str, max_len: int = 64) -> str:
+    """A short string field."""
+    v = obj.get(key)
+    if not isinstance(v, str) or len(v) > max_len:
+        raise ProtocolError(f"{key!r} must be a string of at most {max_len} characters")
+    return v
+
+
+def get_bool(obj: dict[str, Any], key: str) -> bool:
+    """A boolean field."""
+    v = obj.get(key)
+    if not isinstance(v, bool):
+        raise ProtocolError(f"{key!r} must be a boolean, got {v!r}")
+    return v
+
+
+def get_robots(obj: dict[str, Any], key: str, n: int = MAX_ROBOTS) -> tuple[int, ...]:
+    """A list of distinct robot ids in [0, n), returned sorted."""
+    v = obj.get(key)
+    if not isinstance(v, list) or len(v) > min(n, MAX_ROBOTS):
+        raise ProtocolError(f"{key!r} must be a list of at most {min(n, MAX_ROBOTS)} robot ids")
+    for r in v:
+        if isinstance(r, bool) or not isinstance(r, int) or not 0 <= r < n:
+            raise ProtocolError(f"{key!r} holds {r!r}, not a robot id in [0, {n})")
+    if len(set(v)) != len(v):
+        raise ProtocolError(f"{key!r} repeats a robot id")
+    return tuple(sorted(v))
+
+
+def points_to_bytes(points: Points) -> bytes:
+    """(k, 2) float64 positions as little-endian bytes."""
+    return np.ascontiguousarray(points, dtype="<f8").tobytes()
+
+
+def get_points(obj: dict[str, Any], key: str, rows: int) -> Points:
+    """A (rows, 2) array of finite, bounded float64 coordinates sent as bytes."""
+    v = obj.get(key)
+    if not isinstance(v, bytes) or len(v) != rows * 16:
+        raise ProtocolError(f"{key!r} must be {rows * 16} bytes of (x, y) float64 pairs")
+    arr = np.frombuffer(v, dtype="<f8").astype(np.float64).reshape(rows, 2)
+    if not np.all(np.isfinite(arr)) or (rows and float(np.abs(arr).max()) > MAX_COORD):
+        raise ProtocolError(f"{key!r} holds a non-finite or out-of-range coordinate")
+    return arr
+
+
+def _robot_list(values: Sequence[int]) -> list[int]:
+    return [int(r) for r in values]
+
+
+# --- world -> observers -----------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class AgentInfo:
+    """What the world knows of one robot's agent process."""
+
+    alive: bool  # its liveliness token is present
+    last_active: int  # last round it was active in, -1 if never
+    last_path_length: float  # length of the last path it sent that was applied (0 if none)
+    timeouts: int  # rounds it was active in but sent no move in time
+
+
+@dataclass(frozen=True, slots=True, eq=False)  # holds arrays: compare fields
+class WorldState:
+    """The world after a round (or at a round's start): the observers' stream, DROP-published."""
+
+    round: int  # last committed round (0 before the first)
+    n: int
+    a: float
+    seed: int
+    scheduler: str
+    swarm: str
+    positions: Points  # (n, 2) world frame
+    active: tuple[int, ...]  # active set of the round being run (or just committed)
+    moved: tuple[int, ...]  # robots whose move was applied in `round`
+    stopped: tuple[int, ...]  # robots stopped by contact in `round`
+    collisions_total: int
+    status: str  # "running" | "formed" | "stalled" | "max_rounds"
+    agents: tuple[AgentInfo, ...]  # one per robot
+
+    def encode(self) -> bytes:
+        """msgpack bytes of this state."""
+        return pack(
+            "state",
+            {
+                "round": int(self.round),
+                "n": int(self.n),
+                "a": float(self.a),
+                "seed": int(self.seed),
+                "scheduler": self.scheduler,
+                "swarm": self.swarm,
+                "positions": points_to_bytes(self.positions),
+                "active": _robot_list(self.active),
+                "moved": _robot_list(self.moved),
+                "stopped": _robot_list(self.stopped),
+                "collisions_total": int(self.collisions_total),
+                "status": self.status,
+                "alive": [bool(g.alive) for g in self.agents],
+                "last_active": [int(g.last_active) for g in self.agents],
+                "last_path_length": [float(g.last_path_length) for g in self.agents],
+                "timeouts": [int(g.timeouts) for g in self.agents],
+            },
+        )
+
+    @staticmethod
+    def decode(data: bytes | bytearray | memoryview) -> WorldState:
+        """Parse and validate; raises ProtocolError."""
+        obj = unpack(data, "state")
+        n = get_int(obj, "n", 1, MAX_ROBOTS)
+        status = get_str(obj, "status")
+        if status not in STATUSES:
+            raise ProtocolError(f"'status' must be one of {STATUSES}, got {status!r}")
+        alive, last_active = obj.get("alive"), obj.get("last_active")
+        lengths, timeouts = obj.get("last_path_length"), obj.get("timeouts")
+        for name, col in (("alive", alive), ("last_active", last_active)):
+            if not isinstance(col, list) or len(col) != n:
+                raise ProtocolError(f"{name!r} must be a list of {n} values")
+        for name, col in (("last_path_length", lengths), ("timeouts", timeouts)):
+            if not isinstance(col, list) or len(col) != n:
+                raise ProtocolError(f"{name!r} must be a list of {n} values")
+        assert isinstance(alive, list) and isinstance(last_active, list)
+        assert isinstance(lengths, list) and isinstance(timeouts, list)
+        agents = tuple(
+            AgentInfo(
+                alive=get_bool({"x": alive[i]}, "x"),
+                last_active=get_int({"x": last_active[i]}, "x", -1, 2**62),
+                last_path_length=get_float({"x": lengths[i]}, "x", 0.0, MAX_COORD),
+                timeouts=get_int({"x": timeouts[i]}, "x", 0, 2**62),
+            )
+            for i in range(n)
+        )
+        return WorldState(
+            round=get_int(obj, "round", 0, 2**62),
+            n=n,
+            a=get_float(obj, "a", 0.0, MAX_COORD),
+            seed=get_int(obj, "seed", -(2**63), 2**64 - 1),
+            scheduler=get_str(obj, "scheduler"),
+            swarm=get_str(obj, "swarm"),
+            positions=get_points(obj, "positions", n),
+            active=get_robots(obj, "active", n),
+            moved=get_robots(obj, "moved", n),
+            stopped=get_robots(obj, "stopped", n),
+            collisions_total=get_int(obj, "collisions_total", 0, 2**62),
+            status=status,
+            agents=agents,
+        )
+
+
+# --- world -> agent: the snapshot -------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True, eq=False)  # holds arrays: compare fields
+class Snapshot:
+    """The others' positions relative to the asker (translation only, shuffled, no ids), n and a.
+
+    Never holds global coordinates: the asker learns where others are from itself, not where it is.
+    """
+
+    round: int
+    n: int
+    a: float
+    view: Points  # (n-1, 2): other centre minus asker's centre, world axes
+
+    def encode(self) -> bytes:
+        """msgpack bytes."""
+        return pack(
+            "snapshot",
+            {
+                "round": int(self.round),
+                "n": int(self.n),
+                "a": float(self.a),
+                "view": points_to_bytes(self.view),
+            },
+        )
+
+    @staticmethod
+    def decode(data: bytes | bytearray | memoryview) -> Snapshot:
+        """Parse and validate; raises ProtocolError."""
+        obj = unpack(data, "snapshot")
+        n = get_int(obj, "n", 1, MAX_ROBOTS)
+        return Snapshot(
+            round=get_int(obj, "round", 1, 2**62),
+            n=n,
+            a=get_float(obj, "a", 0.0, MAX_COORD),
+            view=get_points(obj, "view", n - 1),
+        )
+
+
+# --- coordinator <-> world: control queries ---------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class Hello:
+    """Coordinator asks where the run stands (at start and after a restart)."""
+
+    def encode(self) -> bytes:
+        """msgpack bytes."""
+        return pack("hello", {})
+
+
+@dataclass(frozen=True, slots=True)
+class Begin:
+    """Coordinator opens round `round` with active set `active` (before activating the agents)."""
+
+    round: int
+    active: tuple[int, ...]
+
+    def encode(self) -> bytes:
+        """msgpack bytes."""
+        return pack("begin", {"round": int(self.round), "active": _robot_list(self.active)})
+
+
+@dataclass(frozen=True, slots=True)
+class Commit:
+    """Coordinator closes round `round`: the world applies the moves it holds, through physics."""
+
+    round: int
+    timed_out: tuple[int, ...] = ()  # active robots that sent no move before the deadline
+
+    def encode(self) -> bytes:
+        """msgpack bytes."""
+        return pack("commit", {"round": int(self.round), "timed_out": _robot_list(self.timed_out)})
+
+
+ControlRequest = Hello | Begin | Commit
+
+
+def decode_control(data: bytes | bytearray | memoryview) -> ControlRequest:
+    """Parse a control request of any kind; raises ProtocolError."""
+    kind, obj = unpack_any(data, ("hello", "begin", "commit"))
+    if kind == "hello":
+        return Hello()
+    if kind == "begin":
+        return Begin(round=get_int(obj, "round", 1, 2**62), active=get_robots(obj, "active"))
+    return Commit(round=get_int(obj, "round", 1, 2**62), timed_out=get_robots(obj, "timed_out"))
+
+
+@dataclass(frozen=True, slots=True)
+class ControlReply:
+    """The world's answer to a control request: accepted or not (with why) and where it stands."""
+
+    ok: bool
+    reason: str  # empty when ok
+    n: int
+    committed: int  # last committed (durable) round, 0 before the first
+    open_round: int  # the round open for moves, 0 if none
+    status: str  # "running" | "formed" | "stalled" | "max_rounds"
+
+    def encode(self) -> bytes:
+        """msgpack bytes."""
+        return pack(
+            "control-reply",
+            {
+                "ok": self.ok,
+                "reason": self.reason[:200],
+                "n": int(self.n),
+                "committed": int(self.committed),
+                "open_round": int(self.open_round),
+                "status": self.status,
+            },
+        )
+
+    @staticmethod
+    def decode(data: bytes | bytearray | memoryview) -> ControlReply:
+        """Parse and validate; raises ProtocolError."""
+        obj = unpack(data, "control-reply")
+        status = get_str(obj, "status")
+        if status not in STATUSES:
+            raise ProtocolError(f"'status' must be one of {STATUSES}, got {status!r}")
+        return ControlReply(
+            ok=get_bool(obj, "ok"),
+            reason=get_str(obj, "reason", 200),
+            n=get_int(obj, "n", 1, MAX_ROBOTS),
+            committed=get_int(obj, "committed", 0, 2**62),
+            open_round=get_int(obj, "open_round", 0, 2**62),
+            status=status,
+        )
+
+
+# --- world -> coordinator: moves held ---------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class MoveHeld:
+    """The world accepted robot `robot`'s move for round `round` (BLOCK, so none is lost)."""
+
+    round: int
+    robot: int
+
+    def encode(self) -> bytes:
+        """msgpack bytes."""
+        return pack("move-held", {"round": int(self.round), "robot": int(self.robot)})
+
+    @staticmethod
+    def decode(data: bytes | bytearray | memoryview) -> MoveHeld:
+        """Parse and validate; raises ProtocolError."""
+        obj = unpack(data, "move-held")
+        return MoveHeld(
+            round=get_int(obj, "round", 1, 2**62), robot=get_int(obj, "robot", 0, MAX_ROBOTS - 1)
+        )
