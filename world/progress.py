@@ -1,0 +1,163 @@
+"""Progress of a run: rounds, epochs, moves, distance, collisions and when (and how) it ends.
+
+Pure bookkeeping fed one committed round at a time, shared by the lockstep runner and the networked
+world so both decide `formed`, `stalled` and `max_rounds` the same way.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Iterable, Mapping
+from dataclasses import dataclass
+from typing import Final
+
+import numpy as np
+
+from agent.geometry import is_uniform_circle
+from agent.path import Points
+
+FORMED: Final = "formed"
+STALLED: Final = "stalled"
+MAX_ROUNDS: Final = "max_rounds"
+STATUSES: Final = (FORMED, STALLED, MAX_ROUNDS)
+
+# A robot "moved" (the configuration changed) when its centre shifted by more than this. Far above
+# float noise at coordinates ~1e3 (~1e-13), far below any planned move (>= ~1e-6, the algorithm's
+# "at a point" tolerance); a path fully blocked at its start leaves the configuration unchanged.
+MOVE_TOLERANCE: Final = 1e-9
+
+
+@dataclass(frozen=True, slots=True)
+class Progress:
+    """A snapshot of the run's figures; `status` is None while the run goes on.
+
+    `epochs` counts completed epochs: an epoch ends when every robot has been active at least
+    once since the previous epoch ended (under fsync, epochs == rounds).
+    """
+
+    status: str | None
+    rounds: int
+    epochs: int
+    moves: int
+    total_distance: float
+    collisions: int
+    moves_by_robot: tuple[int, ...]
+
+
+class ProgressTracker:
+    """Observes committed rounds of an n-robot run and decides when it ends.
+
+    formed:  the configuration is a uniform circle (side >= a) and every robot has been active
+             since the configuration last changed, each time asking for an empty path;
+    stalled: every robot has been active since the last change, the configuration is unchanged
+             and it is not formed (someone wants to move but cannot, or nobody wants to move);
+    max_rounds: `max_rounds` rounds were committed without either of the above.
+    """
+
+    def __init__(self, n: int, a: float, max_rounds: int | None = None) -> None:
+        if n < 1:
+            raise ValueError(f"a run needs at least one robot, got n={n}")
+        if max_rounds is not None and max_rounds < 1:
+            raise ValueError(f"max_rounds must be >= 1, got {max_rounds}")
+        self.n = n
+        self.a = a
+        self.max_rounds = max_rounds
+        self._rounds = 0
+        self._epochs = 0
+        self._moves = [0] * n
+        self._distance = 0.0
+        self._collisions = 0
+        self._epoch_seen: set[int] = set()
+        self._seen_since_change: set[int] = set()
+        self._wanting_since_change: set[int] = set()
+        self._status: str | None = None
+
+    @property
+    def status(self) -> str | None:
+        """'formed', 'stalled', 'max_rounds', or None while the run goes on."""
+        return self._status
+
+    @property
+    def done(self) -> bool:
+        return self._status is not None
+
+    def observe(
+        self,
+        active: Iterable[int],
+        movers: Collection[int],
+        before: Points,
+        after: Points,
+        traveled: Mapping[int, float] | None = None,
+        collisions: int = 0,
+    ) -> str | None:
+        """Account one committed round; returns the status (None while the run goes on).
+
+        `movers`: the active robots that asked for a non-empty path; `before`/`after`: (n, 2)
+        positions around the round; `traveled`: arc length each mover covered.
+        """
+        if self._status is not None:
+            raise RuntimeError(f"the run already ended ({self._status}); no more rounds")
+        active_set = {int(r) for r in active}
+        bad = [r for r in active_set | set(movers) if not 0 <= r < self.n]
+        if bad:
+            raise ValueError(f"robots {sorted(bad)} are not in 0..{self.n - 1}")
+        self._rounds += 1
+        for robot in movers:
+            self._moves[robot] += 1
+        if traveled:
+            self._distance += float(sum(traveled.values()))
+        self._collisions += collisions
+
+        self._epoch_seen |= active_set
+        if len(self._epoch_seen) == self.n:
+            self._epochs += 1
+            self._epoch_seen = set()
+
+        before_arr = np.asarray(before, dtype=np.float64)
+        after_arr = np.asarray(after, dtype=np.float64)
+        if configuration_changed(before_arr, after_arr):
+            # The robots active this round looked at the old configuration: start counting afresh.
+            self._seen_since_change = set()
+            self._wanting_since_change = set()
+        else:
+            self._seen_since_change |= active_set
+            self._wanting_since_change |= set(movers)
+            if len(self._seen_since_change) == self.n:
+                formed = not self._wanting_since_change and is_uniform_circle(after_arr, self.a)
+                self._status = FORMED if formed else STALLED
+        if self._status is None and self.max_rounds is not None and self._rounds >= self.max_rounds:
+            self._status = MAX_ROUNDS
+        return self._status
+
+    def snapshot(self) -> Progress:
+        """The figures so far."""
+        return Progress(
+            status=self._status,
+            rounds=self._rounds,
+            epochs=self._epochs,
+            moves=sum(self._moves),
+            total_distance=self._distance,
+            collisions=self._collisions,
+            moves_by_robot=tuple(self._moves),
+        )
+
+
+def configuration_changed(before: Points, after: Points) -> bool:
+    """True when some robot's centre moved by more than MOVE_TOLERANCE."""
+    if before.shape != after.shape:
+        raise ValueError(f"positions changed shape: {before.shape} -> {after.shape}")
+    if before.size == 0:
+        return False
+    shift = np.hypot(after[:, 0] - before[:, 0], after[:, 1] - before[:, 1])
+    return bool(np.max(shift) > MOVE_TOLERANCE)
+
+
+__all__ = [
+    "FORMED",
+    "MAX_ROUNDS",
+    "MOVE_TOLERANCE",
+    "STALLED",
+    "STATUSES",
+    "Progress",
+    "ProgressTracker",
+    "configuration_changed",
+]
