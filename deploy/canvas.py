@@ -1,0 +1,190 @@
+"""A sub-cell drawing surface for the terminal: discs, circles and points to scale.
+
+Each terminal cell holds 2 x 4 dots (braille) or 1 x 2 dots (half blocks); a cell is about twice
+as tall as wide, so dots are square and circles stay round. World y points up, screen rows down.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from rich.style import Style
+from rich.text import Text
+
+Mode = Literal["braille", "half"]
+DOTS_PER_CELL: dict[str, tuple[int, int]] = {"braille": (2, 4), "half": (1, 2)}
+
+# Braille dot bits by (column, row) inside a cell (Unicode block U+2800).
+_BRAILLE_BITS = np.array([[0x01, 0x02, 0x04, 0x40], [0x08, 0x10, 0x20, 0x80]], dtype=np.int64)
+BRAILLE_BLANK = 0x2800
+
+
+@dataclass(frozen=True, slots=True)
+class Viewport:
+    """Maps world coordinates to dot coordinates with one scale on both axes (y up)."""
+
+    cols: int
+    rows: int
+    mode: Mode
+    left: float  # world x of the left edge
+    top: float  # world y of the top edge
+    units_per_dot: float
+
+    @property
+    def dots_wide(self) -> int:
+        return self.cols * DOTS_PER_CELL[self.mode][0]
+
+    @property
+    def dots_high(self) -> int:
+        return self.rows * DOTS_PER_CELL[self.mode][1]
+
+    @classmethod
+    def fit(
+        cls,
+        xmin: float,
+        xmax: float,
+        ymin: float,
+        ymax: float,
+        cols: int,
+        rows: int,
+        mode: Mode = "braille",
+    ) -> Viewport:
+        """The viewport showing the world box [xmin, xmax] x [ymin, ymax] whole, centred."""
+        if cols < 1 or rows < 1:
+            raise ValueError(f"a canvas needs at least one cell, got {cols} x {rows}")
+        dx, dy = DOTS_PER_CELL[mode]
+        width, height = max(xmax - xmin, 1e-9), max(ymax - ymin, 1e-9)
+        units = max(width / (cols * dx), height / (rows * dy))
+        cx, cy = (xmin + xmax) / 2.0, (ymin + ymax) / 2.0
+        return cls(
+            cols=cols,
+            rows=rows,
+            mode=mode,
+            left=cx - units * cols * dx / 2.0,
+            top=cy + units * rows * dy / 2.0,
+            units_per_dot=units,
+        )
+
+    def to_dot(self, x: float, y: float) -> tuple[float, float]:
+        """Continuous dot coordinates (column, row) of a world point; dot (i, j) spans [i, i+1)."""
+        return ((x - self.left) / self.units_per_dot, (self.top - y) / self.units_per_dot)
+
+    def to_cell(self, x: float, y: float) -> tuple[int, int]:
+        """The cell (column, row) a world point falls in (may lie outside the canvas)."""
+        i, j = self.to_dot(x, y)
+        dx, dy = DOTS_PER_CELL[self.mode]
+        return (math.floor(i) // dx, math.floor(j) // dy)
+
+
+class Canvas:
+    """Dots tagged with a layer number; where layers meet in one cell, the highest one is shown."""
+
+    def __init__(self, viewport: Viewport) -> None:
+        self.viewport = viewport
+        self.dots: NDArray[np.uint8] = np.zeros(
+            (viewport.dots_high, viewport.dots_wide), dtype=np.uint8
+        )
+
+    def _set(self, rows: NDArray[np.int64], cols: NDArray[np.int64], layer: int) -> None:
+        keep = (rows >= 0) & (rows < self.dots.shape[0]) & (cols >= 0) & (cols < self.dots.shape[1])
+        r, c = rows[keep], cols[keep]
+        self.dots[r, c] = np.maximum(self.dots[r, c], layer)
+
+    def point(self, x: float, y: float, layer: int) -> None:
+        """Light the dot containing the world point (x, y)."""
+        i, j = self.viewport.to_dot(x, y)
+        self._set(np.array([math.floor(j)]), np.array([math.floor(i)]), layer)
+
+    def points(self, pts: Iterable[tuple[float, float]], layer: int) -> None:
+        """Light the dot under each world point."""
+        for x, y in pts:
+            self.point(x, y, layer)
+
+    def marker(self, x: float, y: float, layer: int) -> None:
+        """A plus of five dots centred on the world point: visible at any scale."""
+        i, j = self.viewport.to_dot(x, y)
+        ci, cj = math.floor(i), math.floor(j)
+        cols = np.array([ci, ci - 1, ci + 1, ci, ci], dtype=np.int64)
+        rows = np.array([cj, cj, cj, cj - 1, cj + 1], dtype=np.int64)
+        self._set(rows, cols, layer)
+
+    def disc(self, x: float, y: float, radius: float, layer: int) -> None:
+        """Fill the dots whose centres lie in the disc; a disc smaller than a dot lights one dot."""
+        vp = self.viewport
+        ci, cj = vp.to_dot(x, y)
+        rd = radius / vp.units_per_dot
+        i0, i1 = math.floor(ci - rd), math.ceil(ci + rd)
+        j0, j1 = math.floor(cj - rd), math.ceil(cj + rd)
+        if i1 < 0 or j1 < 0 or i0 >= vp.dots_wide or j0 >= vp.dots_high:
+            return
+        ii, jj = np.meshgrid(np.arange(i0, i1 + 1), np.arange(j0, j1 + 1))
+        inside = (ii + 0.5 - ci) ** 2 + (jj + 0.5 - cj) ** 2 <= rd * rd
+        if not inside.any():
+            self.point(x, y, layer)
+            return
+        self._set(jj[inside], ii[inside], layer)
+
+    def circle(self, x: float, y: float, radius: float, layer: int) -> None:
+        """Draw the outline of a circle, one dot thick."""
+        rd = radius / self.viewport.units_per_dot
+        steps = max(16, math.ceil(2.0 * math.pi * rd * 2.0))
+        theta = np.linspace(0.0, 2.0 * math.pi, steps, endpoint=False)
+        self.polyline(
+            np.column_stack((x + radius * np.cos(theta), y + radius * np.sin(theta))), layer
+        )
+
+    def polyline(self, pts: NDArray[np.float64], layer: int) -> None:
+        """Draw the world points (k, 2) joined by straight strokes (open), half a dot apart."""
+        if len(pts) == 0:
+            return
+        vp = self.viewport
+        d = np.column_stack(((pts[:, 0] - vp.left), (vp.top - pts[:, 1]))) / vp.units_per_dot
+        samples = [d[:1]]
+        for a, b in itertools.pairwise(d):
+            k = max(1, math.ceil(float(np.hypot(*(b - a))) * 2.0))
+            t = np.linspace(0.0, 1.0, k + 1)[1:, None]
+            samples.append(a + t * (b - a))
+        allpts = np.concatenate(samples)
+        self._set(
+            np.floor(allpts[:, 1]).astype(np.int64), np.floor(allpts[:, 0]).astype(np.int64), layer
+        )
+
+    def cell_layers(self) -> NDArray[np.uint8]:
+        """(rows, cols) of the highest layer lit in each cell (0 where the cell is blank)."""
+        dx, dy = DOTS_PER_CELL[self.viewport.mode]
+        r, c = self.viewport.rows, self.viewport.cols
+        out: NDArray[np.uint8] = self.dots.reshape(r, dy, c, dx).max(axis=(1, 3))
+        return out
+
+    def glyphs(self) -> list[str]:
+        """The canvas as plain text, one string per cell row."""
+        vp = self.viewport
+        lit = (self.dots > 0).astype(np.int64)
+        if vp.mode == "braille":
+            cells = lit.reshape(vp.rows, 4, vp.cols, 2)
+            codes = BRAILLE_BLANK + np.einsum("rjci,ij->rc", cells, _BRAILLE_BITS)
+            return ["".join(map(chr, row)).replace(chr(BRAILLE_BLANK), " ") for row in codes]
+        top, bottom = lit[0::2], lit[1::2]
+        table = np.array([" ", "▄", "▀", "█"])
+        return ["".join(row) for row in table[top * 2 + bottom]]
+
+    def render(self, styles: Mapping[int, str | Style]) -> Text:
+        """The canvas as rich Text; each cell takes the style of the highest layer lit in it."""
+        layers = self.cell_layers()
+        text = Text(no_wrap=True, overflow="crop")
+        for row_no, (row, row_layers) in enumerate(zip(self.glyphs(), layers, strict=True)):
+            if row_no:
+                text.append("\n")
+            start = 0
+            for col in range(1, len(row) + 1):
+                if col == len(row) or row_layers[col] != row_layers[start]:
+                    layer = int(row_layers[start])
+                    text.append(row[start:col], style=styles.get(layer, "") if layer else "")
+                    start = col
+        return text

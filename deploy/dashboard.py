@@ -1,0 +1,699 @@
+"""Terminal dashboard: pure renderers from a `Frame` plus the thin shells that feed them.
+
+`render_frame(frame)` builds a rich renderable (canvas to scale, counters, agents, outcome) from a
+plain dataclass, so tests and replay need no network. `StateWatcher` follows the world's published
+state (`fatswarm/<swarm>/world/state`) through a ring channel of one: it never slows the round.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import math
+import sys
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any, Protocol
+
+import numpy as np
+from rich.console import Console, ConsoleOptions, Group, RenderableType, RenderResult
+from rich.layout import Layout
+from rich.panel import Panel
+from rich.progress_bar import ProgressBar
+from rich.table import Table
+from rich.text import Text
+
+from agent.path import Points
+from deploy.canvas import Canvas, Mode, Viewport
+
+if TYPE_CHECKING:
+    from world.protocol import WorldState
+
+EXIT_FORMED, EXIT_NOT_FORMED, EXIT_BAD_INPUT = 0, 1, 2
+DEFAULT_SWARM = "default"
+FINAL_STATUSES = ("formed", "stalled", "max_rounds")
+
+# Canvas layers: where several meet in one cell, the highest number wins.
+LAYER_SEC, LAYER_TARGET_CIRCLE, LAYER_TRAIL, LAYER_TARGET = 1, 2, 3, 4
+LAYER_ROBOT, LAYER_ACTIVE, LAYER_STOPPED = 5, 6, 7
+LAYER_STYLES: dict[int, str] = {
+    LAYER_SEC: "grey50",
+    LAYER_TARGET_CIRCLE: "blue",
+    LAYER_TRAIL: "magenta",
+    LAYER_TARGET: "bold yellow",
+    LAYER_ROBOT: "green",
+    LAYER_ACTIVE: "bold cyan",
+    LAYER_STOPPED: "bold red",
+}
+LEGEND = Text.from_markup(
+    "[green]idle[/] [bold cyan]active[/] [bold red]stopped[/] [magenta]path[/] "
+    "[grey50]SEC[/] [blue]circle r[/] [bold yellow]targets[/]"
+)
+ROBOT_RADIUS = 1.0  # robots are unit discs
+SIDE_WIDTH = 46  # columns of the counters and agents column
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Frame:
+    """Everything one dashboard frame shows; built from a live `WorldState` or a record."""
+
+    round: int
+    n: int
+    a: float
+    scheduler: str
+    positions: Points  # (n, 2) world frame
+    active: tuple[int, ...] = ()  # robots active in `round`
+    moved: tuple[int, ...] = ()
+    stopped: tuple[int, ...] = ()  # stopped by contact in `round`
+    collisions_total: int = 0
+    status: str = "running"  # "running" | "formed" | "stalled" | "max_rounds"
+    swarm: str = ""
+    seed: int | None = None
+    alive: tuple[bool, ...] | None = None  # None when unknown (a record holds no liveliness)
+    last_active: tuple[int, ...] = ()  # round each robot was last active in, -1 if never
+    last_path_length: tuple[float, ...] = ()  # length covered by its last applied move
+    timeouts: tuple[int, ...] = ()  # None-like empty tuple when unknown
+    rounds_per_second: float | None = None
+    max_rounds: int | None = None
+    last_round: int | None = None  # replay: the record's last round
+    trails: tuple[Points, ...] = ()  # replay: sampled world paths (k, 2) of this round's moves
+    source: str = "live"
+
+
+@dataclass(frozen=True, slots=True)
+class Figures:
+    """What the frame derives from positions: SEC, target radius and points, targets filled."""
+
+    sec_center: tuple[float, float]
+    sec_radius: float  # r_c
+    target_radius: float  # r (ComputeRadius, a* = max(a, 4))
+    targets: Points  # (n, 2) target points on the current SEC
+    filled: int  # target points with a robot centre on them
+
+
+# --- geometry (the lead's agent.geometry; a local stand-in until it lands) ----------------------
+
+
+def _sec_fallback(points: Points) -> tuple[tuple[float, float], float]:
+    """Smallest enclosing circle by incremental Welzl (stand-in for agent.geometry.sec)."""
+    pts = [tuple(map(float, p)) for p in points]
+
+    def two(p: tuple[float, ...], q: tuple[float, ...]) -> tuple[float, float, float]:
+        cx, cy = (p[0] + q[0]) / 2, (p[1] + q[1]) / 2
+        return cx, cy, math.hypot(p[0] - cx, p[1] - cy)
+
+    def three(
+        p: tuple[float, ...], q: tuple[float, ...], s: tuple[float, ...]
+    ) -> tuple[float, float, float]:
+        ax, ay, bx, by, cx, cy = p[0], p[1], q[0], q[1], s[0], s[1]
+        d = 2 * (ax * (by - cy) + bx * (cy - ay) + cx * (ay - by))
+        if abs(d) < 1e-12:
+            cands = [two(p, q), two(p, s), two(q, s)]
+            return max(cands, key=lambda c: c[2])
+        a2, b2, c2 = ax**2 + ay**2, bx**2 + by**2, cx**2 + cy**2
+        ux = (a2 * (by - cy) + b2 * (cy - ay) + c2 * (ay - by)) / d
+        uy = (a2 * (cx - bx) + b2 * (ax - cx) + c2 * (bx - ax)) / d
+        return ux, uy, math.hypot(ax - ux, ay - uy)
+
+    def inside(c: tuple[float, float, float], p: tuple[float, ...]) -> bool:
+        return math.hypot(p[0] - c[0], p[1] - c[1]) <= c[2] * (1 + 1e-12) + 1e-12
+
+    if not pts:
+        return (0.0, 0.0), 0.0
+    c = (pts[0][0], pts[0][1], 0.0)
+    for i, p in enumerate(pts):
+        if inside(c, p):
+            continue
+        c = (p[0], p[1], 0.0)
+        for j in range(i):
+            if inside(c, pts[j]):
+                continue
+            c = two(p, pts[j])
+            for k in range(j):
+                if not inside(c, pts[k]):
+                    c = three(p, pts[j], pts[k])
+    return (c[0], c[1]), c[2]
+
+
+def _sec(points: Points) -> tuple[tuple[float, float], float]:
+    try:
+        from agent import geometry
+
+        circle = geometry.sec(points)  # type: ignore[attr-defined,unused-ignore]
+        return (float(circle.center[0]), float(circle.center[1])), float(circle.radius)
+    except (ImportError, AttributeError, NotImplementedError):
+        return _sec_fallback(points)
+
+
+def _target_radius(n: int, a: float) -> float:
+    try:
+        from agent import geometry
+
+        return float(geometry.target_radius(n, a))  # type: ignore[attr-defined,unused-ignore]
+    except (ImportError, AttributeError, NotImplementedError):
+        return max(a, 4.0) / (2.0 * math.sin(math.pi / n)) if n >= 2 else 0.0
+
+
+def _target_points(points: Points, n: int) -> Points:
+    try:
+        from agent import geometry
+
+        out = geometry.target_points(points, n)  # type: ignore[attr-defined,unused-ignore]
+        return np.asarray(out, dtype=np.float64).reshape(-1, 2)
+    except (ImportError, AttributeError, NotImplementedError):
+        (cx, cy), rc = _sec_fallback(points)
+        north = np.array([cx, cy + rc])
+        gap = float(np.min(np.hypot(*(points - north).T))) if len(points) else math.inf
+        at_o = gap <= 1e-6 * max(1.0, rc)
+        theta = 2 * np.pi * np.arange(n) / n + (0.0 if at_o else np.pi / n)
+        return np.column_stack((cx + rc * np.sin(theta), cy + rc * np.cos(theta)))
+
+
+def derive(frame: Frame) -> Figures:
+    """SEC, target radius, target points and how many are filled, for the frame's positions."""
+    pts = np.asarray(frame.positions, dtype=np.float64).reshape(-1, 2)
+    center, rc = _sec(pts)
+    targets = _target_points(pts, frame.n) if len(pts) else np.zeros((0, 2))
+    tol = 1e-6 * max(1.0, rc)  # "a robot at the point" (the notes' ε_at)
+    filled = 0
+    if len(targets) and len(pts):
+        dist = np.hypot(*(targets[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
+        filled = int(np.count_nonzero(dist.min(axis=1) <= tol))
+    return Figures(center, rc, _target_radius(frame.n, frame.a), targets, filled)
+
+
+# --- canvas ---------------------------------------------------------------------------------------
+
+
+def build_canvas(
+    frame: Frame, figures: Figures, cols: int, rows: int, mode: Mode = "braille"
+) -> Canvas:
+    """Draw the frame to scale: SEC, target circle r, target points, paths and discs."""
+    pts = np.asarray(frame.positions, dtype=np.float64).reshape(-1, 2)
+    (cx, cy), rc = figures.sec_center, figures.sec_radius
+    reach = max(rc, figures.target_radius) + ROBOT_RADIUS
+    xmin, xmax = cx - reach, cx + reach
+    ymin, ymax = cy - reach, cy + reach
+    if len(pts):
+        xmin, xmax = min(xmin, float(pts[:, 0].min()) - 1), max(xmax, float(pts[:, 0].max()) + 1)
+        ymin, ymax = min(ymin, float(pts[:, 1].min()) - 1), max(ymax, float(pts[:, 1].max()) + 1)
+    pad = 0.03 * max(xmax - xmin, ymax - ymin)
+    canvas = Canvas(Viewport.fit(xmin - pad, xmax + pad, ymin - pad, ymax + pad, cols, rows, mode))
+    canvas.circle(cx, cy, rc, LAYER_SEC)
+    if figures.target_radius > 0:
+        canvas.circle(cx, cy, figures.target_radius, LAYER_TARGET_CIRCLE)
+    for trail in frame.trails:
+        canvas.polyline(trail, LAYER_TRAIL)
+    for x, y in figures.targets:
+        canvas.marker(float(x), float(y), LAYER_TARGET)
+    active, stopped = set(frame.active), set(frame.stopped)
+    for i, (x, y) in enumerate(pts):
+        layer = LAYER_STOPPED if i in stopped else LAYER_ACTIVE if i in active else LAYER_ROBOT
+        canvas.disc(float(x), float(y), ROBOT_RADIUS, layer)
+    return canvas
+
+
+class CanvasView:
+    """Renders the frame's canvas at whatever size rich gives it (braille by default)."""
+
+    def __init__(self, frame: Frame, figures: Figures, mode: Mode = "braille") -> None:
+        self.frame, self.figures, self.mode = frame, figures, mode
+
+    def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
+        cols = max(1, options.max_width)
+        rows = max(1, (options.height or options.size.height or 20))
+        yield build_canvas(self.frame, self.figures, cols, rows, self.mode).render(LAYER_STYLES)
+
+
+# --- counters, agents, outcome -------------------------------------------------------------------
+
+
+def _fmt_rate(rate: float | None) -> str:
+    return "-" if rate is None else f"{rate:,.1f}"
+
+
+def outcome_text(frame: Frame) -> str:
+    """One line saying how the run ended, or that it still runs."""
+    if frame.status == "formed":
+        head = f"FORMED: uniform circle of {frame.n} robots after {frame.round} rounds"
+    elif frame.status == "stalled":
+        head = f"STALLED after {frame.round} rounds: no robot can make progress"
+    elif frame.status == "max_rounds":
+        head = f"NOT FORMED: stopped at the round limit ({frame.round} rounds)"
+    else:
+        return f"running: round {frame.round}"
+    return f"{head}, {frame.collisions_total} collisions"
+
+
+def counters_table(frame: Frame, figures: Figures) -> Table:
+    """Round, status, scheduler, r_c versus r, targets filled, collisions, rounds per second."""
+    grid = Table.grid(padding=(0, 1))
+    grid.add_column("key", style="bold", no_wrap=True)
+    grid.add_column("value", no_wrap=True)
+    round_text = f"{frame.round}"
+    if frame.last_round is not None:
+        round_text += f" / {frame.last_round}"
+    elif frame.max_rounds is not None:
+        round_text += f" (limit {frame.max_rounds})"
+    grid.add_row("round", round_text)
+    grid.add_row("status", frame.status)
+    grid.add_row(
+        "scheduler", frame.scheduler + (f"  seed {frame.seed}" if frame.seed is not None else "")
+    )
+    grid.add_row("robots", f"n={frame.n}  a={frame.a:g}")
+    r, rc = figures.target_radius, figures.sec_radius
+    grid.add_row("r_c / r", f"{rc:.3f} / {r:.3f}")
+    grid.add_row("", ProgressBar(total=max(r, 1e-9), completed=min(rc, r), width=22))
+    grid.add_row("targets", f"{figures.filled} / {frame.n} filled")
+    grid.add_row("", ProgressBar(total=max(frame.n, 1), completed=figures.filled, width=22))
+    counts = f"{len(frame.active)} active  {len(frame.moved)} moved  {len(frame.stopped)} stopped"
+    grid.add_row("this round", counts)
+    grid.add_row("collisions", str(frame.collisions_total))
+    grid.add_row("rounds/s", _fmt_rate(frame.rounds_per_second))
+    if frame.alive is not None:
+        grid.add_row("alive", f"{sum(frame.alive)} / {frame.n}")
+    if frame.timeouts:
+        grid.add_row("timeouts", str(sum(frame.timeouts)))
+    return grid
+
+
+def agent_rows(frame: Frame) -> list[int]:
+    """Robots in the order the agents panel lists them: this round's active, then by id."""
+    first = [i for i in frame.active if 0 <= i < frame.n]
+    seen = set(first)
+    return first + [i for i in range(frame.n) if i not in seen]
+
+
+class AgentsView:
+    """The agents table, cut to the rows that fit (with a line saying how many are left out)."""
+
+    def __init__(self, frame: Frame) -> None:
+        self.frame = frame
+
+    def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
+        f = self.frame
+        height = options.height or 12
+        fit = max(0, height - 2)  # header row and the "more" line
+        order = agent_rows(f)
+        table = Table(box=None, padding=(0, 1), show_edge=False, expand=False)
+        table.add_column("robot", justify="right", no_wrap=True)
+        table.add_column("alive", no_wrap=True)
+        for name in ("last", "path", "t/o"):
+            table.add_column(name, justify="right", no_wrap=True)
+        active, stopped = set(f.active), set(f.stopped)
+        shown = order if len(order) <= fit + 1 else order[:fit]
+        for i in shown:
+            alive = "-" if f.alive is None else ("yes" if f.alive[i] else "NO")
+            last = f.last_active[i] if i < len(f.last_active) else -1
+            length = f.last_path_length[i] if i < len(f.last_path_length) else 0.0
+            timeouts = str(f.timeouts[i]) if i < len(f.timeouts) else "-"
+            style = "bold red" if i in stopped else "bold cyan" if i in active else ""
+            table.add_row(
+                str(i),
+                alive,
+                "never" if last < 0 else str(last),
+                f"{length:.3f}",
+                timeouts,
+                style=style,
+            )
+        parts: list[RenderableType] = [table]
+        if len(shown) < len(order):
+            parts.append(Text(f"… {len(order) - len(shown)} more robots", style="dim"))
+        yield Group(*parts)
+
+
+def render_frame(frame: Frame, *, footer: str | None = None, mode: Mode = "braille") -> Layout:
+    """The whole dashboard for one frame: header, canvas, counters, agents, outcome or key help."""
+    figures = derive(frame)
+    title = f"fatswarm · {frame.source}"
+    if frame.swarm:
+        title += f" · swarm {frame.swarm}"
+    layout = Layout(name="root")
+    bottom = outcome_text(frame)
+    if footer:
+        bottom = f"{bottom}    {footer}"
+    style = (
+        "bold green" if frame.status == "formed" else "bold" if frame.status != "running" else ""
+    )
+    layout.split_column(
+        Layout(Text(title, style="bold", no_wrap=True, overflow="ellipsis"), name="header", size=1),
+        Layout(name="body"),
+        Layout(
+            Panel(Text(bottom, no_wrap=True, overflow="ellipsis"), style=style),
+            name="footer",
+            size=3,
+        ),
+    )
+    canvas = Panel(
+        CanvasView(frame, figures, mode), title="swarm, to scale", subtitle=LEGEND, padding=0
+    )
+    layout["body"].split_row(
+        Layout(canvas, name="canvas"),
+        Layout(name="side", size=SIDE_WIDTH),
+    )
+    layout["side"].split_column(
+        Layout(Panel(counters_table(frame, figures), title="run"), name="counters", size=15),
+        Layout(Panel(AgentsView(frame), title="agents"), name="agents"),
+    )
+    return layout
+
+
+def progress_line(frame: Frame) -> str:
+    """The one-line progress report printed when standard output is not a terminal."""
+    figures = derive(frame)
+    return (
+        f"round {frame.round} {frame.status}: targets {figures.filled}/{frame.n}, "
+        f"r_c {figures.sec_radius:.3f} / r {figures.target_radius:.3f}, "
+        f"active {len(frame.active)}, collisions {frame.collisions_total}, "
+        f"{_fmt_rate(frame.rounds_per_second)} rounds/s"
+    )
+
+
+def print_frame(
+    frame: Frame, console: Console, height: int | None = None, footer: str | None = None
+) -> None:
+    """Print one frame at a fixed height (the final frame left on a terminal, or a test render)."""
+    h = height or min(console.size.height, 40)
+    console.print(render_frame(frame, footer=footer), height=h)
+
+
+def save_svg(
+    frame: Frame, path: str, width: int = 120, height: int = 40, footer: str | None = None
+) -> None:
+    """Save one frame as SVG through rich's recording console."""
+    console = Console(
+        record=True, width=width, height=height, file=io.StringIO(), color_system="truecolor"
+    )
+    console.print(render_frame(frame, footer=footer), height=height)
+    console.save_svg(path, title="fatswarm")
+
+
+# --- live state -> frames ------------------------------------------------------------------------
+
+
+def frame_from_state(
+    state: WorldState, rounds_per_second: float | None = None, max_rounds: int | None = None
+) -> Frame:
+    """The frame showing a world's published state."""
+    return Frame(
+        round=state.round,
+        n=state.n,
+        a=state.a,
+        scheduler=state.scheduler,
+        positions=state.positions,
+        active=tuple(state.active),
+        moved=tuple(state.moved),
+        stopped=tuple(state.stopped),
+        collisions_total=state.collisions_total,
+        status=state.status,
+        swarm=state.swarm,
+        seed=state.seed,
+        alive=tuple(g.alive for g in state.agents),
+        last_active=tuple(g.last_active for g in state.agents),
+        last_path_length=tuple(g.last_path_length for g in state.agents),
+        timeouts=tuple(g.timeouts for g in state.agents),
+        rounds_per_second=rounds_per_second,
+        max_rounds=max_rounds,
+        source="live",
+    )
+
+
+class RateMeter:
+    """Rounds per second over a sliding window of (time, round) observations; time passed in."""
+
+    def __init__(self, window: float = 2.0) -> None:
+        self.window = window
+        self.samples: deque[tuple[float, int]] = deque()
+
+    def add(self, now: float, round_no: int) -> float | None:
+        """Record that `round_no` was seen at `now`; the rate over the window, None until known."""
+        if self.samples and round_no < self.samples[-1][1]:
+            self.samples.clear()  # a new run (or a restarted world) on the same key
+        self.samples.append((now, round_no))
+        while len(self.samples) > 2 and now - self.samples[0][0] > self.window:
+            self.samples.popleft()
+        (t0, r0), (t1, r1) = self.samples[0], self.samples[-1]
+        return (r1 - r0) / (t1 - t0) if t1 > t0 else None
+
+
+class FrameSink(Protocol):
+    """Something that shows frames: the live view or the plain progress log."""
+
+    def show(self, frame: Frame) -> None: ...
+
+    def close(self, final: Frame | None) -> None: ...
+
+
+class ProgressLog:
+    """Plain progress for a non-terminal: one line every `every` rounds and one at the end."""
+
+    def __init__(self, out: Callable[[str], None] | None = None, every: int = 50) -> None:
+        self.out = out or (lambda line: print(line, flush=True))
+        self.every = max(1, every)
+        self.next_round = 0
+        self.last: Frame | None = None
+
+    def show(self, frame: Frame) -> None:
+        self.last = frame
+        if frame.status in FINAL_STATUSES:
+            return
+        if frame.round >= self.next_round:
+            self.out(progress_line(frame))
+            self.next_round = (frame.round // self.every + 1) * self.every
+
+    def close(self, final: Frame | None) -> None:
+        frame = final or self.last
+        if frame is not None:
+            self.out(progress_line(frame))
+            if frame.status in FINAL_STATUSES:
+                self.out(outcome_text(frame))
+
+
+class LiveView:
+    """A rich Live view of the frames on the alternate screen; the last frame stays on exit."""
+
+    def __init__(self, console: Console | None = None, svg: str | None = None) -> None:
+        from rich.live import Live
+
+        self.console = console or Console()
+        self.svg = svg
+        self.last: Frame | None = None
+        self.live = Live(
+            Text("waiting for the swarm's state…"),
+            console=self.console,
+            screen=True,
+            auto_refresh=False,
+            redirect_stdout=False,
+            redirect_stderr=False,
+        )
+        self.live.start(refresh=True)
+
+    def show(self, frame: Frame) -> None:
+        self.last = frame
+        self.live.update(render_frame(frame), refresh=True)
+
+    def close(self, final: Frame | None) -> None:
+        self.live.stop()
+        frame = final or self.last
+        if frame is not None:
+            print_frame(frame, self.console)
+            if self.svg:
+                save_svg(frame, self.svg)
+
+
+def _open_session(connect: str) -> Any:
+    import zenoh
+
+    conf = zenoh.Config()
+    conf.insert_json5("mode", '"client"')
+    conf.insert_json5("connect/endpoints", f'["{connect}"]')
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    return zenoh.open(conf)
+
+
+class StateWatcher:
+    """Follows `fatswarm/<swarm>/world/state` in a thread and hands each new frame to a sink.
+
+    It reads through `RingChannel(1)` (only the newest state is kept, DROP on the publisher), so a
+    slow terminal loses frames, never rounds. Pass an open `session` or a `connect` endpoint.
+    """
+
+    def __init__(
+        self,
+        swarm: str,
+        sink: FrameSink,
+        *,
+        session: Any = None,
+        connect: str | None = None,
+        fps: float = 15.0,
+        max_rounds: int | None = None,
+        stop_at_end: bool = False,
+    ) -> None:
+        if session is None and connect is None:
+            raise ValueError("StateWatcher needs an open session or a connect endpoint")
+        self.swarm, self.sink, self.session, self.connect = swarm, sink, session, connect
+        self.period = 1.0 / fps
+        self.max_rounds = max_rounds
+        self.stop_at_end = stop_at_end
+        self.meter = RateMeter()
+        self.latest: Frame | None = None
+        self.ended = threading.Event()  # the run reached a final status
+        self.finished = threading.Event()  # the thread stopped following
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="fatswarm-dashboard", daemon=True)
+        self.error: BaseException | None = None
+
+    def start(self) -> StateWatcher:
+        self._thread.start()
+        return self
+
+    def _run(self) -> None:
+        import zenoh
+
+        from world.protocol import ProtocolError, WorldState, state_key
+
+        own = self.session is None
+        try:
+            session = _open_session(self.connect) if own else self.session  # type: ignore[arg-type]
+        except Exception as exc:  # zenoh raises its own ZError; report it to the caller
+            self.error = exc
+            self.finished.set()
+            return
+        try:
+            sub = session.declare_subscriber(state_key(self.swarm), zenoh.handlers.RingChannel(1))
+            try:
+                while not self._stop.is_set():
+                    sample = sub.try_recv()
+                    if sample is None:
+                        self._stop.wait(self.period)
+                        continue
+                    try:
+                        state = WorldState.decode(sample.payload.to_bytes())
+                    except ProtocolError:
+                        continue
+                    rate = self.meter.add(time.monotonic(), state.round)
+                    if rate is None and self.latest is not None:
+                        rate = self.latest.rounds_per_second
+                    frame = frame_from_state(state, rate, self.max_rounds)
+                    self.latest = frame
+                    self.sink.show(frame)
+                    if frame.status in FINAL_STATUSES:
+                        self.ended.set()
+                        if self.stop_at_end:
+                            break
+                    self._stop.wait(self.period)
+            finally:
+                sub.undeclare()
+        except Exception as exc:  # a failing display must never take the run down with it
+            self.error = exc
+        finally:
+            if own:
+                session.close()
+            self.finished.set()
+
+    def stop(self, final: Frame | None = None) -> None:
+        """Stop following, and leave the final frame (given, or the last one seen) on screen."""
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout=5.0)
+        if final is not None and self.latest is not None:
+            rate = final.rounds_per_second or self.latest.rounds_per_second
+            final = replace(final, rounds_per_second=rate)
+        self.sink.close(final or self.latest)
+
+
+def watch(
+    swarm: str,
+    *,
+    session: Any = None,
+    connect: str | None = None,
+    dashboard: bool | None = None,
+    svg: str | None = None,
+    every: int = 50,
+    max_rounds: int | None = None,
+    console: Console | None = None,
+) -> StateWatcher:
+    """Start showing a running swarm: the live dashboard on a terminal, else a progress log.
+
+    `dashboard=None` picks by whether standard output is a terminal. Call `.stop(final)` at the end.
+    """
+    if dashboard is None:
+        dashboard = sys.stdout.isatty()
+    sink: FrameSink = LiveView(console, svg) if dashboard else ProgressLog(every=every)
+    try:
+        watcher = StateWatcher(swarm, sink, session=session, connect=connect, max_rounds=max_rounds)
+        return watcher.start()
+    except BaseException:
+        sink.close(None)
+        raise
+
+
+# --- command line --------------------------------------------------------------------------------
+
+
+def add_dashboard_arguments(p: argparse.ArgumentParser) -> None:
+    """Flags `fatswarm run` takes for its display."""
+    p.add_argument(
+        "--no-dashboard",
+        action="store_true",
+        help="print a progress line every few rounds instead of the live dashboard",
+    )
+    p.add_argument("--svg", metavar="PATH", help="save the final dashboard frame as SVG")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Flags of `fatswarm dashboard`."""
+    p.add_argument(
+        "--connect",
+        metavar="ENDPOINT",
+        required=True,
+        help="the Zenoh router of the swarm, e.g. tcp/127.0.0.1:7447",
+    )
+    p.add_argument("--swarm", default=DEFAULT_SWARM, help=f"swarm name (default {DEFAULT_SWARM!r})")
+    p.add_argument(
+        "--exit-at-end", action="store_true", help="exit when the run ends (default: at Ctrl-C)"
+    )
+    p.add_argument(
+        "--no-dashboard", action="store_true", help="print progress lines instead of the live view"
+    )
+    p.add_argument(
+        "--every", type=int, default=50, metavar="K", help="progress lines: one every K rounds"
+    )
+    p.add_argument("--svg", metavar="PATH", help="save the last frame shown as SVG on exit")
+
+
+def main(args: argparse.Namespace) -> int:
+    """`fatswarm dashboard`: follow a running swarm read-only until Ctrl-C (or its end)."""
+    from world.protocol import check_swarm
+
+    try:
+        check_swarm(args.swarm)
+    except ValueError as exc:
+        print(f"fatswarm dashboard: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.every < 1:
+        print("fatswarm dashboard: --every must be at least 1", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    dashboard = not args.no_dashboard and sys.stdout.isatty()
+    sink: FrameSink = LiveView(svg=args.svg) if dashboard else ProgressLog(every=args.every)
+    watcher = StateWatcher(args.swarm, sink, connect=args.connect, stop_at_end=args.exit_at_end)
+    watcher.start()
+    try:
+        while not watcher.finished.wait(0.2):
+            pass
+    except KeyboardInterrupt:
+        pass
+    finally:
+        watcher.stop()
+    if watcher.error is not None:
+        print(f"fatswarm dashboard: cannot follow {args.connect}: {watcher.error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if not dashboard and args.svg and watcher.latest is not None:
+        save_svg(watcher.latest, args.svg)
+    last = watcher.latest
+    if last is None or last.status == "running":
+        return EXIT_NOT_FORMED
+    return EXIT_FORMED if last.status == "formed" else EXIT_NOT_FORMED
