@@ -1,0 +1,399 @@
+"""Run records: JSON Lines, one header, one line per committed round, one result line.
+
+World frame, robots numbered by the world. The writer appends and flushes each line (optionally
+fsyncs it, for the networked world's durable log); the reader validates every line.
+Robots' private frames (X flips) are never recorded.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from types import TracebackType
+from typing import IO, Any, Final
+
+import numpy as np
+
+from agent.path import Path, PathFormatError, Points, from_record, to_record
+from world.physics import Collision
+from world.progress import STATUSES
+
+VERSION: Final = 1
+
+
+class RecordFormatError(ValueError):
+    """A run record file is missing, unreadable or not of the documented schema."""
+
+
+@dataclass(frozen=True, slots=True)
+class Header:
+    """First line: the run's parameters and start positions (n, 2)."""
+
+    n: int
+    a: float
+    seed: int | None
+    scheduler: str
+    initial: Points
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, slots=True)
+class Move:
+    """One robot's world-frame path of a round and the arc length it actually covered."""
+
+    robot: int
+    path: Path
+    traveled: float
+
+
+@dataclass(frozen=True, slots=True)
+class RoundEntry:
+    """One committed round: who was active, who moved how, positions after (n, 2), contacts."""
+
+    round: int
+    active: tuple[int, ...]
+    moves: tuple[Move, ...]
+    positions: Points
+    collisions: tuple[Collision, ...]
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, slots=True)
+class Result:
+    """Last line: how the run ended."""
+
+    status: str
+    rounds: int
+    positions: Points
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, slots=True)
+class RunRecord:
+    """A whole record; `result` is None when the run did not finish (e.g. the world crashed)."""
+
+    header: Header
+    rounds: tuple[RoundEntry, ...]
+    result: Result | None
+
+
+def _positions_list(positions: Points) -> list[list[float]]:
+    arr = np.asarray(positions, dtype=np.float64)
+    return [[float(x), float(y)] for x, y in arr]
+
+
+def collision_to_record(c: Collision) -> dict[str, Any]:
+    """`{"robot", "other", "t", "point": [x, y]}`."""
+    return {
+        "robot": int(c.robot),
+        "other": int(c.other),
+        "t": float(c.t),
+        "point": [float(c.point[0]), float(c.point[1])],
+    }
+
+
+class RecordWriter:
+    """Appends record lines to a file, flushing each (and fsyncing it if `fsync`)."""
+
+    def __init__(self, path: str | os.PathLike[str], *, fsync: bool = False) -> None:
+        self.path = os.fspath(path)
+        self.fsync = fsync
+        try:
+            self._fh: IO[str] | None = open(self.path, "a", encoding="utf-8")  # noqa: SIM115
+        except OSError as exc:
+            raise RecordFormatError(
+                f"cannot write run record {self.path}: {exc.strerror}"
+            ) from None
+
+    def __enter__(self) -> RecordWriter:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def write(self, entry: Mapping[str, Any]) -> None:
+        """Append one JSON object as one line."""
+        if self._fh is None:
+            raise RuntimeError(f"run record {self.path} is closed")
+        self._fh.write(json.dumps(entry, separators=(",", ":"), allow_nan=False) + "\n")
+        self._fh.flush()
+        if self.fsync:
+            os.fsync(self._fh.fileno())
+
+    def header(
+        self,
+        n: int,
+        a: float,
+        seed: int | None,
+        scheduler: str,
+        initial: Points,
+        **extra: Any,
+    ) -> None:
+        self.write(
+            {
+                "type": "header",
+                "version": VERSION,
+                "n": int(n),
+                "a": float(a),
+                "seed": seed,
+                "scheduler": scheduler,
+                "initial": _positions_list(initial),
+                **extra,
+            }
+        )
+
+    def round(
+        self,
+        round_no: int,
+        active: Sequence[int],
+        moves: Mapping[int, tuple[Path, float]],
+        positions: Points,
+        collisions: Sequence[Collision] = (),
+        **extra: Any,
+    ) -> None:
+        """`moves`: robot -> (world-frame path, arc length covered), movers with non-empty paths."""
+        self.write(
+            {
+                "type": "round",
+                "round": int(round_no),
+                "active": [int(r) for r in active],
+                "moves": [
+                    {"robot": int(r), "path": to_record(p), "traveled": float(t)}
+                    for r, (p, t) in sorted(moves.items())
+                ],
+                "positions": _positions_list(positions),
+                "collisions": [collision_to_record(c) for c in collisions],
+                **extra,
+            }
+        )
+
+    def result(self, status: str, rounds: int, positions: Points, **extra: Any) -> None:
+        self.write(
+            {
+                "type": "result",
+                "status": status,
+                "rounds": int(rounds),
+                "positions": _positions_list(positions),
+                **extra,
+            }
+        )
+
+    def close(self) -> None:
+        if self._fh is not None:
+            self._fh.close()
+            self._fh = None
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading
+
+
+class _LineError(Exception):
+    """Internal: what is wrong with one line (the reader adds file and line number)."""
+
+
+def _int(entry: Mapping[str, Any], key: str, low: int = 0) -> int:
+    value = entry.get(key)
+    if isinstance(value, bool) or not isinstance(value, int) or value < low:
+        raise _LineError(f"'{key}' must be a whole number >= {low}, got {value!r}")
+    return value
+
+
+def _number(value: Any, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise _LineError(f"{what} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _points(value: Any, n: int, what: str) -> Points:
+    if not isinstance(value, list) or len(value) != n:
+        raise _LineError(f"'{what}' must be a list of {n} [x, y] pairs")
+    out = np.empty((n, 2), dtype=np.float64)
+    for i, pair in enumerate(value):
+        if not isinstance(pair, list) or len(pair) != 2:
+            raise _LineError(f"'{what}'[{i}] must be an [x, y] pair, got {pair!r}")
+        out[i, 0] = _number(pair[0], f"'{what}'[{i}]")
+        out[i, 1] = _number(pair[1], f"'{what}'[{i}]")
+    return out
+
+
+def _robot(value: Any, n: int, what: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < n:
+        raise _LineError(f"{what} must be a robot number in 0..{n - 1}, got {value!r}")
+    return value
+
+
+def _extra(entry: Mapping[str, Any], known: set[str]) -> dict[str, Any]:
+    return {k: v for k, v in entry.items() if k not in known}
+
+
+def _header(entry: Mapping[str, Any]) -> Header:
+    if entry.get("type") != "header":
+        raise _LineError(f"the first line must be the header, got type {entry.get('type')!r}")
+    if entry.get("version") != VERSION:
+        raise _LineError(f"unsupported record version {entry.get('version')!r} (expected 1)")
+    n = _int(entry, "n", 1)
+    a = _number(entry.get("a"), "'a'")
+    seed = entry.get("seed")
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
+        raise _LineError(f"'seed' must be a whole number or null, got {seed!r}")
+    scheduler = entry.get("scheduler")
+    if not isinstance(scheduler, str):
+        raise _LineError(f"'scheduler' must be a string, got {scheduler!r}")
+    initial = _points(entry.get("initial"), n, "initial")
+    known = {"type", "version", "n", "a", "seed", "scheduler", "initial"}
+    return Header(n, a, seed, scheduler, initial, _extra(entry, known))
+
+
+def _collision(value: Any, n: int) -> Collision:
+    if not isinstance(value, dict):
+        raise _LineError(f"a collision must be an object, got {value!r}")
+    point = value.get("point")
+    if not isinstance(point, list) or len(point) != 2:
+        raise _LineError(f"a collision's 'point' must be [x, y], got {point!r}")
+    return Collision(
+        robot=_robot(value.get("robot"), n, "a collision's 'robot'"),
+        other=_robot(value.get("other"), n, "a collision's 'other'"),
+        t=_number(value.get("t"), "a collision's 't'"),
+        point=(_number(point[0], "collision point x"), _number(point[1], "collision point y")),
+    )
+
+
+def _move(value: Any, n: int) -> Move:
+    if not isinstance(value, dict):
+        raise _LineError(f"a move must be an object, got {value!r}")
+    try:
+        path = from_record(value.get("path"))
+    except PathFormatError as exc:
+        raise _LineError(f"bad path: {exc}") from None
+    traveled = _number(value.get("traveled"), "a move's 'traveled'")
+    if traveled < 0:
+        raise _LineError(f"a move's 'traveled' must be >= 0, got {traveled}")
+    return Move(_robot(value.get("robot"), n, "a move's 'robot'"), path, traveled)
+
+
+def _round(entry: Mapping[str, Any], n: int, expected: int | None) -> RoundEntry:
+    number = _int(entry, "round", 1)
+    if expected is not None and number != expected:
+        raise _LineError(f"round {number} follows round {expected - 1}; rounds must be consecutive")
+    active = entry.get("active")
+    if not isinstance(active, list):
+        raise _LineError(f"'active' must be a list of robot numbers, got {active!r}")
+    moves = entry.get("moves")
+    if not isinstance(moves, list):
+        raise _LineError(f"'moves' must be a list, got {moves!r}")
+    collisions = entry.get("collisions", [])
+    if not isinstance(collisions, list):
+        raise _LineError(f"'collisions' must be a list, got {collisions!r}")
+    known = {"type", "round", "active", "moves", "positions", "collisions"}
+    return RoundEntry(
+        round=number,
+        active=tuple(_robot(r, n, "an 'active' entry") for r in active),
+        moves=tuple(_move(m, n) for m in moves),
+        positions=_points(entry.get("positions"), n, "positions"),
+        collisions=tuple(_collision(c, n) for c in collisions),
+        extra=_extra(entry, known),
+    )
+
+
+def _result(entry: Mapping[str, Any], n: int) -> Result:
+    status = entry.get("status")
+    if status not in STATUSES:
+        raise _LineError(f"'status' must be one of {', '.join(STATUSES)}, got {status!r}")
+    known = {"type", "status", "rounds", "positions"}
+    return Result(
+        str(status),
+        _int(entry, "rounds", 0),
+        _points(entry.get("positions"), n, "positions"),
+        _extra(entry, known),
+    )
+
+
+Entry = Header | RoundEntry | Result
+
+
+def iter_record(path: str | os.PathLike[str]) -> Iterator[Entry]:
+    """Validated entries of a record, one per line, in order (for streaming large records).
+
+    Raises RecordFormatError("<file>:<line>: <reason>") at the first malformed line.
+    """
+    name = os.fspath(path)
+    try:
+        fh = open(name, encoding="utf-8")  # noqa: SIM115
+    except OSError as exc:
+        raise RecordFormatError(f"cannot read run record {name}: {exc.strerror}") from None
+    with fh:
+        header: Header | None = None
+        finished = False
+        expected: int | None = None
+        number = 0
+        try:
+            for number, line in enumerate(fh, start=1):  # noqa: B007
+                if not line.strip():
+                    continue
+                try:
+                    entry = json.loads(line)
+                except json.JSONDecodeError as exc:
+                    raise _LineError(f"not JSON ({exc.msg})") from None
+                if not isinstance(entry, dict):
+                    raise _LineError("a line must be a JSON object")
+                if header is None:
+                    header = _header(entry)
+                    yield header
+                    continue
+                if finished:
+                    raise _LineError("nothing may follow the result line")
+                kind = entry.get("type")
+                if kind == "round":
+                    item = _round(entry, header.n, expected)
+                    expected = item.round + 1
+                    yield item
+                elif kind == "result":
+                    finished = True
+                    yield _result(entry, header.n)
+                else:
+                    raise _LineError(f"unknown line type {kind!r} (expected 'round' or 'result')")
+        except _LineError as exc:
+            raise RecordFormatError(f"{name}:{number}: {exc}") from None
+        except UnicodeDecodeError:
+            raise RecordFormatError(f"{name}:{number + 1}: not UTF-8 text") from None
+        if header is None:
+            raise RecordFormatError(f"{name}: empty run record (no header line)")
+
+
+def read_record(path: str | os.PathLike[str]) -> RunRecord:
+    """The whole record, validated; raises RecordFormatError naming the file, line and reason."""
+    entries = iter(iter_record(path))
+    header = next(entries)
+    assert isinstance(header, Header)
+    rounds: list[RoundEntry] = []
+    result: Result | None = None
+    for entry in entries:
+        if isinstance(entry, RoundEntry):
+            rounds.append(entry)
+        elif isinstance(entry, Result):
+            result = entry
+    return RunRecord(header, tuple(rounds), result)
+
+
+__all__ = [
+    "VERSION",
+    "Header",
+    "Move",
+    "RecordFormatError",
+    "RecordWriter",
+    "Result",
+    "RoundEntry",
+    "RunRecord",
+    "collision_to_record",
+    "iter_record",
+    "read_record",
+]
