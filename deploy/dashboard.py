@@ -138,7 +138,8 @@ def _sec_fallback(points: Points) -> tuple[tuple[float, float], float]:
     return (c[0], c[1]), c[2]
 
 
-def _sec(points: Points) -> tuple[tuple[float, float], float]:
+def enclosing_circle(points: Points) -> tuple[tuple[float, float], float]:
+    """Centre and radius of the smallest circle enclosing the centres (agent.geometry.sec)."""
     try:
         from agent import geometry
 
@@ -175,7 +176,7 @@ def _target_points(points: Points, n: int) -> Points:
 def derive(frame: Frame) -> Figures:
     """SEC, target radius, target points and how many are filled, for the frame's positions."""
     pts = np.asarray(frame.positions, dtype=np.float64).reshape(-1, 2)
-    center, rc = _sec(pts)
+    center, rc = enclosing_circle(pts)
     targets = _target_points(pts, frame.n) if len(pts) else np.zeros((0, 2))
     tol = 1e-6 * max(1.0, rc)  # "a robot at the point" (the notes' ε_at)
     filled = 0
