@@ -1,1 +1,1 @@
-"""The robot: geometry, the paper's algorithm in the robot's private frame, and the agent process."""
+"""The robot: geometry, the paper's algorithm in its private frame, and the agent process."""

@@ -1,13 +1,475 @@
-"""The paper's algorithm as a pure function of one snapshot in the robot's own frame."""
+"""The paper's algorithm as a pure function of one snapshot in the robot's own frame.
+
+`compute(view, params)` is what an agent runs in its Compute phase. It builds the *plan* of the
+whole configuration (one mover, or one mirror pair: docs/algorithm.md, G11) and returns the
+observer's own part of it. The plan depends on the configuration only up to the observer's
+translation and X mirroring, so every robot that looks at the same configuration agrees on it.
+No state survives a call: there is no module or instance state here.
+"""
 
 from __future__ import annotations
 
+import functools
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from agent.geometry import (
+    CONTACT,
+    EPS_AT_REL,
+    EPS_CLEAR,
+    EPS_EQ_REL,
+    Circle,
+    is_free,
+    is_uniform_circle,
+    mirror_matched,
+    north_point,
+    path_x_range,
+    robot_at,
+    scale,
+    sec,
+    segment_distances,
+    target_radius,
+    targets_on,
+)
 from agent.params import Params
-from agent.path import STAY, Path, Points
+from agent.path import (
+    STAY,
+    Arc,
+    Line,
+    Path,
+    Point,
+    Points,
+    end_point,
+    mirror,
+    path_length,
+    segment_end,
+    transform,
+)
+
+EXPANSION_OVERSHOOT = 1e-9
+"""Expansion aims at 2r(1 + this) so that rounding cannot leave r_c just below r (G2)."""
+PAIR_CLEARANCE_FROM_L = 1.0
+"""A mirror pair moves only if both paths stay this far from L: the two discs then never touch."""
+
+
+class ViewError(ValueError):
+    """The snapshot does not fit the parameters (wrong shape, count or non-finite values)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Plan:
+    """What the configuration asks for: `moves` maps robot index -> path in the given frame."""
+
+    phase: str  # "done" | "expansion" | "formation" | "stuck"
+    kind: str  # "done", "exp-case1", "exp-case2", "exp-case2b-north", "fill", "note-swap", "stuck"
+    moves: dict[int, Path] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, slots=True)
+class _Ctx:
+    """Quantities of one snapshot shared by the routines (computed once per call)."""
+
+    pts: Points
+    circle: Circle
+    tol_at: float
+    tol_eq: float
+    orientation: float  # +1/-1: the agreed "right" in an asymmetric configuration; 0 if symmetric
+    symmetric: bool
+
+    @property
+    def cx(self) -> float:
+        return self.circle.center[0]
 
 
 def compute(view: Points, params: Params) -> Path:
-    """The path the observer (at the origin) wants, given the others' positions `view` (n-1, 2)."""
-    # placeholder until the algorithm lands (being written now); returns "stay"
-    del view, params
-    return STAY
+    """The observer's path: `view` (n-1, 2) holds the others relative to it, in its own frame."""
+    pts = _with_observer(view, params)
+    return plan(pts, params).moves.get(0, STAY)
+
+
+def _with_observer(view: Points, params: Params) -> Points:
+    arr = np.asarray(view, dtype=np.float64)
+    if arr.size == 0:
+        arr = arr.reshape(0, 2)
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise ViewError(f"the view must be an (n-1, 2) array, got shape {arr.shape}")
+    if len(arr) != params.n - 1:
+        raise ViewError(f"the view holds {len(arr)} robots, expected n-1 = {params.n - 1}")
+    if not np.all(np.isfinite(arr)):
+        raise ViewError("the view holds non-finite coordinates")
+    return np.vstack([np.zeros((1, 2)), arr])
+
+
+def plan(points: Points, params: Params) -> Plan:
+    """The plan of the configuration `points` (n, 2) in any frame (robot 0 is the observer)."""
+    n = len(points)
+    if n <= 1:
+        return Plan("done", "done")
+    if is_uniform_circle(points, params.a):  # G10: a regular n-gon is final, aligned or not
+        return Plan("done", "done")
+    circle = sec(points)
+    s = scale(circle.radius)
+    tol_at, tol_eq = EPS_AT_REL * s, EPS_EQ_REL * s
+    r = target_radius(n, params.a)
+    matched = mirror_matched(points, circle.center[0], tol_at)
+    symmetric = bool(matched.all())
+    ctx = _Ctx(points, circle, tol_at, tol_eq, _orientation(points, circle, matched, tol_eq),
+               symmetric)
+    if circle.radius < r - tol_eq:  # G2
+        return _expansion(ctx, r)
+    return _formation(ctx, n)
+
+
+# --- ties without chirality (G12) ----------------------------------------------------------------
+
+
+def _orientation(pts: Points, circle: Circle, matched: np.ndarray, tol_eq: float) -> float:
+    """s = sign(x - c_x) of the unmatched robot with the largest (y, |x - c_x|); 0 if symmetric.
+
+    It flips with the frame, so `s * x` means the same side to every robot: an agreed left/right.
+    """
+    idx = np.flatnonzero(~matched)
+    if len(idx) == 0:
+        return 0.0
+    dx = pts[idx, 0] - circle.center[0]
+    keys = [(float(pts[i, 1]), abs(float(d))) for i, d in zip(idx, dx, strict=True)]
+    best = _argbest(keys, tol_eq)
+    return 1.0 if dx[best] > 0 else -1.0
+
+
+def _cmp_keys(tol: float) -> Callable[[Sequence[float], Sequence[float]], int]:
+    def cmp(a: Sequence[float], b: Sequence[float]) -> int:
+        for x, y in zip(a, b, strict=True):
+            if abs(x - y) > tol:
+                return -1 if x < y else 1
+        return 0
+
+    return cmp
+
+
+def _argbest(keys: Sequence[Sequence[float]], tol: float) -> int:
+    """Index of the lexicographically largest key; components within `tol` count as ties."""
+    cmp = _cmp_keys(tol)
+    best = 0
+    for i in range(1, len(keys)):
+        if cmp(keys[i], keys[best]) > 0:
+            best = i
+    return best
+
+
+def _sorted_by(items: list[int], keys: Sequence[Sequence[float]], tol: float) -> list[int]:
+    """`items` in increasing key order, ties within `tol` kept in their given order."""
+    cmp = _cmp_keys(tol)
+    def by_key(i: int, j: int) -> int:
+        return cmp(keys[i], keys[j])
+
+    order = sorted(range(len(items)), key=functools.cmp_to_key(by_key))
+    return [items[i] for i in order]
+
+
+# --- SECExpansion --------------------------------------------------------------------------------
+
+
+def _expansion(ctx: _Ctx, r: float) -> Plan:
+    """SECExpansion with leader election on the SEC robots (G3, G4) and radial moves (G5)."""
+    pts, c = ctx.pts, ctx.circle
+    cx, cy = c.center
+    dist = np.hypot(pts[:, 0] - cx, pts[:, 1] - cy)
+    on_sec = np.flatnonzero(dist >= c.radius - ctx.tol_at)
+    sec_pts = pts[on_sec]
+    matched = mirror_matched(sec_pts, cx, ctx.tol_at)
+    on_l = np.abs(sec_pts[:, 0] - cx) <= ctx.tol_at
+    if not matched.all():  # case 1: the unmatched SEC robot with maximum Y
+        cand = np.flatnonzero(~matched)
+        keys = [(float(sec_pts[i, 1]), abs(float(sec_pts[i, 0] - cx))) for i in cand]
+        leaders = [int(on_sec[cand[_argbest(keys, ctx.tol_eq)]])]
+        kind = "exp-case1"
+    elif (~on_l).any():  # case 2 (a or b): the top mirror pair off L
+        cand = np.flatnonzero(~on_l)
+        top = int(cand[np.argmax(sec_pts[cand, 1])])
+        mx, my = 2.0 * cx - sec_pts[top, 0], sec_pts[top, 1]
+        partner = int(np.argmin(np.hypot(sec_pts[:, 0] - mx, sec_pts[:, 1] - my)))
+        leaders = sorted({int(on_sec[top]), int(on_sec[partner])})
+        kind = "exp-case2"
+    else:  # G4: every SEC robot is on L; the north one leads
+        leaders = [int(on_sec[np.argmax(sec_pts[:, 1])])]
+        kind = "exp-case2b-north"
+    moves: dict[int, Path] = {}
+    for leader in leaders:
+        path = _radial_move(pts, leader, c, 2.0 * r * (1.0 + EXPANSION_OVERSHOOT))
+        if path is not None:
+            moves[leader] = path
+    if not moves:
+        return Plan("stuck", "stuck")
+    return Plan("expansion", kind, moves)
+
+
+def _radial_move(pts: Points, leader: int, circle: Circle, reach: float) -> Path | None:
+    """Move `leader` outward along the ray from the SEC centre until its farthest robot is `reach`
+    away (G5). Distances to every robot inside the SEC only grow along this ray: collision free.
+    """
+    p = pts[leader]
+    u = p - np.asarray(circle.center)
+    norm = float(np.hypot(u[0], u[1]))
+    if norm == 0.0:
+        return None
+    u = u / norm
+    others = np.delete(pts, leader, axis=0)
+    d = p - others
+    b = d @ u
+    t = -b + np.sqrt(np.maximum(b * b - np.einsum("ij,ij->i", d, d) + reach * reach, 0.0))
+    step = float(t.min())
+    if step <= 0.0:
+        return None
+    end = (float(p[0] + step * u[0]), float(p[1] + step * u[1]))
+    path = Path((Line(end),))
+    start = (float(p[0]), float(p[1]))
+    return path if is_free(start, path, others) else None
+
+
+# --- FormUCircle -----------------------------------------------------------------------------------
+
+
+def _formation(ctx: _Ctx, n: int) -> Plan:
+    """FormUCircle: fill the targets on the current SEC one mover (or mirror pair) at a time."""
+    pts, c = ctx.pts, ctx.circle
+    at_o = robot_at(pts, north_point(c), ctx.tol_at) is not None
+    targets = targets_on(c, n, at_o)
+    dmat = np.hypot(pts[:, None, 0] - targets[None, :, 0], pts[:, None, 1] - targets[None, :, 1])
+    settled_robot = dmat.min(axis=1) <= ctx.tol_at  # G8: settled robots never move
+    settled_target = dmat.min(axis=0) <= ctx.tol_at
+    blocks = dmat < CONTACT - EPS_CLEAR  # G7: R blocks T iff their discs overlap
+    cx = ctx.cx
+    order = _sorted_by(
+        [int(k) for k in np.flatnonzero(~settled_target)],
+        [(-float(targets[k, 1]), -ctx.orientation * float(targets[k, 0] - cx))
+         for k in np.flatnonzero(~settled_target)],
+        ctx.tol_eq,
+    )
+    for k in order:
+        blockers = np.flatnonzero(blocks[:, k])
+        if len(blockers) >= 2:  # double-blocked: wait until one blocker has left (G7)
+            continue
+        if len(blockers) == 1:
+            cands = [int(blockers[0])] if not settled_robot[blockers[0]] else []
+        else:
+            cands = [int(i) for i in np.flatnonzero(~settled_robot)]
+        if ctx.symmetric:
+            cands = _symmetric_candidates(ctx, cands, targets[k])
+        keys = [(float(dmat[i, k]), -float(pts[i, 1]), -ctx.orientation * float(pts[i, 0] - cx))
+                for i in cands]
+        for i in _sorted_by(cands, keys, ctx.tol_eq):
+            moves = _try_move(ctx, i, targets, k, n)
+            if moves is not None:
+                return Plan("formation", "fill", moves)
+    swap = _note_swap(ctx, targets, order, settled_robot, at_o, n)
+    if swap is not None:
+        return Plan("formation", "note-swap", swap)
+    return Plan("stuck", "stuck")
+
+
+def _symmetric_candidates(ctx: _Ctx, cands: list[int], target: np.ndarray) -> list[int]:
+    """G13: targets on L go to robots on L; an off-L target to robots on its side or on L."""
+    cx, tol = ctx.cx, ctx.tol_at
+    tx = float(target[0]) - cx
+    out = []
+    for i in cands:
+        x = float(ctx.pts[i, 0]) - cx
+        if abs(tx) <= tol:
+            if abs(x) <= tol:
+                out.append(i)
+        elif abs(x) <= tol or (x > 0) == (tx > 0):
+            out.append(i)
+    return out
+
+
+def _try_move(ctx: _Ctx, i: int, targets: Points, k: int, n: int) -> dict[int, Path] | None:
+    """The move of robot i to target k if it is admissible (free, keeps the SEC), else None."""
+    pts, cx, tol = ctx.pts, ctx.cx, ctx.tol_at
+    x_i = float(pts[i, 0]) - cx
+    i_on_l = abs(x_i) <= tol
+    target = (float(targets[k, 0]), float(targets[k, 1]))
+    if ctx.symmetric and i_on_l and abs(target[0] - cx) > tol and target[0] < cx:
+        # A robot on L choosing between mirror targets takes the one on its own +X side (G12);
+        # it moves alone, so this frame-dependent choice breaks the symmetry safely.
+        target = (2.0 * cx - target[0], target[1])
+    start = (float(pts[i, 0]), float(pts[i, 1]))
+    others = np.delete(pts, i, axis=0)
+    path = _free_path(ctx, start, target, others)
+    if path is None:
+        return None
+    moves = {i: path}
+    if ctx.symmetric and not i_on_l:  # the mirror partner makes the mirrored move (G11)
+        lo, hi = path_x_range(start, path)
+        if (x_i > 0 and lo - cx < PAIR_CLEARANCE_FROM_L) or (
+            x_i < 0 and cx - hi < PAIR_CLEARANCE_FROM_L
+        ):
+            return None
+        partner = int(np.argmin(np.hypot(pts[:, 0] - (2.0 * cx - start[0]), pts[:, 1] - start[1])))
+        if partner == i:
+            return None
+        moves[partner] = transform(mirror(transform(path, (-cx, 0.0), False)), (cx, 0.0), False)
+    if not _keeps_sec(ctx, moves):
+        return None
+    return moves
+
+
+def _keeps_sec(ctx: _Ctx, moves: dict[int, Path]) -> bool:
+    """G9: the SEC after the move equals the current one, for every subset SSYNC may activate."""
+    pts, c = ctx.pts, ctx.circle
+    cx, cy = c.center
+    movers = list(moves)
+    if all(math.hypot(pts[i, 0] - cx, pts[i, 1] - cy) < c.radius - ctx.tol_at for i in movers):
+        return True  # only interior robots move onto the circle: the support stays
+    subsets = [movers] if len(movers) == 1 else [movers, movers[:1], movers[1:]]
+    for subset in subsets:
+        after = pts.copy()
+        for i in subset:
+            after[i] = _end(pts[i], moves[i])
+        new = sec(after)
+        if (
+            math.hypot(new.center[0] - cx, new.center[1] - cy) > ctx.tol_at
+            or abs(new.radius - c.radius) > ctx.tol_at
+        ):
+            return False
+    return True
+
+
+def _end(start: np.ndarray, path: Path) -> tuple[float, float]:
+    return end_point((float(start[0]), float(start[1])), path)
+
+
+def _free_path(ctx: _Ctx, start: Point, target: Point, others: Points) -> Path | None:
+    """Shortest free way to the target: along the SEC, the chord, or sliding over an obstacle."""
+    c = ctx.circle
+    options = [Path((Line(target),))]
+    rho = math.hypot(start[0] - c.center[0], start[1] - c.center[1])
+    if rho >= c.radius - ctx.tol_at:  # a robot on the SEC may slide along it (G15)
+        a0 = math.atan2(start[1] - c.center[1], start[0] - c.center[0])
+        a1 = math.atan2(target[1] - c.center[1], target[0] - c.center[0])
+        ccw = (a1 - a0) % (2.0 * math.pi)
+        for sweep in (ccw, ccw - 2.0 * math.pi):
+            options.append(_arc_to(c.center, sweep, start, target))
+    path = _first_free(ctx, start, options, others)
+    if path is not None:
+        return path
+    obstacle = _first_blocker(start, target, others)
+    if obstacle is None:
+        return None
+    return _first_free(ctx, start, _slides(start, target, obstacle), others)
+
+
+def _arc_to(center: Point, sweep: float, start: Point, target: Point) -> Path:
+    arc = Arc(center, sweep)
+    end = segment_end(start, arc)
+    if math.hypot(end[0] - target[0], end[1] - target[1]) > 1e-12:
+        return Path((arc, Line(target)))
+    return Path((arc,))
+
+
+def _first_free(ctx: _Ctx, start: Point, options: list[Path], others: Points) -> Path | None:
+    """The shortest free option; equal lengths go to the agreed side (G12)."""
+    keys = []
+    for p in options:
+        lo, hi = path_x_range(start, p)
+        keys.append((path_length(start, p), -ctx.orientation * ((lo + hi) / 2.0 - ctx.cx)))
+    for j in _sorted_by(list(range(len(options))), keys, ctx.tol_eq):
+        if is_free(start, options[j], others):
+            return options[j]
+    return None
+
+
+def _first_blocker(start: Point, target: Point, others: Points) -> Point | None:
+    """The first robot along the straight path start -> target whose disc it would touch."""
+    if len(others) == 0:
+        return None
+    d = segment_distances(start, target, others)
+    hit = np.flatnonzero(d < CONTACT - EPS_CLEAR)
+    if len(hit) == 0:
+        return None
+    dx, dy = target[0] - start[0], target[1] - start[1]
+    along = (others[hit, 0] - start[0]) * dx + (others[hit, 1] - start[1]) * dy
+    j = int(hit[np.argmin(along)])
+    return (float(others[j, 0]), float(others[j, 1]))
+
+
+def _slides(start: Point, target: Point, obstacle: Point) -> list[Path]:
+    """Tangent-arc-tangent paths around the radius-2 circle about the obstacle, both sides (G14)."""
+    ox, oy = obstacle
+    out: list[Path] = []
+    ds = math.hypot(start[0] - ox, start[1] - oy)
+    dt = math.hypot(target[0] - ox, target[1] - oy)
+    if dt < CONTACT - EPS_CLEAR:
+        return out
+    phi_s = math.atan2(start[1] - oy, start[0] - ox)
+    phi_t = math.atan2(target[1] - oy, target[0] - ox)
+    beta_s = math.acos(min(1.0, CONTACT / ds)) if ds > CONTACT else 0.0
+    beta_t = math.acos(min(1.0, CONTACT / dt)) if dt > CONTACT else 0.0
+    for sigma in (1.0, -1.0):  # counter-clockwise, clockwise around the obstacle
+        a_ang = phi_s + sigma * beta_s
+        b_ang = phi_t - sigma * beta_t
+        sweep = sigma * ((sigma * (b_ang - a_ang)) % (2.0 * math.pi))
+        a_pt = (ox + CONTACT * math.cos(a_ang), oy + CONTACT * math.sin(a_ang))
+        segs: list[Line | Arc] = []
+        if math.hypot(a_pt[0] - start[0], a_pt[1] - start[1]) > 1e-12:
+            segs.append(Line(a_pt))
+        segs.append(Arc(obstacle, sweep))
+        segs.append(Line(target))
+        out.append(Path(tuple(segs)))
+    return out
+
+
+# --- the Note's swap (G15) ---------------------------------------------------------------------
+
+
+def _note_swap(
+    ctx: _Ctx,
+    targets: Points,
+    order: list[int],
+    settled_robot: np.ndarray,
+    at_o: bool,
+    n: int,
+) -> dict[int, Path] | None:
+    """Fallback when nothing else can move: a settled robot R2 next to a vacant target T' slides
+    on to T', vacating T2 so that an unsettled SEC robot can take T2 in the next cycle."""
+    pts, c = ctx.pts, ctx.circle
+    cx, cy = c.center
+    step = 2.0 * math.pi / n
+    on_sec = np.hypot(pts[:, 0] - cx, pts[:, 1] - cy) >= c.radius - ctx.tol_at
+    waiting = np.flatnonzero(~settled_robot & on_sec)
+    if len(waiting) == 0:
+        return None
+    o_pt = north_point(c)
+    for k in order:
+        tk = (float(targets[k, 0]), float(targets[k, 1]))
+        for j in range(n):
+            tj = (float(targets[j, 0]), float(targets[j, 1]))
+            ang = math.atan2(tj[1] - cy, tj[0] - cx) - math.atan2(tk[1] - cy, tk[0] - cx)
+            ang = (ang + math.pi) % (2.0 * math.pi) - math.pi
+            if abs(abs(ang) - step) > 1e-6:
+                continue
+            r2 = robot_at(pts, tj, ctx.tol_at)
+            if r2 is None or (at_o and math.hypot(tj[0] - o_pt[0], tj[1] - o_pt[1]) <= ctx.tol_at):
+                continue
+            others = np.delete(pts, r2, axis=0)
+            path = _arc_to(c.center, -ang, tj, tk)
+            if not is_free(tj, path, others) or not _keeps_sec(ctx, {r2: path}):
+                continue
+            after = pts.copy()
+            after[r2] = tk
+            if _someone_reaches(ctx, after, waiting, tj):
+                return {r2: path}
+    return None
+
+
+def _someone_reaches(ctx: _Ctx, after: Points, waiting: np.ndarray, target: Point) -> bool:
+    """After the swap, some waiting robot has a free path to the vacated target (progress)."""
+    for i in waiting:
+        start = (float(after[i, 0]), float(after[i, 1]))
+        others = np.delete(after, i, axis=0)
+        if _free_path(ctx, start, target, others) is not None:
+            return True
+    return False

@@ -10,7 +10,7 @@ FRAME_STREAM = 0xF1A9  # keeps frame draws apart from other seeded streams of th
 
 
 def draw_flip(seed: int, robot: int) -> bool:
-    """The X mirroring of robot `robot` in a run seeded with `seed` (same in lockstep and networked)."""
+    """Robot `robot`'s X mirroring in a run seeded with `seed` (same in lockstep and networked)."""
     rng = np.random.default_rng([FRAME_STREAM, seed & 0xFFFFFFFF, robot])
     return bool(rng.random() < 0.5)
 

@@ -1,17 +1,332 @@
-"""Plane geometry the paper uses: smallest enclosing circle, free paths, symmetry, targets."""
+"""Plane geometry the paper uses: smallest enclosing circle, free paths, symmetry about L, targets.
+
+Everything works on centres of unit discs, as `(n, 2)` float64 arrays, in whatever frame the caller
+uses: every function here is equivariant under translation and under the mirror x -> -x.
+"""
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
 
-from agent.path import Points
+from agent.path import Arc, Line, Path, Point, Points, segment_end
+
+ROBOT_RADIUS = 1.0
+CONTACT = 2.0 * ROBOT_RADIUS  # centre distance at which two unit discs touch
+
+# Tolerances. Relative ones are multiplied by `scale(r_c) = max(1, r_c)` so that they mean the
+# same thing for a swarm of radius 5 and one of radius 500.
+EPS_EQ_REL = 1e-9
+"""Equalities and ties: far above the float error of O(n) sums, far below any real gap."""
+EPS_AT_REL = 1e-6
+""""Robot at o / at p / on the SEC / settled on a target / mirror image of": above the precision of
+any computed position (~1e-12), below any distance the algorithm creates on purpose (>= 1e-3)."""
+EPS_CLEAR = 1e-9
+"""Absolute slack in clearance tests (free path, vacant point): a planned path keeps every other
+centre at >= 2 - EPS_CLEAR, so touching (exactly 2, up to rounding) is allowed. It is 100x below the
+physics' overlap slack (1e-7), so a path planned free can never be stopped by contact."""
+SEC_SLACK_REL = 1e-12
+"""A point counts as inside a candidate circle if within radius*(1 + this): rounding only."""
 
 
-def is_uniform_circle(positions: Points, a: float) -> bool:
-    """True when the centres form a regular n-gon with side >= a (within tolerance)."""
-    # placeholder until geometry lands
-    del positions, a
-    return False
+def scale(radius: float) -> float:
+    """The length scale tolerances are relative to."""
+    return max(1.0, radius)
 
 
-__all__ = ["is_uniform_circle", "np"]
+@dataclass(frozen=True, slots=True)
+class Circle:
+    """A circle by centre and radius."""
+
+    center: Point
+    radius: float
+
+
+# --- smallest enclosing circle -----------------------------------------------------------------
+
+
+def _circle2(p: Point, q: Point) -> Circle:
+    cx, cy = (p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0
+    return Circle((cx, cy), math.hypot(p[0] - cx, p[1] - cy))
+
+
+def _circle3(p: Point, q: Point, s: Point) -> Circle | None:
+    """Circumcircle of three points, or None when they are (nearly) collinear."""
+    bx, by = q[0] - p[0], q[1] - p[1]
+    cx, cy = s[0] - p[0], s[1] - p[1]
+    d = 2.0 * (bx * cy - by * cx)
+    # Collinear within rounding: the circumcircle is huge or undefined; the diametral circle of the
+    # extreme pair then encloses the third point, so dropping the triple loses nothing.
+    if abs(d) <= 1e-14 * (bx * bx + by * by + cx * cx + cy * cy):
+        return None
+    b2, c2 = bx * bx + by * by, cx * cx + cy * cy
+    ux = (cy * b2 - by * c2) / d
+    uy = (bx * c2 - cx * b2) / d
+    return Circle((p[0] + ux, p[1] + uy), math.hypot(ux, uy))
+
+
+def _contains_all(circle: Circle, pts: list[Point]) -> bool:
+    lim = circle.radius * (1.0 + SEC_SLACK_REL) + 1e-300
+    cx, cy = circle.center
+    return all(math.hypot(x - cx, y - cy) <= lim for x, y in pts)
+
+
+def _sec_small(pts: list[Point]) -> Circle:
+    """Smallest enclosing circle of at most four points, by trying every pair and triple."""
+    if len(pts) == 1:
+        return Circle(pts[0], 0.0)
+    best: Circle | None = None
+    m = len(pts)
+    for i in range(m):
+        for j in range(i + 1, m):
+            c = _circle2(pts[i], pts[j])
+            if (best is None or c.radius < best.radius) and _contains_all(c, pts):
+                best = c
+    for i in range(m):
+        for j in range(i + 1, m):
+            for k in range(j + 1, m):
+                c3 = _circle3(pts[i], pts[j], pts[k])
+                if c3 is None:
+                    continue
+                if (best is None or c3.radius < best.radius) and _contains_all(c3, pts):
+                    best = c3
+    assert best is not None  # the diametral circle of the farthest pair always encloses
+    return best
+
+
+def _support(circle: Circle, pts: list[Point]) -> list[Point]:
+    """The points of `pts` on the boundary of `circle` (at most three are kept)."""
+    cx, cy = circle.center
+    tol = circle.radius * 1e-9 + 1e-300
+    on = [p for p in pts if abs(math.hypot(p[0] - cx, p[1] - cy) - circle.radius) <= tol]
+    return on[:3] if len(on) <= 3 else _three_spanning(circle, on)
+
+
+def _three_spanning(circle: Circle, on: list[Point]) -> list[Point]:
+    # Cocircular boundary points: keep a pair or triple that still pins the same circle.
+    for i in range(len(on)):
+        for j in range(i + 1, len(on)):
+            c = _circle2(on[i], on[j])
+            if abs(c.radius - circle.radius) <= circle.radius * 1e-9:
+                return [on[i], on[j]]
+    for i in range(len(on)):
+        for j in range(i + 1, len(on)):
+            for k in range(j + 1, len(on)):
+                c3 = _circle3(on[i], on[j], on[k])
+                if c3 is not None and abs(c3.radius - circle.radius) <= circle.radius * 1e-9:
+                    return [on[i], on[j], on[k]]
+    return on[:3]
+
+
+def sec(points: Points) -> Circle:
+    """Smallest enclosing circle of the centres `points` (n, 2), n >= 1.
+
+    Iterative support-set method: keep the circle of a support set of at most three points, add
+    the point farthest outside it, and replace the circle by the smallest one enclosing the support
+    plus that point. The radius grows strictly, supports are finite, and a circle that encloses all
+    points and is the smallest one of a subset of them is the smallest of all: so the loop ends on
+    the exact SEC. Each step is one vectorised distance pass; a handful of steps is typical.
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) == 0:
+        raise ValueError(f"sec needs an (n, 2) array with n >= 1, got shape {pts.shape}")
+    if len(pts) == 1:
+        return Circle((float(pts[0, 0]), float(pts[0, 1])), 0.0)
+    # Start from the diametral circle of point 0 and the point farthest from it.
+    d0 = np.hypot(pts[:, 0] - pts[0, 0], pts[:, 1] - pts[0, 1])
+    far = int(np.argmax(d0))
+    support: list[Point] = [
+        (float(pts[0, 0]), float(pts[0, 1])),
+        (float(pts[far, 0]), float(pts[far, 1])),
+    ]
+    circle = _circle2(support[0], support[1])
+    for _ in range(4 * len(pts) + 16):
+        cx, cy = circle.center
+        d = np.hypot(pts[:, 0] - cx, pts[:, 1] - cy)
+        k = int(np.argmax(d))
+        if d[k] <= circle.radius * (1.0 + SEC_SLACK_REL) + 1e-300:
+            return circle
+        p = (float(pts[k, 0]), float(pts[k, 1]))
+        candidate = _sec_small([*support, p])
+        if candidate.radius <= circle.radius:  # rounding stalled the growth: accept as is
+            return circle
+        circle = candidate
+        support = _support(circle, [*support, p])
+    return circle
+
+
+# --- the algorithm's quantities ----------------------------------------------------------------
+
+
+def effective_side(a: float) -> float:
+    """a* = max(a, 4): with sides >= 4 no robot blocks two targets (docs/algorithm.md, G1)."""
+    return max(a, 4.0)
+
+
+def target_radius(n: int, a: float) -> float:
+    """ComputeRadius: circumradius of the regular n-gon of side a* (0 for a single robot)."""
+    if n < 2:
+        return 0.0
+    return effective_side(a) / (2.0 * math.sin(math.pi / n))
+
+
+def north_point(circle: Circle) -> Point:
+    """o: the north-most intersection of L (the vertical through the SEC centre) and the SEC."""
+    return (circle.center[0], circle.center[1] + circle.radius)
+
+
+def targets_on(circle: Circle, n: int, robot_at_o: bool) -> Points:
+    """ComputeTargetPoint: n equally spaced points on the circle, from o (case i) or o +- pi/n.
+
+    Target k sits at angle theta_k from north. The set is mirror symmetric about L, so a mirrored
+    frame yields the same set (in another order: callers must not rely on the order).
+    """
+    k = np.arange(n, dtype=np.float64)
+    theta = 2.0 * math.pi * k / n + (0.0 if robot_at_o else math.pi / n)
+    cx, cy = circle.center
+    rad = circle.radius
+    return np.stack([cx + rad * np.sin(theta), cy + rad * np.cos(theta)], axis=1)
+
+
+def robot_at(points: Points, p: Point, tol: float) -> int | None:
+    """Index of a robot within `tol` of point p, or None."""
+    d = np.hypot(points[:, 0] - p[0], points[:, 1] - p[1])
+    k = int(np.argmin(d))
+    return k if d[k] <= tol else None
+
+
+def target_points(points: Points, n: int | None = None) -> Points:
+    """The n target points on the SEC of `points` (case i or ii decided by a robot at o)."""
+    pts = np.asarray(points, dtype=np.float64)
+    circle = sec(pts)
+    tol = EPS_AT_REL * scale(circle.radius)
+    at_o = robot_at(pts, north_point(circle), tol) is not None
+    return targets_on(circle, len(pts) if n is None else n, at_o)
+
+
+def mirror_matched(points: Points, axis_x: float, tol: float) -> np.ndarray:
+    """Boolean (n,): robot i has a robot (itself, when on the axis) at its mirror image about x."""
+    mx = 2.0 * axis_x - points[:, 0]
+    dx = mx[:, None] - points[None, :, 0]
+    dy = points[:, 1][:, None] - points[None, :, 1]
+    return np.asarray((dx * dx + dy * dy).min(axis=1) <= tol * tol)
+
+
+def is_uniform_circle(points: Points, a: float) -> bool:
+    """True when the centres form a regular n-gon with side >= a (the paper's goal; G10)."""
+    pts = np.asarray(points, dtype=np.float64)
+    n = len(pts)
+    if n <= 1:
+        return True
+    if n == 2:
+        return bool(np.hypot(*(pts[0] - pts[1])) >= a - EPS_AT_REL * scale(a))
+    circle = sec(pts)
+    tol = EPS_AT_REL * scale(circle.radius)
+    cx, cy = circle.center
+    rel = pts - np.array([cx, cy])
+    radii = np.hypot(rel[:, 0], rel[:, 1])
+    if np.any(np.abs(radii - circle.radius) > tol):
+        return False
+    ang = np.sort(np.arctan2(rel[:, 1], rel[:, 0]))
+    gaps = np.diff(np.append(ang, ang[0] + 2.0 * math.pi))
+    if np.any(np.abs(gaps - 2.0 * math.pi / n) * circle.radius > tol):
+        return False
+    side = 2.0 * circle.radius * math.sin(math.pi / n)
+    return side >= a - tol
+
+
+# --- free paths --------------------------------------------------------------------------------
+
+
+def segment_distances(p: Point, q: Point, others: Points) -> np.ndarray:
+    """Distance from every row of `others` to the segment pq."""
+    px, py = p
+    dx, dy = q[0] - px, q[1] - py
+    len2 = dx * dx + dy * dy
+    ox, oy = others[:, 0] - px, others[:, 1] - py
+    if len2 == 0.0:
+        return np.asarray(np.hypot(ox, oy))
+    t = np.clip((ox * dx + oy * dy) / len2, 0.0, 1.0)
+    return np.asarray(np.hypot(ox - t * dx, oy - t * dy))
+
+
+def _angle_in_sweep(angles: np.ndarray, start: float, sweep: float) -> np.ndarray:
+    """Whether each angle lies on the arc that starts at `start` and turns by `sweep`."""
+    if sweep >= 0.0:
+        rel = np.mod(angles - start, 2.0 * math.pi)
+        return np.asarray(rel <= sweep)
+    rel = np.mod(start - angles, 2.0 * math.pi)
+    return np.asarray(rel <= -sweep)
+
+
+def arc_distances(start: Point, arc: Arc, others: Points) -> np.ndarray:
+    """Distance from every row of `others` to the arc that starts at `start`."""
+    cx, cy = arc.center
+    radius = math.hypot(start[0] - cx, start[1] - cy)
+    end = segment_end(start, arc)
+    ox, oy = others[:, 0] - cx, others[:, 1] - cy
+    to_circle = np.abs(np.hypot(ox, oy) - radius)
+    a0 = math.atan2(start[1] - cy, start[0] - cx)
+    inside = _angle_in_sweep(np.arctan2(oy, ox), a0, arc.sweep)
+    if abs(arc.sweep) >= 2.0 * math.pi:
+        inside = np.ones(len(others), dtype=bool)
+    d_ends = np.minimum(
+        np.hypot(others[:, 0] - start[0], others[:, 1] - start[1]),
+        np.hypot(others[:, 0] - end[0], others[:, 1] - end[1]),
+    )
+    return np.asarray(np.where(inside, to_circle, d_ends))
+
+
+def path_distances(start: Point, path: Path, others: Points) -> np.ndarray:
+    """Distance from every row of `others` to the whole path (its swept centre line)."""
+    best = np.hypot(others[:, 0] - start[0], others[:, 1] - start[1])
+    here = start
+    for seg in path.segments:
+        d = segment_distances(here, seg.end, others) if isinstance(seg, Line) else (
+            arc_distances(here, seg, others)
+        )
+        best = np.minimum(best, d)
+        here = segment_end(here, seg)
+    return np.asarray(best)
+
+
+def is_free(start: Point, path: Path, others: Points) -> bool:
+    """Free path (G6): the unit disc swept along the path, end disc included, meets no other disc.
+
+    The paper's rectangle of width 2 misses the half disc ahead of the destination; the capsule
+    (every other centre >= 2 from every point of the path) is the sound version. Starting in
+    contact is allowed: only the minimum distance counts, with EPS_CLEAR slack.
+    """
+    if len(others) == 0:
+        return True
+    return bool(path_distances(start, path, others).min() >= CONTACT - EPS_CLEAR)
+
+
+def is_vacant(p: Point, others: Points) -> bool:
+    """Vacant point: no part of another robot within the unit disc around p."""
+    if len(others) == 0:
+        return True
+    return bool(np.hypot(others[:, 0] - p[0], others[:, 1] - p[1]).min() >= CONTACT - EPS_CLEAR)
+
+
+def path_x_range(start: Point, path: Path) -> tuple[float, float]:
+    """Smallest and largest x reached along the path (for the distance of a path to L)."""
+    xs = [start[0]]
+    here = start
+    for seg in path.segments:
+        end = segment_end(here, seg)
+        xs.append(end[0])
+        if isinstance(seg, Arc):
+            cx, cy = seg.center
+            radius = math.hypot(here[0] - cx, here[1] - cy)
+            a0 = math.atan2(here[1] - cy, here[0] - cx)
+            extremes = np.array([0.0, math.pi])
+            hit = _angle_in_sweep(extremes, a0, seg.sweep)
+            if hit[0]:
+                xs.append(cx + radius)
+            if hit[1]:
+                xs.append(cx - radius)
+        here = end
+    return min(xs), max(xs)
