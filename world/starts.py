@@ -1,7 +1,7 @@
 """Start configurations: seeded random families, named degenerate cases, and `--init` files.
 
 Every start is valid: centres at least 2 apart (discs may touch, never overlap), all finite.
-Random kinds (r = the target radius of ComputeRadius with a* = max(a, 4)):
+Random kinds (r = `agent.geometry.target_radius`, ComputeRadius with a* = max(a, 4)):
 
 | kind      | density                       | smallest enclosing circle (SEC) |
 |-----------|-------------------------------|---------------------------------|
@@ -21,6 +21,7 @@ from typing import Any, Final
 
 import numpy as np
 
+from agent.geometry import target_radius
 from agent.path import Points
 
 CONTACT: Final = 2.0  # unit discs touch when their centres are 2 apart
@@ -33,11 +34,6 @@ SEC_MARGIN: Final = 1e-3  # relative margin that keeps "needs expansion" robust 
 
 class InitFileError(ValueError):
     """An `--init` file is missing or not a valid start configuration."""
-
-
-def target_radius(n: int, a: float) -> float:
-    """The paper's ComputeRadius with a* = max(a, 4) (docs/algorithm.md, G1); n >= 2."""
-    return max(a, 4.0) / (2.0 * math.sin(math.pi / n))
 
 
 def overlapping_pair(positions: Points) -> tuple[int, int, float] | None:
