@@ -1,0 +1,234 @@
+"""Dashboard frames rendered into a recording console: what is drawn and what the counters say."""
+
+from __future__ import annotations
+
+import argparse
+import io
+import math
+import re
+
+import numpy as np
+import pytest
+from rich.console import Console
+
+from deploy.dashboard import (
+    LAYER_ACTIVE,
+    LAYER_ROBOT,
+    LAYER_STOPPED,
+    LAYER_TARGET,
+    Frame,
+    ProgressLog,
+    RateMeter,
+    add_arguments,
+    add_dashboard_arguments,
+    build_canvas,
+    derive,
+    frame_from_state,
+    outcome_text,
+    print_frame,
+    save_svg,
+)
+from world.protocol import AgentInfo, WorldState
+
+
+def render_text(frame: Frame, width: int = 120, height: int = 40) -> str:
+    console = Console(
+        width=width, height=height, record=True, color_system=None, file=io.StringIO()
+    )
+    print_frame(frame, console, height)
+    return console.export_text()
+
+
+def polygon(n: int, side: float) -> np.ndarray:
+    """A regular n-gon of side `side` about (10, -5), robot 0 at its north point."""
+    r = side / (2 * math.sin(math.pi / n))
+    theta = 2 * math.pi * np.arange(n) / n
+    return np.column_stack((10 + r * np.sin(theta), -5 + r * np.cos(theta)))
+
+
+def sample_frame(**changes: object) -> Frame:
+    fields: dict[str, object] = dict(
+        round=7,
+        n=4,
+        a=4.0,
+        scheduler="ssync",
+        positions=np.array([[0.0, 0.0], [8.0, 0.0], [0.0, 8.0], [-6.0, -5.0]]),
+        active=(1, 2),
+        moved=(1,),
+        stopped=(2,),
+        collisions_total=3,
+        alive=(True, True, False, True),
+        last_active=(3, 7, 7, -1),
+        last_path_length=(0.0, 1.5, 0.25, 0.0),
+        timeouts=(0, 0, 2, 0),
+        rounds_per_second=12.5,
+        swarm="lab",
+    )
+    fields.update(changes)
+    return Frame(**fields)  # type: ignore[arg-type]
+
+
+def test_counters_show_round_scheduler_collisions_rate_and_alive() -> None:
+    text = render_text(sample_frame())
+    assert re.search(r"round\s+7\b", text)
+    assert re.search(r"scheduler\s+ssync", text)
+    assert re.search(r"collisions\s+3\b", text)
+    assert re.search(r"rounds/s\s+12\.5\b", text)
+    assert re.search(r"alive\s+3 / 4\b", text)
+    assert re.search(r"timeouts\s+2\b", text)
+    assert re.search(r"2 active\s+1 moved\s+1 stopped", text)
+    assert "swarm lab" in text
+
+
+def test_counters_show_sec_radius_against_target_radius() -> None:
+    frame = sample_frame()
+    fig = derive(frame)
+    # r = a* / (2 sin(pi/n)) with a* = max(a, 4) = 4 and n = 4
+    assert fig.target_radius == pytest.approx(4 / (2 * math.sin(math.pi / 4)))
+    text = render_text(frame)
+    assert re.search(rf"r_c / r\s+{fig.sec_radius:.3f} / {fig.target_radius:.3f}", text)
+
+
+def test_agents_panel_lists_alive_last_activation_path_length_and_timeouts() -> None:
+    text = render_text(sample_frame())
+    assert re.search(r"\b2\s+NO\s+7\s+0\.250\s+2\b", text)
+    assert re.search(r"\b1\s+yes\s+7\s+1\.500\s+0\b", text)
+    assert re.search(r"\b3\s+yes\s+never\s+0\.000\s+0\b", text)
+    # this round's active robots come first
+    assert text.index(" NO ") < text.index("never")
+
+
+def test_agents_panel_says_how_many_rows_did_not_fit() -> None:
+    n = 60
+    frame = Frame(round=1, n=n, a=4.0, scheduler="fsync", positions=polygon(n, 4.0))
+    text = render_text(frame, height=30)
+    match = re.search(r"… (\d+) more robots", text)
+    assert match is not None and 0 < int(match.group(1)) < n
+
+
+def test_robots_light_their_cells_with_active_and_stopped_marked() -> None:
+    frame = sample_frame()
+    canvas = build_canvas(frame, derive(frame), cols=60, rows=30)
+    glyphs, layers = canvas.glyphs(), canvas.cell_layers()
+    expected = {0: LAYER_ROBOT, 1: LAYER_ACTIVE, 2: LAYER_STOPPED, 3: LAYER_ROBOT}
+    for robot, layer in expected.items():
+        x, y = frame.positions[robot]
+        col, row = canvas.viewport.to_cell(float(x), float(y))
+        assert glyphs[row][col] != " ", robot
+        assert layers[row, col] == layer, robot
+
+
+def test_canvas_is_blank_away_from_everything_drawn() -> None:
+    frame = sample_frame(positions=np.array([[0.0, 0.0], [2.0, 0.0], [0.0, 2.0], [2.0, 2.0]]))
+    canvas = build_canvas(frame, derive(frame), cols=60, rows=30)
+    # the top-left corner lies outside the SEC, the target circle and every disc
+    assert canvas.glyphs()[0][0] == " "
+
+
+def test_formed_polygon_fills_every_target_and_says_formed() -> None:
+    n = 6
+    pts = polygon(n, 4.0)
+    frame = Frame(round=42, n=n, a=4.0, scheduler="fsync", positions=pts, status="formed")
+    fig = derive(frame)
+    assert fig.filled == n
+    assert fig.sec_radius == pytest.approx(fig.target_radius)
+    canvas = build_canvas(frame, fig, cols=60, rows=30)
+    for x, y in fig.targets:
+        col, row = canvas.viewport.to_cell(float(x), float(y))
+        assert canvas.cell_layers()[row, col] >= LAYER_ROBOT  # a disc sits on each target
+    text = render_text(frame)
+    assert re.search(r"targets\s+6 / 6 filled", text)
+    assert "FORMED: uniform circle of 6 robots after 42 rounds, 0 collisions" in text
+
+
+def test_empty_targets_are_marked_on_the_canvas() -> None:
+    n = 6
+    pts = polygon(n, 4.0) * 0.0 + np.array([[0.0, 0.0]]) + np.arange(n)[:, None] * [2.5, 0.0]
+    frame = Frame(round=1, n=n, a=4.0, scheduler="fsync", positions=pts)
+    fig = derive(frame)
+    assert fig.filled < n
+    canvas = build_canvas(frame, fig, cols=80, rows=40)
+    marked = [
+        canvas.cell_layers()[row, col]
+        for col, row in (canvas.viewport.to_cell(float(x), float(y)) for x, y in fig.targets)
+    ]
+    assert LAYER_TARGET in marked
+
+
+@pytest.mark.parametrize(
+    ("status", "words"),
+    [
+        ("stalled", "STALLED after 9 rounds"),
+        ("max_rounds", "NOT FORMED: stopped at the round limit (9 rounds)"),
+        ("running", "running: round 9"),
+    ],
+)
+def test_outcome_line_names_how_the_run_ended(status: str, words: str) -> None:
+    assert outcome_text(sample_frame(round=9, status=status)).startswith(words)
+
+
+def test_progress_log_prints_every_k_rounds_and_the_outcome() -> None:
+    lines: list[str] = []
+    log = ProgressLog(out=lines.append, every=10)
+    for r in range(0, 26):
+        log.show(sample_frame(round=r, status="running"))
+    log.close(sample_frame(round=26, status="formed"))
+    assert [int(line.split()[1]) for line in lines[:-2]] == [0, 10, 20]
+    assert lines[-2].startswith("round 26 formed")
+    assert lines[-1].startswith("FORMED")
+    assert "collisions 3" in lines[0] and "12.5 rounds/s" in lines[0]
+
+
+def test_rate_meter_counts_rounds_per_second_over_its_window() -> None:
+    meter = RateMeter(window=2.0)
+    assert meter.add(0.0, 0) is None
+    assert meter.add(0.5, 10) == pytest.approx(20.0)
+    assert meter.add(1.0, 30) == pytest.approx(30.0)
+    meter.add(10.0, 40)  # older samples leave the window
+    assert meter.add(10.5, 45) == pytest.approx(10.0)
+    assert meter.add(11.0, 1) is None  # a new run starts over
+
+
+def test_frame_from_world_state_carries_every_field() -> None:
+    agents = tuple(
+        AgentInfo(alive=i != 1, last_active=i, last_path_length=0.5 * i, timeouts=i)
+        for i in range(3)
+    )
+    state = WorldState(
+        round=5, n=3, a=4.5, seed=11, scheduler="centralized", swarm="s",
+        positions=np.array([[0.0, 0.0], [3.0, 0.0], [0.0, 3.0]]), active=(2,), moved=(2,),
+        stopped=(), collisions_total=0, status="running", agents=agents,
+    )  # fmt: skip
+    frame = frame_from_state(WorldState.decode(state.encode()), rounds_per_second=3.0)
+    assert (frame.round, frame.n, frame.a, frame.seed, frame.scheduler) == (
+        5,
+        3,
+        4.5,
+        11,
+        "centralized",
+    )
+    assert frame.alive == (True, False, True)
+    assert frame.last_active == (0, 1, 2) and frame.timeouts == (0, 1, 2)
+    assert frame.last_path_length == (0.0, 0.5, 1.0)
+    assert frame.active == (2,) and frame.rounds_per_second == 3.0
+    assert re.search(r"rounds/s\s+3\.0", render_text(frame))
+
+
+def test_svg_of_a_frame_holds_the_counters(tmp_path: object) -> None:
+    import pathlib
+
+    out = pathlib.Path(str(tmp_path)) / "frame.svg"
+    save_svg(sample_frame(), str(out))
+    svg = out.read_text()
+    assert svg.startswith("<svg") and "collisions" in svg
+
+
+def test_run_flags_and_dashboard_flags_parse() -> None:
+    run = argparse.ArgumentParser()
+    add_dashboard_arguments(run)
+    args = run.parse_args(["--no-dashboard", "--svg", "x.svg"])
+    assert args.no_dashboard and args.svg == "x.svg"
+    dash = argparse.ArgumentParser()
+    add_arguments(dash)
+    args = dash.parse_args(["--connect", "tcp/127.0.0.1:7447", "--swarm", "lab"])
+    assert (args.connect, args.swarm, args.exit_at_end) == ("tcp/127.0.0.1:7447", "lab", False)

@@ -1,0 +1,69 @@
+"""`fatswarm plot`: trajectories to scale, a one-line message and exit 2 without matplotlib."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import pathlib
+import sys
+
+import pytest
+
+from deploy.plot import MISSING_MATPLOTLIB, add_arguments, final_positions, main, trajectories
+from world.record import read_record
+
+RECORD = pathlib.Path(__file__).resolve().parents[1] / "data" / "replay-small.jsonl"
+
+
+def run_plot(*argv: object) -> int:
+    p = argparse.ArgumentParser()
+    add_arguments(p)
+    return main(p.parse_args([str(a) for a in argv]))
+
+
+def test_each_route_runs_from_the_start_to_the_end_position() -> None:
+    record = read_record(RECORD)
+    routes = trajectories(record)
+    end = final_positions(record)
+    assert len(routes) == record.header.n
+    for i, route in enumerate(routes):
+        assert route[0].tolist() == record.header.initial[i].tolist()
+        assert route[-1].tolist() == pytest.approx(end[i].tolist())
+    # robot 2 turned about the origin: its route keeps radius 3 and is finely sampled
+    assert len(routes[2]) > 10
+    assert [math.hypot(x, y) for x, y in routes[2]] == pytest.approx([3.0] * len(routes[2]))
+    # robot 0 followed two segments through the corner (0, -2)
+    assert [0.0, -2.0] in routes[0].tolist()
+
+
+@pytest.mark.parametrize("suffix", [".svg", ".png"])
+def test_plot_writes_the_picture(tmp_path: pathlib.Path, suffix: str) -> None:
+    pytest.importorskip("matplotlib")
+    out = tmp_path / f"run{suffix}"
+    assert run_plot(RECORD, out) == 0
+    data = out.read_bytes()
+    assert data.startswith(b"\x89PNG") if suffix == ".png" else b"<svg" in data[:2000]
+
+
+def test_missing_matplotlib_says_how_to_install_and_exits_2(
+    tmp_path: pathlib.Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # makes `import matplotlib` fail
+    assert run_plot(RECORD, tmp_path / "x.svg") == 2
+    err = capsys.readouterr().err
+    assert err == MISSING_MATPLOTLIB + "\n" and "fatswarm[plot]" in err
+    assert not (tmp_path / "x.svg").exists()
+
+
+def test_unknown_picture_format_exits_2(
+    tmp_path: pathlib.Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert run_plot(RECORD, tmp_path / "x.jpg") == 2
+    assert "must end in .svg or .png" in capsys.readouterr().err
+
+
+def test_unreadable_record_exits_2(
+    tmp_path: pathlib.Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert run_plot(tmp_path / "none.jsonl", tmp_path / "x.svg") == 2
+    assert "none.jsonl" in capsys.readouterr().err

@@ -1,0 +1,132 @@
+"""Replay of the fixed record tests/data/replay-small.jsonl: frames, player keys, command line."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import pathlib
+import re
+
+import pytest
+
+from deploy.replay import Player, add_arguments, build_frames, main, parse_keys
+from world.record import read_record
+
+RECORD = pathlib.Path(__file__).resolve().parents[1] / "data" / "replay-small.jsonl"
+
+
+def run_replay(*argv: object) -> int:
+    p = argparse.ArgumentParser()
+    add_arguments(p)
+    return main(p.parse_args([str(a) for a in argv]))
+
+
+def test_one_frame_per_round_starting_from_the_initial_positions() -> None:
+    record = read_record(RECORD)
+    frames = build_frames(record)
+    assert [f.round for f in frames] == [0, 1, 2, 3]
+    assert frames[0].positions.tolist() == record.header.initial.tolist()
+    assert frames[3].positions.tolist() == record.rounds[2].positions.tolist()
+    assert [f.status for f in frames] == ["running", "running", "running", "max_rounds"]
+
+
+def test_frames_carry_who_was_active_moved_and_stopped_and_the_collision_count() -> None:
+    frames = build_frames(read_record(RECORD))
+    f2 = frames[2]  # robot 2 turns about the origin and is stopped by robot 3
+    assert f2.active == (2,) and f2.moved == (2,) and f2.stopped == (2,)
+    assert [f.collisions_total for f in frames] == [0, 0, 1, 1]
+    assert f2.last_active == (1, 1, 2, -1)
+    assert f2.last_path_length[2] == pytest.approx(3.70046653609408)
+    assert frames[3].last_active == (3, 3, 3, 3)
+
+
+def test_trails_follow_the_arc_covered_until_contact() -> None:
+    trail = build_frames(read_record(RECORD))[2].trails[0]
+    radii = [math.hypot(x, y) for x, y in trail]
+    assert radii == pytest.approx([3.0] * len(radii))
+    assert trail[-1].tolist() == pytest.approx([-2.8309475019306793, 0.9928425057945736])
+
+
+def test_replay_prints_the_requested_round(capsys: pytest.CaptureFixture[str]) -> None:
+    assert run_replay(RECORD, "--round", "2", "--no-play") == 0
+    out = capsys.readouterr().out
+    assert re.search(r"round\s+2 / 3", out)
+    assert re.search(r"collisions\s+1\b", out)
+    assert re.search(r"1 active\s+1 moved\s+1 stopped", out)
+
+
+def test_replay_without_a_round_shows_the_outcome(capsys: pytest.CaptureFixture[str]) -> None:
+    assert run_replay(RECORD, "--no-play") == 0
+    assert "NOT FORMED: stopped at the round limit (3 rounds)" in capsys.readouterr().out
+
+
+def test_replay_saves_the_frame_as_svg(tmp_path: pathlib.Path) -> None:
+    out = tmp_path / "last.svg"
+    assert run_replay(RECORD, "--no-play", "--svg", out) == 0
+    assert out.read_text().startswith("<svg")
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--round", "9"], "--round must be between 0 and 3, got 9"),
+        (["--speed", "0"], "--speed must be a positive number"),
+    ],
+)
+def test_bad_flags_exit_2_with_one_line(
+    argv: list[str], message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert run_replay(RECORD, "--no-play", *argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+def test_unreadable_record_exits_2(
+    tmp_path: pathlib.Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert run_replay(tmp_path / "missing.jsonl", "--no-play") == 2
+    bad = tmp_path / "bad.jsonl"
+    bad.write_text('{"type": "round"}\n')
+    assert run_replay(bad, "--no-play") == 2
+    err = capsys.readouterr().err
+    assert "missing.jsonl" in err and "bad.jsonl:1" in err
+
+
+def test_player_steps_pauses_and_clamps_to_the_record() -> None:
+    p = Player(count=4)
+    p.key("right")
+    assert (p.index, p.playing) == (1, False)
+    p.key("left")
+    p.key("left")
+    assert p.index == 0
+    p.key("G")
+    p.key(".")
+    assert p.index == 3
+    p.key("g")
+    assert p.index == 0
+    p.key("q")
+    assert p.quit
+
+
+def test_player_plays_at_its_speed_and_stops_at_the_end() -> None:
+    p = Player(count=100, speed=10.0)
+    p.tick(0.25)
+    p.tick(0.25)
+    assert p.index == 5
+    p.key(" ")
+    p.tick(5.0)
+    assert p.index == 5  # paused
+    p.key("+")
+    assert p.speed == 20.0
+    p.key(" ")
+    p.tick(100.0)
+    assert (p.index, p.playing) == (99, False)
+    p.key(" ")  # play again from the start
+    assert (p.index, p.playing) == (0, True)
+    p.key("-")
+    p.key("-")
+    assert p.speed == 5.0
+
+
+def test_terminal_input_is_split_into_named_keys() -> None:
+    assert parse_keys("\x1b[C\x1b[D \x1b[A+q\x1b") == ["right", "left", " ", "up", "+", "q", "esc"]
