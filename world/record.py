@@ -96,13 +96,20 @@ def collision_to_record(c: Collision) -> dict[str, Any]:
 
 
 class RecordWriter:
-    """Appends record lines to a file, flushing each (and fsyncing it if `fsync`)."""
+    """Writes record lines to a file, flushing each (and fsyncing it if `fsync`).
 
-    def __init__(self, path: str | os.PathLike[str], *, fsync: bool = False) -> None:
+    The file is truncated unless `append` (to continue a durable log after a restart).
+    """
+
+    def __init__(
+        self, path: str | os.PathLike[str], *, fsync: bool = False, append: bool = False
+    ) -> None:
         self.path = os.fspath(path)
         self.fsync = fsync
         try:
-            self._fh: IO[str] | None = open(self.path, "a", encoding="utf-8")  # noqa: SIM115
+            self._fh: IO[str] | None = open(  # noqa: SIM115
+                self.path, "a" if append else "w", encoding="utf-8"
+            )
         except OSError as exc:
             raise RecordFormatError(
                 f"cannot write run record {self.path}: {exc.strerror}"

@@ -64,6 +64,16 @@ def test_lines_follow_the_documented_schema(tmp_path: FsPath) -> None:
     assert lines[1]["collisions"] == [{"robot": 0, "other": 1, "t": 0.5, "point": [0.0, 0.5]}]
 
 
+def test_writer_truncates_unless_appending(tmp_path: FsPath) -> None:
+    target = tmp_path / "run.jsonl"
+    write_sample(target)
+    write_sample(target)
+    assert len(read_record(target).rounds) == 2
+    with RecordWriter(target, append=True) as w:
+        w.write({"type": "noise"})
+    assert target.read_text().splitlines()[-1] == '{"type":"noise"}'
+
+
 def test_unfinished_record_has_no_result(tmp_path: FsPath) -> None:
     target = tmp_path / "run.jsonl"
     write_sample(target, finish=False)
