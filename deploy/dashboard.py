@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import io
-import math
 import sys
 import threading
 import time
@@ -26,6 +25,7 @@ from rich.progress_bar import ProgressBar
 from rich.table import Table
 from rich.text import Text
 
+from agent import geometry
 from agent.path import Points
 from deploy.canvas import Canvas, Mode, Viewport
 
@@ -94,96 +94,23 @@ class Figures:
     filled: int  # target points with a robot centre on them
 
 
-# --- geometry (the lead's agent.geometry; a local stand-in until it lands) ----------------------
-
-
-def _sec_fallback(points: Points) -> tuple[tuple[float, float], float]:
-    """Smallest enclosing circle by incremental Welzl (stand-in for agent.geometry.sec)."""
-    pts = [tuple(map(float, p)) for p in points]
-
-    def two(p: tuple[float, ...], q: tuple[float, ...]) -> tuple[float, float, float]:
-        cx, cy = (p[0] + q[0]) / 2, (p[1] + q[1]) / 2
-        return cx, cy, math.hypot(p[0] - cx, p[1] - cy)
-
-    def three(
-        p: tuple[float, ...], q: tuple[float, ...], s: tuple[float, ...]
-    ) -> tuple[float, float, float]:
-        ax, ay, bx, by, cx, cy = p[0], p[1], q[0], q[1], s[0], s[1]
-        d = 2 * (ax * (by - cy) + bx * (cy - ay) + cx * (ay - by))
-        if abs(d) < 1e-12:
-            cands = [two(p, q), two(p, s), two(q, s)]
-            return max(cands, key=lambda c: c[2])
-        a2, b2, c2 = ax**2 + ay**2, bx**2 + by**2, cx**2 + cy**2
-        ux = (a2 * (by - cy) + b2 * (cy - ay) + c2 * (ay - by)) / d
-        uy = (a2 * (cx - bx) + b2 * (ax - cx) + c2 * (bx - ax)) / d
-        return ux, uy, math.hypot(ax - ux, ay - uy)
-
-    def inside(c: tuple[float, float, float], p: tuple[float, ...]) -> bool:
-        return math.hypot(p[0] - c[0], p[1] - c[1]) <= c[2] * (1 + 1e-12) + 1e-12
-
-    if not pts:
-        return (0.0, 0.0), 0.0
-    c = (pts[0][0], pts[0][1], 0.0)
-    for i, p in enumerate(pts):
-        if inside(c, p):
-            continue
-        c = (p[0], p[1], 0.0)
-        for j in range(i):
-            if inside(c, pts[j]):
-                continue
-            c = two(p, pts[j])
-            for k in range(j):
-                if not inside(c, pts[k]):
-                    c = three(p, pts[j], pts[k])
-    return (c[0], c[1]), c[2]
-
-
 def enclosing_circle(points: Points) -> tuple[tuple[float, float], float]:
-    """Centre and radius of the smallest circle enclosing the centres (agent.geometry.sec)."""
-    try:
-        from agent import geometry
-
-        circle = geometry.sec(points)  # type: ignore[attr-defined,unused-ignore]
-        return (float(circle.center[0]), float(circle.center[1])), float(circle.radius)
-    except (ImportError, AttributeError, NotImplementedError):
-        return _sec_fallback(points)
-
-
-def _target_radius(n: int, a: float) -> float:
-    try:
-        from agent import geometry
-
-        return float(geometry.target_radius(n, a))  # type: ignore[attr-defined,unused-ignore]
-    except (ImportError, AttributeError, NotImplementedError):
-        return max(a, 4.0) / (2.0 * math.sin(math.pi / n)) if n >= 2 else 0.0
-
-
-def _target_points(points: Points, n: int) -> Points:
-    try:
-        from agent import geometry
-
-        out = geometry.target_points(points, n)  # type: ignore[attr-defined,unused-ignore]
-        return np.asarray(out, dtype=np.float64).reshape(-1, 2)
-    except (ImportError, AttributeError, NotImplementedError):
-        (cx, cy), rc = _sec_fallback(points)
-        north = np.array([cx, cy + rc])
-        gap = float(np.min(np.hypot(*(points - north).T))) if len(points) else math.inf
-        at_o = gap <= 1e-6 * max(1.0, rc)
-        theta = 2 * np.pi * np.arange(n) / n + (0.0 if at_o else np.pi / n)
-        return np.column_stack((cx + rc * np.sin(theta), cy + rc * np.cos(theta)))
+    """Centre and radius of the smallest circle enclosing the centres."""
+    circle = geometry.sec(points)
+    return (float(circle.center[0]), float(circle.center[1])), float(circle.radius)
 
 
 def derive(frame: Frame) -> Figures:
     """SEC, target radius, target points and how many are filled, for the frame's positions."""
     pts = np.asarray(frame.positions, dtype=np.float64).reshape(-1, 2)
     center, rc = enclosing_circle(pts)
-    targets = _target_points(pts, frame.n) if len(pts) else np.zeros((0, 2))
-    tol = 1e-6 * max(1.0, rc)  # "a robot at the point" (the notes' ε_at)
+    targets = geometry.target_points(pts, frame.n) if len(pts) else np.zeros((0, 2))
+    tol = geometry.EPS_AT_REL * geometry.scale(rc)  # "a robot at the point", as the algorithm
     filled = 0
     if len(targets) and len(pts):
         dist = np.hypot(*(targets[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
         filled = int(np.count_nonzero(dist.min(axis=1) <= tol))
-    return Figures(center, rc, _target_radius(frame.n, frame.a), targets, filled)
+    return Figures(center, rc, geometry.target_radius(frame.n, frame.a), targets, filled)
 
 
 # --- canvas ---------------------------------------------------------------------------------------
