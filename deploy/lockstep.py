@@ -1,0 +1,158 @@
+"""The whole run in one process: the very compute, scheduler, physics and progress of the swarm.
+
+Each active robot Looks at the same snapshot in its own private frame (seeded X flip, as a
+networked agent), the paths are mapped back to the world frame and applied at once by the physics.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Final
+
+import numpy as np
+
+from agent import algorithm
+from agent.frames import draw_flip, path_to_world, to_local
+from agent.params import Params
+from agent.path import Path, Points
+from coordinator.schedule import Scheduler
+from world.physics import RoundOutcome, apply_round, validate_configuration
+from world.progress import Progress, ProgressTracker
+from world.record import RecordWriter
+
+LOOK_STREAM: Final = 0x100C  # orders the others in a robot's view (compute must ignore the order)
+
+# Default round cap = ROUNDS_PER_STEP[scheduler] * (n + STEP_SLACK). The algorithm needs about
+# n + 2 sequential steps (one mover or one mirror pair each); a step costs 1 round under fsync,
+# about 2 under ssync (p = 1/2), about n under centralized; the caps leave a factor 10 or more.
+STEP_SLACK: Final = 10
+ROUNDS_PER_STEP: Final = {"fsync": 10, "ssync": 40}  # others (centralized, scripted): 10 n
+
+ComputeFn = Callable[[Points, Params], Path]
+
+
+def default_max_rounds(n: int, scheduler: str) -> int:
+    """A round cap far above what a correct run needs under `scheduler` (see ROUNDS_PER_STEP)."""
+    per_step = ROUNDS_PER_STEP.get(scheduler, 10 * max(1, n))
+    return per_step * (n + STEP_SLACK)
+
+
+@dataclass(frozen=True, slots=True)
+class RoundReport:
+    """What happened in one committed round (world frame), for callbacks such as a dashboard."""
+
+    round: int
+    active: tuple[int, ...]
+    paths: dict[int, Path]
+    outcome: RoundOutcome
+    progress: Progress
+
+
+@dataclass(frozen=True, slots=True)
+class RunResult:
+    """How a run ended and what it cost. Positions are (n, 2), world frame."""
+
+    status: str
+    rounds: int
+    epochs: int
+    moves: int
+    total_distance: float
+    collisions: int
+    looks: int
+    initial: Points
+    positions: Points
+    moves_by_robot: tuple[int, ...]
+
+
+def run_lockstep(
+    initial: Points,
+    params: Params,
+    scheduler: Scheduler,
+    *,
+    seed: int,
+    max_rounds: int | None = None,
+    record: RecordWriter | None = None,
+    on_round: Callable[[RoundReport], None] | None = None,
+    compute: ComputeFn = algorithm.compute,
+) -> RunResult:
+    """Run until formed, stalled or `max_rounds` (default `default_max_rounds`).
+
+    `seed` fixes the robots' private frames and view orders; the scheduler carries its own seed.
+    Raises InvalidConfigurationError for an invalid start, ValueError if n disagrees with params.
+    """
+    positions = validate_configuration(initial).copy()
+    n = len(positions)
+    if n != params.n:
+        raise ValueError(f"the start has {n} robots but params say n={params.n}")
+    cap = default_max_rounds(n, scheduler.name) if max_rounds is None else max_rounds
+    tracker = ProgressTracker(n, params.a, cap)
+    flips = [draw_flip(seed, robot) for robot in range(n)]
+    look_rng = np.random.default_rng([LOOK_STREAM, seed & 0xFFFFFFFF])
+    everyone = list(range(n))
+    initial_copy = positions.copy()
+    looks = 0
+    if record is not None:
+        record.header(n, params.a, seed, scheduler.name, positions, max_rounds=cap)
+
+    round_no = 0
+    while not tracker.done:
+        round_no += 1
+        active = scheduler.active(round_no, everyone)
+        paths: dict[int, Path] = {}
+        for robot in active:
+            me = positions[robot]
+            others = np.delete(positions, robot, axis=0)[look_rng.permutation(n - 1)]
+            path_local = compute(to_local(others, me, flips[robot]), params)
+            looks += 1
+            if path_local:
+                paths[robot] = path_to_world(path_local, (float(me[0]), float(me[1])), flips[robot])
+        outcome = apply_round(positions, paths) if paths else RoundOutcome(positions.copy())
+        tracker.observe(
+            active,
+            paths.keys(),
+            positions,
+            outcome.positions,
+            outcome.traveled,
+            len(outcome.collisions),
+        )
+        if record is not None:
+            moves = {r: (p, outcome.traveled.get(r, 0.0)) for r, p in paths.items()}
+            record.round(round_no, active, moves, outcome.positions, outcome.collisions)
+        positions = np.asarray(outcome.positions, dtype=np.float64)
+        if on_round is not None:
+            on_round(RoundReport(round_no, tuple(active), paths, outcome, tracker.snapshot()))
+
+    progress = tracker.snapshot()
+    assert progress.status is not None
+    if record is not None:
+        record.result(
+            progress.status,
+            progress.rounds,
+            positions,
+            epochs=progress.epochs,
+            moves=progress.moves,
+            total_distance=progress.total_distance,
+            collisions=progress.collisions,
+        )
+    return RunResult(
+        status=progress.status,
+        rounds=progress.rounds,
+        epochs=progress.epochs,
+        moves=progress.moves,
+        total_distance=progress.total_distance,
+        collisions=progress.collisions,
+        looks=looks,
+        initial=initial_copy,
+        positions=positions,
+        moves_by_robot=progress.moves_by_robot,
+    )
+
+
+__all__ = [
+    "ComputeFn",
+    "RoundReport",
+    "RunResult",
+    "default_max_rounds",
+    "run_lockstep",
+]

@@ -1,0 +1,197 @@
+"""`fatswarm run`: run a swarm, networked (default, deploy.launcher) or in one process (--lockstep).
+
+Exit codes: 0 formed, 1 not formed (stalled or max_rounds), 2 bad input (one line on stderr).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import importlib.util
+import secrets
+import sys
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, Final, TextIO
+
+if TYPE_CHECKING:
+    from deploy.lockstep import RoundReport
+
+EXIT_FORMED: Final = 0
+EXIT_NOT_FORMED: Final = 1
+EXIT_BAD_INPUT: Final = 2
+DEFAULT_N: Final = 8
+DEFAULT_A: Final = 4.0
+DEFAULT_SCHEDULER: Final = "ssync"  # the paper's model
+DEFAULT_START: Final = "clustered"  # needs SEC expansion, so every phase of the algorithm runs
+PROGRESS_SECONDS: Final = 1.0  # at most one progress line per this many seconds
+
+
+class RunInputError(ValueError):
+    """A flag combination `fatswarm run` cannot use."""
+
+
+def _optional_adder(module_name: str, function: str) -> Callable[[argparse.ArgumentParser], None]:
+    """`module.function` if the module exists and defines it, else a no-op (parts land later)."""
+    try:
+        if importlib.util.find_spec(module_name) is None:
+            return lambda p: None
+    except ModuleNotFoundError:
+        return lambda p: None
+    adder = getattr(importlib.import_module(module_name), function, None)
+    return adder if callable(adder) else (lambda p: None)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Flags of `fatswarm run` (plus the launcher's and dashboard's, once those modules exist)."""
+    from coordinator.schedule import NAMES
+    from world.starts import KINDS
+
+    p.add_argument(
+        "--lockstep",
+        action="store_true",
+        help="run every robot in this one process, in lock step (no Zenoh)",
+    )
+    p.add_argument("-n", type=int, default=None, metavar="N",
+                   help=f"number of robots (default {DEFAULT_N}; with --init, taken from the file)")
+    p.add_argument("-a", type=float, default=None, metavar="A",
+                   help=f"least side of the polygon, > 3 (default {DEFAULT_A:g}, or the --init "
+                   "file's 'a')")
+    p.add_argument("--seed", type=int, default=None, metavar="S",
+                   help="seed of the start, frames and scheduler (default: random, printed)")
+    p.add_argument("--init", metavar="PATH",
+                   help='start from a JSON file {"positions": [[x, y], ...], "a": 4.0}')
+    p.add_argument("--start", choices=KINDS, default=DEFAULT_START,
+                   help=f"kind of random start without --init (default {DEFAULT_START}: "
+                   "needs SEC expansion)")
+    p.add_argument("--scheduler", choices=NAMES, default=DEFAULT_SCHEDULER,
+                   help=f"who is active each round (default {DEFAULT_SCHEDULER})")
+    p.add_argument("--schedule", metavar="PATH",
+                   help='scripted scheduler: JSON {"rounds": [[0, 2], [1], ...]} or a run record')
+    p.add_argument("--fairness", type=int, default=None, metavar="K",
+                   help="ssync/centralized: every robot active at least once in every K rounds "
+                   "(default 2n)")
+    p.add_argument("--max-rounds", type=int, default=None, metavar="R",
+                   help="stop after R rounds (default: 10 (n + 10) for fsync, 40 (n + 10) for "
+                   "ssync, 10 n (n + 10) otherwise)")
+    p.add_argument("--record", metavar="PATH", help="write the run record (JSON Lines) to PATH")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress lines while running (the summary is still printed)")
+    _optional_adder("deploy.launcher", "add_network_arguments")(p)
+    _optional_adder("deploy.dashboard", "add_dashboard_arguments")(p)
+
+
+def _fail(message: str) -> int:
+    print(f"fatswarm run: {message}", file=sys.stderr)
+    return EXIT_BAD_INPUT
+
+
+def main(args: argparse.Namespace) -> int:
+    """Run the swarm as asked; returns the exit code."""
+    if not args.lockstep:
+        return _networked(args)
+    return run_lockstep_command(args)
+
+
+def _networked(args: argparse.Namespace) -> int:
+    try:
+        launcher = importlib.import_module("deploy.launcher")
+    except ModuleNotFoundError as exc:
+        if exc.name != "deploy.launcher":
+            raise
+        launcher = None
+    run_networked: Any = getattr(launcher, "run_networked", None)
+    if run_networked is None:
+        return _fail("the networked emulator is not available in this build; use --lockstep")
+    code: int = run_networked(args)
+    return code
+
+
+def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) -> int:
+    """`fatswarm run --lockstep`: build the run from the flags, run it, print the summary."""
+    from agent.params import Params, ParamsError
+    from coordinator.schedule import ScheduleError, make_scheduler
+    from deploy.lockstep import default_max_rounds, run_lockstep
+    from world.physics import InvalidConfigurationError
+    from world.record import RecordFormatError, RecordWriter
+    from world.starts import InitFileError, load_init, random_start
+
+    out = sys.stdout if out is None else out
+    seed_given = args.seed is not None
+    seed: int = args.seed if seed_given else secrets.randbelow(2**31)
+    try:
+        if args.init is not None:
+            initial, file_a = load_init(args.init)
+            if args.n is not None and args.n != len(initial):
+                raise RunInputError(
+                    f"-n {args.n} disagrees with the {len(initial)} robots of {args.init}; drop -n"
+                )
+            a = args.a if args.a is not None else (file_a if file_a is not None else DEFAULT_A)
+            params = Params(len(initial), a)
+        else:
+            params = Params(DEFAULT_N if args.n is None else args.n,
+                            DEFAULT_A if args.a is None else args.a)
+            initial = random_start(params.n, seed, args.start, params.a)
+        if args.scheduler != "scripted" and args.schedule is not None:
+            raise RunInputError("--schedule only goes with --scheduler scripted")
+        if args.max_rounds is not None and args.max_rounds < 1:
+            raise RunInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
+        scheduler = make_scheduler(args.scheduler, params.n, seed, args.schedule, args.fairness)
+        max_rounds = args.max_rounds or default_max_rounds(params.n, args.scheduler)
+        record = RecordWriter(args.record) if args.record else None
+    except (ParamsError, InitFileError, ScheduleError, RecordFormatError, RunInputError) as exc:
+        return _fail(str(exc))
+
+    if not seed_given and not args.quiet:
+        print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
+    on_round = None if args.quiet else _progress_printer(max_rounds)
+    try:
+        result = run_lockstep(
+            initial,
+            params,
+            scheduler,
+            seed=seed,
+            max_rounds=max_rounds,
+            record=record,
+            on_round=on_round,
+        )
+    except InvalidConfigurationError as exc:
+        return _fail(f"invalid start: {exc}")
+    finally:
+        if record is not None:
+            record.close()
+
+    per_robot = result.moves / params.n
+    print(
+        f"{result.status}: n={params.n} a={params.a:g} seed={seed} scheduler={scheduler.name}\n"
+        f"rounds {result.rounds}  epochs {result.epochs}  moves {result.moves} "
+        f"({per_robot:.2f} per robot)  total distance {result.total_distance:.3f}  "
+        f"collisions {result.collisions}",
+        file=out,
+    )
+    if args.record:
+        print(f"record: {args.record}", file=out)
+    return EXIT_FORMED if result.status == "formed" else EXIT_NOT_FORMED
+
+
+def _progress_printer(max_rounds: int) -> Callable[[RoundReport], None]:
+    """A round callback printing a progress line to stderr at most once per PROGRESS_SECONDS."""
+    last = [time.monotonic()]
+
+    def show(report: RoundReport) -> None:
+        now = time.monotonic()
+        if now - last[0] < PROGRESS_SECONDS:
+            return
+        last[0] = now
+        p = report.progress
+        print(
+            f"round {report.round}/{max_rounds}  epochs {p.epochs}  moves {p.moves}  "
+            f"distance {p.total_distance:.1f}  collisions {p.collisions}",
+            file=sys.stderr,
+            flush=True,
+        )
+
+    return show
+
+
+__all__ = ["add_arguments", "main", "run_lockstep_command"]
