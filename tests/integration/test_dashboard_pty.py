@@ -1,0 +1,249 @@
+"""The live dashboard on a pseudo-terminal: attached to a published world state, and in `run`.
+
+The screen is read from the pty (escape codes stripped) and checked for the counters and the
+outcome. Every started process is killed in `finally`; loopback only, free ports, no scouting.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import importlib.util
+import math
+import os
+import pty
+import re
+import select
+import signal
+import struct
+import subprocess
+import sys
+import termios
+import time
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from world.protocol import AgentInfo, WorldState, state_key
+
+pytestmark = pytest.mark.integration
+
+ROOT = Path(__file__).resolve().parents[2]
+ROWS, COLS = 40, 120
+ANSI = re.compile(
+    r"\x1b\[[0-?]*[ -/]*[@-~]|\x1b\][^\x07\x1b]*(\x07|\x1b\\)|\x1b[()][0-9A-Za-z]|\x1b[=>78]"
+)
+DASHBOARD_MAIN = (
+    "import argparse, sys\n"
+    "from deploy import dashboard\n"
+    "p = argparse.ArgumentParser()\n"
+    "dashboard.add_arguments(p)\n"
+    "sys.exit(dashboard.main(p.parse_args(sys.argv[1:])))\n"
+)
+
+
+def free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port: int = s.getsockname()[1]
+        return port
+
+
+def screen_text(raw: bytes) -> str:
+    """What was written to the terminal, without escape sequences."""
+    return ANSI.sub("", raw.decode("utf-8", errors="replace"))
+
+
+class PtyProcess:
+    """A child process whose stdin, stdout and stderr are one pseudo-terminal of ROWS x COLS."""
+
+    def __init__(self, argv: Sequence[str], env: dict[str, str] | None = None) -> None:
+        master, slave = pty.openpty()
+        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", ROWS, COLS, 0, 0))
+        full_env = {k: v for k, v in os.environ.items() if k not in ("COLUMNS", "LINES")}
+        full_env.update(TERM="xterm-256color", PYTHONUNBUFFERED="1", **(env or {}))
+        full_env.pop("NO_COLOR", None)
+        self.proc = subprocess.Popen(
+            list(argv),
+            stdin=slave,
+            stdout=slave,
+            stderr=slave,
+            cwd=ROOT,
+            env=full_env,
+            start_new_session=True,
+        )
+        os.close(slave)
+        self.master = master
+        self.output = bytearray()
+
+    def pump(self, timeout: float = 0.1) -> None:
+        """Read whatever the child wrote within `timeout`."""
+        ready, _, _ = select.select([self.master], [], [], timeout)
+        if ready:
+            try:
+                chunk = os.read(self.master, 65536)
+            except OSError:  # EIO: the child closed the terminal
+                chunk = b""
+            self.output.extend(chunk)
+
+    def wait_for(self, predicate: Any, deadline: float) -> bool:
+        """Pump until `predicate(screen_text)` holds or the child exits or the deadline passes."""
+        while time.monotonic() < deadline:
+            self.pump()
+            if predicate(screen_text(bytes(self.output))):
+                return True
+            if self.proc.poll() is not None:
+                self.pump(0.2)
+                return bool(predicate(screen_text(bytes(self.output))))
+        return False
+
+    def finish(self, deadline: float) -> int | None:
+        """Pump until the child exits; its exit code, or None at the deadline."""
+        while time.monotonic() < deadline and self.proc.poll() is None:
+            self.pump()
+        for _ in range(20):
+            before = len(self.output)
+            self.pump(0.05)
+            if len(self.output) == before:
+                break
+        return self.proc.poll()
+
+    def kill(self) -> None:
+        if self.proc.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(self.proc.pid, signal.SIGKILL)
+        self.proc.wait(timeout=10)
+        os.close(self.master)
+
+    @property
+    def text(self) -> str:
+        return screen_text(bytes(self.output))
+
+
+@contextlib.contextmanager
+def router_session() -> Iterator[tuple[Any, str]]:
+    """A Zenoh router in this process on a free loopback port: (session, endpoint)."""
+    import zenoh
+
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    conf = zenoh.Config()
+    conf.insert_json5("mode", '"router"')
+    conf.insert_json5("listen/endpoints", f'["{endpoint}"]')
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    session = zenoh.open(conf)
+    try:
+        yield session, endpoint
+    finally:
+        session.close()  # type: ignore[no-untyped-call]
+
+
+def world_state(round_no: int, n: int, status: str, swarm: str) -> WorldState:
+    """A plausible published state: a regular n-gon of side 4 (robot 0 north), all agents alive."""
+    r = 4.0 / (2 * math.sin(math.pi / n))
+    theta = 2 * math.pi * np.arange(n) / n
+    shrink = 1.0 if status == "formed" else 0.5
+    positions = np.column_stack((r * shrink * np.sin(theta), r * shrink * np.cos(theta)))
+    agents = tuple(
+        AgentInfo(alive=True, last_active=round_no, last_path_length=0.5, timeouts=0)
+        for _ in range(n)
+    )
+    return WorldState(
+        round=round_no, n=n, a=4.0, seed=3, scheduler="fsync", swarm=swarm, positions=positions,
+        active=tuple(range(n)), moved=(), stopped=(), collisions_total=0, status=status,
+        agents=agents,
+    )  # fmt: skip
+
+
+def test_attached_dashboard_shows_the_published_state_and_the_outcome() -> None:
+    swarm = "ptytest"
+    with router_session() as (session, endpoint):
+        pub = session.declare_publisher(state_key(swarm))
+        child = PtyProcess(
+            [sys.executable, "-c", DASHBOARD_MAIN, "--connect", endpoint, "--swarm", swarm,
+             "--exit-at-end"]
+        )  # fmt: skip
+        try:
+            deadline = time.monotonic() + 30
+            round_no = 0
+            # keep publishing running rounds until the dashboard shows one (it may join late)
+            while time.monotonic() < deadline:
+                round_no += 1
+                pub.put(world_state(round_no, 6, "running", swarm).encode())
+                child.pump(0.05)
+                if re.search(r"round\s+\d+", child.text) and "targets" in child.text:
+                    break
+            assert "swarm ptytest" in child.text, child.text[-3000:]
+            assert re.search(r"alive\s+6 / 6", child.text)
+            while child.proc.poll() is None and time.monotonic() < deadline:
+                pub.put(world_state(round_no + 1, 6, "formed", swarm).encode())
+                child.pump(0.1)
+            code = child.finish(deadline)
+            text = child.text
+            assert code == 0, text[-3000:]
+            assert f"FORMED: uniform circle of 6 robots after {round_no + 1} rounds" in text
+            assert re.search(r"targets\s+6 / 6 filled", text)
+        finally:
+            child.kill()
+            pub.undeclare()
+
+
+def test_attached_dashboard_without_a_router_says_so_and_exits_2() -> None:
+    endpoint = f"tcp/127.0.0.1:{free_port()}"  # nothing listens there
+    child = PtyProcess([sys.executable, "-c", DASHBOARD_MAIN, "--connect", endpoint])
+    try:
+        code = child.finish(time.monotonic() + 30)
+        assert code == 2, child.text[-2000:]
+        assert f"cannot follow {endpoint}" in child.text
+        assert "Traceback" not in child.text
+    finally:
+        child.kill()
+
+
+needs_launcher = pytest.mark.skipif(
+    importlib.util.find_spec("deploy.launcher") is None,
+    reason="deploy.launcher (the networked `fatswarm run`) does not exist yet",
+)
+
+
+@needs_launcher
+def test_fatswarm_run_shows_the_live_dashboard_on_a_terminal(tmp_path: Path) -> None:
+    svg = tmp_path / "final.svg"
+    child = PtyProcess(
+        [sys.executable, "-m", "deploy.cli", "run", "-n", "5", "--seed", "3",
+         "--scheduler", "fsync", "--max-rounds", "400", "--svg", str(svg)]
+    )  # fmt: skip
+    try:
+        code = child.finish(time.monotonic() + 150)
+        text = child.text
+        assert code == 0, text[-3000:]
+        assert "fatswarm · live" in text
+        assert re.search(r"rounds/s\s+[\d,.]+", text)
+        assert re.search(r"targets\s+5 / 5 filled", text)
+        assert "FORMED: uniform circle of 5 robots" in text
+        assert svg.read_text().startswith("<svg")
+    finally:
+        child.kill()
+
+
+@needs_launcher
+def test_fatswarm_run_prints_progress_lines_when_not_a_terminal() -> None:
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "deploy.cli", "run", "-n", "4", "--seed", "2",
+         "--scheduler", "fsync", "--max-rounds", "400"],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, cwd=ROOT, text=True,
+        start_new_session=True,
+    )  # fmt: skip
+    try:
+        out, _ = proc.communicate(timeout=150)
+        assert proc.returncode == 0, out[-3000:]
+        assert re.search(r"^round \d+ \w+: targets \d+/4", out, re.MULTILINE), out[-3000:]
+        assert not ANSI.search(out)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait(timeout=10)
