@@ -9,9 +9,8 @@ No state survives a call: there is no module or instance state here.
 
 from __future__ import annotations
 
-import functools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -108,9 +107,9 @@ def plan(points: Points, params: Params) -> Plan:
     n = len(points)
     if n <= 1:
         return Plan("done", "done")
-    if is_uniform_circle(points, params.a):  # G10: a regular n-gon is final, aligned or not
-        return Plan("done", "done")
     circle = sec(points)
+    if is_uniform_circle(points, params.a, circle):  # G10: a regular n-gon is final, aligned or not
+        return Plan("done", "done")
     s = scale(circle.radius)
     tol_at, tol_eq = EPS_AT_REL * s, EPS_EQ_REL * s
     r = target_radius(n, params.a)
@@ -135,39 +134,32 @@ def _orientation(pts: Points, circle: Circle, matched: np.ndarray, tol_eq: float
     if len(idx) == 0:
         return 0.0
     dx = pts[idx, 0] - circle.center[0]
-    keys = [(float(pts[i, 1]), abs(float(d))) for i, d in zip(idx, dx, strict=True)]
-    best = _argbest(keys, tol_eq)
+    best = _first(np.stack([-pts[idx, 1], -np.abs(dx)], axis=1), tol_eq)
     return 1.0 if dx[best] > 0 else -1.0
 
 
-def _cmp_keys(tol: float) -> Callable[[Sequence[float], Sequence[float]], int]:
-    def cmp(a: Sequence[float], b: Sequence[float]) -> int:
-        for x, y in zip(a, b, strict=True):
-            if abs(x - y) > tol:
-                return -1 if x < y else 1
-        return 0
+def _ranked(keys: np.ndarray, tol: float) -> Iterator[int]:
+    """Row indices of `keys` (m, k) in increasing lexicographic order, lazily.
 
-    return cmp
+    Components within `tol` of the smallest remaining one count as ties and fall through to the
+    next component; full ties go by row index. Lazy because the caller usually stops at the first.
+    """
+    remaining = np.ones(len(keys), dtype=bool)
+    for _ in range(len(keys)):
+        group = remaining.copy()
+        for col in range(keys.shape[1]):
+            values = np.where(group, keys[:, col], np.inf)
+            group &= values <= values.min() + tol
+            if np.count_nonzero(group) == 1:
+                break
+        i = int(np.argmax(group))
+        remaining[i] = False
+        yield i
 
 
-def _argbest(keys: Sequence[Sequence[float]], tol: float) -> int:
-    """Index of the lexicographically largest key; components within `tol` count as ties."""
-    cmp = _cmp_keys(tol)
-    best = 0
-    for i in range(1, len(keys)):
-        if cmp(keys[i], keys[best]) > 0:
-            best = i
-    return best
-
-
-def _sorted_by(items: list[int], keys: Sequence[Sequence[float]], tol: float) -> list[int]:
-    """`items` in increasing key order, ties within `tol` kept in their given order."""
-    cmp = _cmp_keys(tol)
-    def by_key(i: int, j: int) -> int:
-        return cmp(keys[i], keys[j])
-
-    order = sorted(range(len(items)), key=functools.cmp_to_key(by_key))
-    return [items[i] for i in order]
+def _first(keys: np.ndarray, tol: float) -> int:
+    """Index of the smallest row of `keys` under the tolerant order of `_ranked`."""
+    return next(_ranked(keys, tol))
 
 
 # --- SECExpansion --------------------------------------------------------------------------------
@@ -184,8 +176,8 @@ def _expansion(ctx: _Ctx, r: float) -> Plan:
     on_l = np.abs(sec_pts[:, 0] - cx) <= ctx.tol_at
     if not matched.all():  # case 1: the unmatched SEC robot with maximum Y
         cand = np.flatnonzero(~matched)
-        keys = [(float(sec_pts[i, 1]), abs(float(sec_pts[i, 0] - cx))) for i in cand]
-        leaders = [int(on_sec[cand[_argbest(keys, ctx.tol_eq)]])]
+        keys = np.stack([-sec_pts[cand, 1], -np.abs(sec_pts[cand, 0] - cx)], axis=1)
+        leaders = [int(on_sec[cand[_first(keys, ctx.tol_eq)]])]
         kind = "exp-case1"
     elif (~on_l).any():  # case 2 (a or b): the top mirror pair off L
         cand = np.flatnonzero(~on_l)
@@ -230,7 +222,7 @@ def _radial_move(pts: Points, leader: int, circle: Circle, reach: float) -> Path
     return path if is_free(start, path, others) else None
 
 
-# --- FormUCircle -----------------------------------------------------------------------------------
+# --- FormUCircle ---------------------------------------------------------------------------------
 
 
 def _formation(ctx: _Ctx, n: int) -> Plan:
@@ -243,13 +235,10 @@ def _formation(ctx: _Ctx, n: int) -> Plan:
     settled_target = dmat.min(axis=0) <= ctx.tol_at
     blocks = dmat < CONTACT - EPS_CLEAR  # G7: R blocks T iff their discs overlap
     cx = ctx.cx
-    order = _sorted_by(
-        [int(k) for k in np.flatnonzero(~settled_target)],
-        [(-float(targets[k, 1]), -ctx.orientation * float(targets[k, 0] - cx))
-         for k in np.flatnonzero(~settled_target)],
-        ctx.tol_eq,
-    )
-    for k in order:
+    vacant = np.flatnonzero(~settled_target)
+    order_keys = np.stack([-targets[vacant, 1], -ctx.orientation * (targets[vacant, 0] - cx)], 1)
+    for j_target in _ranked(order_keys, ctx.tol_eq):
+        k = int(vacant[j_target])
         blockers = np.flatnonzero(blocks[:, k])
         if len(blockers) >= 2:  # double-blocked: wait until one blocker has left (G7)
             continue
@@ -259,12 +248,17 @@ def _formation(ctx: _Ctx, n: int) -> Plan:
             cands = [int(i) for i in np.flatnonzero(~settled_robot)]
         if ctx.symmetric:
             cands = _symmetric_candidates(ctx, cands, targets[k])
-        keys = [(float(dmat[i, k]), -float(pts[i, 1]), -ctx.orientation * float(pts[i, 0] - cx))
-                for i in cands]
-        for i in _sorted_by(cands, keys, ctx.tol_eq):
-            moves = _try_move(ctx, i, targets, k, n)
+        if not cands:
+            continue
+        ci = np.asarray(cands)
+        keys = np.stack(
+            [dmat[ci, k], -pts[ci, 1], -ctx.orientation * (pts[ci, 0] - cx)], axis=1
+        )
+        for j in _ranked(keys, ctx.tol_eq):
+            moves = _try_move(ctx, int(ci[j]), targets, k, n)
             if moves is not None:
                 return Plan("formation", "fill", moves)
+    order = [int(vacant[j]) for j in _ranked(order_keys, ctx.tol_eq)]
     swap = _note_swap(ctx, targets, order, settled_robot, at_o, n)
     if swap is not None:
         return Plan("formation", "note-swap", swap)
@@ -372,11 +366,11 @@ def _arc_to(center: Point, sweep: float, start: Point, target: Point) -> Path:
 
 def _first_free(ctx: _Ctx, start: Point, options: list[Path], others: Points) -> Path | None:
     """The shortest free option; equal lengths go to the agreed side (G12)."""
-    keys = []
-    for p in options:
+    keys = np.empty((len(options), 2))
+    for j, p in enumerate(options):
         lo, hi = path_x_range(start, p)
-        keys.append((path_length(start, p), -ctx.orientation * ((lo + hi) / 2.0 - ctx.cx)))
-    for j in _sorted_by(list(range(len(options))), keys, ctx.tol_eq):
+        keys[j] = (path_length(start, p), -ctx.orientation * ((lo + hi) / 2.0 - ctx.cx))
+    for j in _ranked(keys, ctx.tol_eq):
         if is_free(start, options[j], others):
             return options[j]
     return None

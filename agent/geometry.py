@@ -67,93 +67,68 @@ def _circle3(p: Point, q: Point, s: Point) -> Circle | None:
     return Circle((p[0] + ux, p[1] + uy), math.hypot(ux, uy))
 
 
-def _contains_all(circle: Circle, pts: list[Point]) -> bool:
+def _encloses(circle: Circle, pts: list[Point]) -> bool:
     lim = circle.radius * (1.0 + SEC_SLACK_REL) + 1e-300
     cx, cy = circle.center
     return all(math.hypot(x - cx, y - cy) <= lim for x, y in pts)
 
 
-def _sec_small(pts: list[Point]) -> Circle:
-    """Smallest enclosing circle of at most four points, by trying every pair and triple."""
-    if len(pts) == 1:
-        return Circle(pts[0], 0.0)
-    best: Circle | None = None
-    m = len(pts)
-    for i in range(m):
-        for j in range(i + 1, m):
-            c = _circle2(pts[i], pts[j])
-            if (best is None or c.radius < best.radius) and _contains_all(c, pts):
-                best = c
-    for i in range(m):
-        for j in range(i + 1, m):
-            for k in range(j + 1, m):
-                c3 = _circle3(pts[i], pts[j], pts[k])
-                if c3 is None:
-                    continue
-                if (best is None or c3.radius < best.radius) and _contains_all(c3, pts):
-                    best = c3
-    assert best is not None  # the diametral circle of the farthest pair always encloses
+def _sec_through(support: list[Point], p: Point) -> tuple[Circle, list[Point]]:
+    """Smallest circle enclosing `support` (at most 3 points) and p, where p lies outside the
+    smallest circle of `support`: p is then on its boundary (Welzl's lemma), so only circles
+    through p are tried. Returns the circle and the points that pin it."""
+    pts = [*support, p]
+    best: tuple[Circle, list[Point]] | None = None
+    for q in support:
+        c = _circle2(p, q)
+        if (best is None or c.radius < best[0].radius) and _encloses(c, pts):
+            best = (c, [p, q])
+    for i in range(len(support)):
+        for j in range(i + 1, len(support)):
+            c3 = _circle3(p, support[i], support[j])
+            if (
+                c3 is not None
+                and (best is None or c3.radius < best[0].radius)
+                and _encloses(c3, pts)
+            ):
+                best = (c3, [p, support[i], support[j]])
+    if best is None:  # only rounding gets here: fall back to the farthest pair
+        far = max(support, key=lambda q: math.hypot(q[0] - p[0], q[1] - p[1]))
+        best = (_circle2(p, far), [p, far])
     return best
-
-
-def _support(circle: Circle, pts: list[Point]) -> list[Point]:
-    """The points of `pts` on the boundary of `circle` (at most three are kept)."""
-    cx, cy = circle.center
-    tol = circle.radius * 1e-9 + 1e-300
-    on = [p for p in pts if abs(math.hypot(p[0] - cx, p[1] - cy) - circle.radius) <= tol]
-    return on[:3] if len(on) <= 3 else _three_spanning(circle, on)
-
-
-def _three_spanning(circle: Circle, on: list[Point]) -> list[Point]:
-    # Cocircular boundary points: keep a pair or triple that still pins the same circle.
-    for i in range(len(on)):
-        for j in range(i + 1, len(on)):
-            c = _circle2(on[i], on[j])
-            if abs(c.radius - circle.radius) <= circle.radius * 1e-9:
-                return [on[i], on[j]]
-    for i in range(len(on)):
-        for j in range(i + 1, len(on)):
-            for k in range(j + 1, len(on)):
-                c3 = _circle3(on[i], on[j], on[k])
-                if c3 is not None and abs(c3.radius - circle.radius) <= circle.radius * 1e-9:
-                    return [on[i], on[j], on[k]]
-    return on[:3]
 
 
 def sec(points: Points) -> Circle:
     """Smallest enclosing circle of the centres `points` (n, 2), n >= 1.
 
-    Iterative support-set method: keep the circle of a support set of at most three points, add
-    the point farthest outside it, and replace the circle by the smallest one enclosing the support
-    plus that point. The radius grows strictly, supports are finite, and a circle that encloses all
-    points and is the smallest one of a subset of them is the smallest of all: so the loop ends on
-    the exact SEC. Each step is one vectorised distance pass; a handful of steps is typical.
+    Iterative support-set method: keep the smallest circle of a support set of at most three
+    points, add the point farthest outside it, and replace the circle by the smallest one enclosing
+    the support plus that point. The radius grows strictly, supports are finite, and a circle that
+    encloses all points and is the smallest of a subset of them is the smallest of all: so the loop
+    ends on the exact SEC. Each step is one vectorised distance pass; a handful of steps is typical.
     """
     pts = np.asarray(points, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) == 0:
         raise ValueError(f"sec needs an (n, 2) array with n >= 1, got shape {pts.shape}")
+    xs, ys = pts[:, 0], pts[:, 1]
     if len(pts) == 1:
-        return Circle((float(pts[0, 0]), float(pts[0, 1])), 0.0)
-    # Start from the diametral circle of point 0 and the point farthest from it.
-    d0 = np.hypot(pts[:, 0] - pts[0, 0], pts[:, 1] - pts[0, 1])
-    far = int(np.argmax(d0))
-    support: list[Point] = [
-        (float(pts[0, 0]), float(pts[0, 1])),
-        (float(pts[far, 0]), float(pts[far, 1])),
-    ]
+        return Circle((float(xs[0]), float(ys[0])), 0.0)
+    # Seed with an approximate diameter: the point farthest from robot 0, then farthest from that.
+    i0 = int(np.argmax((xs - xs[0]) ** 2 + (ys - ys[0]) ** 2))
+    i1 = int(np.argmax((xs - xs[i0]) ** 2 + (ys - ys[i0]) ** 2))
+    support: list[Point] = [(float(xs[i0]), float(ys[i0])), (float(xs[i1]), float(ys[i1]))]
     circle = _circle2(support[0], support[1])
     for _ in range(4 * len(pts) + 16):
         cx, cy = circle.center
-        d = np.hypot(pts[:, 0] - cx, pts[:, 1] - cy)
-        k = int(np.argmax(d))
-        if d[k] <= circle.radius * (1.0 + SEC_SLACK_REL) + 1e-300:
+        d2 = (xs - cx) ** 2 + (ys - cy) ** 2
+        k = int(np.argmax(d2))
+        lim = circle.radius * (1.0 + SEC_SLACK_REL) + 1e-300
+        if d2[k] <= lim * lim:
             return circle
-        p = (float(pts[k, 0]), float(pts[k, 1]))
-        candidate = _sec_small([*support, p])
+        candidate, pinned = _sec_through(support, (float(xs[k]), float(ys[k])))
         if candidate.radius <= circle.radius:  # rounding stalled the growth: accept as is
             return circle
-        circle = candidate
-        support = _support(circle, [*support, p])
+        circle, support = candidate, pinned
     return circle
 
 
@@ -214,15 +189,18 @@ def mirror_matched(points: Points, axis_x: float, tol: float) -> np.ndarray:
     return np.asarray((dx * dx + dy * dy).min(axis=1) <= tol * tol)
 
 
-def is_uniform_circle(points: Points, a: float) -> bool:
-    """True when the centres form a regular n-gon with side >= a (the paper's goal; G10)."""
+def is_uniform_circle(points: Points, a: float, circle: Circle | None = None) -> bool:
+    """True when the centres form a regular n-gon with side >= a (the paper's goal; G10).
+
+    `circle`, if given, must be the SEC of `points` (saves recomputing it).
+    """
     pts = np.asarray(points, dtype=np.float64)
     n = len(pts)
     if n <= 1:
         return True
     if n == 2:
         return bool(np.hypot(*(pts[0] - pts[1])) >= a - EPS_AT_REL * scale(a))
-    circle = sec(pts)
+    circle = sec(pts) if circle is None else circle
     tol = EPS_AT_REL * scale(circle.radius)
     cx, cy = circle.center
     rel = pts - np.array([cx, cy])

@@ -1,0 +1,125 @@
+"""Model properties of compute: mirror and translation invariance, anonymity, obliviousness."""
+
+from __future__ import annotations
+
+import dataclasses
+import types
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import agent.algorithm as algorithm_module
+import agent.geometry as geometry_module
+from agent.algorithm import compute, plan
+from agent.geometry import mirror_matched, sec
+from agent.params import Params
+from agent.path import Path, end_point, mirror, path_length, transform
+
+CELL = 2.6  # grid spacing; with jitter <= 0.25 every pair of centres is >= 2.1 apart
+
+
+@st.composite
+def configurations(draw: st.DrawFn, symmetric: bool | None = None) -> np.ndarray:
+    """Valid starts: distinct jittered grid cells, optionally mirror symmetric about x = 0."""
+    sym = draw(st.booleans()) if symmetric is None else symmetric
+    size = draw(st.integers(2, 7))
+    cells = draw(st.lists(st.tuples(st.integers(0, size), st.integers(-size, size)),
+                          min_size=1, max_size=8, unique=True))
+    jitter = st.floats(-0.25, 0.25, allow_nan=False)
+    pts = []
+    for cx, cy in cells:
+        x, y = cx * CELL + draw(jitter), cy * CELL + draw(jitter)
+        if sym:
+            if cx == 0:
+                pts.append((0.0, y))
+            else:
+                pts.extend([(x, y), (-x, y)])
+        else:
+            pts.append((x if draw(st.booleans()) else -x, y))
+    arr = np.array(pts, dtype=np.float64)
+    d = np.hypot(arr[:, None, 0] - arr[None, :, 0], arr[:, None, 1] - arr[None, :, 1])
+    np.fill_diagonal(d, np.inf)
+    if len(arr) < 2 or d.min() < 2.05:
+        arr = np.array([[0.0, 0.0], [5.0, 1.0]])
+    return arr
+
+
+def same_path(p: Path, q: Path, start: tuple[float, float] = (0.0, 0.0)) -> bool:
+    if bool(p) != bool(q) or len(p) != len(q):
+        return False
+    ep, eq = end_point(start, p), end_point(start, q)
+    return bool(
+        np.allclose(ep, eq, atol=1e-7)
+        and abs(path_length(start, p) - path_length(start, q)) < 1e-7
+    )
+
+
+SETTINGS = settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+side = st.sampled_from([4.0, 5.0, 7.5])
+
+
+@SETTINGS
+@given(configurations(), side, st.data())
+def test_result_in_a_mirrored_frame_is_the_mirrored_path(
+    pts: np.ndarray, a: float, data: st.DataObject
+) -> None:
+    me = data.draw(st.integers(0, len(pts) - 1))
+    view = np.delete(pts, me, axis=0) - pts[me]
+    params = Params(len(pts), a)
+    direct = compute(view, params)
+    flipped = view * np.array([-1.0, 1.0])
+    in_mirror = compute(flipped, params)
+    if same_path(in_mirror, mirror(direct)):
+        return
+    # The one allowed exception (G12): in a symmetric configuration a robot on L picks between
+    # mirror targets by its own +X, so its choice does not flip with the frame.
+    cx = sec(pts).center[0]
+    assert mirror_matched(pts, cx, 1e-6).all(), "asymmetric configuration: must be equivariant"
+    assert abs(pts[me, 0] - cx) <= 1e-6, "only a robot on L may keep its own side"
+    assert plan(pts, params).moves.keys() == {me}, "and only when it is the single mover"
+    assert same_path(in_mirror, direct)
+
+
+@SETTINGS
+@given(configurations(), side, st.tuples(st.floats(-100, 100), st.floats(-100, 100)))
+def test_plan_is_translation_invariant(pts: np.ndarray, a: float, d: tuple[float, float]) -> None:
+    params = Params(len(pts), a)
+    base = plan(pts, params)
+    moved = plan(pts + np.array(d), params)
+    assert base.kind == moved.kind
+    assert base.moves.keys() == moved.moves.keys()
+    for i, path in base.moves.items():
+        start = (float(pts[i, 0] + d[0]), float(pts[i, 1] + d[1]))
+        assert same_path(moved.moves[i], transform(path, d, False), start)
+
+
+@SETTINGS
+@given(configurations(), side, st.randoms(use_true_random=False))
+def test_order_of_the_view_does_not_matter(pts: np.ndarray, a: float, rnd: object) -> None:
+    params = Params(len(pts), a)
+    view = pts[1:] - pts[0]
+    perm = list(range(len(view)))
+    rnd.shuffle(perm)  # type: ignore[attr-defined]
+    assert same_path(compute(view[perm], params), compute(view, params))
+
+
+@SETTINGS
+@given(configurations(), configurations(), side)
+def test_no_state_survives_a_call(p1: np.ndarray, p2: np.ndarray, a: float) -> None:
+    v1, v2 = p1[1:] - p1[0], p2[1:] - p2[0]
+    first = compute(v1, Params(len(p1), a))
+    compute(v2, Params(len(p2), a))
+    assert same_path(compute(v1, Params(len(p1), a)), first)
+
+
+def test_algorithm_and_geometry_modules_hold_no_mutable_state() -> None:
+    for module in (algorithm_module, geometry_module):
+        for name, value in vars(module).items():
+            if name.startswith("__") or name == "annotations":  # the __future__ flag
+                continue
+            if isinstance(value, (types.ModuleType, type, float, int, str)):
+                continue
+            params = getattr(value, "__dataclass_params__", None)
+            frozen = dataclasses.is_dataclass(value) and params is not None and params.frozen
+            assert callable(value) or frozen or isinstance(value, (tuple, frozenset)), (module, name)
