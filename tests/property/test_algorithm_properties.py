@@ -122,4 +122,5 @@ def test_algorithm_and_geometry_modules_hold_no_mutable_state() -> None:
                 continue
             params = getattr(value, "__dataclass_params__", None)
             frozen = dataclasses.is_dataclass(value) and params is not None and params.frozen
-            assert callable(value) or frozen or isinstance(value, (tuple, frozenset)), (module, name)
+            immutable = frozen or isinstance(value, (tuple, frozenset))
+            assert callable(value) or immutable, (module, name)
