@@ -170,15 +170,24 @@ def test_attached_dashboard_shows_the_published_state_and_the_outcome() -> None:
         try:
             deadline = time.monotonic() + 30
             round_no = 0
-            # keep publishing running rounds until the dashboard shows one (it may join late)
-            while time.monotonic() < deadline:
+
+            # keep publishing running rounds until a whole frame is on screen (it may join late)
+            def shown(text: str) -> bool:
+                return all(
+                    re.search(p, text)
+                    for p in (
+                        r"swarm ptytest",
+                        r"round\s+\d+",
+                        r"alive\s+6 / 6",
+                        r"targets\s+\d+ / 6 filled",
+                    )
+                )
+
+            while time.monotonic() < deadline and not shown(child.text):
                 round_no += 1
                 pub.put(world_state(round_no, 6, "running", swarm).encode())
                 child.pump(0.05)
-                if re.search(r"round\s+\d+", child.text) and "targets" in child.text:
-                    break
-            assert "swarm ptytest" in child.text, child.text[-3000:]
-            assert re.search(r"alive\s+6 / 6", child.text)
+            assert shown(child.text), child.text[-3000:]
             while child.proc.poll() is None and time.monotonic() < deadline:
                 pub.put(world_state(round_no + 1, 6, "formed", swarm).encode())
                 child.pump(0.1)
