@@ -130,3 +130,22 @@ def test_player_plays_at_its_speed_and_stops_at_the_end() -> None:
 
 def test_terminal_input_is_split_into_named_keys() -> None:
     assert parse_keys("\x1b[C\x1b[D \x1b[A+q\x1b") == ["right", "left", " ", "up", "+", "q", "esc"]
+
+
+# A real run: `fatswarm run --lockstep -n 6 --seed 1 --scheduler ssync --record ...`.
+LOCKSTEP = RECORD.parent / "lockstep-n6-seed1.jsonl"
+
+
+def test_real_lockstep_record_replays_to_a_formed_circle(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    record = read_record(LOCKSTEP)
+    frames = build_frames(record)
+    assert len(frames) == len(record.rounds) + 1 == 18
+    assert frames[-1].status == "formed" and frames[-1].collisions_total == 0
+    assert run_replay(LOCKSTEP, "--no-play") == 0
+    out = capsys.readouterr().out
+    assert "FORMED: uniform circle of 6 robots after 17 rounds, 0 collisions" in out
+    assert re.search(r"targets\s+6 / 6 filled", out)
+    assert run_replay(LOCKSTEP, "--no-play", "--round", "0") == 0
+    assert re.search(r"round\s+0 / 17", capsys.readouterr().out)
