@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
+from rich.segment import Segment
 from rich.style import Style
 from rich.text import Text
 
@@ -131,11 +132,11 @@ class Canvas:
         self._set(jj[inside], ii[inside], layer)
 
     def circle(self, x: float, y: float, radius: float, layer: int) -> None:
-        """Draw the outline of a circle, one dot thick."""
+        """Draw the outline of a circle, one dot thick (samples at most half a dot apart)."""
         rd = radius / self.viewport.units_per_dot
         steps = max(16, math.ceil(2.0 * math.pi * rd * 2.0))
         theta = np.linspace(0.0, 2.0 * math.pi, steps, endpoint=False)
-        self.polyline(
+        self._light_dots(
             np.column_stack((x + radius * np.cos(theta), y + radius * np.sin(theta))), layer
         )
 
@@ -143,17 +144,21 @@ class Canvas:
         """Draw the world points (k, 2) joined by straight strokes (open), half a dot apart."""
         if len(pts) == 0:
             return
+        seg = np.diff(pts, axis=0)
+        per_dot = 2.0 / self.viewport.units_per_dot
+        counts = np.maximum(1, np.ceil(np.hypot(seg[:, 0], seg[:, 1]) * per_dot)).astype(np.int64)
+        which = np.repeat(np.arange(len(seg)), counts)
+        first = np.concatenate(([0], np.cumsum(counts)[:-1]))
+        t = (np.arange(int(counts.sum())) - first[which] + 1) / counts[which]
+        samples = pts[which] + t[:, None] * seg[which]
+        self._light_dots(np.concatenate((pts[:1], samples)), layer)
+
+    def _light_dots(self, pts: NDArray[np.float64], layer: int) -> None:
+        """Light the dot under each world point of (k, 2)."""
         vp = self.viewport
-        d = np.column_stack(((pts[:, 0] - vp.left), (vp.top - pts[:, 1]))) / vp.units_per_dot
-        samples = [d[:1]]
-        for a, b in itertools.pairwise(d):
-            k = max(1, math.ceil(float(np.hypot(*(b - a))) * 2.0))
-            t = np.linspace(0.0, 1.0, k + 1)[1:, None]
-            samples.append(a + t * (b - a))
-        allpts = np.concatenate(samples)
-        self._set(
-            np.floor(allpts[:, 1]).astype(np.int64), np.floor(allpts[:, 0]).astype(np.int64), layer
-        )
+        cols = np.floor((pts[:, 0] - vp.left) / vp.units_per_dot).astype(np.int64)
+        rows = np.floor((vp.top - pts[:, 1]) / vp.units_per_dot).astype(np.int64)
+        self._set(rows, cols, layer)
 
     def cell_layers(self) -> NDArray[np.uint8]:
         """(rows, cols) of the highest layer lit in each cell (0 where the cell is blank)."""
@@ -174,17 +179,28 @@ class Canvas:
         table = np.array([" ", "▄", "▀", "█"])
         return ["".join(row) for row in table[top * 2 + bottom]]
 
+    def runs(self) -> list[list[tuple[str, int]]]:
+        """Each cell row as runs of (text, layer) where the shown layer stays the same."""
+        out: list[list[tuple[str, int]]] = []
+        for row, row_layers in zip(self.glyphs(), self.cell_layers().tolist(), strict=True):
+            cuts = [0] + [c for c in range(1, len(row)) if row_layers[c] != row_layers[c - 1]]
+            cuts.append(len(row))
+            out.append([(row[a:b], row_layers[a]) for a, b in itertools.pairwise(cuts)])
+        return out
+
     def render(self, styles: Mapping[int, str | Style]) -> Text:
         """The canvas as rich Text; each cell takes the style of the highest layer lit in it."""
-        layers = self.cell_layers()
         text = Text(no_wrap=True, overflow="crop")
-        for row_no, (row, row_layers) in enumerate(zip(self.glyphs(), layers, strict=True)):
+        for row_no, runs in enumerate(self.runs()):
             if row_no:
                 text.append("\n")
-            start = 0
-            for col in range(1, len(row) + 1):
-                if col == len(row) or row_layers[col] != row_layers[start]:
-                    layer = int(row_layers[start])
-                    text.append(row[start:col], style=styles.get(layer, "") if layer else "")
-                    start = col
+            for chunk, layer in runs:
+                text.append(chunk, style=styles.get(layer, "") if layer else "")
         return text
+
+    def segments(self, styles: Mapping[int, Style]) -> Iterator[Segment]:
+        """The canvas as rich Segments, one line per cell row (fast path for live frames)."""
+        for runs in self.runs():
+            for chunk, layer in runs:
+                yield Segment(chunk, styles.get(layer) if layer else None)
+            yield Segment.line()

@@ -18,10 +18,12 @@ from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
-from rich.console import Console, ConsoleOptions, Group, RenderableType, RenderResult
+from rich.console import Console, ConsoleOptions, RenderResult
 from rich.layout import Layout
 from rich.panel import Panel
 from rich.progress_bar import ProgressBar
+from rich.segment import Segment
+from rich.style import Style
 from rich.table import Table
 from rich.text import Text
 
@@ -48,12 +50,14 @@ LAYER_STYLES: dict[int, str] = {
     LAYER_ACTIVE: "bold cyan",
     LAYER_STOPPED: "bold red",
 }
+_LAYER_STYLES = {layer: Style.parse(style) for layer, style in LAYER_STYLES.items()}
 LEGEND = Text.from_markup(
     "[green]idle[/] [bold cyan]active[/] [bold red]stopped[/] [magenta]path[/] "
     "[grey50]SEC[/] [blue]circle r[/] [bold yellow]targets[/]"
 )
 ROBOT_RADIUS = 1.0  # robots are unit discs
-SIDE_WIDTH = 46  # columns of the counters and agents column
+SIDE_WIDTH = 46
+MAX_DUTY = 5  # the live view draws for at most a fifth of the wall time (one core)  # columns of the counters and agents column
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -149,11 +153,15 @@ class CanvasView:
 
     def __init__(self, frame: Frame, figures: Figures, mode: Mode = "braille") -> None:
         self.frame, self.figures, self.mode = frame, figures, mode
+        self._cache: dict[tuple[int, int], list[Segment]] = {}
 
     def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
         cols = max(1, options.max_width)
         rows = max(1, (options.height or options.size.height or 20))
-        yield build_canvas(self.frame, self.figures, cols, rows, self.mode).render(LAYER_STYLES)
+        if (cols, rows) not in self._cache:  # rich may render a panel's content twice
+            canvas = build_canvas(self.frame, self.figures, cols, rows, self.mode)
+            self._cache[(cols, rows)] = list(canvas.segments(_LAYER_STYLES))
+        yield from self._cache[(cols, rows)]
 
 
 # --- counters, agents, outcome -------------------------------------------------------------------
@@ -216,7 +224,13 @@ def agent_rows(frame: Frame) -> list[int]:
 
 
 class AgentsView:
-    """The agents table, cut to the rows that fit (with a line saying how many are left out)."""
+    """The agents list, cut to the rows that fit (with a line saying how many are left out).
+
+    Fixed-width text rather than a rich Table: a Table of a few hundred cells costs tens of
+    milliseconds a frame, and the dashboard must stay cheap next to the swarm it watches.
+    """
+
+    HEADER = f"{'robot':>5}  {'alive':<5}  {'last':>6}  {'path':>8}  {'t/o':>4}"
 
     def __init__(self, frame: Frame) -> None:
         self.frame = frame
@@ -226,31 +240,22 @@ class AgentsView:
         height = options.height or 12
         fit = max(0, height - 2)  # header row and the "more" line
         order = agent_rows(f)
-        table = Table(box=None, padding=(0, 1), show_edge=False, expand=False)
-        table.add_column("robot", justify="right", no_wrap=True)
-        table.add_column("alive", no_wrap=True)
-        for name in ("last", "path", "t/o"):
-            table.add_column(name, justify="right", no_wrap=True)
-        active, stopped = set(f.active), set(f.stopped)
         shown = order if len(order) <= fit + 1 else order[:fit]
+        active, stopped = set(f.active), set(f.stopped)
+        text = Text(self.HEADER, style="bold", no_wrap=True, overflow="crop")
         for i in shown:
             alive = "-" if f.alive is None else ("yes" if f.alive[i] else "NO")
             last = f.last_active[i] if i < len(f.last_active) else -1
             length = f.last_path_length[i] if i < len(f.last_path_length) else 0.0
             timeouts = str(f.timeouts[i]) if i < len(f.timeouts) else "-"
-            style = "bold red" if i in stopped else "bold cyan" if i in active else ""
-            table.add_row(
-                str(i),
-                alive,
-                "never" if last < 0 else str(last),
-                f"{length:.3f}",
-                timeouts,
-                style=style,
+            last_text = "never" if last < 0 else str(last)
+            row = f"\n{i:>5}  {alive:<5}  {last_text:>6}  {length:>8.3f}  {timeouts:>4}"
+            text.append(
+                row, style="bold red" if i in stopped else "bold cyan" if i in active else ""
             )
-        parts: list[RenderableType] = [table]
         if len(shown) < len(order):
-            parts.append(Text(f"… {len(order) - len(shown)} more robots", style="dim"))
-        yield Group(*parts)
+            text.append(f"\n… {len(order) - len(shown)} more robots", style="dim")
+        yield text
 
 
 def render_frame(frame: Frame, *, footer: str | None = None, mode: Mode = "braille") -> Layout:
@@ -507,12 +512,15 @@ class StateWatcher:
                         rate = self.latest.rounds_per_second
                     frame = frame_from_state(state, rate, self.max_rounds)
                     self.latest = frame
+                    began = time.monotonic()
                     self.sink.show(frame)
+                    busy = time.monotonic() - began
                     if frame.status in FINAL_STATUSES:
                         self.ended.set()
                         if self.stop_at_end:
                             break
-                    self._stop.wait(self.period)
+                    # drawing may take at most 1/MAX_DUTY of the time: the swarm needs the CPU
+                    self._stop.wait(max(self.period, busy * (MAX_DUTY - 1)))
             finally:
                 sub.undeclare()
         except Exception as exc:  # a failing display must never take the run down with it
