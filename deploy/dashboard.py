@@ -56,8 +56,8 @@ LEGEND = Text.from_markup(
     "[grey50]SEC[/] [blue]circle r[/] [bold yellow]targets[/]"
 )
 ROBOT_RADIUS = 1.0  # robots are unit discs
-SIDE_WIDTH = 46
-MAX_DUTY = 5  # the live view draws for at most a fifth of the wall time (one core)  # columns of the counters and agents column
+SIDE_WIDTH = 46  # columns of the counters and agents column
+MAX_DUTY = 5  # the live view draws for at most a fifth of the wall time (one core)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
