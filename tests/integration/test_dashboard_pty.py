@@ -36,13 +36,15 @@ ROWS, COLS = 40, 120
 ANSI = re.compile(
     r"\x1b\[[0-?]*[ -/]*[@-~]|\x1b\][^\x07\x1b]*(\x07|\x1b\\)|\x1b[()][0-9A-Za-z]|\x1b[=>78]"
 )
-DASHBOARD_MAIN = (
+COMMAND_MAIN = (
     "import argparse, sys\n"
-    "from deploy import dashboard\n"
+    "from deploy import {module} as m\n"
     "p = argparse.ArgumentParser()\n"
-    "dashboard.add_arguments(p)\n"
-    "sys.exit(dashboard.main(p.parse_args(sys.argv[1:])))\n"
+    "m.add_arguments(p)\n"
+    "sys.exit(m.main(p.parse_args(sys.argv[1:])))\n"
 )
+DASHBOARD_MAIN = COMMAND_MAIN.format(module="dashboard")
+REPLAY_MAIN = COMMAND_MAIN.format(module="replay")
 
 
 def free_port() -> int:
@@ -209,6 +211,25 @@ def test_attached_dashboard_without_a_router_says_so_and_exits_2() -> None:
         assert code == 2, child.text[-2000:]
         assert f"cannot follow {endpoint}" in child.text
         assert "Traceback" not in child.text
+    finally:
+        child.kill()
+
+
+def test_replay_on_a_terminal_steps_with_keys_and_quits() -> None:
+    record = ROOT / "tests" / "data" / "lockstep-n6-seed1.jsonl"
+    child = PtyProcess([sys.executable, "-c", REPLAY_MAIN, str(record), "--round", "5"])
+    try:
+        deadline = time.monotonic() + 30
+        # --round K starts paused at K
+        assert child.wait_for(
+            lambda t: re.search(r"round\s+5 / 17", t) and "[paused" in t, deadline
+        ), child.text
+        os.write(child.master, b"..")  # two steps forward
+        assert child.wait_for(lambda t: re.search(r"round\s+7 / 17", t), deadline), child.text
+        os.write(child.master, b"G")  # to the end: the outcome shows
+        assert child.wait_for(lambda t: "FORMED: uniform circle of 6" in t, deadline), child.text
+        os.write(child.master, b"q")
+        assert child.finish(deadline) == 0, child.text[-2000:]
     finally:
         child.kill()
 
