@@ -408,11 +408,10 @@ class ProgressLog:
 class LiveView:
     """A rich Live view of the frames on the alternate screen; the last frame stays on exit."""
 
-    def __init__(self, console: Console | None = None, svg: str | None = None) -> None:
+    def __init__(self, console: Console | None = None) -> None:
         from rich.live import Live
 
         self.console = console or Console()
-        self.svg = svg
         self.last: Frame | None = None
         self.live = Live(
             Text("waiting for the swarm's state…"),
@@ -433,8 +432,6 @@ class LiveView:
         frame = final or self.last
         if frame is not None:
             print_frame(frame, self.console)
-            if self.svg:
-                save_svg(frame, self.svg)
 
 
 def _open_session(connect: str) -> Any:
@@ -464,6 +461,7 @@ class StateWatcher:
         fps: float = 15.0,
         max_rounds: int | None = None,
         stop_at_end: bool = False,
+        svg: str | None = None,
     ) -> None:
         if session is None and connect is None:
             raise ValueError("StateWatcher needs an open session or a connect endpoint")
@@ -471,6 +469,7 @@ class StateWatcher:
         self.period = 1.0 / fps
         self.max_rounds = max_rounds
         self.stop_at_end = stop_at_end
+        self.svg = svg
         self.meter = RateMeter()
         self.latest: Frame | None = None
         self.ended = threading.Event()  # the run reached a final status
@@ -530,15 +529,23 @@ class StateWatcher:
                 session.close()
             self.finished.set()
 
-    def stop(self, final: Frame | None = None) -> None:
-        """Stop following, and leave the final frame (given, or the last one seen) on screen."""
+    def stop(self, final: Frame | WorldState | None = None) -> None:
+        """Stop following; leave the final frame (given, else the last seen) on screen and in SVG.
+
+        Pass the final state when you have it: the last published one may have been dropped.
+        """
         self._stop.set()
         if self._thread.is_alive():
             self._thread.join(timeout=5.0)
-        if final is not None and self.latest is not None:
-            rate = final.rounds_per_second or self.latest.rounds_per_second
-            final = replace(final, rounds_per_second=rate)
-        self.sink.close(final or self.latest)
+        last_rate = self.latest.rounds_per_second if self.latest is not None else None
+        if final is not None and not isinstance(final, Frame):
+            final = frame_from_state(final, last_rate, self.max_rounds)
+        elif final is not None and final.rounds_per_second is None:
+            final = replace(final, rounds_per_second=last_rate)
+        frame = final or self.latest
+        self.sink.close(frame)
+        if self.svg and frame is not None:
+            save_svg(frame, self.svg)
 
 
 def watch(
@@ -558,9 +565,11 @@ def watch(
     """
     if dashboard is None:
         dashboard = sys.stdout.isatty()
-    sink: FrameSink = LiveView(console, svg) if dashboard else ProgressLog(every=every)
+    sink: FrameSink = LiveView(console) if dashboard else ProgressLog(every=every)
     try:
-        watcher = StateWatcher(swarm, sink, session=session, connect=connect, max_rounds=max_rounds)
+        watcher = StateWatcher(
+            swarm, sink, session=session, connect=connect, max_rounds=max_rounds, svg=svg
+        )
         return watcher.start()
     except BaseException:
         sink.close(None)
@@ -614,8 +623,10 @@ def main(args: argparse.Namespace) -> int:
         print("fatswarm dashboard: --every must be at least 1", file=sys.stderr)
         return EXIT_BAD_INPUT
     dashboard = not args.no_dashboard and sys.stdout.isatty()
-    sink: FrameSink = LiveView(svg=args.svg) if dashboard else ProgressLog(every=args.every)
-    watcher = StateWatcher(args.swarm, sink, connect=args.connect, stop_at_end=args.exit_at_end)
+    sink: FrameSink = LiveView() if dashboard else ProgressLog(every=args.every)
+    watcher = StateWatcher(
+        args.swarm, sink, connect=args.connect, stop_at_end=args.exit_at_end, svg=args.svg
+    )
     watcher.start()
     try:
         while not watcher.finished.wait(0.2):
@@ -627,8 +638,6 @@ def main(args: argparse.Namespace) -> int:
     if watcher.error is not None:
         print(f"fatswarm dashboard: cannot follow {args.connect}: {watcher.error}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    if not dashboard and args.svg and watcher.latest is not None:
-        save_svg(watcher.latest, args.svg)
     last = watcher.latest
     if last is None or last.status == "running":
         return EXIT_NOT_FORMED

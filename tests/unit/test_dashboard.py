@@ -19,6 +19,7 @@ from deploy.dashboard import (
     Frame,
     ProgressLog,
     RateMeter,
+    StateWatcher,
     add_arguments,
     add_dashboard_arguments,
     build_canvas,
@@ -232,3 +233,80 @@ def test_run_flags_and_dashboard_flags_parse() -> None:
     add_arguments(dash)
     args = dash.parse_args(["--connect", "tcp/127.0.0.1:7447", "--swarm", "lab"])
     assert (args.connect, args.swarm, args.exit_at_end) == ("tcp/127.0.0.1:7447", "lab", False)
+
+
+class FakeSample:
+    def __init__(self, data: bytes) -> None:
+        self.payload = self
+        self.data = data
+
+    def to_bytes(self) -> bytes:
+        return self.data
+
+
+class FakeSubscriber:
+    def __init__(self, samples: list[bytes]) -> None:
+        self.samples = samples
+        self.undeclared = False
+
+    def try_recv(self) -> FakeSample | None:
+        return FakeSample(self.samples.pop(0)) if self.samples else None
+
+    def undeclare(self) -> None:
+        self.undeclared = True
+
+
+class FakeSession:
+    """Stands in for an open Zenoh session: records what the watcher subscribes to."""
+
+    def __init__(self, samples: list[bytes]) -> None:
+        self.subscriber = FakeSubscriber(samples)
+        self.declared: list[tuple[str, object]] = []
+
+    def declare_subscriber(self, key: str, handler: object) -> FakeSubscriber:
+        self.declared.append((key, handler))
+        return self.subscriber
+
+
+def state(round_no: int, status: str = "running") -> WorldState:
+    agents = tuple(AgentInfo(True, round_no, 1.0, 0) for _ in range(3))
+    return WorldState(
+        round=round_no, n=3, a=4.0, seed=1, scheduler="fsync", swarm="w",
+        positions=np.array([[0.0, 0.0], [5.0, 0.0], [0.0, 5.0]]), active=(0, 1, 2), moved=(),
+        stopped=(), collisions_total=0, status=status, agents=agents,
+    )  # fmt: skip
+
+
+def test_watcher_reads_the_state_key_through_a_ring_of_one_and_logs_progress(
+    tmp_path: object,
+) -> None:
+    import pathlib
+
+    import zenoh
+
+    samples = [state(r).encode() for r in (1, 2, 3)] + [b"garbage"] + [state(4, "stalled").encode()]
+    session = FakeSession(samples)
+    lines: list[str] = []
+    svg = pathlib.Path(str(tmp_path)) / "end.svg"
+    watcher = StateWatcher(
+        "w", ProgressLog(out=lines.append, every=2), session=session, fps=200.0,
+        stop_at_end=True, svg=str(svg),
+    )  # fmt: skip
+    watcher.start()
+    assert watcher.finished.wait(10.0)
+    watcher.stop()
+    key, handler = session.declared[0]
+    assert key == "fatswarm/w/world/state"
+    assert isinstance(handler, zenoh.handlers.RingChannel)
+    assert session.subscriber.undeclared and watcher.error is None
+    assert [line.split()[1] for line in lines[:-1]] == ["1", "2", "4"]  # every 2, then the end
+    assert lines[-1].startswith("STALLED after 4 rounds")
+    assert svg.read_text().startswith("<svg")
+
+
+def test_watcher_stop_shows_the_final_state_it_is_given() -> None:
+    lines: list[str] = []
+    watcher = StateWatcher("w", ProgressLog(out=lines.append), session=FakeSession([]))
+    watcher.start()
+    watcher.stop(state(9, "formed"))
+    assert lines[-1] == "FORMED: uniform circle of 3 robots after 9 rounds, 0 collisions"
