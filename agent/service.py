@@ -1,0 +1,127 @@
+"""The agent process: one robot. On activation it Looks, Computes in its private frame, Moves.
+
+It keeps only its identity and its frame (an X mirroring drawn at start-up, never sent). The world
+sends the others' positions relative to this robot with world axes; the agent mirrors them into its
+own frame, computes, mirrors the path back and sends it relative to itself, so no global coordinate
+ever reaches it or leaves it.
+"""
+
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from agent.algorithm import compute
+from agent.frames import draw_flip, path_to_world
+from agent.params import Params, ParamsError
+from agent.protocol import MoveSubmitted, alive_key, move_key
+from coordinator.protocol import RoundStart, round_key
+from world.protocol import ProtocolError, Snapshot, snapshot_key
+
+log = logging.getLogger("fatswarm.agent")
+
+LOOK_TIMEOUT_S = 5.0
+OPEN_RETRY_S = 0.2  # a client cannot open a session before its router is up: retry
+
+
+@dataclass(frozen=True, slots=True)
+class AgentConfig:
+    """One robot's identity and the seed its private frame is drawn from."""
+
+    swarm: str
+    robot: int
+    seed: int
+
+
+def look_compute(snapshot: Snapshot, flip_x: bool) -> Any:
+    """Compute in the private frame and return the path relative to the robot, world axes."""
+    view = snapshot.view.copy()
+    if flip_x:
+        view[:, 0] = -view[:, 0]
+    path_local = compute(view, Params(snapshot.n, snapshot.a))
+    return path_to_world(path_local, (0.0, 0.0), flip_x)  # undo the mirroring only
+
+
+def open_session(conf: Any, stop: threading.Event) -> Any:
+    """Open a Zenoh session, retrying until the router answers; None if stopped first."""
+    import zenoh
+
+    while not stop.is_set():
+        try:
+            return zenoh.open(conf)
+        except zenoh.ZError as exc:
+            log.debug("router not reachable yet: %s", exc)
+            stop.wait(OPEN_RETRY_S)
+    return None
+
+
+def serve(cfg: AgentConfig, conf: Any, stop: threading.Event | None = None) -> int:
+    """Run one robot until `stop` is set; returns an exit code."""
+    import zenoh
+
+    stop = stop or threading.Event()
+    flip_x = draw_flip(cfg.seed, cfg.robot)
+    starts: queue.Queue[bytes] = queue.Queue()
+    session = open_session(conf, stop)
+    if session is None:
+        return 0
+    with session:
+        session.declare_subscriber(
+            round_key(cfg.swarm), lambda s: starts.put(s.payload.to_bytes())
+        )
+        mover = session.declare_publisher(
+            move_key(cfg.swarm, cfg.robot),
+            congestion_control=zenoh.CongestionControl.BLOCK,
+            express=True,
+        )
+        querier = session.declare_querier(
+            snapshot_key(cfg.swarm, cfg.robot),
+            target=zenoh.QueryTarget.ALL,
+            consolidation=zenoh.ConsolidationMode.NONE,
+            timeout=LOOK_TIMEOUT_S,
+        )
+        _token = session.liveliness().declare_token(alive_key(cfg.swarm, cfg.robot))
+        log.info("robot %d up", cfg.robot)
+        while not stop.is_set():
+            try:
+                data = starts.get(timeout=0.2)
+            except queue.Empty:
+                continue
+            try:
+                start = RoundStart.decode(data)
+            except ProtocolError as exc:
+                log.warning("rejected round start: %s", exc)
+                continue
+            if cfg.robot in start.active and starts.empty():  # a newer start supersedes this one
+                _cycle(cfg, start.round, flip_x, querier, mover)
+    return 0
+
+
+def _cycle(cfg: AgentConfig, round_no: int, flip_x: bool, querier: Any, mover: Any) -> None:
+    """One Look-Compute-Move cycle for round `round_no`."""
+    snapshot = None
+    for reply in querier.get():
+        if reply.ok is None:
+            log.info("round %d: world refused the look", round_no)
+            continue
+        try:
+            snapshot = Snapshot.decode(reply.ok.payload.to_bytes())
+        except ProtocolError as exc:
+            log.warning("rejected snapshot: %s", exc)
+    if snapshot is None or snapshot.round != round_no:
+        return
+    t0 = time.perf_counter()
+    try:
+        path = look_compute(snapshot, flip_x)
+    except ParamsError as exc:
+        log.error("round %d: the world sent unusable parameters: %s", round_no, exc)
+        return
+    except Exception:  # a bug in compute must not kill the robot: it stays put this round
+        log.exception("round %d: compute failed, staying put", round_no)
+        return
+    log.debug("round %d: computed in %.1f ms", round_no, 1e3 * (time.perf_counter() - t0))
+    mover.put(MoveSubmitted(robot=cfg.robot, round=round_no, path=path).encode())

@@ -1,0 +1,286 @@
+"""`fatswarm run` networked: a router here, then world, coordinator and N agent processes.
+
+Every child is its own OS process (`subprocess.Popen` of `sys.executable`, never a fork of a
+process with a Zenoh session) in its own process group; whatever happens, `Children` stops them all.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import logging
+import os
+import secrets
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from collections.abc import Sequence
+from types import TracebackType
+from typing import Any
+
+from deploy.zconf import ROUTER_ENDPOINT_HELP, loopback_endpoint
+
+log = logging.getLogger("fatswarm.launcher")
+
+EXIT_FORMED = 0
+EXIT_NOT_FORMED = 1
+EXIT_BAD_INPUT = 2
+EXIT_INTERRUPTED = 130
+STOP_GRACE_S = 5.0  # SIGTERM first; SIGKILL whatever is still there after this
+
+
+class Children:
+    """Processes started here, each in its own process group; all stopped on exit."""
+
+    def __init__(self) -> None:
+        self.procs: dict[str, subprocess.Popen[bytes]] = {}
+
+    def __enter__(self) -> Children:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.stop_all()
+
+    def start(self, name: str, argv: Sequence[str], **kwargs: Any) -> subprocess.Popen[bytes]:
+        """Start `argv` as its own process group (so its own children go with it)."""
+        proc = subprocess.Popen(list(argv), start_new_session=True, **kwargs)
+        self.procs[name] = proc
+        return proc
+
+    def exited(self) -> dict[str, int]:
+        """Children that have exited, with their exit codes."""
+        return {
+            name: code for name, proc in self.procs.items() if (code := proc.poll()) is not None
+        }
+
+    def stop(self, name: str, sig: int = signal.SIGTERM) -> None:
+        """Signal one child's process group."""
+        _signal_group(self.procs[name], sig)
+
+    def stop_all(self, grace_s: float = STOP_GRACE_S) -> None:
+        """SIGTERM every group, wait up to `grace_s`, SIGKILL the rest, reap everything."""
+        for proc in self.procs.values():
+            _signal_group(proc, signal.SIGTERM)
+        deadline = time.monotonic() + grace_s
+        for proc in self.procs.values():
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                proc.wait(timeout=max(0.0, deadline - time.monotonic()))
+        for proc in self.procs.values():
+            _signal_group(proc, signal.SIGKILL)  # also reaps grandchildren left in the group
+            proc.wait()
+
+
+def _signal_group(proc: subprocess.Popen[bytes], sig: int) -> None:
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(proc.pid, sig)
+
+
+# --- flags ---------------------------------------------------------------------------------------
+
+
+def add_network_arguments(p: argparse.ArgumentParser) -> None:
+    """The networked run's flags on top of the lockstep ones."""
+    g = p.add_argument_group("networked run (default; not with --lockstep)")
+    g.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
+                   help=f"use this router instead of starting one; {ROUTER_ENDPOINT_HELP}")
+    g.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
+                   help="endpoint(s) of the router started here (default: a free loopback port)")
+    g.add_argument("--swarm", default=None,
+                   help="swarm name, keys under fatswarm/<swarm>/ (default: a fresh random name)")
+    g.add_argument("--move-timeout", type=float, default=5.0, metavar="SECONDS",
+                   help="an active robot that has not moved by then stays put (default 5)")
+    g.add_argument("--resume", action="store_true",
+                   help="continue the run of an existing --record instead of starting afresh")
+
+
+def _child_endpoint(listen: str) -> str:
+    """Where local children reach a router listening on `listen` (wildcard hosts -> loopback)."""
+    for wildcard in ("0.0.0.0", "[::]"):
+        listen = listen.replace(f"/{wildcard}:", "/127.0.0.1:")
+    return listen
+
+
+# --- the run -------------------------------------------------------------------------------------
+
+
+def run_networked(args: argparse.Namespace) -> int:
+    """Run the swarm over Zenoh as `fatswarm run` asks; returns the exit code (0 formed)."""
+    problem, seed = check_inputs(args)
+    if problem is not None:
+        print(f"fatswarm run: {problem}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.move_timeout <= 0:
+        print("fatswarm run: --move-timeout must be > 0 seconds", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.seed is None and not args.quiet:
+        print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
+    with tempfile.TemporaryDirectory(prefix="fatswarm-") as tmp:
+        record = args.record or os.path.join(tmp, "record.jsonl")
+        if args.record and not args.resume and os.path.exists(record):
+            os.unlink(record)  # a new run, as in lockstep (which truncates)
+        return _launch(args, seed, record)
+
+
+def check_inputs(args: argparse.Namespace) -> tuple[str | None, int]:
+    """(what to fix or None, the seed): the lockstep run's checks, before any process starts."""
+    from agent.params import Params, ParamsError
+    from coordinator.schedule import ScheduleError, make_scheduler
+    from deploy.run import DEFAULT_A, DEFAULT_N
+    from world.physics import InvalidConfigurationError, validate_configuration
+    from world.starts import InitFileError, load_init, random_start
+
+    seed: int = args.seed if args.seed is not None else secrets.randbelow(2**31)
+    try:
+        if args.init is not None:
+            initial, file_a = load_init(args.init)
+            if args.n is not None and args.n != len(initial):
+                return f"-n {args.n} disagrees with the {len(initial)} robots of {args.init}; " \
+                    "drop -n", seed
+            a = args.a if args.a is not None else (file_a if file_a is not None else DEFAULT_A)
+            params = Params(len(initial), a)
+        else:
+            params = Params(DEFAULT_N if args.n is None else args.n,
+                            DEFAULT_A if args.a is None else args.a)
+            initial = random_start(params.n, seed, args.start, params.a)
+        validate_configuration(initial)
+        if args.scheduler != "scripted" and args.schedule is not None:
+            return "--schedule only goes with --scheduler scripted", seed
+        if args.max_rounds is not None and args.max_rounds < 1:
+            return f"--max-rounds must be at least 1, got {args.max_rounds}", seed
+        make_scheduler(args.scheduler, params.n, seed, args.schedule, args.fairness)
+        if args.swarm is not None:
+            from world.protocol import check_swarm
+
+            check_swarm(args.swarm)
+    except (ParamsError, InitFileError, ScheduleError, InvalidConfigurationError,
+            ValueError) as exc:
+        return str(exc), seed
+    return None, seed
+
+
+def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
+    stop = threading.Event()
+    previous = {
+        sig: signal.signal(sig, lambda signum, frame: stop.set())
+        for sig in (signal.SIGTERM, signal.SIGINT)
+    }
+    swarm = args.swarm or f"run-{secrets.token_hex(4)}"
+    router = None
+    try:
+        if args.connect:
+            endpoints = list(args.connect)
+        else:
+            from deploy.router import open_router
+
+            listen = list(args.listen) or [loopback_endpoint()]
+            router = open_router(listen)
+            endpoints = [_child_endpoint(listen[0])]
+        with Children() as children:
+            code = _run_children(args, seed, record, swarm, endpoints, children, stop)
+    finally:
+        if router is not None:
+            router.close()
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    if code in (EXIT_FORMED, EXIT_NOT_FORMED):
+        print_summary(record, sys.stdout)
+        if args.record:
+            print(f"record: {args.record}")
+    return code
+
+
+def _part(name: str, *flags: str) -> list[str]:
+    return [sys.executable, "-m", "deploy.parts", name, *flags]
+
+
+def _run_children(
+    args: argparse.Namespace,
+    seed: int,
+    record: str,
+    swarm: str,
+    endpoints: Sequence[str],
+    children: Children,
+    stop: threading.Event,
+) -> int:
+    from deploy.parts import agent_command
+
+    net = ["--swarm", swarm]
+    for ep in endpoints:
+        net += ["--connect", ep]
+    quiet = ["--log-level", "warning"]
+    world = ["--state", record, "--seed", str(seed), "--scheduler", args.scheduler, "--start",
+             args.start]
+    if args.init:
+        world += ["--init", args.init]
+    if args.n is not None:
+        world += ["-n", str(args.n)]
+    if args.a is not None:
+        world += ["-a", repr(args.a)]
+    if args.max_rounds is not None:
+        world += ["--max-rounds", str(args.max_rounds)]
+    coord = ["--seed", str(seed), "--scheduler", args.scheduler,
+             "--move-timeout", repr(args.move_timeout)]
+    if args.schedule:
+        coord += ["--schedule", args.schedule]
+    if args.fairness is not None:
+        coord += ["--fairness", str(args.fairness)]
+    children.start("world", _part("world", *net, *quiet, *world))
+    children.start("coordinator", _part("coordinator", *net, *quiet, *coord))
+    n = _robot_count(args)
+    for robot in range(n):
+        children.start(f"agent {robot}", agent_command(robot, seed, swarm, endpoints, "warning"))
+    while not stop.wait(0.1):
+        gone = children.exited()
+        if "coordinator" in gone:
+            return gone["coordinator"] if gone["coordinator"] in (0, 1) else EXIT_NOT_FORMED
+        if "world" in gone:
+            print(f"fatswarm run: the world process exited with code {gone['world']}",
+                  file=sys.stderr)
+            return EXIT_NOT_FORMED if gone["world"] != EXIT_BAD_INPUT else EXIT_BAD_INPUT
+    print("interrupted: stopping every process started", file=sys.stderr)
+    return EXIT_INTERRUPTED
+
+
+def _robot_count(args: argparse.Namespace) -> int:
+    if args.init is not None:
+        from world.starts import load_init
+
+        return len(load_init(args.init)[0])
+    from deploy.run import DEFAULT_N
+
+    return int(args.n if args.n is not None else DEFAULT_N)
+
+
+def print_summary(record: str, out: Any) -> None:
+    """The same summary lines as the lockstep run, read back from the record."""
+    from world.record import RecordFormatError, read_record
+
+    try:
+        rec = read_record(record)
+    except RecordFormatError as exc:
+        print(f"no summary: {exc}", file=sys.stderr)
+        return
+    h, res = rec.header, rec.result
+    if res is None:
+        print(f"unfinished: n={h.n} after {len(rec.rounds)} rounds", file=out)
+        return
+    x = res.extra
+    moves = int(x.get("moves", 0))
+    print(
+        f"{res.status}: n={h.n} a={h.a:g} seed={h.seed} scheduler={h.scheduler}\n"
+        f"rounds {res.rounds}  epochs {x.get('epochs', '?')}  moves {moves} "
+        f"({moves / h.n:.2f} per robot)  total distance {float(x.get('total_distance', 0.0)):.3f}  "
+        f"collisions {x.get('collisions', '?')}",
+        file=out,
+    )
+
+
+__all__ = ["Children", "add_network_arguments", "run_networked"]

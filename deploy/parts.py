@@ -1,0 +1,279 @@
+"""Each networked part alone (`fatswarm router|world|coordinator|agent|agents`), for several hosts.
+
+Also the entry point the launcher spawns (`python -m deploy.parts <part> ...`): it parses only the
+part's own flags, so starting 128 agents does not import every subcommand of the CLI.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import signal
+import sys
+import threading
+from collections.abc import Sequence
+
+from deploy.zconf import AGENT_LEASE_MS, add_zenoh_arguments, make_config
+
+EXIT_BAD_INPUT = 2
+DEFAULT_ROUTER_LISTEN = "tcp/127.0.0.1:7447"
+
+
+def install_stop_signals() -> threading.Event:
+    """An event set by SIGTERM or SIGINT, so a part closes its session and exits cleanly."""
+    stop = threading.Event()
+
+    def handler(signum: int, frame: object) -> None:
+        del signum, frame
+        stop.set()
+
+    signal.signal(signal.SIGTERM, handler)
+    signal.signal(signal.SIGINT, handler)
+    return stop
+
+
+def _logging(args: argparse.Namespace, default: str) -> None:
+    level = getattr(args, "log_level", None) or default
+    logging.basicConfig(
+        level=level.upper(),
+        format="%(asctime)s %(name)s[%(process)d] %(levelname)s %(message)s",
+        stream=sys.stderr,
+    )
+
+
+def _fail(part: str, message: str) -> int:
+    print(f"fatswarm {part}: {message}", file=sys.stderr)
+    return EXIT_BAD_INPUT
+
+
+def _add_common(p: argparse.ArgumentParser) -> None:
+    add_zenoh_arguments(p)
+    p.add_argument("--log-level", choices=("debug", "info", "warning", "error"), default=None,
+                   help="log level on stderr")
+
+
+def _client_config(args: argparse.Namespace, lease_ms: int | None = None) -> object:
+    if not args.connect:
+        raise ValueError("give the router to use with --connect ENDPOINT (e.g. tcp/127.0.0.1:7447)")
+    return make_config("client", connect=args.connect, listen=args.listen, lease_ms=lease_ms)
+
+
+# --- router ------------------------------------------------------------------------------------
+
+
+def add_router_arguments(p: argparse.ArgumentParser) -> None:
+    """Flags of `fatswarm router`."""
+    _add_common(p)
+
+
+def main_router(args: argparse.Namespace) -> int:
+    """Run a router until SIGTERM/SIGINT."""
+    from deploy.router import run_router
+
+    _logging(args, "info")
+    stop = install_stop_signals()
+    try:
+        return run_router(args.listen or [DEFAULT_ROUTER_LISTEN], args.connect, stop)
+    except ValueError as exc:
+        return _fail("router", str(exc))
+
+
+# --- world -------------------------------------------------------------------------------------
+
+
+def add_world_arguments(p: argparse.ArgumentParser) -> None:
+    """Flags of `fatswarm world` (the start flags matter only for a new state file)."""
+    from coordinator.schedule import NAMES
+    from world.starts import KINDS
+
+    _add_common(p)
+    p.add_argument("--state", required=True, metavar="PATH",
+                   help="run record = durable log; an existing one is resumed after its last round")
+    p.add_argument("-n", type=int, default=8, metavar="N", help="number of robots (default 8)")
+    p.add_argument("-a", type=float, default=None, metavar="A", help="least polygon side (> 3)")
+    p.add_argument("--seed", type=int, default=0, metavar="S", help="seed of the random start")
+    p.add_argument("--init", metavar="PATH", help='JSON {"positions": [[x, y], ...], "a": 4.0}')
+    p.add_argument("--start", choices=KINDS, default="clustered", help="kind of random start")
+    p.add_argument("--scheduler", choices=NAMES, default="ssync",
+                   help="scheduler name written to the record (the coordinator runs it)")
+    p.add_argument("--max-rounds", type=int, default=None, metavar="R",
+                   help="end as max_rounds after R rounds (default: as lockstep)")
+
+
+def main_world(args: argparse.Namespace) -> int:
+    """Run the world until SIGTERM/SIGINT."""
+    from agent.params import Params, ParamsError
+    from deploy.lockstep import default_max_rounds
+    from world.physics import InvalidConfigurationError, validate_configuration
+    from world.record import RecordFormatError
+    from world.service import WorldSetup, open_world, serve
+    from world.starts import InitFileError, load_init, random_start
+
+    _logging(args, "info")
+    stop = install_stop_signals()
+
+    def make_setup() -> WorldSetup:
+        if args.init is not None:
+            initial, file_a = load_init(args.init)
+            a = args.a if args.a is not None else (file_a if file_a is not None else 4.0)
+        else:
+            a = 4.0 if args.a is None else args.a
+            initial = random_start(args.n, args.seed, args.start, a)
+        params = Params(len(initial), a)
+        initial = validate_configuration(initial)
+        max_rounds = args.max_rounds or default_max_rounds(params.n, args.scheduler)
+        return WorldSetup(args.swarm, params.n, params.a, args.seed, args.scheduler, initial,
+                          max_rounds)
+
+    try:
+        conf = _client_config(args)
+        core = open_world(args.state, make_setup, args.swarm, args.max_rounds)
+    except (ValueError, ParamsError, InitFileError, RecordFormatError,
+            InvalidConfigurationError) as exc:
+        return _fail("world", str(exc))
+    return serve(core, conf, stop)
+
+
+# --- coordinator -------------------------------------------------------------------------------
+
+
+def add_coordinator_arguments(p: argparse.ArgumentParser) -> None:
+    """Flags of `fatswarm coordinator` (n comes from the world)."""
+    from coordinator.schedule import NAMES
+
+    _add_common(p)
+    p.add_argument("--seed", type=int, default=0, metavar="S", help="seed of the scheduler")
+    p.add_argument("--scheduler", choices=NAMES, default="ssync", help="who is active each round")
+    p.add_argument("--schedule", metavar="PATH", help="scripted scheduler's JSON or run record")
+    p.add_argument("--fairness", type=int, default=None, metavar="K",
+                   help="every robot active at least once in every K rounds (default 2n)")
+    p.add_argument("--move-timeout", type=float, default=5.0, metavar="SECONDS",
+                   help="an active robot that has not moved by then stays put (default 5)")
+    p.add_argument("--start-timeout", type=float, default=120.0, metavar="SECONDS",
+                   help="wait this long for all n agents before round 1 (default 120)")
+
+
+def main_coordinator(args: argparse.Namespace) -> int:
+    """Run rounds until the run ends; exit 0 formed, 1 not formed."""
+    from coordinator.schedule import ScheduleError, Scheduler, make_scheduler
+    from coordinator.service import Coordinator, CoordinatorConfig
+
+    _logging(args, "info")
+    stop = install_stop_signals()
+
+    def scheduler_for(n: int) -> Scheduler:
+        return make_scheduler(args.scheduler, n, args.seed, args.schedule, args.fairness)
+
+    try:
+        conf = _client_config(args)
+        if args.move_timeout <= 0 or args.start_timeout < 0:
+            raise ValueError("--move-timeout must be > 0 and --start-timeout >= 0")
+        cfg = CoordinatorConfig(args.swarm, args.move_timeout, args.start_timeout)
+        return Coordinator(cfg, scheduler_for, stop).run(conf)
+    except (ValueError, ScheduleError) as exc:
+        return _fail("coordinator", str(exc))
+
+
+# --- agent(s) ----------------------------------------------------------------------------------
+
+
+def add_agent_arguments(p: argparse.ArgumentParser) -> None:
+    """Flags of `fatswarm agent`."""
+    _add_common(p)
+    p.add_argument("--robot", type=int, required=True, metavar="I", help="robot id, 0..n-1")
+    p.add_argument("--seed", type=int, default=0, metavar="S",
+                   help="seed the private frame is drawn from (the run's seed)")
+
+
+def main_agent(args: argparse.Namespace) -> int:
+    """Run one robot until SIGTERM/SIGINT."""
+    from agent.service import AgentConfig, serve
+
+    _logging(args, "warning")
+    stop = install_stop_signals()
+    if args.robot < 0:
+        return _fail("agent", f"--robot must be >= 0, got {args.robot}")
+    try:
+        conf = _client_config(args, lease_ms=AGENT_LEASE_MS)
+    except ValueError as exc:
+        return _fail("agent", str(exc))
+    return serve(AgentConfig(args.swarm, args.robot, args.seed), conf, stop)
+
+
+def add_agents_arguments(p: argparse.ArgumentParser) -> None:
+    """Flags of `fatswarm agents`."""
+    _add_common(p)
+    p.add_argument("-n", type=int, required=True, metavar="K", help="number of agent processes")
+    p.add_argument("--first", type=int, default=0, metavar="I",
+                   help="id of the first robot (robots I..I+K-1; default 0)")
+    p.add_argument("--seed", type=int, default=0, metavar="S", help="the run's seed")
+
+
+def agent_command(robot: int, seed: int, swarm: str, connect: Sequence[str],
+                  log_level: str | None = None) -> list[str]:
+    """The argv that starts one agent process."""
+    argv = [sys.executable, "-m", "deploy.parts", "agent", "--robot", str(robot),
+            "--seed", str(seed), "--swarm", swarm]
+    for endpoint in connect:
+        argv += ["--connect", endpoint]
+    if log_level:
+        argv += ["--log-level", log_level]
+    return argv
+
+
+def main_agents(args: argparse.Namespace) -> int:
+    """Start K agent processes here (each its own OS process) and stop them on SIGTERM/SIGINT."""
+    from deploy.launcher import Children
+
+    _logging(args, "info")
+    if args.n < 1 or args.first < 0:
+        return _fail("agents", "-n must be >= 1 and --first >= 0")
+    if not args.connect:
+        return _fail("agents", "give the router to use with --connect ENDPOINT")
+    stop = install_stop_signals()
+    with Children() as children:
+        for robot in range(args.first, args.first + args.n):
+            children.start(f"agent {robot}",
+                           agent_command(robot, args.seed, args.swarm, args.connect,
+                                         args.log_level))
+        while not stop.wait(0.5):
+            gone = children.exited()
+            if gone:
+                logging.getLogger("fatswarm.agents").warning("exited: %s", gone)
+                if len(gone) == args.n:
+                    return 1
+    return 0
+
+
+# --- `python -m deploy.parts <part> ...` -------------------------------------------------------
+
+_PARTS = {
+    "router": (add_router_arguments, main_router),
+    "world": (add_world_arguments, main_world),
+    "coordinator": (add_coordinator_arguments, main_coordinator),
+    "agent": (add_agent_arguments, main_agent),
+    "agents": (add_agents_arguments, main_agents),
+}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Parse one part's flags and run it."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or argv[0] not in _PARTS:
+        print(f"usage: python -m deploy.parts {{{','.join(_PARTS)}}} ...", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    add, run = _PARTS[argv[0]]
+    parser = argparse.ArgumentParser(prog=f"fatswarm {argv[0]}")
+    add(parser)
+    code = run(parser.parse_args(argv[1:]))
+    return code
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Unused fallback: deploy.cli evaluates `module.add_arguments` eagerly as a getattr default."""
+    add_agent_arguments(p)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
+

@@ -1,0 +1,30 @@
+"""A Zenoh router in a Python process (the wheel embeds the Rust router; no zenohd needed)."""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Sequence
+from typing import Any
+
+from deploy.zconf import make_config
+
+log = logging.getLogger("fatswarm.router")
+
+
+def open_router(listen: Sequence[str], connect: Sequence[str] = ()) -> Any:
+    """An open router session listening on `listen` (and linked to the routers in `connect`)."""
+    import zenoh
+
+    if not listen:
+        raise ValueError("a router needs at least one --listen endpoint, e.g. tcp/127.0.0.1:7447")
+    return zenoh.open(make_config("router", connect=connect, listen=listen))
+
+
+def run_router(listen: Sequence[str], connect: Sequence[str], stop: threading.Event) -> int:
+    """Route until `stop` is set; returns an exit code."""
+    with open_router(listen, connect):
+        log.info("router listening on %s", ", ".join(listen))
+        while not stop.wait(0.5):
+            pass
+    return 0
