@@ -458,7 +458,7 @@ class StateWatcher:
         *,
         session: Any = None,
         connect: str | None = None,
-        fps: float = 15.0,
+        fps: float = 10.0,
         max_rounds: int | None = None,
         stop_at_end: bool = False,
         svg: str | None = None,
