@@ -43,6 +43,7 @@ class CoordinatorConfig:
     swarm: str
     move_timeout_s: float = 5.0  # an active robot that has not moved by then stays put
     start_timeout_s: float = 120.0  # wait this long for all n agents before round 1
+    pace_s: float = 0.0  # least time per round: lets people (and tests) watch a run unfold
     resume_live: Sequence[int] | None = None  # live set assumed when replaying the scheduler
 
 
@@ -168,7 +169,10 @@ class Coordinator:
             status = reply.status
             if status != "running":
                 break
+            started = time.monotonic()
             status = self._one_round(session, announce, reply.committed + 1)
+            if self.cfg.pace_s > 0:
+                self.stop.wait(max(0.0, started + self.cfg.pace_s - time.monotonic()))
         if status == "running":
             return EXIT_NOT_FORMED
         log.info("run ended: %s after round %d", status, self.round)

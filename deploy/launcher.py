@@ -97,6 +97,8 @@ def add_network_arguments(p: argparse.ArgumentParser) -> None:
                    help="swarm name, keys under fatswarm/<swarm>/ (default: a fresh random name)")
     g.add_argument("--move-timeout", type=float, default=5.0, metavar="SECONDS",
                    help="an active robot that has not moved by then stays put (default 5)")
+    g.add_argument("--pace", type=float, default=0.0, metavar="SECONDS",
+                   help="least time per round, to watch a run unfold (default 0: full speed)")
     g.add_argument("--resume", action="store_true",
                    help="continue the run of an existing --record instead of starting afresh")
 
@@ -117,8 +119,8 @@ def run_networked(args: argparse.Namespace) -> int:
     if problem is not None:
         print(f"fatswarm run: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    if args.move_timeout <= 0:
-        print("fatswarm run: --move-timeout must be > 0 seconds", file=sys.stderr)
+    if args.move_timeout <= 0 or args.pace < 0:
+        print("fatswarm run: --move-timeout must be > 0 and --pace >= 0 seconds", file=sys.stderr)
         return EXIT_BAD_INPUT
     if args.seed is None and not args.quiet:
         print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
@@ -227,7 +229,7 @@ def _run_children(
     if args.max_rounds is not None:
         world += ["--max-rounds", str(args.max_rounds)]
     coord = ["--seed", str(seed), "--scheduler", args.scheduler,
-             "--move-timeout", repr(args.move_timeout)]
+             "--move-timeout", repr(args.move_timeout), "--pace", repr(args.pace)]
     if args.schedule:
         coord += ["--schedule", args.schedule]
     if args.fairness is not None:

@@ -151,6 +151,8 @@ def add_coordinator_arguments(p: argparse.ArgumentParser) -> None:
                    help="an active robot that has not moved by then stays put (default 5)")
     p.add_argument("--start-timeout", type=float, default=120.0, metavar="SECONDS",
                    help="wait this long for all n agents before round 1 (default 120)")
+    p.add_argument("--pace", type=float, default=0.0, metavar="SECONDS",
+                   help="least time per round, to watch a run unfold (default 0: full speed)")
 
 
 def main_coordinator(args: argparse.Namespace) -> int:
@@ -166,9 +168,9 @@ def main_coordinator(args: argparse.Namespace) -> int:
 
     try:
         conf = _client_config(args)
-        if args.move_timeout <= 0 or args.start_timeout < 0:
-            raise ValueError("--move-timeout must be > 0 and --start-timeout >= 0")
-        cfg = CoordinatorConfig(args.swarm, args.move_timeout, args.start_timeout)
+        if args.move_timeout <= 0 or args.start_timeout < 0 or args.pace < 0:
+            raise ValueError("--move-timeout must be > 0, --start-timeout and --pace >= 0")
+        cfg = CoordinatorConfig(args.swarm, args.move_timeout, args.start_timeout, args.pace)
         return Coordinator(cfg, scheduler_for, stop).run(conf)
     except (ValueError, ScheduleError) as exc:
         return _fail("coordinator", str(exc))
