@@ -1,0 +1,169 @@
+"""Wire protocols: round trips, and every kind of peer garbage is refused with ProtocolError."""
+
+from __future__ import annotations
+
+import math
+
+import msgpack
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from agent.path import Arc, Line, Path
+from agent.protocol import MoveSubmitted, move_key, robot_of_alive_key
+from coordinator.protocol import RoundStart, round_key
+from world.protocol import (
+    PROTOCOL_VERSION,
+    AgentInfo,
+    Begin,
+    Commit,
+    ControlReply,
+    Hello,
+    MoveHeld,
+    ProtocolError,
+    Snapshot,
+    WorldState,
+    check_swarm,
+    decode_control,
+    robot_of_key,
+    snapshot_key,
+    state_key,
+)
+
+
+def _state(n: int = 3) -> WorldState:
+    return WorldState(
+        round=4,
+        n=n,
+        a=4.0,
+        seed=7,
+        scheduler="ssync",
+        swarm="s1",
+        positions=np.arange(2 * n, dtype=np.float64).reshape(n, 2) / 3,
+        active=(0, 2),
+        moved=(2,),
+        stopped=(),
+        collisions_total=1,
+        status="running",
+        agents=tuple(AgentInfo(i != 1, i - 1, 0.5 * i, i) for i in range(n)),
+    )
+
+
+def test_world_state_round_trips_exactly() -> None:
+    s = _state()
+    d = WorldState.decode(s.encode())
+    assert np.array_equal(d.positions, s.positions)
+    assert (d.round, d.n, d.a, d.seed, d.scheduler, d.swarm) == (4, 3, 4.0, 7, "ssync", "s1")
+    assert (d.active, d.moved, d.stopped, d.collisions_total, d.status) == (
+        (0, 2), (2,), (), 1, "running")
+    assert d.agents == s.agents
+
+
+def test_keys_live_under_the_swarm_prefix() -> None:
+    assert state_key("s1") == "fatswarm/s1/world/state"
+    assert snapshot_key("s1", 3) == "fatswarm/s1/robot/3/snapshot"
+    assert move_key("s1", 3) == "fatswarm/s1/robot/3/move"
+    assert round_key("s1") == "fatswarm/s1/coordinator/round"
+    assert robot_of_key("fatswarm/s1/robot/12/move") == 12
+    assert robot_of_key("fatswarm/s1/robot/012/move") is None
+    assert robot_of_key("fatswarm/s1/robot/x/move") is None
+    assert robot_of_alive_key("fatswarm/s1/alive/agent/5") == 5
+    with pytest.raises(ValueError, match="swarm name"):
+        check_swarm("a/b")
+    with pytest.raises(ValueError, match="swarm name"):
+        check_swarm("*")
+
+
+@given(
+    robot=st.integers(0, 4095),
+    round_no=st.integers(1, 2**40),
+    pts=st.lists(
+        st.tuples(st.floats(-1e6, 1e6), st.floats(-1e6, 1e6), st.floats(-6.0, 6.0)),
+        max_size=4,
+    ),
+)
+def test_move_round_trips(robot: int, round_no: int, pts: list[tuple[float, float, float]]) -> None:
+    segs = tuple(Line((x, y)) if i % 2 else Arc((x, y), w) for i, (x, y, w) in enumerate(pts))
+    msg = MoveSubmitted(robot=robot, round=round_no, path=Path(segs))
+    assert MoveSubmitted.decode(msg.encode()) == msg
+
+
+def test_control_messages_round_trip() -> None:
+    assert decode_control(Hello().encode()) == Hello()
+    assert decode_control(Begin(3, (0, 4)).encode()) == Begin(3, (0, 4))
+    assert decode_control(Commit(3, (4,)).encode()) == Commit(3, (4,))
+    r = ControlReply(True, "", 5, 2, 3, "running")
+    assert ControlReply.decode(r.encode()) == r
+    assert MoveHeld.decode(MoveHeld(3, 1).encode()) == MoveHeld(3, 1)
+    rs = RoundStart(9, (1, 2), 5000)
+    assert RoundStart.decode(rs.encode()) == rs
+
+
+def test_snapshot_round_trips_and_checks_its_size() -> None:
+    view = np.array([[1.0, -2.0], [3.5, 0.25]])
+    d = Snapshot.decode(Snapshot(2, 3, 4.0, view).encode())
+    assert np.array_equal(d.view, view) and (d.round, d.n, d.a) == (2, 3, 4.0)
+    wrong = Snapshot(2, 4, 4.0, view).encode()  # n = 4 needs 3 rows
+    with pytest.raises(ProtocolError, match="bytes"):
+        Snapshot.decode(wrong)
+
+
+def _raw(**fields: object) -> bytes:
+    out: bytes = msgpack.packb(fields, use_bin_type=True)
+    return out
+
+
+GOOD_MOVE = {"v": PROTOCOL_VERSION, "t": "move", "robot": 1, "round": 2, "path": [{"line": [1, 2]}]}
+
+
+@pytest.mark.parametrize(
+    ("data", "reason"),
+    [
+        (b"", "not msgpack"),
+        (b"\xc1garbage", "not msgpack"),
+        (b"\x93\x01\x02\x03", "must be a map"),
+        (_raw(**{**GOOD_MOVE, "v": 99}), "protocol version"),
+        (_raw(**{k: v for k, v in GOOD_MOVE.items() if k != "v"}), "protocol version"),
+        (_raw(**{**GOOD_MOVE, "t": "state"}), "message type"),
+        (_raw(**{**GOOD_MOVE, "robot": -1}), "'robot'"),
+        (_raw(**{**GOOD_MOVE, "robot": True}), "'robot'"),
+        (_raw(**{**GOOD_MOVE, "round": 0}), "'round'"),
+        (_raw(**{**GOOD_MOVE, "round": "3"}), "'round'"),
+        (_raw(**{**GOOD_MOVE, "path": [{"line": [math.nan, 0.0]}]}), "bad path"),
+        (_raw(**{**GOOD_MOVE, "path": [{"line": [math.inf, 0.0]}]}), "bad path"),
+        (_raw(**{**GOOD_MOVE, "path": [{"line": [1e300, 0.0]}]}), "bounded plane"),
+        (_raw(**{**GOOD_MOVE, "path": [{"arc": [0.0, 0.0, 1e9]}]}), "sweep"),
+        (_raw(**{**GOOD_MOVE, "path": [{"teleport": [0.0, 0.0]}]}), "bad path"),
+        (_raw(**{**GOOD_MOVE, "path": [{"line": [0, 0]}] * 65}), "bad path"),
+        (b"\x00" * (2 << 20), "exceeds"),
+    ],
+)
+def test_move_decoder_refuses_garbage(data: bytes, reason: str) -> None:
+    with pytest.raises(ProtocolError, match=reason):
+        MoveSubmitted.decode(data)
+
+
+def test_world_state_decoder_refuses_bad_shapes() -> None:
+    good = msgpack.unpackb(_state().encode(), raw=False)
+    for key, value in [
+        ("positions", b"\x00" * 8),
+        ("positions", np.full((3, 2), np.nan).tobytes()),
+        ("alive", [True]),
+        ("status", "exploded"),
+        ("active", [0, 0]),
+        ("active", [7]),
+        ("n", 0),
+    ]:
+        with pytest.raises(ProtocolError):
+            WorldState.decode(_raw(**{**good, key: value}))
+
+
+def test_control_decoder_refuses_unknown_requests() -> None:
+    with pytest.raises(ProtocolError, match="message type"):
+        decode_control(_raw(v=PROTOCOL_VERSION, t="format-disk"))
+    with pytest.raises(ProtocolError):
+        decode_control(_raw(v=PROTOCOL_VERSION, t="begin", round=1, active="all"))
+    with pytest.raises(ProtocolError):
+        RoundStart.decode(_raw(v=PROTOCOL_VERSION, t="round-start", round=1, active=[1],
+                               timeout_ms=-5))

@@ -1,0 +1,149 @@
+"""The world handling its protocol, without Zenoh: looks, moves, commits, durability, resume."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path as FsPath
+
+import numpy as np
+import pytest
+
+from agent.path import STAY, Line, Path
+from agent.protocol import MoveSubmitted, move_key
+from world.protocol import (
+    Begin,
+    Commit,
+    ControlReply,
+    Hello,
+    MoveHeld,
+    Snapshot,
+    snapshot_key,
+)
+from world.record import read_record
+from world.service import WorldCore, WorldSetup, open_world
+
+SWARM = "t"
+START = np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]])
+
+
+def _setup(max_rounds: int | None = 50) -> WorldSetup:
+    return WorldSetup(SWARM, 3, 4.0, 1, "ssync", START, max_rounds)
+
+
+OPENED: list[WorldCore] = []
+
+
+def _world(tmp_path: FsPath) -> WorldCore:
+    w = open_world(str(tmp_path / "state.jsonl"), _setup, SWARM, None)
+    OPENED.append(w)
+    return w
+
+
+@pytest.fixture(autouse=True)
+def _close_journals() -> Iterator[None]:
+    yield
+    while OPENED:
+        OPENED.pop().journal.close()
+
+
+def _ctl(world: WorldCore, data: bytes) -> ControlReply:
+    return world.control(data)[0]
+
+
+def _move(world: WorldCore, key_robot: int, robot: int, round_no: int, path: Path) -> object:
+    return world.move(move_key(SWARM, key_robot), MoveSubmitted(robot, round_no, path).encode())
+
+
+def test_snapshot_only_for_active_robots_relative_and_without_ids(tmp_path: FsPath) -> None:
+    w = _world(tmp_path)
+    assert w.look(snapshot_key(SWARM, 0)) is None  # no round open
+    assert _ctl(w, Begin(1, (1,)).encode()).ok
+    assert w.look(snapshot_key(SWARM, 0)) is None  # not active
+    data = w.look(snapshot_key(SWARM, 1))
+    assert data is not None
+    snap = Snapshot.decode(data)
+    assert snap.round == 1 and snap.n == 3
+    got = sorted(map(tuple, snap.view.tolist()))
+    assert got == [(-10.0, 0.0), (-10.0, 10.0)]  # others minus the asker: never its own position
+
+
+def test_moves_are_taken_once_from_active_robots_that_looked(tmp_path: FsPath) -> None:
+    w = _world(tmp_path)
+    _ctl(w, Begin(1, (0, 1)).encode())
+    step = Path((Line((1.0, 0.0)),))
+    assert _move(w, 0, 0, 1, step) is None  # has not looked yet
+    w.look(snapshot_key(SWARM, 0))
+    w.look(snapshot_key(SWARM, 1))
+    assert _move(w, 0, 1, 1, step) is None  # names someone else
+    assert _move(w, 2, 2, 1, step) is None  # not active
+    assert _move(w, 0, 0, 2, step) is None  # not the open round
+    assert w.move(move_key(SWARM, 0), b"\x00garbage") is None
+    assert _move(w, 0, 0, 1, step) == MoveHeld(1, 0)
+    assert _move(w, 0, 0, 1, STAY) is None  # a second move for the round
+    assert set(w.rejected) == {
+        "move-without-look", "move-wrong-robot", "move-not-active", "move-wrong-round",
+        "move-garbage", "move-duplicate",
+    }
+    reply = _ctl(w, Commit(1).encode())
+    assert reply.ok and reply.committed == 1
+    assert w.positions[0].tolist() == [1.0, 0.0]  # translated by the robot's own position
+    assert w.positions[1].tolist() == [10.0, 0.0]  # looked, never moved: stays
+    assert w.timeouts == [0, 1, 0]
+    assert _move(w, 0, 0, 1, step) is None  # a replay of an old round
+
+
+def test_control_refuses_out_of_order_rounds_and_is_idempotent(tmp_path: FsPath) -> None:
+    w = _world(tmp_path)
+    assert not _ctl(w, Begin(2, (0,)).encode()).ok
+    assert not _ctl(w, Commit(1).encode()).ok
+    assert _ctl(w, Begin(1, (0,)).encode()).ok
+    assert _ctl(w, Begin(1, (0,)).encode()).ok  # a coordinator retrying
+    assert _ctl(w, Commit(1).encode()).ok
+    again = _ctl(w, Commit(1).encode())  # its reply was lost: still fine, nothing re-applied
+    assert again.ok and again.committed == 1
+    assert not _ctl(w, b"\xff\xfe").ok
+    hello = _ctl(w, Hello().encode())
+    assert (hello.committed, hello.open_round, hello.status) == (1, 0, "running")
+
+
+def test_committed_rounds_survive_a_restart_and_a_torn_line(tmp_path: FsPath) -> None:
+    w = _world(tmp_path)
+    for r in (1, 2):
+        _ctl(w, Begin(r, (0,)).encode())
+        w.look(snapshot_key(SWARM, 0))
+        _move(w, 0, 0, r, Path((Line((1.0, 0.0)),)))
+        _ctl(w, Commit(r).encode())
+    _ctl(w, Begin(3, (0,)).encode())  # open but never committed: not durable, not announced
+    w.journal.close()
+    state = tmp_path / "state.jsonl"
+    with open(state, "a", encoding="utf-8") as f:
+        f.write('{"type":"round","rou')  # died mid-write
+    again = _world(tmp_path)
+    assert again.committed == 2 and again.open_round == 0
+    assert again.positions[0].tolist() == [2.0, 0.0]
+    assert again.last_active[0] == 2
+    assert _ctl(again, Begin(3, (1,)).encode()).ok
+    assert _ctl(again, Commit(3).encode()).ok
+    again.journal.close()
+    record = read_record(state)
+    assert [r.round for r in record.rounds] == [1, 2, 3]
+
+
+def test_the_run_ends_at_max_rounds_with_a_result_line(tmp_path: FsPath) -> None:
+    w = open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=1), SWARM, None)
+    OPENED.append(w)
+    _ctl(w, Begin(1, (0, 1, 2)).encode())
+    reply = _ctl(w, Commit(1).encode())
+    assert reply.status in ("stalled", "max_rounds")
+    assert not _ctl(w, Begin(2, (0,)).encode()).ok
+    w.journal.close()
+    result = read_record(tmp_path / "s.jsonl").result
+    assert result is not None and result.status == reply.status
+
+
+@pytest.mark.parametrize("alive", [True, False])
+def test_liveliness_shows_in_the_state(tmp_path: FsPath, alive: bool) -> None:
+    w = _world(tmp_path)
+    assert w.set_alive(2, alive) is alive
+    assert w.state().agents[2].alive is alive
+    assert not w.set_alive(99, True)
