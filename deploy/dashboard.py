@@ -79,7 +79,7 @@ class Frame:
     alive: tuple[bool, ...] | None = None  # None when unknown (a record holds no liveliness)
     last_active: tuple[int, ...] = ()  # round each robot was last active in, -1 if never
     last_path_length: tuple[float, ...] = ()  # length covered by its last applied move
-    timeouts: tuple[int, ...] = ()  # None-like empty tuple when unknown
+    timeouts: tuple[int, ...] = ()  # rounds active without a move in time; empty when unknown
     rounds_per_second: float | None = None
     max_rounds: int | None = None
     last_round: int | None = None  # replay: the record's last round
@@ -217,10 +217,12 @@ def counters_table(frame: Frame, figures: Figures) -> Table:
 
 
 def agent_rows(frame: Frame) -> list[int]:
-    """Robots in the order the agents panel lists them: this round's active, then by id."""
+    """Robots in the order the agents panel lists them: this round's active, the gone, the rest."""
     first = [i for i in frame.active if 0 <= i < frame.n]
     seen = set(first)
-    return first + [i for i in range(frame.n) if i not in seen]
+    gone = [i for i in range(frame.n) if i not in seen and frame.alive and not frame.alive[i]]
+    seen.update(gone)
+    return first + gone + [i for i in range(frame.n) if i not in seen]
 
 
 class AgentsView:

@@ -22,6 +22,7 @@ from deploy.dashboard import (
     StateWatcher,
     add_arguments,
     add_dashboard_arguments,
+    agent_rows,
     build_canvas,
     derive,
     frame_from_state,
@@ -97,6 +98,20 @@ def test_agents_panel_lists_alive_last_activation_path_length_and_timeouts() -> 
     assert re.search(r"\b3\s+yes\s+never\s+0\.000\s+0\b", text)
     # this round's active robots come first
     assert text.index(" NO ") < text.index("never")
+
+
+def test_agents_panel_lists_active_then_gone_then_the_rest() -> None:
+    alive = (True, True, True, False, True)
+    frame = Frame(
+        round=3,
+        n=5,
+        a=4.0,
+        scheduler="ssync",
+        positions=polygon(5, 4.0),
+        active=(4, 1),
+        alive=alive,
+    )
+    assert agent_rows(frame) == [4, 1, 3, 0, 2]
 
 
 def test_agents_panel_says_how_many_rows_did_not_fit() -> None:
