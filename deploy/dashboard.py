@@ -57,6 +57,7 @@ LEGEND = Text.from_markup(
 )
 ROBOT_RADIUS = 1.0  # robots are unit discs
 SIDE_WIDTH = 46  # columns of the counters and agents column
+PROGRESS_EVERY = 50  # rounds between two progress lines when output is not a terminal
 MAX_DUTY = 5  # the live view draws for at most a fifth of the wall time (one core)
 
 
@@ -499,27 +500,33 @@ class StateWatcher:
         try:
             sub = session.declare_subscriber(state_key(self.swarm), zenoh.handlers.RingChannel(1))
             try:
-                while not self._stop.is_set():
+                while True:
+                    stopping = self._stop.is_set()  # then take one last look, and leave
                     sample = sub.try_recv()
-                    if sample is None:
+                    frame = None
+                    if sample is not None:
+                        try:
+                            state = WorldState.decode(sample.payload.to_bytes())
+                        except ProtocolError:
+                            state = None
+                        if state is not None:
+                            rate = self.meter.add(time.monotonic(), state.round)
+                            if rate is None and self.latest is not None:
+                                rate = self.latest.rounds_per_second
+                            frame = frame_from_state(state, rate, self.max_rounds)
+                            self.latest = frame
+                            if frame.status in FINAL_STATUSES:
+                                self.ended.set()
+                    if stopping:
+                        break  # the sink shows `latest` when it closes
+                    if frame is None:
                         self._stop.wait(self.period)
                         continue
-                    try:
-                        state = WorldState.decode(sample.payload.to_bytes())
-                    except ProtocolError:
-                        continue
-                    rate = self.meter.add(time.monotonic(), state.round)
-                    if rate is None and self.latest is not None:
-                        rate = self.latest.rounds_per_second
-                    frame = frame_from_state(state, rate, self.max_rounds)
-                    self.latest = frame
                     began = time.monotonic()
                     self.sink.show(frame)
                     busy = time.monotonic() - began
-                    if frame.status in FINAL_STATUSES:
-                        self.ended.set()
-                        if self.stop_at_end:
-                            break
+                    if self.stop_at_end and frame.status in FINAL_STATUSES:
+                        break
                     # drawing may take at most 1/MAX_DUTY of the time: the swarm needs the CPU
                     self._stop.wait(max(self.period, busy * (MAX_DUTY - 1)))
             finally:
@@ -557,7 +564,7 @@ def watch(
     connect: str | None = None,
     dashboard: bool | None = None,
     svg: str | None = None,
-    every: int = 50,
+    every: int = PROGRESS_EVERY,
     max_rounds: int | None = None,
     console: Console | None = None,
 ) -> StateWatcher:
@@ -576,6 +583,37 @@ def watch(
     except BaseException:
         sink.close(None)
         raise
+
+
+def follow(
+    args: argparse.Namespace,
+    swarm: str,
+    *,
+    session: Any = None,
+    connect: str | None = None,
+) -> StateWatcher:
+    """What `fatswarm run` calls once the router is up: the live view or the progress log.
+
+    Reads `--no-dashboard`, `--svg`, `--max-rounds` and `--quiet` from `args`; the dashboard is
+    shown only when standard output is a terminal. Call `.stop(final)` when the run is over.
+    """
+    live = not getattr(args, "no_dashboard", False) and sys.stdout.isatty()
+    sink: FrameSink
+    if live:
+        sink = LiveView()
+    elif getattr(args, "quiet", False):
+        sink = ProgressLog(out=lambda line: None)
+    else:
+        sink = ProgressLog()
+    watcher = StateWatcher(
+        swarm,
+        sink,
+        session=session,
+        connect=connect,
+        max_rounds=getattr(args, "max_rounds", None),
+        svg=getattr(args, "svg", None),
+    )
+    return watcher.start()
 
 
 # --- command line --------------------------------------------------------------------------------
