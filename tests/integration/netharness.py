@@ -1,0 +1,165 @@
+"""Harness for multi-process swarms on loopback: free ports, no multicast, all stopped after."""
+
+from __future__ import annotations
+
+import secrets
+import sys
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from deploy.launcher import Children
+from deploy.zconf import loopback_endpoint, make_config
+from world.protocol import ProtocolError, WorldState, state_key
+from world.record import RecordWriter, RunRecord, read_record
+
+DEADLINE_S = 120.0  # generous: the machine is shared; tests wait on predicates, never on sleeps
+
+
+class Swarm:
+    """Router, world, coordinator and agents as separate processes, plus an observer session."""
+
+    def __init__(self, tmp: Path, n: int, seed: int, scheduler: str = "ssync") -> None:
+        self.tmp, self.n, self.seed, self.scheduler = tmp, n, seed, scheduler
+        self.endpoint = loopback_endpoint()
+        self.swarm = f"it-{secrets.token_hex(3)}"
+        self.state_path = tmp / "state.jsonl"
+        self.children = Children()
+        self.session: Any = None
+        self.latest: WorldState | None = None
+        self._lock = threading.Lock()
+
+    # -- processes ------------------------------------------------------------------------------
+
+    def _start(self, name: str, part: str, *flags: str) -> None:
+        log = open(self.tmp / f"{name.replace(' ', '-')}.log", "ab")  # noqa: SIM115
+        argv = [sys.executable, "-m", "deploy.parts", part, *flags]
+        self.children.start(name, argv, stdout=log, stderr=log)
+        log.close()
+
+    def _net(self) -> list[str]:
+        return ["--connect", self.endpoint, "--swarm", self.swarm]
+
+    def start_router(self) -> None:
+        self._start("router", "router", "--listen", self.endpoint, "--log-level", "warning")
+
+    def start_world(self, name: str = "world") -> None:
+        self._start(name, "world", *self._net(), "--state", str(self.state_path), "-n",
+                    str(self.n), "--seed", str(self.seed), "--scheduler", self.scheduler,
+                    "--log-level", "info")
+
+    def start_coordinator(self, pace: float) -> None:
+        self._start("coordinator", "coordinator", *self._net(), "--seed", str(self.seed),
+                    "--scheduler", self.scheduler, "--pace", str(pace), "--log-level", "info")
+
+    def start_agent(self, robot: int, name: str | None = None) -> None:
+        self._start(name or f"agent {robot}", "agent", *self._net(), "--robot", str(robot),
+                    "--seed", str(self.seed), "--log-level", "info")
+
+    def start_all(self, pace: float) -> None:
+        self.start_router()
+        self.observe()
+        self.start_world()
+        self.start_coordinator(pace)
+        for robot in range(self.n):
+            self.start_agent(robot)
+
+    def kill9(self, name: str) -> None:
+        import signal
+
+        self.children.stop(name, signal.SIGKILL)
+        self.children.procs[name].wait()
+
+    # -- observing ------------------------------------------------------------------------------
+
+    def observe(self) -> None:
+        """Subscribe to the world's state stream from this test process (a client session)."""
+        import zenoh
+
+        def keep(sample: Any) -> None:
+            try:
+                state = WorldState.decode(sample.payload.to_bytes())
+            except ProtocolError:
+                return
+            with self._lock:
+                self.latest = state
+
+        for _ in range(100):
+            try:
+                self.session = zenoh.open(make_config("client", [self.endpoint]))
+                break
+            except zenoh.ZError:
+                time.sleep(0.1)
+        assert self.session is not None, "router did not come up"
+        self.session.declare_subscriber(state_key(self.swarm), keep)
+
+    def state(self) -> WorldState | None:
+        with self._lock:
+            return self.latest
+
+    def log(self, name: str) -> str:
+        path = self.tmp / f"{name.replace(' ', '-')}.log"
+        return path.read_text(errors="replace") if path.exists() else ""
+
+    def logs(self) -> str:
+        return "\n".join(f"--- {p.name}\n{p.read_text(errors='replace')[-3000:]}"
+                         for p in sorted(self.tmp.glob("*.log")) if p.stat().st_size)
+
+    def wait_for(self, what: str, predicate: Callable[[], bool],
+                 deadline_s: float = DEADLINE_S) -> None:
+        """Poll `predicate` until true; fail with every process's log tail at the deadline."""
+        end = time.monotonic() + deadline_s
+        while not predicate():
+            if time.monotonic() > end:
+                pytest.fail(f"timed out waiting for {what}\n{self.logs()}")
+            exited = {k: v for k, v in self.children.exited().items() if v not in (0, -9)}
+            if exited:
+                pytest.fail(f"processes died {exited} while waiting for {what}\n{self.logs()}")
+            time.sleep(0.02)
+
+    def wait_done(self) -> WorldState:
+        self.wait_for("the run to end", lambda: (s := self.state()) is not None
+                      and s.status != "running")
+        state = self.state()
+        assert state is not None
+        return state
+
+    def close(self) -> None:
+        try:
+            self.children.stop_all()
+        finally:
+            if self.session is not None:
+                self.session.close()
+
+
+def lockstep_record(path: Path, n: int, seed: int, scheduler: str = "ssync") -> RunRecord:
+    """The lockstep run of the same start, seed and scheduler, as a record."""
+    from agent.params import Params
+    from coordinator.schedule import make_scheduler
+    from deploy.lockstep import run_lockstep
+    from world.starts import random_start
+
+    initial = random_start(n, seed, "clustered", 4.0)
+    with RecordWriter(path) as rec:
+        run_lockstep(initial, Params(n, 4.0), make_scheduler(scheduler, n, seed), seed=seed,
+                     record=rec)
+    return read_record(path)
+
+
+def assert_same_run(net: RunRecord, lock: RunRecord) -> None:
+    """Same rounds, active sets, movers, collisions and end; positions within 1e-9."""
+    assert np.allclose(net.header.initial, lock.header.initial, rtol=0, atol=1e-9)
+    assert len(net.rounds) == len(lock.rounds), (len(net.rounds), len(lock.rounds))
+    for a, b in zip(net.rounds, lock.rounds, strict=True):
+        assert a.round == b.round
+        assert a.active == b.active, f"round {a.round}"
+        assert [m.robot for m in a.moves] == [m.robot for m in b.moves], f"round {a.round}"
+        assert len(a.collisions) == len(b.collisions), f"round {a.round}"
+        assert np.allclose(a.positions, b.positions, rtol=0, atol=1e-9), f"round {a.round}"
+    assert net.result is not None and lock.result is not None
+    assert net.result.status == lock.result.status

@@ -1,0 +1,147 @@
+"""The networked emulator, real processes on loopback: forms as lockstep does, survives crashes."""
+
+from __future__ import annotations
+
+import queue
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+from netharness import Swarm, assert_same_run, lockstep_record
+
+from agent.path import Line
+from agent.path import Path as RobotPath
+from agent.protocol import MoveSubmitted, move_key
+from coordinator.protocol import RoundStart, round_key
+from world.protocol import Begin, Commit, control_key, snapshot_key
+from world.record import read_record
+
+pytestmark = pytest.mark.integration
+
+SEED = 3  # a start that needs SEC expansion and forms under ssync for n = 8 and n = 24
+
+
+def _run_cli(tmp_path: Path, n: int, seed: int) -> tuple[int, str, Path]:
+    record = tmp_path / "net.jsonl"
+    argv = [sys.executable, "-m", "deploy.cli", "run", "-n", str(n), "--seed", str(seed),
+            "--scheduler", "ssync", "--record", str(record), "-q"]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            start_new_session=True)
+    try:
+        out, _ = proc.communicate(timeout=240)
+    finally:
+        if proc.poll() is None:
+            import os
+
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    return proc.returncode, out.decode(errors="replace"), record
+
+
+@pytest.mark.parametrize("n", [8, 24])
+def test_agents_form_the_circle_with_the_lockstep_record(tmp_path: Path, n: int) -> None:
+    code, out, record = _run_cli(tmp_path, n, SEED)
+    assert code == 0, out
+    assert out.startswith("formed"), out
+    net = read_record(record)
+    assert sum(len(r.collisions) for r in net.rounds) == 0
+    assert_same_run(net, lockstep_record(tmp_path / "lock.jsonl", n, SEED))
+
+
+def test_a_killed_agent_stays_an_obstacle_and_a_restarted_one_rejoins(
+    make_swarm: Callable[..., Swarm],
+) -> None:
+    sw = make_swarm(8, SEED)
+    sw.start_all(pace=0.15)
+    sw.wait_for("round 3", lambda: (s := sw.state()) is not None and s.round >= 3)
+    victim = 5
+    sw.kill9(f"agent {victim}")
+    killed_at = time.monotonic()
+    sw.wait_for("the coordinator to see the agent gone",
+                lambda: f"agent {victim} is gone" in sw.log("coordinator"), deadline_s=2.0)
+    seen_gone_s = time.monotonic() - killed_at
+    state = sw.state()
+    assert state is not None
+    gone_round = state.round
+    sw.wait_for("three rounds without it", lambda: ((s := sw.state()) is not None
+                and s.round >= gone_round + 3) or (s is not None and s.status != "running"))
+    sw.start_agent(victim, name="agent again")
+    sw.wait_for("it to rejoin", lambda: (s := sw.state()) is not None and s.agents[victim].alive)
+    back = sw.state()
+    assert back is not None
+    end = sw.wait_done()
+    assert end.status == "formed", sw.logs()
+    rec = read_record(sw.state_path)
+    away = [r for r in rec.rounds if gone_round + 1 < r.round < back.round]
+    assert away, "no round ran while the agent was gone"
+    at_kill = rec.rounds[gone_round - 1].positions[victim]
+    for r in away:
+        assert victim not in r.active
+        assert r.positions[victim].tolist() == at_kill.tolist()  # an obstacle, it never moved
+    assert any(victim in r.active for r in rec.rounds if r.round > back.round)
+    assert seen_gone_s < 2.0
+
+
+def test_a_killed_world_resumes_from_its_state_file_without_losing_a_round(
+    tmp_path: Path, make_swarm: Callable[..., Swarm]
+) -> None:
+    sw = make_swarm(8, SEED)
+    sw.start_all(pace=0.1)
+    sw.wait_for("round 4", lambda: (s := sw.state()) is not None and s.round >= 4)
+    state = sw.state()
+    assert state is not None
+    announced = state.round  # published only after the round was durable
+    sw.kill9("world")
+    sw.start_world(name="world again")
+    end = sw.wait_done()
+    assert end.status == "formed"
+    rec = read_record(sw.state_path)
+    assert [r.round for r in rec.rounds] == list(range(1, len(rec.rounds) + 1))
+    assert len(rec.rounds) >= announced
+    assert "resumed" in sw.log("world again")
+    assert_same_run(rec, lockstep_record(tmp_path / "lock.jsonl", 8, SEED))
+
+
+def test_a_foreign_client_changes_nothing_and_crashes_nothing(
+    tmp_path: Path, make_swarm: Callable[..., Swarm]
+) -> None:
+    sw = make_swarm(8, SEED)
+    sw.start_all(pace=0.1)
+    sw.wait_for("round 2", lambda: (s := sw.state()) is not None and s.round >= 2)
+    s = sw.session
+    starts: queue.Queue[bytes] = queue.Queue()
+    s.declare_subscriber(round_key(sw.swarm), lambda sample: starts.put(sample.payload.to_bytes()))
+    step = RobotPath((Line((3.0, 0.0)),))
+    while (state := sw.state()) is not None and state.status == "running":
+        try:
+            start = RoundStart.decode(starts.get(timeout=0.5))
+        except queue.Empty:
+            continue
+        r, active = start.round, start.active
+        idle = [robot for robot in range(8) if robot not in active]
+        s.put(move_key(sw.swarm, 0), b"\x93garbage")
+        s.put(move_key(sw.swarm, 0), b"\xc1")
+        s.put(f"fatswarm/{sw.swarm}/robot/99999/move", MoveSubmitted(0, r, step).encode())
+        for robot in active:  # someone else's robot, and a replay of round 1
+            other = (robot + 1) % 8
+            s.put(move_key(sw.swarm, other), MoveSubmitted(robot, r, step).encode())
+            s.put(move_key(sw.swarm, robot), MoveSubmitted(robot, 1, step).encode())
+        for robot in idle:  # not active in this round
+            s.put(move_key(sw.swarm, robot), MoveSubmitted(robot, r, step).encode())
+            list(s.get(snapshot_key(sw.swarm, robot), timeout=2.0))
+        replies = list(s.get(snapshot_key(sw.swarm, 1000), timeout=2.0))
+        assert replies and all(x.ok is None for x in replies), "a snapshot for no robot"
+        for bad in (b"\x00\x01", Begin(1, (0,)).encode(), Commit(1).encode()):
+            list(s.get(control_key(sw.swarm), payload=bad, timeout=2.0))
+    end = sw.wait_done()
+    assert end.status == "formed"
+    log = sw.log("world")
+    for reason in ("move-garbage", "move-wrong-robot", "move-wrong-round", "move-not-active",
+                   "control-garbage", "look-not-active"):
+        assert f"rejected ({reason})" in log, reason
+    assert sw.children.procs["world"].poll() is None, "the world crashed"
+    assert_same_run(read_record(sw.state_path), lockstep_record(tmp_path / "lock.jsonl", 8, SEED))
