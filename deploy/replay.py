@@ -264,7 +264,7 @@ def main(args: argparse.Namespace) -> int:
         from rich.console import Console
 
         frame = frames[index]
-        print_frame(frame, Console(), height=40)
+        print_frame(frame, Console(width=None if sys.stdout.isatty() else 120), height=40)
     if args.svg:
         try:
             save_svg(frame, args.svg)
