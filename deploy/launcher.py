@@ -73,8 +73,12 @@ class Children:
         for proc in self.procs.values():
             with contextlib.suppress(subprocess.TimeoutExpired):
                 proc.wait(timeout=max(0.0, deadline - time.monotonic()))
+        stubborn = [name for name, proc in self.procs.items() if proc.poll() is None]
+        if stubborn:
+            print(f"did not stop on SIGTERM within {grace_s:g} s, killed: {', '.join(stubborn)}",
+                  file=sys.stderr)
         for proc in self.procs.values():
-            _signal_group(proc, signal.SIGKILL)  # also reaps grandchildren left in the group
+            _signal_group(proc, signal.SIGKILL)  # also ends grandchildren left in the group
             proc.wait()
 
 

@@ -45,8 +45,8 @@ class Swarm:
     def _net(self) -> list[str]:
         return ["--connect", self.endpoint, "--swarm", self.swarm]
 
-    def start_router(self) -> None:
-        self._start("router", "router", "--listen", self.endpoint, "--log-level", "warning")
+    def start_router(self, name: str = "router") -> None:
+        self._start(name, "router", "--listen", self.endpoint, "--log-level", "warning")
 
     def start_world(self, name: str = "world") -> None:
         self._start(name, "world", *self._net(), "--state", str(self.state_path), "-n",

@@ -145,3 +145,52 @@ def test_a_foreign_client_changes_nothing_and_crashes_nothing(
         assert f"rejected ({reason})" in log, reason
     assert sw.children.procs["world"].poll() is None, "the world crashed"
     assert_same_run(read_record(sw.state_path), lockstep_record(tmp_path / "lock.jsonl", 8, SEED))
+
+
+def test_agents_and_world_outlive_a_router_restart(make_swarm: Callable[..., Swarm]) -> None:
+    sw = make_swarm(8, SEED)
+    sw.start_all(pace=0.2)
+    sw.wait_for("round 3", lambda: (s := sw.state()) is not None and s.round >= 3)
+    sw.kill9("router")
+    sw.start_router("router again")  # on the same endpoint
+    end = sw.wait_done()
+    assert end.status == "formed"
+    assert all(p.poll() is None for name, p in sw.children.procs.items() if name != "router")
+
+
+def _children_of(pid: int) -> list[int]:
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            out.append(int(stat.parent.name))
+    return out
+
+
+def test_sigterm_to_the_launcher_stops_every_process_it_started(tmp_path: Path) -> None:
+    argv = [sys.executable, "-m", "deploy.cli", "run", "-n", "6", "--seed", "1", "--pace", "0.5",
+            "-q"]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            start_new_session=True)
+    children: list[int] = []
+    try:
+        deadline = time.monotonic() + 60
+        while len(children) < 8 and time.monotonic() < deadline:  # world, coordinator, 6 agents
+            children = _children_of(proc.pid)
+            time.sleep(0.05)
+        assert len(children) == 8, children
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            import os
+
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 130
+    assert b"did not stop on SIGTERM" not in err, err
+    alive = [pid for pid in children if Path(f"/proc/{pid}").exists()]
+    assert not alive
