@@ -619,8 +619,12 @@ def follow(
 # --- command line --------------------------------------------------------------------------------
 
 
-def add_dashboard_arguments(p: argparse.ArgumentParser) -> None:
-    """Flags `fatswarm run` takes for its display."""
+def add_run_arguments(p: argparse.ArgumentParser) -> None:
+    """Flags `fatswarm run` takes for its display (`--no-dashboard`, `--svg`).
+
+    Not named `add_dashboard_arguments`: the CLI takes `add_<command>_arguments` of a module
+    first, so that name would give `fatswarm dashboard` the flags of `fatswarm run`.
+    """
     p.add_argument(
         "--no-dashboard",
         action="store_true",

@@ -21,7 +21,7 @@ from deploy.dashboard import (
     RateMeter,
     StateWatcher,
     add_arguments,
-    add_dashboard_arguments,
+    add_run_arguments,
     agent_rows,
     build_canvas,
     derive,
@@ -239,9 +239,19 @@ def test_svg_of_a_frame_holds_the_counters(tmp_path: object) -> None:
     assert svg.startswith("<svg") and "collisions" in svg
 
 
+def test_cli_gives_each_command_its_own_flags() -> None:
+    from deploy.cli import build_parser
+
+    parser = build_parser()
+    args = parser.parse_args(["dashboard", "--connect", "tcp/127.0.0.1:7447", "--exit-at-end"])
+    assert (args.connect, args.swarm, args.exit_at_end) == ("tcp/127.0.0.1:7447", "default", True)
+    with pytest.raises(SystemExit):
+        parser.parse_args(["dashboard", "--no-dashboard"])  # --connect is required
+
+
 def test_run_flags_and_dashboard_flags_parse() -> None:
     run = argparse.ArgumentParser()
-    add_dashboard_arguments(run)
+    add_run_arguments(run)
     args = run.parse_args(["--no-dashboard", "--svg", "x.svg"])
     assert args.no_dashboard and args.svg == "x.svg"
     dash = argparse.ArgumentParser()
