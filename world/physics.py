@@ -52,6 +52,9 @@ contact reported early. Only long near-contact sliding of two curved movers gets
 ADVANCE_TARGET = OVERLAP_DISTANCE + 1e-10
 """Conservative advancement moves a pair's proven-safe time only up to where the distance could have
 fallen to this, so rounding (~1e-13 at coordinates ~1e3) never lands it inside an overlap."""
+CONCENTRIC = 1e-9
+"""Arcs whose centres differ by less than this (relative) are treated as turning about one centre;
+the difference itself is accounted for, so the threshold only selects the sharper bound."""
 BOX_MARGIN = 1e-6
 """Slack on bounding-box culling (boxes are exact up to ~1e-13)."""
 BISECTION_STEPS = 200
@@ -369,7 +372,7 @@ def _bounds(
     mo: _Motion, pi: IntArray, pj: IntArray, t0: FloatArray, t1: FloatArray
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Per interval: a lower bound of the pair's centre distance, the distances at both ends, and
-    a bound on how fast that distance changes.
+    how far past t0 the pair is proven not to come within ADVANCE_TARGET (conservative advance).
 
     Each interval lies within one segment (or rest) of each robot. The bound is exact when the
     relative motion is straight (line or rest against line or rest) and for an arc against a
@@ -409,7 +412,23 @@ def _bounds(
         inside = (np.abs(sigma) >= 2.0 * np.pi) | (delta <= np.abs(sigma))
         gap = np.abs(np.hypot(px, py) - np.hypot(qx, qy))
         lb[sel] = np.where(inside, gap, np.minimum(d0[sel], d1[sel]))
-    return np.minimum(lb, np.minimum(d0, d1)), d0, d1, rate
+    step = np.full(q, np.inf)
+    np.divide(d0 - ADVANCE_TARGET, rate, out=step, where=rate > 0.0)
+    # Two arcs about one centre (robots sliding on the same circle): the distance is constant up
+    # to the difference of turning rates and of the centres as computed in each robot's frame.
+    both = (gi[:, _ARC] > 0.5) & (gj[:, _ARC] > 0.5)
+    offset = np.hypot(gi[:, _CX] - gj[:, _CX], gi[:, _CY] - gj[:, _CY])
+    scale = 1.0 + np.abs(gi[:, _CX]) + np.abs(gi[:, _CY])
+    sel = (both & (offset <= CONCENTRIC * scale)).nonzero()[0]
+    if sel.size:
+        radius = 1.0 / np.maximum(gi[sel, _CURV], gj[sel, _CURV])
+        drift = np.abs(gi[sel, _RATE] - gj[sel, _RATE]) * radius
+        slack = 2.0 * offset[sel]
+        lb[sel] = np.maximum(lb[sel], 0.5 * (d0[sel] + d1[sel]) - slack - 0.5 * drift * h[sel])
+        ahead = np.full(sel.size, np.inf)
+        np.divide(d0[sel] - slack - ADVANCE_TARGET, drift, out=ahead, where=drift > 0.0)
+        step[sel] = np.maximum(step[sel], ahead)
+    return np.minimum(lb, np.minimum(d0, d1)), d0, d1, step
 
 
 def _initial_intervals(
@@ -452,15 +471,13 @@ def _first_unprovable(mo: _Motion, pi: IntArray, pj: IntArray, t_w: float) -> Fl
         work += ip.size
         if not ip.size or work > MAX_WORK:
             break
-        lb, d0, d1, rate = _bounds(mo, pi[ip], pj[ip], t0, t1)
+        lb, d0, d1, safe_step = _bounds(mo, pi[ip], pj[ip], t0, t1)
         over0, over1 = d0 < OVERLAP_DISTANCE, d1 < OVERLAP_DISTANCE
         np.minimum.at(first_bad, ip, np.where(over0, t0, np.where(over1, t1, np.inf)))
         at_start = over0 & (t0 <= t_w)  # overlapping already at the window start
         if at_start.any():
             t_hit[ip[at_start]] = t_w
         h = t1 - t0
-        safe_step = (d0 - ADVANCE_TARGET) / np.where(rate > 0.0, rate, 1.0)
-        safe_step[rate <= 0.0] = np.inf
         keep = (lb < OVERLAP_DISTANCE) & (safe_step < h)
         keep &= (t0 < first_bad[ip]) & (t0 < t_hit[ip])
         res = TIME_RESOLUTION * np.maximum(1.0, np.abs(t1))

@@ -311,3 +311,30 @@ def test_mirror_movers_circling_many_times_touch_repeatedly_without_being_stoppe
     out = apply_round(pts((1.5, 0), (3.5, 0)), paths)
     assert out.collisions == []
     assert out.traveled == {0: 600.0, 1: 600.0}
+
+
+def test_neighbours_sliding_together_on_one_circle_while_touching_are_free() -> None:
+    # Two robots 2 apart on a circle of radius 30 slide 4 turns the same way; each robot's copy
+    # of the centre carries its own rounding, as paths mapped back from private frames do.
+    radius = 30.0
+    gap = 2 * math.asin(1 / radius)
+    start = pts((radius, 0), (radius * math.cos(gap), radius * math.sin(gap)))
+    paths = {
+        0: Path((Arc((0.0, 0.0), 8 * math.pi),)),
+        1: Path((Arc((1e-14, -1e-14), 8 * math.pi),)),
+    }
+    out = apply_round(start, paths)
+    assert out.collisions == []
+    assert dist(out.positions, 0, 1) == pytest.approx(2.0, abs=1e-9)
+
+
+def test_inner_robot_turning_faster_about_the_same_centre_catches_the_outer_one() -> None:
+    # Radii 5 and 4 about the origin, angular speeds 1/5 and 1/4: the angle between them falls
+    # from 0.5 at 0.05 per unit time; they touch when 41 - 40 cos(angle) = 4.
+    start = pts((5 * math.cos(0.5), 5 * math.sin(0.5)), (4, 0))
+    out = apply_round(start, {0: Path((Arc((0.0, 0.0), 2.0),)), 1: Path((Arc((0.0, 0.0), 2.0),))})
+    t = (0.5 - math.acos(37 / 40)) / 0.05
+    assert out.traveled[0] == pytest.approx(t, abs=1e-8)
+    assert out.traveled[1] == pytest.approx(t, abs=1e-8)
+    assert dist(out.positions, 0, 1) == pytest.approx(2.0, abs=TOUCH)
+    assert len(out.collisions) == 2
