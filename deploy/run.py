@@ -78,7 +78,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-q", "--quiet", action="store_true",
                    help="no progress lines while running (the summary is still printed)")
     _optional_adder("deploy.launcher", "add_network_arguments")(p)
-    _optional_adder("deploy.dashboard", "add_dashboard_arguments")(p)
+    # The dashboard's run flags (--no-dashboard, --svg): `add_run_arguments`, because the CLI
+    # would hand an `add_dashboard_arguments` to `fatswarm dashboard` itself.
+    _optional_adder("deploy.dashboard", "add_run_arguments")(p)
 
 
 def _fail(message: str) -> int:
@@ -171,6 +173,27 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
     )
     if args.record:
         print(f"record: {args.record}", file=out)
+    svg = getattr(args, "svg", None)  # the dashboard's flag, when deploy.dashboard is there
+    if svg:
+        from deploy.dashboard import Frame, save_svg
+
+        final = Frame(
+            round=result.rounds,
+            n=params.n,
+            a=params.a,
+            scheduler=scheduler.name,
+            positions=result.positions,
+            collisions_total=result.collisions,
+            status=result.status,
+            seed=seed,
+            max_rounds=max_rounds,
+            source="lockstep",
+        )
+        try:
+            save_svg(final, svg)
+        except OSError as exc:
+            return _fail(f"cannot write {svg}: {exc.strerror}")
+        print(f"svg: {svg}", file=out)
     return EXIT_FORMED if result.status == "formed" else EXIT_NOT_FORMED
 
 

@@ -113,3 +113,10 @@ def test_networked_mode_without_launcher_exits_two(
     monkeypatch.setitem(sys.modules, "deploy.launcher", None)
     assert fatswarm_run(["-n", "3"]) == 2
     assert "use --lockstep" in capsys.readouterr().err
+
+
+def test_svg_of_the_final_frame(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    pytest.importorskip("deploy.dashboard")
+    target = tmp_path / "final.svg"
+    assert fatswarm_run(["--lockstep", "-n", "4", "--seed", "3", "-q", "--svg", str(target)]) == 0
+    assert target.read_text().lstrip().startswith("<svg")
