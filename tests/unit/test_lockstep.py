@@ -15,7 +15,7 @@ from coordinator.schedule import make_scheduler
 from deploy.lockstep import RoundReport, default_max_rounds, run_lockstep
 from world.physics import InvalidConfigurationError
 from world.record import RecordWriter, read_record
-from world.starts import random_start
+from world.starts import degenerate_starts, random_start
 
 
 def polygon(n: int, side: float) -> Points:
@@ -150,3 +150,20 @@ def test_the_algorithm_forms_the_circle_without_collisions(scheduler: str) -> No
         start = random_start(n, seed, kind)
         result = run_lockstep(start, Params(n), make_scheduler(scheduler, n, seed), seed=seed)
         assert (result.status, result.collisions) == ("formed", 0), (n, kind, seed)
+
+
+# Known bug (reported to the lead): in the touching rosette, after three rounds the configuration
+# is mirror symmetric with a robot on L; that robot's plan depends on its own X flip (local
+# chirality) while robots 5/6 plan a mirror-pair move in the other frame, so under fsync with seed
+# 7 (flips of 0 and 6 False, the others True) three robots move at once and 0 and 6 touch.
+ROSETTE_BUG = pytest.mark.xfail(strict=True, reason="frame-dependent plan: robot on L vs pair")
+
+
+@pytest.mark.parametrize(
+    "scheduler", [pytest.param("fsync", marks=ROSETTE_BUG), "ssync", "centralized"]
+)
+def test_every_named_degenerate_start_forms_without_collisions(scheduler: str) -> None:
+    for name, (start, a) in degenerate_starts().items():
+        n = len(start)
+        result = run_lockstep(start, Params(n, a), make_scheduler(scheduler, n, 7), seed=7)
+        assert (result.status, result.collisions) == ("formed", 0), name
