@@ -104,6 +104,7 @@ def serve(cfg: AgentConfig, conf: Any, stop: threading.Event | None = None) -> i
 def _cycle(cfg: AgentConfig, round_no: int, flip_x: bool, querier: Any, mover: Any) -> None:
     """One Look-Compute-Move cycle for round `round_no`."""
     snapshot = None
+    t_look = time.perf_counter()
     for reply in querier.get():
         if reply.ok is None:
             log.info("round %d: world refused the look", round_no)
@@ -123,5 +124,6 @@ def _cycle(cfg: AgentConfig, round_no: int, flip_x: bool, querier: Any, mover: A
     except Exception:  # a bug in compute must not kill the robot: it stays put this round
         log.exception("round %d: compute failed, staying put", round_no)
         return
-    log.debug("round %d: computed in %.1f ms", round_no, 1e3 * (time.perf_counter() - t0))
+    log.debug("round %d: look %.2f ms, compute %.2f ms", round_no, 1e3 * (t0 - t_look),
+              1e3 * (time.perf_counter() - t0))
     mover.put(MoveSubmitted(robot=cfg.robot, round=round_no, path=path).encode())

@@ -211,6 +211,7 @@ class Coordinator:
             self.planned = {round_no: tuple(self.scheduler.active(round_no, sorted(self.live)))}
         active = self.planned[round_no]
         self.round, self.held = round_no, set()
+        t0 = time.perf_counter()
         begun = self._ask(session, Begin(round=round_no, active=active).encode())
         if begun is None or not begun.ok:
             log.warning("world refused round %d: %s", round_no, begun and begun.reason)
@@ -218,6 +219,7 @@ class Coordinator:
             return begun.status if begun is not None else "running"
         timeout_ms = int(self.cfg.move_timeout_s * 1000)
         announce.put(RoundStart(round=round_no, active=active, timeout_ms=timeout_ms).encode())
+        t1 = time.perf_counter()
         deadline = time.monotonic() + self.cfg.move_timeout_s
         while not self.stop.is_set():
             waiting = [r for r in active if r in self.live and r not in self.held]
@@ -227,7 +229,11 @@ class Coordinator:
         timed_out = tuple(r for r in active if r not in self.held)
         if timed_out:
             log.info("round %d: no move from %s", round_no, list(timed_out))
+        t2 = time.perf_counter()
         done = self._ask(session, Commit(round=round_no, timed_out=timed_out).encode())
+        t3 = time.perf_counter()
+        log.debug("round %d: begin %.2f ms, moves %.2f ms, commit %.2f ms", round_no,
+                  1e3 * (t1 - t0), 1e3 * (t2 - t1), 1e3 * (t3 - t2))
         if done is None or not done.ok:
             # The world restarted and lost the open round: the loop opens it again.
             log.warning("commit of round %d failed: %s", round_no, done and done.reason)

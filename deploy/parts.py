@@ -52,10 +52,13 @@ def _add_common(p: argparse.ArgumentParser) -> None:
                    help="log level on stderr")
 
 
-def _client_config(args: argparse.Namespace, lease_ms: int | None = None) -> object:
+def _client_config(
+    args: argparse.Namespace, lease_ms: int | None = None, shared_memory: bool = True
+) -> object:
     if not args.connect:
         raise ValueError("give the router to use with --connect ENDPOINT (e.g. tcp/127.0.0.1:7447)")
-    return make_config("client", connect=args.connect, listen=args.listen, lease_ms=lease_ms)
+    return make_config("client", connect=args.connect, listen=args.listen, lease_ms=lease_ms,
+                       shared_memory=shared_memory)
 
 
 # --- router ------------------------------------------------------------------------------------
@@ -98,6 +101,8 @@ def add_world_arguments(p: argparse.ArgumentParser) -> None:
                    help="scheduler name written to the record (the coordinator runs it)")
     p.add_argument("--max-rounds", type=int, default=None, metavar="R",
                    help="end as max_rounds after R rounds (default: as lockstep)")
+    p.add_argument("--no-fsync", action="store_true",
+                   help="do not fsync each round (faster; a crash may lose announced rounds)")
 
 
 def main_world(args: argparse.Namespace) -> int:
@@ -127,7 +132,8 @@ def main_world(args: argparse.Namespace) -> int:
 
     try:
         conf = _client_config(args)
-        core = open_world(args.state, make_setup, args.swarm, args.max_rounds)
+        core = open_world(args.state, make_setup, args.swarm, args.max_rounds,
+                          fsync=not args.no_fsync)
     except (ValueError, ParamsError, InitFileError, RecordFormatError,
             InvalidConfigurationError) as exc:
         return _fail("world", str(exc))
@@ -196,7 +202,7 @@ def main_agent(args: argparse.Namespace) -> int:
     if args.robot < 0:
         return _fail("agent", f"--robot must be >= 0, got {args.robot}")
     try:
-        conf = _client_config(args, lease_ms=AGENT_LEASE_MS)
+        conf = _client_config(args, lease_ms=AGENT_LEASE_MS, shared_memory=False)
     except ValueError as exc:
         return _fail("agent", str(exc))
     return serve(AgentConfig(args.swarm, args.robot, args.seed), conf, stop)

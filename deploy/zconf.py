@@ -26,6 +26,7 @@ def make_config(
     connect: Sequence[str] = (),
     listen: Sequence[str] = (),
     lease_ms: int | None = None,
+    shared_memory: bool = True,
 ) -> zenoh.Config:
     """A Zenoh config with multicast (and gossip) scouting off and the given endpoints."""
     import zenoh
@@ -37,6 +38,9 @@ def make_config(
     conf.insert_json5("scouting/multicast/enabled", "false")
     conf.insert_json5("connect/endpoints", json.dumps(list(connect)))
     conf.insert_json5("listen/endpoints", json.dumps(list(listen)))
+    if not shared_memory:
+        # Agents send and receive small messages only; no 16 MB SHM pool per process.
+        conf.insert_json5("transport/shared_memory/enabled", "false")
     if lease_ms is not None:
         conf.insert_json5("transport/link/tx/lease", str(int(lease_ms)))
     return conf

@@ -340,7 +340,11 @@ class WorldCore:
 
 
 def open_world(
-    state_path: str, make_setup: Callable[[], WorldSetup], swarm: str, max_rounds: int | None
+    state_path: str,
+    make_setup: Callable[[], WorldSetup],
+    swarm: str,
+    max_rounds: int | None,
+    fsync: bool = True,
 ) -> WorldCore:
     """Resume from `state_path` if it holds a record, else start a new one from `make_setup()`.
 
@@ -350,8 +354,8 @@ def open_world(
         cut_torn_line(state_path)
         record = read_record(state_path)
         setup = setup_from_header(record.header, swarm, max_rounds)
-        return WorldCore(setup, RecordWriter(state_path, fsync=True, append=True), record)
-    return WorldCore(make_setup(), RecordWriter(state_path, fsync=True))
+        return WorldCore(setup, RecordWriter(state_path, fsync=fsync, append=True), record)
+    return WorldCore(make_setup(), RecordWriter(state_path, fsync=fsync))
 
 
 # --- the Zenoh shell --------------------------------------------------------------------------

@@ -1,0 +1,225 @@
+"""Networked emulator benchmark (a script that prints figures, not a test).
+
+Prints: the Zenoh get/reply round-trip floor on the router the runs use; per size N (fsync, one OS
+process per robot, world fsyncing every round): round latency (median, p95), rounds/s and Looks/s
+networked vs lockstep, resident memory per agent process, time to start N agents.
+
+    /work/venv/bin/python bench/bench_net.py [--sizes 8,32,64,128] [--seed 1]
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from agent.params import Params
+from agent.protocol import alive_any_key, robot_of_alive_key
+from coordinator.schedule import make_scheduler
+from deploy.launcher import Children
+from deploy.parts import agent_command
+from deploy.zconf import loopback_endpoint, make_config
+from world.protocol import ProtocolError, WorldState, state_key
+from world.starts import random_start
+
+REPLIER = """
+import sys, threading, zenoh
+from deploy.zconf import make_config
+conf = make_config("client", [sys.argv[1]])
+with zenoh.open(conf) as s:
+    q = s.declare_queryable("bench/rtt", lambda q: (q.reply(q.key_expr, b"x" * 100), q.drop()))
+    t = s.liveliness().declare_token("bench/replier")
+    threading.Event().wait(float(sys.argv[2]))
+"""
+
+
+def pct(values: list[float], p: float) -> float:
+    return float(np.percentile(values, p)) if values else float("nan")
+
+
+def rtt_floor(endpoint: str, samples: int) -> list[float]:
+    """Bare get/reply round trips (seconds) between two client processes over the same router."""
+    import zenoh
+
+    env = dict(os.environ, PYTHONPATH=os.getcwd())
+    replier = subprocess.Popen([sys.executable, "-c", REPLIER, endpoint, "120"], env=env)
+    try:
+        with zenoh.open(make_config("client", [endpoint])) as s:
+            deadline = time.monotonic() + 30
+            while not list(s.liveliness().get("bench/replier", timeout=1.0)):
+                if time.monotonic() > deadline:
+                    raise RuntimeError("replier did not come up")
+                time.sleep(0.05)
+            querier = s.declare_querier("bench/rtt", timeout=5.0)
+            out = []
+            for i in range(samples + 100):
+                t0 = time.perf_counter()
+                replies = list(querier.get())
+                dt = time.perf_counter() - t0
+                if i >= 100 and replies:
+                    out.append(dt)
+            return out
+    finally:
+        replier.terminate()
+        replier.wait()
+
+
+@dataclass
+class NetRun:
+    n: int
+    status: str
+    rounds: int
+    start_s: float  # Popen of the first agent -> all N liveliness tokens visible
+    wall_s: float  # all agents alive -> final state received
+    intervals: list[float]  # time between consecutive committed rounds
+    rss_mb: list[float]  # per agent process
+
+
+def _rss_mb(pid: int) -> float:
+    try:
+        with open(f"/proc/{pid}/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return float("nan")
+
+
+def networked(session: Any, endpoint: str, n: int, seed: int, tmp: str) -> NetRun:
+    """One fsync run with N agent processes; timings seen from a client in this process."""
+    swarm = f"bench-{n}-{seed}-{time.monotonic_ns() % 10**6}"
+    alive: set[int] = set()
+    commits: list[tuple[float, int]] = []
+    final: list[WorldState] = []
+    lock = threading.Lock()
+    all_alive = threading.Event()
+    done = threading.Event()
+
+    def on_alive(sample: Any) -> None:
+        robot = robot_of_alive_key(str(sample.key_expr))
+        if robot is not None:
+            with lock:
+                alive.add(robot)
+                if len(alive) == n:
+                    all_alive.set()
+
+    def on_state(sample: Any) -> None:
+        now = time.perf_counter()
+        try:
+            st = WorldState.decode(sample.payload.to_bytes())
+        except ProtocolError:
+            return
+        with lock:
+            if st.round and (not commits or commits[-1][1] != st.round):
+                commits.append((now, st.round))
+            if st.status != "running":
+                final.append(st)
+                done.set()
+
+    subs = [
+        session.liveliness().declare_subscriber(alive_any_key(swarm), on_alive, history=True),
+        session.declare_subscriber(state_key(swarm), on_state),
+    ]
+    net = ["--connect", endpoint, "--swarm", swarm, "--log-level", "warning"]
+    state = os.path.join(tmp, f"{swarm}.jsonl")
+    with Children() as children:
+        children.start("world", [sys.executable, "-m", "deploy.parts", "world", *net, "--state",
+                                 state, "-n", str(n), "--seed", str(seed), "--scheduler", "fsync"])
+        children.start("coordinator", [sys.executable, "-m", "deploy.parts", "coordinator", *net,
+                                       "--seed", str(seed), "--scheduler", "fsync",
+                                       "--start-timeout", "600", "--move-timeout", "30"])
+        t0 = time.perf_counter()
+        for robot in range(n):
+            children.start(f"agent {robot}",
+                           agent_command(robot, seed, swarm, [endpoint], "warning"))
+        if not all_alive.wait(600):
+            raise RuntimeError(f"only {len(alive)} of {n} agents came up")
+        t_alive = time.perf_counter()
+        rss: list[float] = []
+        while not done.wait(0.25):
+            if not rss and commits:  # measure memory once the agents have computed
+                rss = [_rss_mb(p.pid) for k, p in children.procs.items() if k.startswith("agent")]
+            if time.perf_counter() - t_alive > 1800:
+                raise RuntimeError("run did not end in 30 minutes")
+        t_end = time.perf_counter()
+        if not rss:
+            rss = [_rss_mb(p.pid) for k, p in children.procs.items() if k.startswith("agent")]
+    for sub in subs:
+        sub.undeclare()
+    times = [t for t, _ in commits]
+    return NetRun(
+        n=n,
+        status=final[0].status,
+        rounds=final[0].round,
+        start_s=t_alive - t0,
+        wall_s=t_end - t_alive,
+        intervals=[b - a for a, b in itertools.pairwise(times)],
+        rss_mb=[r for r in rss if r == r],
+    )
+
+
+def lockstep(n: int, seed: int) -> tuple[str, int, int, float]:
+    from deploy.lockstep import run_lockstep
+
+    initial = random_start(n, seed, "clustered", 4.0)
+    t0 = time.perf_counter()
+    res = run_lockstep(initial, Params(n, 4.0), make_scheduler("fsync", n, seed), seed=seed)
+    return res.status, res.rounds, res.looks, time.perf_counter() - t0
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--sizes", default="8,32,64,128")
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--rtt-samples", type=int, default=2000)
+    p.add_argument("--latency-runs", type=int, default=3,
+                   help="runs at the smallest N pooled for the round-latency figure")
+    args = p.parse_args()
+    sizes = [int(s) for s in args.sizes.split(",")]
+
+    import zenoh
+
+    endpoint = loopback_endpoint()
+    with (
+        tempfile.TemporaryDirectory() as tmp,
+        zenoh.open(make_config("router", listen=[endpoint])),
+        zenoh.open(make_config("client", [endpoint])) as session,
+    ):
+        rtt = rtt_floor(endpoint, args.rtt_samples)
+        floor = statistics.median(rtt)
+        print(f"zenoh get/reply round trip (2 client processes, 1 router): median "
+              f"{floor * 1e3:.3f} ms  p95 {pct(rtt, 95) * 1e3:.3f} ms  ({len(rtt)} samples)")
+        print(f"{'N':>4} {'status':>8} {'rounds':>6} {'round ms med':>12} {'p95':>7} "
+              f"{'x floor':>7} {'net rounds/s':>12} {'net Looks/s':>11} {'lock rounds/s':>13} "
+              f"{'lock Looks/s':>12} {'RSS MB/agent':>12} {'start s':>7}")
+        for n in sizes:
+            runs = [networked(session, endpoint, n, args.seed + k, tmp)
+                    for k in range(args.latency_runs if n == sizes[0] else 1)]
+            run = runs[0]
+            intervals = [x for r in runs for x in r.intervals]
+            med = statistics.median(intervals) if intervals else float("nan")
+            l_status, l_rounds, l_looks, l_wall = lockstep(n, args.seed)
+            rss = statistics.median(run.rss_mb) if run.rss_mb else float("nan")
+            print(f"{n:>4} {run.status:>8} {run.rounds:>6} {med * 1e3:>12.2f} "
+                  f"{pct(intervals, 95) * 1e3:>7.2f} {med / floor:>7.1f} "
+                  f"{run.rounds / run.wall_s:>12.1f} {run.rounds * n / run.wall_s:>11.0f} "
+                  f"{l_rounds / l_wall:>13.1f} {l_looks / l_wall:>12.0f} {rss:>12.1f} "
+                  f"{run.start_s:>7.2f}", flush=True)
+            if l_status != run.status or l_rounds != run.rounds:
+                print(f"     (lockstep: {l_status} after {l_rounds} rounds)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
