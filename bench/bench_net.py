@@ -82,18 +82,22 @@ class NetRun:
     start_s: float  # Popen of the first agent -> all N liveliness tokens visible
     wall_s: float  # all agents alive -> final state received
     intervals: list[float]  # time between consecutive committed rounds
-    rss_mb: list[float]  # per agent process
+    memory_mb: list[tuple[float, float, float]]  # per agent process: RSS, PSS, private
 
 
-def _rss_mb(pid: int) -> float:
+def _memory_mb(pid: int) -> tuple[float, float, float]:
+    """(RSS, PSS, private) of a process in MB: shared library pages count fully only in RSS."""
+    fields: dict[str, int] = {}
     try:
-        with open(f"/proc/{pid}/status", encoding="ascii") as f:
+        with open(f"/proc/{pid}/smaps_rollup", encoding="ascii") as f:
             for line in f:
-                if line.startswith("VmRSS:"):
-                    return int(line.split()[1]) / 1024
+                parts = line.split()
+                if len(parts) >= 2 and parts[1].isdigit():
+                    fields[parts[0].rstrip(":")] = int(parts[1])
     except OSError:
-        pass
-    return float("nan")
+        return (float("nan"),) * 3
+    private = fields.get("Private_Clean", 0) + fields.get("Private_Dirty", 0)
+    return fields.get("Rss", 0) / 1024, fields.get("Pss", 0) / 1024, private / 1024
 
 
 def networked(session: Any, endpoint: str, n: int, seed: int, tmp: str) -> NetRun:
@@ -146,15 +150,16 @@ def networked(session: Any, endpoint: str, n: int, seed: int, tmp: str) -> NetRu
         if not all_alive.wait(600):
             raise RuntimeError(f"only {len(alive)} of {n} agents came up")
         t_alive = time.perf_counter()
-        rss: list[float] = []
+        rss: list[tuple[float, float, float]] = []
         while not done.wait(0.25):
-            if not rss and commits:  # measure memory once the agents have computed
-                rss = [_rss_mb(p.pid) for k, p in children.procs.items() if k.startswith("agent")]
+            if not rss and len(commits) > 2:  # measure memory once the agents have computed
+                rss = [_memory_mb(p.pid) for k, p in children.procs.items()
+                       if k.startswith("agent")]
             if time.perf_counter() - t_alive > 1800:
                 raise RuntimeError("run did not end in 30 minutes")
         t_end = time.perf_counter()
         if not rss:
-            rss = [_rss_mb(p.pid) for k, p in children.procs.items() if k.startswith("agent")]
+            rss = [_memory_mb(p.pid) for k, p in children.procs.items() if k.startswith("agent")]
     for sub in subs:
         sub.undeclare()
     times = [t for t, _ in commits]
@@ -165,7 +170,7 @@ def networked(session: Any, endpoint: str, n: int, seed: int, tmp: str) -> NetRu
         start_s=t_alive - t0,
         wall_s=t_end - t_alive,
         intervals=[b - a for a, b in itertools.pairwise(times)],
-        rss_mb=[r for r in rss if r == r],
+        memory_mb=[m for m in rss if m[0] == m[0]],
     )
 
 
@@ -202,7 +207,7 @@ def main() -> int:
               f"{floor * 1e3:.3f} ms  p95 {pct(rtt, 95) * 1e3:.3f} ms  ({len(rtt)} samples)")
         print(f"{'N':>4} {'status':>8} {'rounds':>6} {'round ms med':>12} {'p95':>7} "
               f"{'x floor':>7} {'net rounds/s':>12} {'net Looks/s':>11} {'lock rounds/s':>13} "
-              f"{'lock Looks/s':>12} {'RSS MB/agent':>12} {'start s':>7}")
+              f"{'lock Looks/s':>12} {'agent MB RSS/PSS/priv':>21} {'start s':>7}")
         for n in sizes:
             runs = [networked(session, endpoint, n, args.seed + k, tmp)
                     for k in range(args.latency_runs if n == sizes[0] else 1)]
@@ -210,11 +215,12 @@ def main() -> int:
             intervals = [x for r in runs for x in r.intervals]
             med = statistics.median(intervals) if intervals else float("nan")
             l_status, l_rounds, l_looks, l_wall = lockstep(n, args.seed)
-            rss = statistics.median(run.rss_mb) if run.rss_mb else float("nan")
+            mem = [statistics.median(col) for col in zip(*run.memory_mb, strict=True)]
+            mem_text = "/".join(f"{m:.1f}" for m in mem) if mem else "?"
             print(f"{n:>4} {run.status:>8} {run.rounds:>6} {med * 1e3:>12.2f} "
                   f"{pct(intervals, 95) * 1e3:>7.2f} {med / floor:>7.1f} "
                   f"{run.rounds / run.wall_s:>12.1f} {run.rounds * n / run.wall_s:>11.0f} "
-                  f"{l_rounds / l_wall:>13.1f} {l_looks / l_wall:>12.0f} {rss:>12.1f} "
+                  f"{l_rounds / l_wall:>13.1f} {l_looks / l_wall:>12.0f} {mem_text:>21} "
                   f"{run.start_s:>7.2f}", flush=True)
             if l_status != run.status or l_rounds != run.rounds:
                 print(f"     (lockstep: {l_status} after {l_rounds} rounds)")
