@@ -58,7 +58,7 @@ LEGEND = Text.from_markup(
 ROBOT_RADIUS = 1.0  # robots are unit discs
 SIDE_WIDTH = 46  # columns of the counters and agents column
 PROGRESS_EVERY = 50  # rounds between two progress lines when output is not a terminal
-MAX_DUTY = 5  # the live view draws for at most a fifth of the wall time (one core)
+MAX_DUTY = 10  # the live view draws for at most a tenth of the wall time (one core)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -461,7 +461,7 @@ class StateWatcher:
         *,
         session: Any = None,
         connect: str | None = None,
-        fps: float = 10.0,
+        fps: float = 5.0,
         max_rounds: int | None = None,
         stop_at_end: bool = False,
         svg: str | None = None,
