@@ -563,18 +563,23 @@ def watch(
     session: Any = None,
     connect: str | None = None,
     dashboard: bool | None = None,
+    quiet: bool = False,
     svg: str | None = None,
     every: int = PROGRESS_EVERY,
     max_rounds: int | None = None,
     console: Console | None = None,
 ) -> StateWatcher:
-    """Start showing a running swarm: the live dashboard on a terminal, else a progress log.
+    """Start showing a running swarm: the live dashboard, else progress lines (none if `quiet`).
 
     `dashboard=None` picks by whether standard output is a terminal. Call `.stop(final)` at the end.
     """
     if dashboard is None:
         dashboard = sys.stdout.isatty()
-    sink: FrameSink = LiveView(console) if dashboard else ProgressLog(every=every)
+    sink: FrameSink
+    if dashboard:
+        sink = LiveView(console)
+    else:
+        sink = ProgressLog(out=(lambda line: None) if quiet else None, every=every)
     try:
         watcher = StateWatcher(
             swarm, sink, session=session, connect=connect, max_rounds=max_rounds, svg=svg
@@ -586,34 +591,22 @@ def watch(
 
 
 def follow(
-    args: argparse.Namespace,
-    swarm: str,
-    *,
-    session: Any = None,
-    connect: str | None = None,
+    args: argparse.Namespace, swarm: str, *, session: Any = None, connect: str | None = None
 ) -> StateWatcher:
     """What `fatswarm run` calls once the router is up: the live view or the progress log.
 
     Reads `--no-dashboard`, `--svg`, `--max-rounds` and `--quiet` from `args`; the dashboard is
     shown only when standard output is a terminal. Call `.stop(final)` when the run is over.
     """
-    live = not getattr(args, "no_dashboard", False) and sys.stdout.isatty()
-    sink: FrameSink
-    if live:
-        sink = LiveView()
-    elif getattr(args, "quiet", False):
-        sink = ProgressLog(out=lambda line: None)
-    else:
-        sink = ProgressLog()
-    watcher = StateWatcher(
+    return watch(
         swarm,
-        sink,
         session=session,
         connect=connect,
-        max_rounds=getattr(args, "max_rounds", None),
+        dashboard=not getattr(args, "no_dashboard", False) and sys.stdout.isatty(),
+        quiet=getattr(args, "quiet", False),
         svg=getattr(args, "svg", None),
+        max_rounds=getattr(args, "max_rounds", None),
     )
-    return watcher.start()
 
 
 # --- command line --------------------------------------------------------------------------------

@@ -25,6 +25,7 @@ from deploy.dashboard import (
     agent_rows,
     build_canvas,
     derive,
+    follow,
     frame_from_state,
     outcome_text,
     print_frame,
@@ -335,3 +336,20 @@ def test_watcher_stop_shows_the_final_state_it_is_given() -> None:
     watcher.start()
     watcher.stop(state(9, "formed"))
     assert lines[-1] == "FORMED: uniform circle of 3 robots after 9 rounds, 0 collisions"
+
+
+@pytest.mark.parametrize("quiet", [False, True])
+def test_follow_prints_progress_lines_off_a_terminal_unless_quiet(
+    quiet: bool, capsys: pytest.CaptureFixture[str]
+) -> None:
+    args = argparse.Namespace(no_dashboard=False, quiet=quiet, svg=None, max_rounds=100)
+    session = FakeSession([state(1).encode(), state(2, "formed").encode()])
+    watcher = follow(args, "w", session=session)
+    assert watcher.ended.wait(10.0)
+    watcher.stop()
+    out = capsys.readouterr().out
+    if quiet:
+        assert out == ""
+    else:
+        assert out.splitlines()[0].startswith("round 1 running: targets")
+        assert out.splitlines()[-1].startswith("FORMED: uniform circle of 3 robots after 2 rounds")
