@@ -33,6 +33,7 @@ log = logging.getLogger("fatswarm.coordinator")
 
 EXIT_FORMED = 0
 EXIT_NOT_FORMED = 1
+RESUME_GRACE_S = 2.0  # a restarted coordinator waits this long for every agent's token
 CONTROL_TIMEOUT_S = 10.0  # the world answers in milliseconds; a commit includes one fsync
 
 
@@ -187,13 +188,13 @@ class Coordinator:
         log.info("resuming after round %d", committed)
 
     def _wait_for_agents(self, committed: int) -> None:
-        """Before round 1, wait for all n agents (a fair start); a resumed run waits for one."""
-        want = self.n if committed == 0 else 1
-        deadline = time.monotonic() + self.cfg.start_timeout_s
-        while len(self.live) < want and not self.stop.is_set():
+        """Wait for all n agents: up to the start timeout before round 1, briefly on resuming."""
+        wait_s = self.cfg.start_timeout_s if committed == 0 else RESUME_GRACE_S
+        deadline = time.monotonic() + wait_s
+        while len(self.live) < self.n and not self.stop.is_set():
             if time.monotonic() > deadline:
-                log.warning("only %d of %d agents after %.0f s; starting anyway",
-                            len(self.live), self.n, self.cfg.start_timeout_s)
+                log.warning("only %d of %d agents after %.1f s; going on with them",
+                            len(self.live), self.n, wait_s)
                 break
             self._drain(0.1)
         while not self.live and not self.stop.is_set():

@@ -189,8 +189,13 @@ def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
             listen = list(args.listen) or [loopback_endpoint()]
             router = open_router(listen)
             endpoints = [_child_endpoint(listen[0])]
-        with Children() as children:
-            code = _run_children(args, seed, record, swarm, endpoints, children, stop)
+        watcher = _follow(args, swarm, router, endpoints[0])
+        try:
+            with Children() as children:
+                code = _run_children(args, seed, record, swarm, endpoints, children, stop)
+        finally:
+            if watcher is not None:
+                watcher.stop()
     finally:
         if router is not None:
             router.close()
@@ -201,6 +206,17 @@ def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
         if args.record:
             print(f"record: {args.record}")
     return code
+
+
+def _follow(args: argparse.Namespace, swarm: str, router: Any, endpoint: str) -> Any:
+    """The dashboard (on a terminal) or progress lines, from the world's state stream."""
+    try:
+        from deploy.dashboard import follow
+    except ImportError:
+        return None
+    if router is not None:
+        return follow(args, swarm, session=router)
+    return follow(args, swarm, connect=endpoint)
 
 
 def _part(name: str, *flags: str) -> list[str]:

@@ -53,8 +53,8 @@ class Swarm:
                     str(self.n), "--seed", str(self.seed), "--scheduler", self.scheduler,
                     "--log-level", "info")
 
-    def start_coordinator(self, pace: float) -> None:
-        self._start("coordinator", "coordinator", *self._net(), "--seed", str(self.seed),
+    def start_coordinator(self, pace: float, name: str = "coordinator") -> None:
+        self._start(name, "coordinator", *self._net(), "--seed", str(self.seed),
                     "--scheduler", self.scheduler, "--pace", str(pace), "--log-level", "info")
 
     def start_agent(self, robot: int, name: str | None = None) -> None:

@@ -106,6 +106,20 @@ def test_a_killed_world_resumes_from_its_state_file_without_losing_a_round(
     assert_same_run(rec, lockstep_record(tmp_path / "lock.jsonl", 8, SEED))
 
 
+def test_a_restarted_coordinator_continues_from_the_last_committed_round(
+    tmp_path: Path, make_swarm: Callable[..., Swarm]
+) -> None:
+    sw = make_swarm(8, SEED)
+    sw.start_all(pace=0.1)
+    sw.wait_for("round 4", lambda: (s := sw.state()) is not None and s.round >= 4)
+    sw.kill9("coordinator")
+    sw.start_coordinator(pace=0.0, name="coordinator again")
+    end = sw.wait_done()
+    assert end.status == "formed"
+    assert "resuming after round" in sw.log("coordinator again")
+    # the scheduler is replayed, so the run is still the lockstep run
+    assert_same_run(read_record(sw.state_path), lockstep_record(tmp_path / "lock.jsonl", 8, SEED))
+
 def test_a_foreign_client_changes_nothing_and_crashes_nothing(
     tmp_path: Path, make_swarm: Callable[..., Swarm]
 ) -> None:
