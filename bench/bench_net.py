@@ -27,7 +27,7 @@ from agent.params import Params
 from agent.protocol import alive_any_key, robot_of_alive_key
 from coordinator.schedule import make_scheduler
 from deploy.launcher import Children
-from deploy.parts import agent_command
+from deploy.parts import agent_command, agents_command
 from deploy.zconf import loopback_endpoint, make_config
 from world.protocol import ProtocolError, WorldState, state_key
 from world.starts import random_start
@@ -100,7 +100,28 @@ def _memory_mb(pid: int) -> tuple[float, float, float]:
     return fields.get("Rss", 0) / 1024, fields.get("Pss", 0) / 1024, private / 1024
 
 
-def networked(session: Any, endpoint: str, n: int, seed: int, tmp: str) -> NetRun:
+def _agent_pids(children: Children) -> list[int]:
+    """Agent processes: started directly, or forked by the `agents` host process."""
+    direct = [p.pid for k, p in children.procs.items() if k.startswith("agent ")]
+    host = children.procs.get("agents")
+    if host is None:
+        return direct
+    forked = []
+    for stat in os.listdir("/proc"):
+        if stat.isdigit():
+            try:
+                with open(f"/proc/{stat}/stat", encoding="ascii") as f:
+                    ppid = int(f.read().rsplit(")", 1)[1].split()[1])
+            except (OSError, ValueError, IndexError):
+                continue
+            if ppid == host.pid:
+                forked.append(int(stat))
+    return direct + forked
+
+
+def networked(
+    session: Any, endpoint: str, n: int, seed: int, tmp: str, spawn: str = "fork"
+) -> NetRun:
     """One fsync run with N agent processes; timings seen from a client in this process."""
     swarm = f"bench-{n}-{seed}-{time.monotonic_ns() % 10**6}"
     alive: set[int] = set()
@@ -144,22 +165,24 @@ def networked(session: Any, endpoint: str, n: int, seed: int, tmp: str) -> NetRu
                                        "--seed", str(seed), "--scheduler", "fsync",
                                        "--start-timeout", "600", "--move-timeout", "30"])
         t0 = time.perf_counter()
-        for robot in range(n):
-            children.start(f"agent {robot}",
-                           agent_command(robot, seed, swarm, [endpoint], "warning"))
+        if spawn == "fork":
+            children.start("agents", agents_command(n, seed, swarm, [endpoint], "warning"))
+        else:
+            for robot in range(n):
+                children.start(f"agent {robot}",
+                               agent_command(robot, seed, swarm, [endpoint], "warning"))
         if not all_alive.wait(600):
             raise RuntimeError(f"only {len(alive)} of {n} agents came up")
         t_alive = time.perf_counter()
         rss: list[tuple[float, float, float]] = []
         while not done.wait(0.25):
             if not rss and len(commits) > 2:  # measure memory once the agents have computed
-                rss = [_memory_mb(p.pid) for k, p in children.procs.items()
-                       if k.startswith("agent")]
+                rss = [_memory_mb(pid) for pid in _agent_pids(children)]
             if time.perf_counter() - t_alive > 1800:
                 raise RuntimeError("run did not end in 30 minutes")
         t_end = time.perf_counter()
         if not rss:
-            rss = [_memory_mb(p.pid) for k, p in children.procs.items() if k.startswith("agent")]
+            rss = [_memory_mb(pid) for pid in _agent_pids(children)]
     for sub in subs:
         sub.undeclare()
     times = [t for t, _ in commits]
@@ -188,6 +211,8 @@ def main() -> int:
     p.add_argument("--sizes", default="8,32,64,128")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--rtt-samples", type=int, default=2000)
+    p.add_argument("--spawn", choices=("fork", "exec"), default="fork",
+                   help="agents forked from one preloaded host (as fatswarm run) or one exec each")
     p.add_argument("--latency-runs", type=int, default=3,
                    help="runs at the smallest N pooled for the round-latency figure")
     args = p.parse_args()
@@ -203,13 +228,14 @@ def main() -> int:
     ):
         rtt = rtt_floor(endpoint, args.rtt_samples)
         floor = statistics.median(rtt)
+        print(f"agents started by: {args.spawn}")
         print(f"zenoh get/reply round trip (2 client processes, 1 router): median "
               f"{floor * 1e3:.3f} ms  p95 {pct(rtt, 95) * 1e3:.3f} ms  ({len(rtt)} samples)")
         print(f"{'N':>4} {'status':>8} {'rounds':>6} {'round ms med':>12} {'p95':>7} "
               f"{'x floor':>7} {'net rounds/s':>12} {'net Looks/s':>11} {'lock rounds/s':>13} "
               f"{'lock Looks/s':>12} {'agent MB RSS/PSS/priv':>21} {'start s':>7}")
         for n in sizes:
-            runs = [networked(session, endpoint, n, args.seed + k, tmp)
+            runs = [networked(session, endpoint, n, args.seed + k, tmp, args.spawn)
                     for k in range(args.latency_runs if n == sizes[0] else 1)]
             run = runs[0]
             intervals = [x for r in runs for x in r.intervals]

@@ -103,6 +103,9 @@ def add_network_arguments(p: argparse.ArgumentParser) -> None:
                    help="an active robot that has not moved by then stays put (default 5)")
     g.add_argument("--pace", type=float, default=0.0, metavar="SECONDS",
                    help="least time per round, to watch a run unfold (default 0: full speed)")
+    g.add_argument("--spawn", choices=("fork", "exec"), default="fork",
+                   help="agent processes forked from one preloaded host process before any Zenoh "
+                   "session exists (fork, fast) or one fresh interpreter each (exec)")
     g.add_argument("--resume", action="store_true",
                    help="continue the run of an existing --record instead of starting afresh")
 
@@ -232,7 +235,7 @@ def _run_children(
     children: Children,
     stop: threading.Event,
 ) -> int:
-    from deploy.parts import agent_command
+    from deploy.parts import agents_command
 
     net = ["--swarm", swarm]
     for ep in endpoints:
@@ -257,8 +260,7 @@ def _run_children(
     children.start("world", _part("world", *net, *quiet, *world))
     children.start("coordinator", _part("coordinator", *net, *quiet, *coord))
     n = _robot_count(args)
-    for robot in range(n):
-        children.start(f"agent {robot}", agent_command(robot, seed, swarm, endpoints, "warning"))
+    children.start("agents", agents_command(n, seed, swarm, endpoints, "warning", args.spawn))
     while not stop.wait(0.1):
         gone = children.exited()
         if "coordinator" in gone:

@@ -11,6 +11,7 @@ import logging
 import signal
 import sys
 import threading
+import time
 from collections.abc import Sequence
 
 from deploy.zconf import AGENT_LEASE_MS, add_zenoh_arguments, make_config
@@ -215,6 +216,13 @@ def add_agents_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--first", type=int, default=0, metavar="I",
                    help="id of the first robot (robots I..I+K-1; default 0)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="the run's seed")
+    p.add_argument("--spawn", choices=SPAWN_MODES, default="fork",
+                   help="fork: this process loads the code once and forks each agent before any "
+                   "Zenoh session exists (fast start, shared pages); exec: one fresh interpreter "
+                   "per agent (default fork)")
+
+
+SPAWN_MODES = ("fork", "exec")
 
 
 def agent_command(robot: int, seed: int, swarm: str, connect: Sequence[str],
@@ -229,28 +237,114 @@ def agent_command(robot: int, seed: int, swarm: str, connect: Sequence[str],
     return argv
 
 
+def agents_command(count: int, seed: int, swarm: str, connect: Sequence[str],
+                   log_level: str | None = None, spawn: str = "fork", first: int = 0) -> list[str]:
+    """The argv of one `agents` host process starting `count` agent processes."""
+    argv = [sys.executable, "-m", "deploy.parts", "agents", "-n", str(count), "--first",
+            str(first), "--seed", str(seed), "--swarm", swarm, "--spawn", spawn]
+    for endpoint in connect:
+        argv += ["--connect", endpoint]
+    if log_level:
+        argv += ["--log-level", log_level]
+    return argv
+
+
 def main_agents(args: argparse.Namespace) -> int:
     """Start K agent processes here (each its own OS process) and stop them on SIGTERM/SIGINT."""
-    from deploy.launcher import Children
-
-    _logging(args, "info")
+    _logging(args, "warning")
     if args.n < 1 or args.first < 0:
         return _fail("agents", "-n must be >= 1 and --first >= 0")
     if not args.connect:
         return _fail("agents", "give the router to use with --connect ENDPOINT")
+    robots = range(args.first, args.first + args.n)
+    if args.spawn == "exec":
+        return _exec_agents(args, robots)
+    return _fork_agents(args, robots)
+
+
+def _exec_agents(args: argparse.Namespace, robots: range) -> int:
+    from deploy.launcher import Children
+
     stop = install_stop_signals()
     with Children() as children:
-        for robot in range(args.first, args.first + args.n):
+        for robot in robots:
             children.start(f"agent {robot}",
                            agent_command(robot, args.seed, args.swarm, args.connect,
                                          args.log_level))
         while not stop.wait(0.5):
-            gone = children.exited()
-            if gone:
-                logging.getLogger("fatswarm.agents").warning("exited: %s", gone)
-                if len(gone) == args.n:
-                    return 1
+            if len(children.exited()) == len(robots):
+                return 1
     return 0
+
+
+def _fork_agents(args: argparse.Namespace, robots: range) -> int:
+    """Load numpy, the algorithm and the zenoh module once, then fork one process per robot.
+
+    Safe because this process never opens a Zenoh session (forking after `zenoh.open` hangs the
+    child); each child opens its own session, token and frame, exactly as `fatswarm agent`.
+    """
+    import os
+
+    import zenoh  # noqa: F401  (the module only: no session, no runtime thread in this process)
+
+    from agent.service import AgentConfig, serve
+
+    log = logging.getLogger("fatswarm.agents")
+    children: dict[int, int] = {}
+    for robot in robots:
+        pid = os.fork()
+        if pid == 0:  # the agent process: never returns into the parent's code
+            code = 1
+            try:
+                stop = install_stop_signals()
+                conf = _client_config(args, lease_ms=AGENT_LEASE_MS, shared_memory=False)
+                code = serve(AgentConfig(args.swarm, robot, args.seed), conf, stop)
+            except BaseException:  # report, then leave without running the parent's cleanup
+                log.exception("agent %d failed", robot)
+            finally:
+                sys.stderr.flush()
+                os._exit(code)
+        children[pid] = robot
+    stop = install_stop_signals()
+    while children and not stop.is_set():
+        _reap(children, log)
+        stop.wait(0.2)
+    code = 0 if stop.is_set() else 1  # every agent gone by itself: something is wrong
+    for pid in children:
+        _kill(pid, signal.SIGTERM)
+    deadline = time.monotonic() + 5.0
+    while children and time.monotonic() < deadline:
+        _reap(children, log)
+        time.sleep(0.02)
+    for pid in list(children):
+        _kill(pid, signal.SIGKILL)
+        os.waitpid(pid, 0)
+    return code
+
+
+def _reap(children: dict[int, int], log: logging.Logger) -> None:
+    import os
+
+    while children:
+        try:
+            pid, status = os.waitpid(-1, os.WNOHANG)
+        except ChildProcessError:
+            children.clear()
+            return
+        if pid == 0:
+            return
+        robot = children.pop(pid, None)
+        code = os.waitstatus_to_exitcode(status)
+        if code != 0:
+            log.warning("agent %s exited with %d", robot, code)
+
+
+def _kill(pid: int, sig: int) -> None:
+    import contextlib
+    import os
+
+    with contextlib.suppress(ProcessLookupError):
+        os.kill(pid, sig)
 
 
 # --- `python -m deploy.parts <part> ...` -------------------------------------------------------

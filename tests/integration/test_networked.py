@@ -172,15 +172,18 @@ def test_agents_and_world_outlive_a_router_restart(make_swarm: Callable[..., Swa
     assert all(p.poll() is None for name, p in sw.children.procs.items() if name != "router")
 
 
-def _children_of(pid: int) -> list[int]:
-    out = []
+def _descendants_of(pid: int) -> list[int]:
+    parent: dict[int, int] = {}
     for stat in Path("/proc").glob("[0-9]*/stat"):
         try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except OSError:
+            parent[int(stat.parent.name)] = int(stat.read_text().rsplit(")", 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
             continue
-        if int(fields[1]) == pid:
-            out.append(int(stat.parent.name))
+    out, frontier = [], [pid]
+    while frontier:
+        kids = [p for p, pp in parent.items() if pp in frontier]
+        out += kids
+        frontier = kids
     return out
 
 
@@ -192,10 +195,10 @@ def test_sigterm_to_the_launcher_stops_every_process_it_started(tmp_path: Path) 
     children: list[int] = []
     try:
         deadline = time.monotonic() + 60
-        while len(children) < 8 and time.monotonic() < deadline:  # world, coordinator, 6 agents
-            children = _children_of(proc.pid)
+        while len(children) < 9 and time.monotonic() < deadline:
+            children = _descendants_of(proc.pid)  # world, coordinator, agents host, 6 agents
             time.sleep(0.05)
-        assert len(children) == 8, children
+        assert len(children) == 9, children
         proc.send_signal(signal.SIGTERM)
         _, err = proc.communicate(timeout=60)
     finally:
