@@ -113,10 +113,8 @@ def plan(points: Points, params: Params) -> Plan:
     s = scale(circle.radius)
     tol_at, tol_eq = EPS_AT_REL * s, EPS_EQ_REL * s
     r = target_radius(n, params.a)
-    matched = mirror_matched(points, circle.center[0], tol_at)
-    symmetric = bool(matched.all())
-    ctx = _Ctx(points, circle, tol_at, tol_eq, _orientation(points, circle, matched, tol_eq),
-               symmetric)
+    orientation = _orientation(points, circle.center[0], tol_at, tol_eq)
+    ctx = _Ctx(points, circle, tol_at, tol_eq, orientation, orientation == 0.0)
     if circle.radius < r - tol_eq:  # G2
         return _expansion(ctx, r)
     return _formation(ctx, n)
@@ -125,41 +123,52 @@ def plan(points: Points, params: Params) -> Plan:
 # --- ties without chirality (G12) ----------------------------------------------------------------
 
 
-def _orientation(pts: Points, circle: Circle, matched: np.ndarray, tol_eq: float) -> float:
+def _orientation(pts: Points, cx: float, tol_at: float, tol_eq: float) -> float:
     """s = sign(x - c_x) of the unmatched robot with the largest (y, |x - c_x|); 0 if symmetric.
 
     It flips with the frame, so `s * x` means the same side to every robot: an agreed left/right.
     """
-    idx = np.flatnonzero(~matched)
+    idx = np.flatnonzero(~mirror_matched(pts, cx, tol_at))
     if len(idx) == 0:
         return 0.0
-    dx = pts[idx, 0] - circle.center[0]
-    best = _first(np.stack([-pts[idx, 1], -np.abs(dx)], axis=1), tol_eq)
+    dx = pts[idx, 0] - cx
+    best = _first((-pts[idx, 1], -np.abs(dx)), tol_eq)
     return 1.0 if dx[best] > 0 else -1.0
 
 
-def _ranked(keys: np.ndarray, tol: float) -> Iterator[int]:
-    """Row indices of `keys` (m, k) in increasing lexicographic order, lazily.
+def _ranked(cols: tuple[np.ndarray, ...], tol: float) -> Iterator[int]:
+    """Indices in increasing lexicographic order of the key columns `cols` (each (m,)), lazily.
 
-    Components within `tol` of the smallest remaining one count as ties and fall through to the
-    next component; full ties go by row index. Lazy because the caller usually stops at the first.
+    Values within `tol` of the smallest remaining one count as ties and fall through to the next
+    column; full ties go by index. Lazy because the caller usually stops at the first.
     """
-    remaining = np.ones(len(keys), dtype=bool)
-    for _ in range(len(keys)):
-        group = remaining.copy()
-        for col in range(keys.shape[1]):
-            values = np.where(group, keys[:, col], np.inf)
-            group &= values <= values.min() + tol
-            if np.count_nonzero(group) == 1:
-                break
-        i = int(np.argmax(group))
-        remaining[i] = False
+    first = np.array(cols[0], dtype=np.float64)  # a copy: taken rows are set to +inf
+    for _ in range(len(first)):
+        i = int(np.argmin(first))
+        low = first[i]
+        if low == np.inf:
+            return
+        tied = np.flatnonzero(first <= low + tol)
+        if len(tied) > 1:  # rare outside mirror pairs: settle on the next columns
+            group = tied
+            for col in cols[1:]:
+                values = col[group]
+                group = group[values <= values.min() + tol]
+                if len(group) == 1:
+                    break
+            i = int(group[0])
+        first[i] = np.inf
         yield i
 
 
-def _first(keys: np.ndarray, tol: float) -> int:
-    """Index of the smallest row of `keys` under the tolerant order of `_ranked`."""
-    return next(_ranked(keys, tol))
+def _first(cols: tuple[np.ndarray, ...], tol: float) -> int:
+    """Index of the smallest key under the tolerant order of `_ranked`."""
+    return next(_ranked(cols, tol))
+
+
+def _without(pts: Points, i: int) -> Points:
+    """All rows but row i (cheaper than np.delete on small arrays)."""
+    return np.concatenate((pts[:i], pts[i + 1 :]))
 
 
 # --- SECExpansion --------------------------------------------------------------------------------
@@ -176,7 +185,7 @@ def _expansion(ctx: _Ctx, r: float) -> Plan:
     on_l = np.abs(sec_pts[:, 0] - cx) <= ctx.tol_at
     if not matched.all():  # case 1: the unmatched SEC robot with maximum Y
         cand = np.flatnonzero(~matched)
-        keys = np.stack([-sec_pts[cand, 1], -np.abs(sec_pts[cand, 0] - cx)], axis=1)
+        keys = (-sec_pts[cand, 1], -np.abs(sec_pts[cand, 0] - cx))
         leaders = [int(on_sec[cand[_first(keys, ctx.tol_eq)]])]
         kind = "exp-case1"
     elif (~on_l).any():  # case 2 (a or b): the top mirror pair off L
@@ -209,7 +218,7 @@ def _radial_move(pts: Points, leader: int, circle: Circle, reach: float) -> Path
     if norm == 0.0:
         return None
     u = u / norm
-    others = np.delete(pts, leader, axis=0)
+    others = _without(pts, leader)
     d = p - others
     b = d @ u
     t = -b + np.sqrt(np.maximum(b * b - np.einsum("ij,ij->i", d, d) + reach * reach, 0.0))
@@ -228,34 +237,39 @@ def _radial_move(pts: Points, leader: int, circle: Circle, reach: float) -> Path
 def _formation(ctx: _Ctx, n: int) -> Plan:
     """FormUCircle: fill the targets on the current SEC one mover (or mirror pair) at a time."""
     pts, c = ctx.pts, ctx.circle
+    cx, cy = c.center
     at_o = robot_at(pts, north_point(c), ctx.tol_at) is not None
     targets = targets_on(c, n, at_o)
-    dmat = np.hypot(pts[:, None, 0] - targets[None, :, 0], pts[:, None, 1] - targets[None, :, 1])
-    settled_robot = dmat.min(axis=1) <= ctx.tol_at  # G8: settled robots never move
-    settled_target = dmat.min(axis=0) <= ctx.tol_at
-    blocks = dmat < CONTACT - EPS_CLEAR  # G7: R blocks T iff their discs overlap
-    cx = ctx.cx
+    # Targets are >= a* >= 4 apart (G1), so only a robot's angularly nearest target can be within
+    # 2 of it: one O(n) pass gives "settled" (G8) and "blocks" (G7) for every robot.
+    step = 2.0 * math.pi / n
+    theta = np.arctan2(pts[:, 0] - cx, pts[:, 1] - cy) - (0.0 if at_o else step / 2.0)
+    nearest = np.rint(theta / step).astype(np.intp) % n
+    d_near = np.hypot(pts[:, 0] - targets[nearest, 0], pts[:, 1] - targets[nearest, 1])
+    settled_robot = d_near <= ctx.tol_at  # G8: settled robots never move
+    blocking = d_near < CONTACT - EPS_CLEAR  # G7: R blocks T iff their discs overlap
+    settled_target = np.zeros(n, dtype=bool)
+    settled_target[nearest[settled_robot]] = True
+    unsettled = np.flatnonzero(~settled_robot)
     vacant = np.flatnonzero(~settled_target)
-    order_keys = np.stack([-targets[vacant, 1], -ctx.orientation * (targets[vacant, 0] - cx)], 1)
+    order_keys = (-targets[vacant, 1], -ctx.orientation * (targets[vacant, 0] - cx))
     for j_target in _ranked(order_keys, ctx.tol_eq):
         k = int(vacant[j_target])
-        blockers = np.flatnonzero(blocks[:, k])
+        blockers = np.flatnonzero(blocking & (nearest == k))
         if len(blockers) >= 2:  # double-blocked: wait until one blocker has left (G7)
             continue
         if len(blockers) == 1:
-            cands = [int(blockers[0])] if not settled_robot[blockers[0]] else []
+            cands = blockers[:0] if settled_robot[blockers[0]] else blockers
         else:
-            cands = [int(i) for i in np.flatnonzero(~settled_robot)]
+            cands = unsettled
         if ctx.symmetric:
             cands = _symmetric_candidates(ctx, cands, targets[k])
-        if not cands:
+        if len(cands) == 0:
             continue
-        ci = np.asarray(cands)
-        keys = np.stack(
-            [dmat[ci, k], -pts[ci, 1], -ctx.orientation * (pts[ci, 0] - cx)], axis=1
-        )
+        dist = np.hypot(pts[cands, 0] - targets[k, 0], pts[cands, 1] - targets[k, 1])
+        keys = (dist, -pts[cands, 1], -ctx.orientation * (pts[cands, 0] - cx))
         for j in _ranked(keys, ctx.tol_eq):
-            moves = _try_move(ctx, int(ci[j]), targets, k, n)
+            moves = _try_move(ctx, int(cands[j]), targets, k, n)
             if moves is not None:
                 return Plan("formation", "fill", moves)
     order = [int(vacant[j]) for j in _ranked(order_keys, ctx.tol_eq)]
@@ -265,19 +279,13 @@ def _formation(ctx: _Ctx, n: int) -> Plan:
     return Plan("stuck", "stuck")
 
 
-def _symmetric_candidates(ctx: _Ctx, cands: list[int], target: np.ndarray) -> list[int]:
+def _symmetric_candidates(ctx: _Ctx, cands: np.ndarray, target: np.ndarray) -> np.ndarray:
     """G13: targets on L go to robots on L; an off-L target to robots on its side or on L."""
-    cx, tol = ctx.cx, ctx.tol_at
-    tx = float(target[0]) - cx
-    out = []
-    for i in cands:
-        x = float(ctx.pts[i, 0]) - cx
-        if abs(tx) <= tol:
-            if abs(x) <= tol:
-                out.append(i)
-        elif abs(x) <= tol or (x > 0) == (tx > 0):
-            out.append(i)
-    return out
+    tx = float(target[0]) - ctx.cx
+    x = ctx.pts[cands, 0] - ctx.cx
+    on_l = np.abs(x) <= ctx.tol_at
+    keep = on_l if abs(tx) <= ctx.tol_at else on_l | ((x > 0) == (tx > 0))
+    return np.asarray(cands[keep])
 
 
 def _try_move(ctx: _Ctx, i: int, targets: Points, k: int, n: int) -> dict[int, Path] | None:
@@ -291,7 +299,7 @@ def _try_move(ctx: _Ctx, i: int, targets: Points, k: int, n: int) -> dict[int, P
         # it moves alone, so this frame-dependent choice breaks the symmetry safely.
         target = (2.0 * cx - target[0], target[1])
     start = (float(pts[i, 0]), float(pts[i, 1]))
-    others = np.delete(pts, i, axis=0)
+    others = _without(pts, i)
     path = _free_path(ctx, start, target, others)
     if path is None:
         return None
@@ -366,11 +374,13 @@ def _arc_to(center: Point, sweep: float, start: Point, target: Point) -> Path:
 
 def _first_free(ctx: _Ctx, start: Point, options: list[Path], others: Points) -> Path | None:
     """The shortest free option; equal lengths go to the agreed side (G12)."""
-    keys = np.empty((len(options), 2))
+    if len(options) == 1:
+        return options[0] if is_free(start, options[0], others) else None
+    keys = np.empty((2, len(options)))
     for j, p in enumerate(options):
         lo, hi = path_x_range(start, p)
-        keys[j] = (path_length(start, p), -ctx.orientation * ((lo + hi) / 2.0 - ctx.cx))
-    for j in _ranked(keys, ctx.tol_eq):
+        keys[:, j] = (path_length(start, p), -ctx.orientation * ((lo + hi) / 2.0 - ctx.cx))
+    for j in _ranked((keys[0], keys[1]), ctx.tol_eq):
         if is_free(start, options[j], others):
             return options[j]
     return None
@@ -448,7 +458,7 @@ def _note_swap(
             r2 = robot_at(pts, tj, ctx.tol_at)
             if r2 is None or (at_o and math.hypot(tj[0] - o_pt[0], tj[1] - o_pt[1]) <= ctx.tol_at):
                 continue
-            others = np.delete(pts, r2, axis=0)
+            others = _without(pts, r2)
             path = _arc_to(c.center, -ang, tj, tk)
             if not is_free(tj, path, others) or not _keeps_sec(ctx, {r2: path}):
                 continue
@@ -463,7 +473,7 @@ def _someone_reaches(ctx: _Ctx, after: Points, waiting: np.ndarray, target: Poin
     """After the swap, some waiting robot has a free path to the vacated target (progress)."""
     for i in waiting:
         start = (float(after[i, 0]), float(after[i, 1]))
-        others = np.delete(after, i, axis=0)
+        others = _without(after, int(i))
         if _free_path(ctx, start, target, others) is not None:
             return True
     return False

@@ -181,12 +181,37 @@ def target_points(points: Points, n: int | None = None) -> Points:
     return targets_on(circle, len(pts) if n is None else n, at_o)
 
 
+MATCH_WINDOW = 8
+"""Above this many robots sharing one Y (within tolerance), mirror matching compares all pairs."""
+
+
 def mirror_matched(points: Points, axis_x: float, tol: float) -> np.ndarray:
-    """Boolean (n,): robot i has a robot (itself, when on the axis) at its mirror image about x."""
-    mx = 2.0 * axis_x - points[:, 0]
-    dx = mx[:, None] - points[None, :, 0]
-    dy = points[:, 1][:, None] - points[None, :, 1]
-    return np.asarray((dx * dx + dy * dy).min(axis=1) <= tol * tol)
+    """Boolean (n,): robot i has a robot (itself, when on the axis) at its mirror image about x.
+
+    Mirroring keeps Y, so only robots with the same Y (within `tol`) can match: sort by Y and
+    compare each robot with the few neighbours in its Y window. O(n log n) unless many robots
+    share a Y, where it falls back to all pairs.
+    """
+    n = len(points)
+    order = np.argsort(points[:, 1], kind="stable")
+    ys, xs = points[order, 1], points[order, 0]
+    lo = np.searchsorted(ys, ys - tol, side="left")
+    hi = np.searchsorted(ys, ys + tol, side="right")
+    width = int((hi - lo).max()) if n else 0
+    mx = 2.0 * axis_x - xs
+    if width > MATCH_WINDOW:
+        dx = mx[:, None] - xs[None, :]
+        dy = ys[:, None] - ys[None, :]
+        found = (dx * dx + dy * dy).min(axis=1) <= tol * tol
+    else:
+        found = np.zeros(n, dtype=bool)
+        for offset in range(width):
+            j = np.minimum(lo + offset, n - 1)
+            ddx, ddy = xs[j] - mx, ys[j] - ys
+            found |= (lo + offset < hi) & (ddx * ddx + ddy * ddy <= tol * tol)
+    out = np.empty(n, dtype=bool)
+    out[order] = found
+    return out
 
 
 def is_uniform_circle(points: Points, a: float, circle: Circle | None = None) -> bool:
@@ -203,11 +228,11 @@ def is_uniform_circle(points: Points, a: float, circle: Circle | None = None) ->
     circle = sec(pts) if circle is None else circle
     tol = EPS_AT_REL * scale(circle.radius)
     cx, cy = circle.center
-    rel = pts - np.array([cx, cy])
-    radii = np.hypot(rel[:, 0], rel[:, 1])
-    if np.any(np.abs(radii - circle.radius) > tol):
+    dx, dy = pts[:, 0] - cx, pts[:, 1] - cy
+    radii = np.sqrt(dx * dx + dy * dy)
+    if np.any(np.abs(radii - circle.radius) > tol):  # the usual early exit: someone is inside
         return False
-    ang = np.sort(np.arctan2(rel[:, 1], rel[:, 0]))
+    ang = np.sort(np.arctan2(dy, dx))
     gaps = np.diff(np.append(ang, ang[0] + 2.0 * math.pi))
     if np.any(np.abs(gaps - 2.0 * math.pi / n) * circle.radius > tol):
         return False
