@@ -42,7 +42,8 @@ def build_parser() -> argparse.ArgumentParser:
     for name, (module_name, help_text) in COMMANDS.items():
         p = sub.add_parser(name, help=help_text, description=help_text)
         module = importlib.import_module(module_name)
-        getattr(module, f"add_{name}_arguments", module.add_arguments)(p)
+        adder = getattr(module, f"add_{name}_arguments", None) or module.add_arguments
+        adder(p)
         p.set_defaults(_module=module_name, _name=name)
     return parser
 
