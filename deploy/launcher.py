@@ -30,13 +30,20 @@ EXIT_NOT_FORMED = 1
 EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
 STOP_GRACE_S = 5.0  # SIGTERM first; SIGKILL whatever is still there after this
+STOP_GRACE_PER_AGENT_S = 0.1  # hundreds of agents closing sessions at once share two cores
+
+
+def stop_grace_s(agents: int) -> float:
+    """How long a group holding `agents` agent processes may take to stop on SIGTERM."""
+    return STOP_GRACE_S + STOP_GRACE_PER_AGENT_S * agents
 
 
 class Children:
     """Processes started here, each in its own process group; all stopped on exit."""
 
-    def __init__(self) -> None:
+    def __init__(self, grace_s: float = STOP_GRACE_S) -> None:
         self.procs: dict[str, subprocess.Popen[bytes]] = {}
+        self.grace_s = grace_s
 
     def __enter__(self) -> Children:
         return self
@@ -65,8 +72,9 @@ class Children:
         """Signal one child's process group."""
         _signal_group(self.procs[name], sig)
 
-    def stop_all(self, grace_s: float = STOP_GRACE_S) -> None:
+    def stop_all(self, grace_s: float | None = None) -> None:
         """SIGTERM every group, wait up to `grace_s`, SIGKILL the rest, reap everything."""
+        grace_s = self.grace_s if grace_s is None else grace_s
         for proc in self.procs.values():
             _signal_group(proc, signal.SIGTERM)
         deadline = time.monotonic() + grace_s
@@ -194,7 +202,8 @@ def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
             endpoints = [_child_endpoint(listen[0])]
         watcher = _follow(args, swarm, router, endpoints[0])
         try:
-            with Children() as children:
+            # the agents host needs its own grace first, to stop its agents one by one
+            with Children(stop_grace_s(_robot_count(args)) + STOP_GRACE_S) as children:
                 code = _run_children(args, seed, record, swarm, endpoints, children, stop)
         finally:
             if watcher is not None:

@@ -263,10 +263,10 @@ def main_agents(args: argparse.Namespace) -> int:
 
 
 def _exec_agents(args: argparse.Namespace, robots: range) -> int:
-    from deploy.launcher import Children
+    from deploy.launcher import Children, stop_grace_s
 
     stop = install_stop_signals()
-    with Children() as children:
+    with Children(stop_grace_s(1)) as children:
         for robot in robots:
             children.start(f"agent {robot}",
                            agent_command(robot, args.seed, args.swarm, args.connect,
@@ -310,9 +310,11 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
         _reap(children, log)
         stop.wait(0.2)
     code = 0 if stop.is_set() else 1  # every agent gone by itself: something is wrong
+    from deploy.launcher import stop_grace_s
+
     for pid in children:
         _kill(pid, signal.SIGTERM)
-    deadline = time.monotonic() + 5.0
+    deadline = time.monotonic() + stop_grace_s(len(children))
     while children and time.monotonic() < deadline:
         _reap(children, log)
         time.sleep(0.02)
