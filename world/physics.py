@@ -44,7 +44,8 @@ least this far from the robot it hit: touching, on the safe side (to ~1e-12)."""
 TIME_RESOLUTION = 1e-12
 """Contact times are located to this precision (relative to max(1, t)), far below visible motion."""
 MAX_LEVELS = 200
-"""Subdivision depth cap: 2^-200 of a path's length is below TIME_RESOLUTION for any finite path."""
+"""Subdivision depth cap: 200 halvings resolve TIME_RESOLUTION on paths up to 1e48 long; past it a
+pair stops conservatively, as past MAX_WORK."""
 MAX_WORK = 2_000_000
 """Cap on the time intervals examined per detection pass, so hostile paths cannot hang the world.
 Past it, every pair not yet proven safe stops where the proof stopped: no overlap, but possibly a
@@ -52,9 +53,6 @@ contact reported early. Only long near-contact sliding of two curved movers gets
 ADVANCE_TARGET = OVERLAP_DISTANCE + 1e-10
 """Conservative advancement moves a pair's proven-safe time only up to where the distance could have
 fallen to this, so rounding (~1e-13 at coordinates ~1e3) never lands it inside an overlap."""
-CONCENTRIC = 1e-9
-"""Arcs whose centres differ by less than this (relative) are treated as turning about one centre;
-the difference itself is accounted for, so the threshold only selects the sharper bound."""
 BOX_MARGIN = 1e-6
 """Slack on bounding-box culling (boxes are exact up to ~1e-13)."""
 BISECTION_STEPS = 200
@@ -414,19 +412,27 @@ def _bounds(
         lb[sel] = np.where(inside, gap, np.minimum(d0[sel], d1[sel]))
     step = np.full(q, np.inf)
     np.divide(d0 - ADVANCE_TARGET, rate, out=step, where=rate > 0.0)
-    # Two arcs about one centre (robots sliding on the same circle): the distance is constant up
-    # to the difference of turning rates and of the centres as computed in each robot's frame.
-    both = (gi[:, _ARC] > 0.5) & (gj[:, _ARC] > 0.5)
-    offset = np.hypot(gi[:, _CX] - gj[:, _CX], gi[:, _CY] - gj[:, _CY])
-    scale = 1.0 + np.abs(gi[:, _CX]) + np.abs(gi[:, _CY])
-    sel = (both & (offset <= CONCENTRIC * scale)).nonzero()[0]
+    # Two arcs: p_i - p_j = (c_i - c_j) + R(w_i s) (w0 - drift), where w0 = a - b is the
+    # difference of the arms and the drift grows at |w_i - w_j| |b|. Without drift that is a point
+    # on a circle about a fixed point: an exact distance, sharp for robots sliding together on one
+    # circle or turning side by side (where the generic bounds would subdivide for long).
+    sel = ((gi[:, _ARC] > 0.5) & (gj[:, _ARC] > 0.5)).nonzero()[0]
     if sel.size:
-        radius = 1.0 / np.maximum(gi[sel, _CURV], gj[sel, _CURV])
-        drift = np.abs(gi[sel, _RATE] - gj[sel, _RATE]) * radius
-        slack = 2.0 * offset[sel]
-        lb[sel] = np.maximum(lb[sel], 0.5 * (d0[sel] + d1[sel]) - slack - 0.5 * drift * h[sel])
+        rate_i = gi[sel, _RATE]
+        drift = np.abs(rate_i - gj[sel, _RATE]) / gj[sel, _CURV]  # |w_i - w_j| |b|
+        dx, dy = gj[sel, _CX] - gi[sel, _CX], gj[sel, _CY] - gi[sel, _CY]  # -(c_i - c_j)
+        wx, wy = r0[sel, 0] + dx, r0[sel, 1] + dy
+        sigma = rate_i * h[sel]
+        c, sn = np.cos(sigma), np.sin(sigma)
+        end = np.hypot(c * wx - sn * wy - dx, sn * wx + c * wy - dy)
+        delta = ((np.arctan2(dy, dx) - np.arctan2(wy, wx)) * np.sign(sigma)) % (2.0 * np.pi)
+        inside = (np.abs(sigma) >= 2.0 * np.pi) | (delta <= np.abs(sigma))
+        arm = np.hypot(wx, wy)
+        exact = np.where(inside, np.abs(arm - np.hypot(dx, dy)), np.minimum(d0[sel], end))
+        lb[sel] = np.maximum(lb[sel], exact - drift * h[sel])
+        rel_speed = np.abs(rate_i) * (arm + drift * h[sel]) + drift
         ahead = np.full(sel.size, np.inf)
-        np.divide(d0[sel] - slack - ADVANCE_TARGET, drift, out=ahead, where=drift > 0.0)
+        np.divide(d0[sel] - ADVANCE_TARGET, rel_speed, out=ahead, where=rel_speed > 0.0)
         step[sel] = np.maximum(step[sel], ahead)
     return np.minimum(lb, np.minimum(d0, d1)), d0, d1, step
 

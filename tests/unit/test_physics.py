@@ -338,3 +338,11 @@ def test_inner_robot_turning_faster_about_the_same_centre_catches_the_outer_one(
     assert out.traveled[1] == pytest.approx(t, abs=1e-8)
     assert dist(out.positions, 0, 1) == pytest.approx(2.0, abs=TOUCH)
     assert len(out.collisions) == 2
+
+
+def test_robots_touching_side_by_side_making_the_same_turn_are_free() -> None:
+    # Equal turns about centres 2 apart translate the pair along a circle: distance stays 2.
+    paths = {0: Path((Arc((0.0, 0.0), 8 * math.pi),)), 1: Path((Arc((2.0, 0.0), 8 * math.pi),))}
+    out = apply_round(pts((50, 0), (52, 0)), paths)
+    assert out.collisions == []
+    assert out.traveled[1] == pytest.approx(400 * math.pi)
