@@ -18,6 +18,7 @@ from typing import Any
 from agent.algorithm import compute
 from agent.frames import draw_flip, path_to_world
 from agent.params import Params, ParamsError
+from agent.path import Path
 from agent.protocol import MoveSubmitted, alive_key, move_key
 from coordinator.protocol import RoundStart, round_key
 from world.protocol import ProtocolError, Snapshot, snapshot_key
@@ -37,7 +38,7 @@ class AgentConfig:
     seed: int
 
 
-def look_compute(snapshot: Snapshot, flip_x: bool) -> Any:
+def look_compute(snapshot: Snapshot, flip_x: bool) -> Path:
     """Compute in the private frame and return the path relative to the robot, world axes."""
     view = snapshot.view.copy()
     if flip_x:
