@@ -83,10 +83,11 @@ class Outcome:
     error: str | None = None
 
 
-def build_matrix(quick: bool) -> list[Case]:
+def build_matrix(quick: bool, seeds: int | None = None) -> list[Case]:
     """Random starts (sizes x kinds x seeds) and the named degenerate starts, x schedulers."""
     sizes = QUICK_SIZES if quick else SIZES
-    seeds = QUICK_SEEDS if quick else FULL_SEEDS
+    if seeds is None:
+        seeds = QUICK_SEEDS if quick else FULL_SEEDS
     cases: list[Case] = []
     index = 0
     for seed_slot in range(seeds):
@@ -162,16 +163,23 @@ def run_all(cases: Sequence[Case], jobs: int, quiet: bool) -> list[Outcome]:
     stream: Iterable[Outcome]
     if jobs <= 1:
         stream = map(run_case, cases)
-        for out in stream:
-            outcomes.append(out)
-            note(len(outcomes))
+        try:
+            for out in stream:
+                outcomes.append(out)
+                note(len(outcomes))
+        except KeyboardInterrupt:
+            print(f"interrupted after {len(outcomes)} of {len(cases)} runs", file=sys.stderr)
         return outcomes
     # Long runs first so the pool does not finish on one straggler.
     order = sorted(cases, key=lambda c: -c.n * (c.n if c.scheduler == "centralized" else 1))
     with mp.get_context("spawn").Pool(jobs) as pool:
-        for out in pool.imap_unordered(run_case, order, chunksize=4):
-            outcomes.append(out)
-            note(len(outcomes))
+        try:
+            for out in pool.imap_unordered(run_case, order, chunksize=4):
+                outcomes.append(out)
+                note(len(outcomes))
+        except KeyboardInterrupt:  # Ctrl-C: report what is done
+            pool.terminate()
+            print(f"interrupted after {len(outcomes)} of {len(cases)} runs", file=sys.stderr)
     return outcomes
 
 
@@ -187,6 +195,8 @@ def _stats(values: Sequence[float]) -> str:
 def report(outcomes: Sequence[Outcome], out: Any = sys.stdout) -> None:
     """Per scheduler and per family group: success, collisions, stalls, rounds, epochs, cost."""
     print(f"\n== evidence: {len(outcomes)} runs ==", file=out)
+    if not outcomes:
+        return
     header = (
         f"{'group':<26}{'runs':>6}{'formed':>9}{'coll':>6}{'stall':>6}{'cap':>5}{'err':>5}"
         f"  {'rounds med/p95/max':<20}{'epochs med/p95/max':<20}"
@@ -340,6 +350,8 @@ def _iter_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--quick", action="store_true", help="a small subset of the matrix")
     p.add_argument("--jobs", type=int, default=2, help="worker processes (spawn; default 2)")
+    p.add_argument("--seeds", type=int, default=None, metavar="K",
+                   help=f"seeds per (kind, n) (default {FULL_SEEDS}; --quick {QUICK_SEEDS})")
     p.add_argument("--speed-only", action="store_true", help="skip the evidence matrix")
     p.add_argument("--evidence-only", action="store_true", help="skip the speed part")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
@@ -349,7 +361,7 @@ def _iter_args(argv: Sequence[str] | None) -> argparse.Namespace:
 def main(argv: Sequence[str] | None = None) -> int:
     args = _iter_args(argv)
     if not args.speed_only:
-        cases = build_matrix(args.quick)
+        cases = build_matrix(args.quick, args.seeds)
         random_starts = len({(c.family, c.n, c.seed) for c in cases if c.positions is None})
         print(
             f"matrix: {random_starts} random starts + {len(degenerate_starts())} degenerate, "
