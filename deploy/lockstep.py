@@ -102,7 +102,9 @@ def run_lockstep(
         paths: dict[int, Path] = {}
         for robot in active:
             me = positions[robot]
-            others = np.delete(positions, robot, axis=0)[look_rng.permutation(n - 1)]
+            order = look_rng.permutation(n - 1)
+            order[order >= robot] += 1  # a shuffled order of everyone but `robot`
+            others = positions[order]
             path_local = compute(to_local(others, me, flips[robot]), params)
             looks += 1
             if path_local:
