@@ -3,6 +3,11 @@
 Robots are unit discs. Every robot of a round follows its path from t = 0 at unit speed (time equals
 arc length). A robot whose disc would overlap another stops at first contact; stopped robots are
 still obstacles for the rest of the round. Discs never overlap, at any time of the round.
+
+Method: an event loop over the pairs whose path boxes come within 2; per pair, adaptive subdivision
+of time proves intervals overlap-free with lower bounds on the distance (exact for straight relative
+motion, an arc against a robot at rest and two arcs up to their turning-rate drift; Lipschitz and
+chord bounds otherwise) and conservative advancement; contacts are then located by bisection.
 """
 
 from __future__ import annotations
@@ -374,8 +379,9 @@ def _bounds(
 
     Each interval lies within one segment (or rest) of each robot. The bound is exact when the
     relative motion is straight (line or rest against line or rest) and for an arc against a
-    robot at rest; otherwise the best of a Lipschitz bound (each robot moves at unit speed) and
-    the chord of the relative motion minus its deviation (relative acceleration <= 1/r_i + 1/r_j).
+    robot at rest, exact up to the turning-rate drift for two arcs, and otherwise the best of a
+    Lipschitz bound (each robot moves at unit speed) and the chord of the relative motion minus
+    its deviation (relative acceleration <= 1/r_i + 1/r_j).
     """
     q = len(pi)
     p = _positions(mo, np.concatenate([pi, pi, pj, pj]), np.concatenate([t0, t1, t0, t1]))
