@@ -211,3 +211,40 @@ def test_sigterm_to_the_launcher_stops_every_process_it_started(tmp_path: Path) 
     assert b"did not stop on SIGTERM" not in err, err
     alive = [pid for pid in children if Path(f"/proc/{pid}").exists()]
     assert not alive
+
+
+@pytest.mark.slow
+def test_64_agents_under_fsync_record_the_lockstep_run(tmp_path: Path) -> None:
+    record = tmp_path / "net.jsonl"
+    argv = [sys.executable, "-m", "deploy.cli", "run", "-n", "64", "--seed", "2", "--scheduler",
+            "fsync", "--record", str(record), "-q"]
+    done = subprocess.run(argv, capture_output=True, timeout=900, check=False)
+    assert done.returncode == 0, done.stdout + done.stderr
+    lock = tmp_path / "lock.jsonl"
+    from agent.params import Params
+    from coordinator.schedule import make_scheduler
+    from deploy.lockstep import run_lockstep
+    from world.record import RecordWriter
+    from world.starts import random_start
+
+    with RecordWriter(lock) as rec:
+        run_lockstep(random_start(64, 2, "clustered", 4.0), Params(64, 4.0),
+                     make_scheduler("fsync", 64, 2), seed=2, record=rec)
+    assert_same_run(read_record(record), read_record(lock))
+
+
+@pytest.mark.slow
+def test_a_hung_agent_is_seen_gone_by_its_lease_and_rejoins_when_it_wakes(
+    make_swarm: Callable[..., Swarm],
+) -> None:
+    sw = make_swarm(8, SEED)
+    sw.start_all(pace=0.2)
+    sw.wait_for("round 3", lambda: (s := sw.state()) is not None and s.round >= 3)
+    victim = 2
+    sw.children.stop(f"agent {victim}", signal.SIGSTOP)
+    sw.wait_for("the lease to expire", lambda: f"agent {victim} is gone" in sw.log("coordinator"),
+                deadline_s=5.0)
+    sw.children.stop(f"agent {victim}", signal.SIGCONT)
+    sw.wait_for("it to come back", lambda: (s := sw.state()) is not None
+                and s.agents[victim].alive)
+    assert sw.wait_done().status == "formed"
