@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from types import TracebackType
 from typing import Any
 
-from deploy.zconf import ROUTER_ENDPOINT_HELP, loopback_endpoint
+from deploy.zconf import DEFAULT_SWARM, ROUTER_ENDPOINT_HELP, loopback_endpoint
 
 log = logging.getLogger("fatswarm.launcher")
 
@@ -106,7 +106,8 @@ def add_network_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
                    help="endpoint(s) of the router started here (default: a free loopback port)")
     g.add_argument("--swarm", default=None,
-                   help="swarm name, keys under fatswarm/<swarm>/ (default: a fresh random name)")
+                   help=f"swarm name, keys under fatswarm/<swarm>/ (default {DEFAULT_SWARM!r} on "
+                   "the router started here, a fresh random name with --connect)")
     g.add_argument("--move-timeout", type=float, default=5.0, metavar="SECONDS",
                    help="an active robot that has not moved by then stays put (default 5)")
     g.add_argument("--pace", type=float, default=0.0, metavar="SECONDS",
@@ -189,7 +190,9 @@ def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
         sig: signal.signal(sig, lambda signum, frame: stop.set())
         for sig in (signal.SIGTERM, signal.SIGINT)
     }
-    swarm = args.swarm or f"run-{secrets.token_hex(4)}"
+    # Our own router holds one swarm: the default name lets `fatswarm dashboard` attach as is. On
+    # a shared router (--connect), a fresh name keeps two runs from mixing their messages.
+    swarm = args.swarm or (f"run-{secrets.token_hex(4)}" if args.connect else DEFAULT_SWARM)
     router = None
     try:
         if args.connect:
@@ -200,6 +203,9 @@ def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
             listen = list(args.listen) or [loopback_endpoint()]
             router = open_router(listen)
             endpoints = [_child_endpoint(listen[0])]
+        if not args.quiet:
+            print(f"swarm {swarm!r} on {endpoints[0]} (watch from elsewhere: fatswarm dashboard "
+                  f"--connect {endpoints[0]} --swarm {swarm})", file=sys.stderr)
         watcher = _follow(args, swarm, router, endpoints[0])
         try:
             # the agents host needs its own grace first, to stop its agents one by one
