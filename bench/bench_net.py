@@ -83,6 +83,7 @@ class NetRun:
     wall_s: float  # all agents alive -> final state received
     intervals: list[float]  # time between consecutive committed rounds
     memory_mb: list[tuple[float, float, float]]  # per agent process: RSS, PSS, private
+    cpu_s: float  # CPU of every process (router and observer included) from start to end
 
 
 def _memory_mb(pid: int) -> tuple[float, float, float]:
@@ -117,6 +118,19 @@ def _agent_pids(children: Children) -> list[int]:
             if ppid == host.pid:
                 forked.append(int(stat))
     return direct + forked
+
+
+def _cpu_s(pids: list[int]) -> float:
+    """User + system CPU seconds used so far by these processes (this one included by caller)."""
+    total = 0
+    for pid in pids:
+        try:
+            with open(f"/proc/{pid}/stat", encoding="ascii") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            total += int(fields[11]) + int(fields[12])
+        except (OSError, ValueError, IndexError):
+            continue
+    return total / os.sysconf("SC_CLK_TCK")
 
 
 def networked(
@@ -174,6 +188,8 @@ def networked(
         if not all_alive.wait(600):
             raise RuntimeError(f"only {len(alive)} of {n} agents came up")
         t_alive = time.perf_counter()
+        pids = [os.getpid(), *(p.pid for p in children.procs.values()), *_agent_pids(children)]
+        cpu0 = _cpu_s(pids)
         rss: list[tuple[float, float, float]] = []
         while not done.wait(0.25):
             if not rss and len(commits) > 2:  # measure memory once the agents have computed
@@ -181,6 +197,7 @@ def networked(
             if time.perf_counter() - t_alive > 1800:
                 raise RuntimeError("run did not end in 30 minutes")
         t_end = time.perf_counter()
+        cpu1 = _cpu_s(pids)
         if not rss:
             rss = [_memory_mb(pid) for pid in _agent_pids(children)]
     for sub in subs:
@@ -194,16 +211,17 @@ def networked(
         wall_s=t_end - t_alive,
         intervals=[b - a for a, b in itertools.pairwise(times)],
         memory_mb=[m for m in rss if m[0] == m[0]],
+        cpu_s=cpu1 - cpu0,
     )
 
 
-def lockstep(n: int, seed: int) -> tuple[str, int, int, float]:
+def lockstep(n: int, seed: int) -> tuple[str, int, int, float, float]:
     from deploy.lockstep import run_lockstep
 
     initial = random_start(n, seed, "clustered", 4.0)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     res = run_lockstep(initial, Params(n, 4.0), make_scheduler("fsync", n, seed), seed=seed)
-    return res.status, res.rounds, res.looks, time.perf_counter() - t0
+    return res.status, res.rounds, res.looks, time.perf_counter() - t0, time.process_time() - c0
 
 
 def main() -> int:
@@ -233,21 +251,23 @@ def main() -> int:
               f"{floor * 1e3:.3f} ms  p95 {pct(rtt, 95) * 1e3:.3f} ms  ({len(rtt)} samples)")
         print(f"{'N':>4} {'status':>8} {'rounds':>6} {'round ms med':>12} {'p95':>7} "
               f"{'x floor':>7} {'net rounds/s':>12} {'net Looks/s':>11} {'lock rounds/s':>13} "
-              f"{'lock Looks/s':>12} {'agent MB RSS/PSS/priv':>21} {'start s':>7}")
+              f"{'lock Looks/s':>12} {'agent MB RSS/PSS/priv':>21} {'start s':>7} "
+              f"{'CPU ms/Look net':>15} {'lock':>5}")
         for n in sizes:
             runs = [networked(session, endpoint, n, args.seed + k, tmp, args.spawn)
                     for k in range(args.latency_runs if n == sizes[0] else 1)]
             run = runs[0]
             intervals = [x for r in runs for x in r.intervals]
             med = statistics.median(intervals) if intervals else float("nan")
-            l_status, l_rounds, l_looks, l_wall = lockstep(n, args.seed)
+            l_status, l_rounds, l_looks, l_wall, l_cpu = lockstep(n, args.seed)
             mem = [statistics.median(col) for col in zip(*run.memory_mb, strict=True)]
             mem_text = "/".join(f"{m:.1f}" for m in mem) if mem else "?"
             print(f"{n:>4} {run.status:>8} {run.rounds:>6} {med * 1e3:>12.2f} "
                   f"{pct(intervals, 95) * 1e3:>7.2f} {med / floor:>7.1f} "
                   f"{run.rounds / run.wall_s:>12.1f} {run.rounds * n / run.wall_s:>11.0f} "
                   f"{l_rounds / l_wall:>13.1f} {l_looks / l_wall:>12.0f} {mem_text:>21} "
-                  f"{run.start_s:>7.2f}", flush=True)
+                  f"{run.start_s:>7.2f} {1e3 * run.cpu_s / (run.rounds * n):>15.2f} "
+                  f"{1e3 * l_cpu / l_looks:>5.2f}", flush=True)
             if l_status != run.status or l_rounds != run.rounds:
                 print(f"     (lockstep: {l_status} after {l_rounds} rounds)")
     return 0
