@@ -116,7 +116,7 @@ def _cycle(cfg: AgentConfig, round_no: int, flip_x: bool, querier: Any, mover: A
             log.warning("rejected snapshot: %s", exc)
     if snapshot is None or snapshot.round != round_no:
         return
-    t0 = time.perf_counter()
+    t0, cpu0 = time.perf_counter(), time.thread_time()
     try:
         path = look_compute(snapshot, flip_x)
     except ParamsError as exc:
@@ -125,6 +125,7 @@ def _cycle(cfg: AgentConfig, round_no: int, flip_x: bool, querier: Any, mover: A
     except Exception:  # a bug in compute must not kill the robot: it stays put this round
         log.exception("round %d: compute failed, staying put", round_no)
         return
-    log.debug("round %d: look %.2f ms, compute %.2f ms", round_no, 1e3 * (t0 - t_look),
-              1e3 * (time.perf_counter() - t0))
+    log.debug("round %d: look %.2f ms, compute %.2f ms (CPU %.2f ms)", round_no,
+              1e3 * (t0 - t_look), 1e3 * (time.perf_counter() - t0),
+              1e3 * (time.thread_time() - cpu0))
     mover.put(MoveSubmitted(robot=cfg.robot, round=round_no, path=path).encode())
