@@ -98,7 +98,10 @@ def serve(cfg: AgentConfig, conf: Any, stop: threading.Event | None = None) -> i
                 log.warning("rejected round start: %s", exc)
                 continue
             if cfg.robot in start.active and starts.empty():  # a newer start supersedes this one
-                _cycle(cfg, start.round, flip_x, querier, mover)
+                try:
+                    _cycle(cfg, start.round, flip_x, querier, mover)
+                except zenoh.ZError as exc:  # the router is away: this round goes without us
+                    log.warning("round %d: %s", start.round, exc)
     return 0
 
 

@@ -113,9 +113,15 @@ class Coordinator:
 
     def _ask(self, session: Any, request: bytes) -> ControlReply | None:
         """One control request; None if the world did not answer (down or restarting)."""
-        replies = session.get(
-            control_key(self.cfg.swarm), payload=request, timeout=CONTROL_TIMEOUT_S
-        )
+        import zenoh
+
+        try:
+            replies = list(
+                session.get(control_key(self.cfg.swarm), payload=request, timeout=CONTROL_TIMEOUT_S)
+            )
+        except zenoh.ZError as exc:  # the session is reconnecting to its router
+            log.warning("control request failed: %s", exc)
+            return None
         for reply in replies:
             if reply.ok is None:
                 continue
@@ -202,6 +208,8 @@ class Coordinator:
 
     def _one_round(self, session: Any, announce: Any, round_no: int) -> str:
         """Run round `round_no` to its commit; returns the world's status after it."""
+        import zenoh
+
         self._drain(0.0)
         while not self.live and not self.stop.is_set():
             self._drain(0.1)
@@ -219,7 +227,10 @@ class Coordinator:
             self._drain(0.2)
             return begun.status if begun is not None else "running"
         timeout_ms = int(self.cfg.move_timeout_s * 1000)
-        announce.put(RoundStart(round=round_no, active=active, timeout_ms=timeout_ms).encode())
+        try:
+            announce.put(RoundStart(round=round_no, active=active, timeout_ms=timeout_ms).encode())
+        except zenoh.ZError as exc:  # nobody hears it: the robots stay put this round
+            log.warning("round %d announcement failed: %s", round_no, exc)
         t1 = time.perf_counter()
         deadline = time.monotonic() + self.cfg.move_timeout_s
         while not self.stop.is_set():

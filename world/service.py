@@ -11,6 +11,7 @@ import logging
 import os
 import queue
 import threading
+import time
 from collections import Counter
 from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
@@ -44,6 +45,8 @@ from world.protocol import (
 from world.record import Header, RecordWriter, RoundEntry, RunRecord, read_record
 
 log = logging.getLogger("fatswarm.world")
+
+REPUBLISH_S = 1.0  # the state is re-published this often when nothing happens, for late observers
 
 @dataclass(frozen=True, slots=True)
 class WorldSetup:
@@ -399,32 +402,44 @@ def serve(core: WorldCore, conf: Any, stop: threading.Event | None = None) -> in
         _token = session.liveliness().declare_token(f"{prefix(swarm)}/alive/world")
         log.info("world of %d robots serving swarm %r", core.setup.n, swarm)
         state_pub.put(core.state().encode())
-        dirty = False
+        dirty, published = False, time.monotonic()
         while not stop.is_set():
             try:
                 kind, item = events.get(timeout=0.2)
             except queue.Empty:
-                if dirty:
+                if dirty or time.monotonic() - published > REPUBLISH_S:  # late joiners see it
                     state_pub.put(core.state().encode())
-                    dirty = False
+                    dirty, published = False, time.monotonic()
                 continue
-            if kind == "look":
-                _answer_look(core, item)
-            elif kind == "move":
-                notice = core.move(*item)
-                if notice is not None:
-                    held_pub.put(notice.encode())
-            elif kind == "control":
-                changed = _answer_control(core, item)
-                if changed:
+            try:
+                if _handle(core, kind, item, held_pub):
                     state_pub.put(core.state().encode())
-            elif kind == "alive":
-                key, alive = item
-                robot = robot_of_alive_key(key)
-                dirty |= robot is not None and core.set_alive(robot, alive)
+                    published = time.monotonic()
+                elif kind == "alive":
+                    dirty = True
+            except zenoh.ZError as exc:  # e.g. the asker left before its reply: not our problem
+                log.warning("zenoh refused a %s reply or notice: %s", kind, exc)
     core.journal.close()
     log.info("world stopped at round %d (%s)", core.committed, core.status)
     return 0
+
+
+def _handle(core: WorldCore, kind: str, item: Any, held_pub: Any) -> bool:
+    """Apply one event; True when the observers' state changed enough to publish at once."""
+    if kind == "look":
+        _answer_look(core, item)
+    elif kind == "move":
+        notice = core.move(*item)
+        if notice is not None:
+            held_pub.put(notice.encode())
+    elif kind == "control":
+        return _answer_control(core, item)
+    elif kind == "alive":
+        key, alive = item
+        robot = robot_of_alive_key(key)
+        if robot is not None:
+            core.set_alive(robot, alive)
+    return False
 
 
 def _answer_look(core: WorldCore, query: Any) -> None:
