@@ -255,7 +255,7 @@ def _run_children(
     net = ["--swarm", swarm]
     for ep in endpoints:
         net += ["--connect", ep]
-    quiet = ["--log-level", "warning"]
+    quiet = ["--log-level", "warning", "--exit-with-parent", str(os.getpid())]
     world = ["--state", record, "--seed", str(seed), "--scheduler", args.scheduler, "--start",
              args.start]
     if args.init:
@@ -275,7 +275,8 @@ def _run_children(
     children.start("world", _part("world", *net, *quiet, *world))
     children.start("coordinator", _part("coordinator", *net, *quiet, *coord))
     n = _robot_count(args)
-    children.start("agents", agents_command(n, seed, swarm, endpoints, "warning", args.spawn))
+    children.start("agents", [*agents_command(n, seed, swarm, endpoints, "warning", args.spawn),
+                              "--exit-with-parent", str(os.getpid())])
     while not stop.wait(0.1):
         gone = children.exited()
         if "coordinator" in gone:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import signal
 import sys
 import threading
@@ -18,10 +19,12 @@ from deploy.zconf import AGENT_LEASE_MS, add_zenoh_arguments, make_config
 
 EXIT_BAD_INPUT = 2
 DEFAULT_ROUTER_LISTEN = "tcp/127.0.0.1:7447"
+PARENT_POLL_S = 0.5
 
 
-def install_stop_signals() -> threading.Event:
-    """An event set by SIGTERM or SIGINT, so a part closes its session and exits cleanly."""
+def install_stop_signals(parent: int | None = None) -> threading.Event:
+    """An event set by SIGTERM or SIGINT (or when process `parent` is gone), so a part closes its
+    session and exits cleanly; the parent watch makes a killed launcher leave nothing behind."""
     stop = threading.Event()
 
     def handler(signum: int, frame: object) -> None:
@@ -30,6 +33,14 @@ def install_stop_signals() -> threading.Event:
 
     signal.signal(signal.SIGTERM, handler)
     signal.signal(signal.SIGINT, handler)
+    if parent is not None:
+
+        def watch() -> None:
+            while not stop.wait(PARENT_POLL_S):
+                if os.getppid() != parent:
+                    stop.set()
+
+        threading.Thread(target=watch, name="parent-watch", daemon=True).start()
     return stop
 
 
@@ -51,6 +62,8 @@ def _add_common(p: argparse.ArgumentParser) -> None:
     add_zenoh_arguments(p)
     p.add_argument("--log-level", choices=("debug", "info", "warning", "error"), default=None,
                    help="log level on stderr")
+    p.add_argument("--exit-with-parent", type=int, default=None, metavar="PID",
+                   help=argparse.SUPPRESS)  # the launcher's pid: stop when it is gone
 
 
 def _client_config(
@@ -75,7 +88,7 @@ def main_router(args: argparse.Namespace) -> int:
     from deploy.router import run_router
 
     _logging(args, "info")
-    stop = install_stop_signals()
+    stop = install_stop_signals(args.exit_with_parent)
     try:
         return run_router(args.listen or [DEFAULT_ROUTER_LISTEN], args.connect, stop)
     except ValueError as exc:
@@ -116,7 +129,7 @@ def main_world(args: argparse.Namespace) -> int:
     from world.starts import InitFileError, load_init, random_start
 
     _logging(args, "info")
-    stop = install_stop_signals()
+    stop = install_stop_signals(args.exit_with_parent)
 
     def make_setup() -> WorldSetup:
         if args.init is not None:
@@ -168,7 +181,7 @@ def main_coordinator(args: argparse.Namespace) -> int:
     from coordinator.service import Coordinator, CoordinatorConfig
 
     _logging(args, "info")
-    stop = install_stop_signals()
+    stop = install_stop_signals(args.exit_with_parent)
 
     def scheduler_for(n: int) -> Scheduler:
         return make_scheduler(args.scheduler, n, args.seed, args.schedule, args.fairness)
@@ -199,7 +212,7 @@ def main_agent(args: argparse.Namespace) -> int:
     from agent.service import AgentConfig, serve
 
     _logging(args, "warning")
-    stop = install_stop_signals()
+    stop = install_stop_signals(args.exit_with_parent)
     if args.robot < 0:
         return _fail("agent", f"--robot must be >= 0, got {args.robot}")
     try:
@@ -265,7 +278,7 @@ def main_agents(args: argparse.Namespace) -> int:
 def _exec_agents(args: argparse.Namespace, robots: range) -> int:
     from deploy.launcher import Children, stop_grace_s
 
-    stop = install_stop_signals()
+    stop = install_stop_signals(args.exit_with_parent)
     with Children(stop_grace_s(1)) as children:
         for robot in robots:
             children.start(f"agent {robot}",
@@ -283,8 +296,6 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
     Safe because this process never opens a Zenoh session (forking after `zenoh.open` hangs the
     child); each child opens its own session, token and frame, exactly as `fatswarm agent`.
     """
-    import os
-
     import zenoh  # noqa: F401  (the module only: no session, no runtime thread in this process)
 
     from agent.service import AgentConfig, serve
@@ -305,7 +316,7 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
                 sys.stderr.flush()
                 os._exit(code)
         children[pid] = robot
-    stop = install_stop_signals()
+    stop = install_stop_signals(args.exit_with_parent)
     while children and not stop.is_set():
         _reap(children, log)
         stop.wait(0.2)
@@ -325,8 +336,6 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
 
 
 def _reap(children: dict[int, int], log: logging.Logger) -> None:
-    import os
-
     while children:
         try:
             pid, status = os.waitpid(-1, os.WNOHANG)
@@ -343,7 +352,6 @@ def _reap(children: dict[int, int], log: logging.Logger) -> None:
 
 def _kill(pid: int, sig: int) -> None:
     import contextlib
-    import os
 
     with contextlib.suppress(ProcessLookupError):
         os.kill(pid, sig)

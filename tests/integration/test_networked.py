@@ -248,3 +248,37 @@ def test_a_hung_agent_is_seen_gone_by_its_lease_and_rejoins_when_it_wakes(
     sw.wait_for("it to come back", lambda: (s := sw.state()) is not None
                 and s.agents[victim].alive)
     assert sw.wait_done().status == "formed"
+
+
+def test_a_killed_launcher_leaves_nothing_behind(tmp_path: Path) -> None:
+    argv = [sys.executable, "-m", "deploy.cli", "run", "-n", "4", "--seed", "1", "--pace", "0.5",
+            "-q"]
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    children: list[int] = []
+    try:
+        deadline = time.monotonic() + 60
+        while len(children) < 7 and time.monotonic() < deadline:
+            children = _descendants_of(proc.pid)  # world, coordinator, agents host, 4 agents
+            time.sleep(0.05)
+        assert len(children) == 7, children
+        proc.kill()  # no chance to clean up: the parts notice their parent is gone
+        proc.wait()
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and any(_running(pid) for pid in children):
+            time.sleep(0.1)
+        assert not [pid for pid in children if _running(pid)]
+    finally:
+        import os
+
+        for pid in [proc.pid, *children]:
+            if _running(pid):
+                os.kill(pid, signal.SIGKILL)
+
+
+def _running(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
