@@ -381,11 +381,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     return code
 
 
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Unused fallback: deploy.cli evaluates `module.add_arguments` eagerly as a getattr default."""
-    add_agent_arguments(p)
-
-
 if __name__ == "__main__":
     sys.exit(main())
 
