@@ -306,9 +306,10 @@ def _try_move(ctx: _Ctx, i: int, targets: Points, k: int, n: int) -> dict[int, P
     moves = {i: path}
     if ctx.symmetric and not i_on_l:  # the mirror partner makes the mirrored move (G11)
         lo, hi = path_x_range(start, path)
-        if (x_i > 0 and lo - cx < PAIR_CLEARANCE_FROM_L) or (
-            x_i < 0 and cx - hi < PAIR_CLEARANCE_FROM_L
-        ):
+        # Exactly 1 from L (touching mirror discs) is allowed; the slack keeps frames that round
+        # differently from disagreeing on such a boundary configuration.
+        need = PAIR_CLEARANCE_FROM_L - EPS_CLEAR
+        if (x_i > 0 and lo - cx < need) or (x_i < 0 and cx - hi < need):
             return None
         partner = int(np.argmin(np.hypot(pts[:, 0] - (2.0 * cx - start[0]), pts[:, 1] - start[1])))
         if partner == i:

@@ -124,3 +124,41 @@ def test_algorithm_and_geometry_modules_hold_no_mutable_state() -> None:
             frozen = dataclasses.is_dataclass(value) and params is not None and params.frozen
             immutable = frozen or isinstance(value, (tuple, frozenset))
             assert callable(value) or immutable, (module, name)
+
+
+def movers_seen_by(pts: np.ndarray, observer: int, flip: bool, params: Params) -> frozenset[int]:
+    """The world indices of the robots that `observer`, in its own frame, plans to move."""
+    others = [j for j in range(len(pts)) if j != observer]
+    local = pts - pts[observer]
+    if flip:
+        local = local * np.array([-1.0, 1.0])
+    order = [observer, *others]
+    return frozenset(order[k] for k in plan(local[order], params).moves)
+
+
+def assert_observers_agree(pts: np.ndarray, params: Params) -> None:
+    seen = {movers_seen_by(pts, i, flip, params) for i in range(len(pts)) for flip in (False, True)}
+    assert len(seen) == 1, f"observers disagree on who moves: {sorted(map(sorted, seen))}"
+
+
+@SETTINGS
+@given(configurations(), side)
+def test_every_observer_agrees_on_who_moves(pts: np.ndarray, a: float) -> None:
+    # G11: the plan is a property of the configuration, whatever the observer's origin and flip
+    assert_observers_agree(pts, Params(len(pts), a))
+
+
+def test_observers_agree_when_a_mirror_pair_is_exactly_one_from_l() -> None:
+    # Found by the lockstep matrix (touching rosette, round 3): robots at x = +-1 from L exactly;
+    # the origin's rounding decided whether the pair counted as 1 from L, so the robot on L and
+    # the pair both moved, and touched.
+    pts = np.array([
+        [0.0, 0.0],
+        [4.727912514773747, 4.092340582224696],
+        [2.1041190169024038, 7.382473562772653],
+        [-2.104119016902402, 7.3824735627726525],
+        [-4.727912514773745, 4.092340582224694],
+        [-1.0000000000000009, -1.7320508075688767],
+        [1.0000000000000002, -1.7320508075688772],
+    ])
+    assert_observers_agree(pts, Params(7, 4.0))

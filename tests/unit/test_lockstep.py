@@ -152,16 +152,7 @@ def test_the_algorithm_forms_the_circle_without_collisions(scheduler: str) -> No
         assert (result.status, result.collisions) == ("formed", 0), (n, kind, seed)
 
 
-# Known bug (reported to the lead): in the touching rosette, after three rounds the configuration
-# is mirror symmetric with a robot on L; that robot's plan depends on its own X flip (local
-# chirality) while robots 5/6 plan a mirror-pair move in the other frame, so under fsync with seed
-# 7 (flips of 0 and 6 False, the others True) three robots move at once and 0 and 6 touch.
-ROSETTE_BUG = pytest.mark.xfail(strict=True, reason="frame-dependent plan: robot on L vs pair")
-
-
-@pytest.mark.parametrize(
-    "scheduler", [pytest.param("fsync", marks=ROSETTE_BUG), "ssync", "centralized"]
-)
+@pytest.mark.parametrize("scheduler", ["fsync", "ssync", "centralized"])
 def test_every_named_degenerate_start_forms_without_collisions(scheduler: str) -> None:
     for name, (start, a) in degenerate_starts().items():
         n = len(start)
