@@ -168,18 +168,15 @@ class Coordinator:
         if first.committed:
             self._replay_scheduler(first.committed)
         self._wait_for_agents(first.committed)
-        status = first.status
-        while status == "running" and not self.stop.is_set():
-            reply = self._hello(session)
-            if reply is None:
-                break
-            status = reply.status
-            if status != "running":
-                break
+        reply: ControlReply | None = first
+        while reply is not None and reply.status == "running" and not self.stop.is_set():
             started = time.monotonic()
-            status = self._one_round(session, announce, reply.committed + 1)
+            done = self._one_round(session, announce, reply.committed + 1)
             if self.cfg.pace_s > 0:
                 self.stop.wait(max(0.0, started + self.cfg.pace_s - time.monotonic()))
+            # a commit's reply says where the run stands; after a refusal or a failure, ask
+            reply = done if done is not None and done.ok else self._hello(session)
+        status = reply.status if reply is not None else "running"
         if status == "running":
             return EXIT_NOT_FORMED
         log.info("run ended: %s after round %d", status, self.round)
@@ -206,15 +203,15 @@ class Coordinator:
         while not self.live and not self.stop.is_set():
             self._drain(0.1)
 
-    def _one_round(self, session: Any, announce: Any, round_no: int) -> str:
-        """Run round `round_no` to its commit; returns the world's status after it."""
+    def _one_round(self, session: Any, announce: Any, round_no: int) -> ControlReply | None:
+        """Run round `round_no` to its commit; the world's last reply (None: no answer)."""
         import zenoh
 
         self._drain(0.0)
         while not self.live and not self.stop.is_set():
             self._drain(0.1)
         if self.stop.is_set():
-            return "running"
+            return None
         if round_no not in self.planned:
             assert self.scheduler is not None
             self.planned = {round_no: tuple(self.scheduler.active(round_no, sorted(self.live)))}
@@ -225,7 +222,7 @@ class Coordinator:
         if begun is None or not begun.ok:
             log.warning("world refused round %d: %s", round_no, begun and begun.reason)
             self._drain(0.2)
-            return begun.status if begun is not None else "running"
+            return begun
         timeout_ms = int(self.cfg.move_timeout_s * 1000)
         try:
             announce.put(RoundStart(round=round_no, active=active, timeout_ms=timeout_ms).encode())
@@ -249,5 +246,4 @@ class Coordinator:
         if done is None or not done.ok:
             # The world restarted and lost the open round: the loop opens it again.
             log.warning("commit of round %d failed: %s", round_no, done and done.reason)
-            return done.status if done is not None else "running"
-        return done.status
+        return done
