@@ -97,7 +97,7 @@ def _with_observer(view: Points, params: Params) -> Points:
         raise ViewError(f"the view must be an (n-1, 2) array, got shape {arr.shape}")
     if len(arr) != params.n - 1:
         raise ViewError(f"the view holds {len(arr)} robots, expected n-1 = {params.n - 1}")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise ViewError("the view holds non-finite coordinates")
     return np.vstack([np.zeros((1, 2)), arr])
 
@@ -128,7 +128,7 @@ def _orientation(pts: Points, cx: float, tol_at: float, tol_eq: float) -> float:
 
     It flips with the frame, so `s * x` means the same side to every robot: an agreed left/right.
     """
-    idx = np.flatnonzero(~mirror_matched(pts, cx, tol_at))
+    idx = (~mirror_matched(pts, cx, tol_at)).nonzero()[0]
     if len(idx) == 0:
         return 0.0
     dx = pts[idx, 0] - cx
@@ -144,11 +144,11 @@ def _ranked(cols: tuple[np.ndarray, ...], tol: float) -> Iterator[int]:
     """
     first = np.array(cols[0], dtype=np.float64)  # a copy: taken rows are set to +inf
     for _ in range(len(first)):
-        i = int(np.argmin(first))
+        i = int(first.argmin())
         low = first[i]
         if low == np.inf:
             return
-        tied = np.flatnonzero(first <= low + tol)
+        tied = (first <= low + tol).nonzero()[0]
         if len(tied) > 1:  # rare outside mirror pairs: settle on the next columns
             group = tied
             for col in cols[1:]:
@@ -179,17 +179,17 @@ def _expansion(ctx: _Ctx, r: float) -> Plan:
     pts, c = ctx.pts, ctx.circle
     cx, cy = c.center
     dist = np.hypot(pts[:, 0] - cx, pts[:, 1] - cy)
-    on_sec = np.flatnonzero(dist >= c.radius - ctx.tol_at)
+    on_sec = (dist >= c.radius - ctx.tol_at).nonzero()[0]
     sec_pts = pts[on_sec]
     matched = mirror_matched(sec_pts, cx, ctx.tol_at)
     on_l = np.abs(sec_pts[:, 0] - cx) <= ctx.tol_at
     if not matched.all():  # case 1: the unmatched SEC robot with maximum Y
-        cand = np.flatnonzero(~matched)
+        cand = (~matched).nonzero()[0]
         keys = (-sec_pts[cand, 1], -np.abs(sec_pts[cand, 0] - cx))
         leaders = [int(on_sec[cand[_first(keys, ctx.tol_eq)]])]
         kind = "exp-case1"
     elif (~on_l).any():  # case 2 (a or b): the top mirror pair off L
-        cand = np.flatnonzero(~on_l)
+        cand = (~on_l).nonzero()[0]
         top = int(cand[np.argmax(sec_pts[cand, 1])])
         mx, my = 2.0 * cx - sec_pts[top, 0], sec_pts[top, 1]
         partner = int(np.argmin(np.hypot(sec_pts[:, 0] - mx, sec_pts[:, 1] - my)))
@@ -250,12 +250,12 @@ def _formation(ctx: _Ctx, n: int) -> Plan:
     blocking = d_near < CONTACT - EPS_CLEAR  # G7: R blocks T iff their discs overlap
     settled_target = np.zeros(n, dtype=bool)
     settled_target[nearest[settled_robot]] = True
-    unsettled = np.flatnonzero(~settled_robot)
-    vacant = np.flatnonzero(~settled_target)
+    unsettled = (~settled_robot).nonzero()[0]
+    vacant = (~settled_target).nonzero()[0]
     order_keys = (-targets[vacant, 1], -ctx.orientation * (targets[vacant, 0] - cx))
     for j_target in _ranked(order_keys, ctx.tol_eq):
         k = int(vacant[j_target])
-        blockers = np.flatnonzero(blocking & (nearest == k))
+        blockers = (blocking & (nearest == k)).nonzero()[0]
         if len(blockers) >= 2:  # double-blocked: wait until one blocker has left (G7)
             continue
         if len(blockers) == 1:
@@ -392,7 +392,7 @@ def _first_blocker(start: Point, target: Point, others: Points) -> Point | None:
     if len(others) == 0:
         return None
     d = segment_distances(start, target, others)
-    hit = np.flatnonzero(d < CONTACT - EPS_CLEAR)
+    hit = (d < CONTACT - EPS_CLEAR).nonzero()[0]
     if len(hit) == 0:
         return None
     dx, dy = target[0] - start[0], target[1] - start[1]
@@ -444,7 +444,7 @@ def _note_swap(
     cx, cy = c.center
     step = 2.0 * math.pi / n
     on_sec = np.hypot(pts[:, 0] - cx, pts[:, 1] - cy) >= c.radius - ctx.tol_at
-    waiting = np.flatnonzero(~settled_robot & on_sec)
+    waiting = (~settled_robot & on_sec).nonzero()[0]
     if len(waiting) == 0:
         return None
     o_pt = north_point(c)

@@ -121,7 +121,7 @@ def sec(points: Points) -> Circle:
     for _ in range(4 * len(pts) + 16):
         cx, cy = circle.center
         d2 = (xs - cx) ** 2 + (ys - cy) ** 2
-        k = int(np.argmax(d2))
+        k = int(d2.argmax())
         lim = circle.radius * (1.0 + SEC_SLACK_REL) + 1e-300
         if d2[k] <= lim * lim:
             return circle
@@ -168,7 +168,7 @@ def targets_on(circle: Circle, n: int, robot_at_o: bool) -> Points:
 def robot_at(points: Points, p: Point, tol: float) -> int | None:
     """Index of a robot within `tol` of point p, or None."""
     d = np.hypot(points[:, 0] - p[0], points[:, 1] - p[1])
-    k = int(np.argmin(d))
+    k = int(d.argmin())
     return k if d[k] <= tol else None
 
 
@@ -230,11 +230,11 @@ def is_uniform_circle(points: Points, a: float, circle: Circle | None = None) ->
     cx, cy = circle.center
     dx, dy = pts[:, 0] - cx, pts[:, 1] - cy
     radii = np.sqrt(dx * dx + dy * dy)
-    if np.any(np.abs(radii - circle.radius) > tol):  # the usual early exit: someone is inside
+    if (np.abs(radii - circle.radius) > tol).any():  # the usual early exit: someone is inside
         return False
     ang = np.sort(np.arctan2(dy, dx))
     gaps = np.diff(np.append(ang, ang[0] + 2.0 * math.pi))
-    if np.any(np.abs(gaps - 2.0 * math.pi / n) * circle.radius > tol):
+    if (np.abs(gaps - 2.0 * math.pi / n) * circle.radius > tol).any():
         return False
     side = 2.0 * circle.radius * math.sin(math.pi / n)
     return side >= a - tol
