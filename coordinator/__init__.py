@@ -1,1 +1,1 @@
-"""Scheduling: who is active in each round (fsync, ssync, centralized, scripted) and the coordinator process."""
+"""Scheduling: who is active each round (fsync, ssync, centralized, scripted); the coordinator."""

@@ -23,7 +23,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "agents": ("deploy.parts", "run K agent processes on this host"),
     "dashboard": ("deploy.dashboard", "attach a read-only dashboard to a running swarm"),
     "replay": ("deploy.replay", "play a run record in the dashboard"),
-    "plot": ("deploy.plot", "draw a run record's trajectories to SVG or PNG (needs fatswarm[plot])"),
+    "plot": ("deploy.plot", "draw a record's trajectories to SVG or PNG (needs fatswarm[plot])"),
 }
 
 EXIT_BAD_INPUT = 2

@@ -1,1 +1,1 @@
-"""The world: authority on positions, disc physics with continuous collision detection, run records."""
+"""The world: authority on positions, disc physics with collision detection, run records."""
