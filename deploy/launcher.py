@@ -149,37 +149,17 @@ def run_networked(args: argparse.Namespace) -> int:
 
 def check_inputs(args: argparse.Namespace) -> tuple[str | None, int]:
     """(what to fix or None, the seed): the lockstep run's checks, before any process starts."""
-    from agent.params import Params, ParamsError
-    from coordinator.schedule import ScheduleError, make_scheduler
-    from deploy.run import DEFAULT_A, DEFAULT_N
-    from world.physics import InvalidConfigurationError, validate_configuration
-    from world.starts import InitFileError, load_init, random_start
+    from deploy.run import input_errors, resolve_run
 
     seed: int = args.seed if args.seed is not None else secrets.randbelow(2**31)
+    bad_input: tuple[type[Exception], ...] = (*input_errors(), ValueError)  # ValueError: swarm
     try:
-        if args.init is not None:
-            initial, file_a = load_init(args.init)
-            if args.n is not None and args.n != len(initial):
-                return f"-n {args.n} disagrees with the {len(initial)} robots of {args.init}; " \
-                    "drop -n", seed
-            a = args.a if args.a is not None else (file_a if file_a is not None else DEFAULT_A)
-            params = Params(len(initial), a)
-        else:
-            params = Params(DEFAULT_N if args.n is None else args.n,
-                            DEFAULT_A if args.a is None else args.a)
-            initial = random_start(params.n, seed, args.start, params.a)
-        validate_configuration(initial)
-        if args.scheduler != "scripted" and args.schedule is not None:
-            return "--schedule only goes with --scheduler scripted", seed
-        if args.max_rounds is not None and args.max_rounds < 1:
-            return f"--max-rounds must be at least 1, got {args.max_rounds}", seed
-        make_scheduler(args.scheduler, params.n, seed, args.schedule, args.fairness)
+        resolve_run(args, seed)
         if args.swarm is not None:
             from world.protocol import check_swarm
 
             check_swarm(args.swarm)
-    except (ParamsError, InitFileError, ScheduleError, InvalidConfigurationError,
-            ValueError) as exc:
+    except bad_input as exc:
         return str(exc), seed
     return None, seed
 

@@ -12,9 +12,13 @@ import secrets
 import sys
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Final, TextIO
 
 if TYPE_CHECKING:
+    from agent.params import Params
+    from agent.path import Points
+    from coordinator.schedule import Scheduler
     from deploy.lockstep import RoundReport
 
 EXIT_FORMED: Final = 0
@@ -109,40 +113,76 @@ def _networked(args: argparse.Namespace) -> int:
     return code
 
 
+@dataclass(frozen=True, slots=True)
+class RunSetup:
+    """What the flags of `fatswarm run` ask for, checked: the start, parameters and scheduler."""
+
+    seed: int
+    params: Params
+    initial: Points
+    scheduler: Scheduler
+    max_rounds: int
+
+
+def input_errors() -> tuple[type[Exception], ...]:
+    """The exceptions `resolve_run` raises for bad input (each message says what to fix)."""
+    from agent.params import ParamsError
+    from coordinator.schedule import ScheduleError
+    from world.physics import InvalidConfigurationError
+    from world.starts import InitFileError
+
+    return (ParamsError, InitFileError, ScheduleError, InvalidConfigurationError, RunInputError)
+
+
+def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
+    """Build the run the flags describe (shared by lockstep and networked runs, so both refuse
+    the same input with the same message); raises one of `input_errors()`."""
+    from agent.params import Params
+    from coordinator.schedule import make_scheduler
+    from deploy.lockstep import default_max_rounds
+    from world.physics import validate_configuration
+    from world.starts import load_init, random_start
+
+    if args.init is not None:
+        initial, file_a = load_init(args.init)
+        if args.n is not None and args.n != len(initial):
+            raise RunInputError(
+                f"-n {args.n} disagrees with the {len(initial)} robots of {args.init}; drop -n"
+            )
+        a = args.a if args.a is not None else (file_a if file_a is not None else DEFAULT_A)
+        params = Params(len(initial), a)
+    else:
+        params = Params(DEFAULT_N if args.n is None else args.n,
+                        DEFAULT_A if args.a is None else args.a)
+        initial = random_start(params.n, seed, args.start, params.a)
+    validate_configuration(initial)
+    if args.scheduler != "scripted" and args.schedule is not None:
+        raise RunInputError("--schedule only goes with --scheduler scripted")
+    if args.max_rounds is not None and args.max_rounds < 1:
+        raise RunInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
+    scheduler = make_scheduler(args.scheduler, params.n, seed, args.schedule, args.fairness)
+    max_rounds = args.max_rounds or default_max_rounds(params.n, args.scheduler)
+    return RunSetup(seed, params, initial, scheduler, max_rounds)
+
+
 def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """`fatswarm run --lockstep`: build the run from the flags, run it, print the summary."""
-    from agent.params import Params, ParamsError
-    from coordinator.schedule import ScheduleError, make_scheduler
-    from deploy.lockstep import default_max_rounds, run_lockstep
+    from deploy.lockstep import run_lockstep
     from world.physics import InvalidConfigurationError
     from world.record import RecordFormatError, RecordWriter
-    from world.starts import InitFileError, load_init, random_start
 
     out = sys.stdout if out is None else out
     seed_given = args.seed is not None
     seed: int = args.seed if seed_given else secrets.randbelow(2**31)
+    bad_input: tuple[type[Exception], ...] = (*input_errors(), RecordFormatError)
     try:
-        if args.init is not None:
-            initial, file_a = load_init(args.init)
-            if args.n is not None and args.n != len(initial):
-                raise RunInputError(
-                    f"-n {args.n} disagrees with the {len(initial)} robots of {args.init}; drop -n"
-                )
-            a = args.a if args.a is not None else (file_a if file_a is not None else DEFAULT_A)
-            params = Params(len(initial), a)
-        else:
-            params = Params(DEFAULT_N if args.n is None else args.n,
-                            DEFAULT_A if args.a is None else args.a)
-            initial = random_start(params.n, seed, args.start, params.a)
-        if args.scheduler != "scripted" and args.schedule is not None:
-            raise RunInputError("--schedule only goes with --scheduler scripted")
-        if args.max_rounds is not None and args.max_rounds < 1:
-            raise RunInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
-        scheduler = make_scheduler(args.scheduler, params.n, seed, args.schedule, args.fairness)
-        max_rounds = args.max_rounds or default_max_rounds(params.n, args.scheduler)
+        setup = resolve_run(args, seed)
         record = RecordWriter(args.record) if args.record else None
-    except (ParamsError, InitFileError, ScheduleError, RecordFormatError, RunInputError) as exc:
+    except bad_input as exc:
         return _fail(str(exc))
+    params, initial, scheduler, max_rounds = (
+        setup.params, setup.initial, setup.scheduler, setup.max_rounds
+    )
 
     if not seed_given and not args.quiet:
         print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
