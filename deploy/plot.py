@@ -106,14 +106,14 @@ def main(args: argparse.Namespace) -> int:
         print(f"fatswarm plot: OUT must end in .svg or .png, got {args.out!r}", file=sys.stderr)
         return EXIT_BAD_INPUT
     try:
-        import matplotlib  # noqa: F401
-    except ImportError:
-        print(MISSING_MATPLOTLIB, file=sys.stderr)
-        return EXIT_BAD_INPUT
-    try:
         record = read_record(args.record)
     except RecordFormatError as exc:
         print(f"fatswarm plot: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        print(MISSING_MATPLOTLIB, file=sys.stderr)
         return EXIT_BAD_INPUT
     try:
         draw(record, args.out, args.title)
