@@ -187,18 +187,28 @@ def _descendants_of(pid: int) -> list[int]:
     return out
 
 
+def _wait_for_parts(proc: subprocess.Popen[bytes], n: int) -> list[int]:
+    """The launcher's descendants once all n + 3 are up (world, coordinator, agents host, n)."""
+    children: list[int] = []
+    deadline = time.monotonic() + 60
+    while len(children) < n + 3 and time.monotonic() < deadline:
+        children = _descendants_of(proc.pid)
+        time.sleep(0.05)
+    assert len(children) == n + 3, children
+    return children
+
+
+def _paced_launcher(n: int, output: int | None) -> subprocess.Popen[bytes]:
+    argv = [sys.executable, "-m", "deploy.cli", "run", "-n", str(n), "--seed", "1", "--pace",
+            "0.5", "-q"]
+    return subprocess.Popen(argv, stdout=output, stderr=output, start_new_session=True)
+
+
 def test_sigterm_to_the_launcher_stops_every_process_it_started(tmp_path: Path) -> None:
-    argv = [sys.executable, "-m", "deploy.cli", "run", "-n", "6", "--seed", "1", "--pace", "0.5",
-            "-q"]
-    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            start_new_session=True)
+    proc = _paced_launcher(6, subprocess.PIPE)
     children: list[int] = []
     try:
-        deadline = time.monotonic() + 60
-        while len(children) < 9 and time.monotonic() < deadline:
-            children = _descendants_of(proc.pid)  # world, coordinator, agents host, 6 agents
-            time.sleep(0.05)
-        assert len(children) == 9, children
+        children = _wait_for_parts(proc, 6)
         proc.send_signal(signal.SIGTERM)
         _, err = proc.communicate(timeout=60)
     finally:
@@ -251,17 +261,10 @@ def test_a_hung_agent_is_seen_gone_by_its_lease_and_rejoins_when_it_wakes(
 
 
 def test_a_killed_launcher_leaves_nothing_behind(tmp_path: Path) -> None:
-    argv = [sys.executable, "-m", "deploy.cli", "run", "-n", "4", "--seed", "1", "--pace", "0.5",
-            "-q"]
-    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            start_new_session=True)
+    proc = _paced_launcher(4, subprocess.DEVNULL)
     children: list[int] = []
     try:
-        deadline = time.monotonic() + 60
-        while len(children) < 7 and time.monotonic() < deadline:
-            children = _descendants_of(proc.pid)  # world, coordinator, agents host, 4 agents
-            time.sleep(0.05)
-        assert len(children) == 7, children
+        children = _wait_for_parts(proc, 4)
         proc.kill()  # no chance to clean up: the parts notice their parent is gone
         proc.wait()
         deadline = time.monotonic() + 30
