@@ -76,7 +76,10 @@ class _Ctx:
     tol_at: float
     tol_eq: float
     orientation: float  # +1/-1: the agreed "right" in an asymmetric configuration; 0 if symmetric
-    symmetric: bool
+
+    @property
+    def symmetric(self) -> bool:
+        return self.orientation == 0.0
 
     @property
     def cx(self) -> float:
@@ -114,7 +117,7 @@ def plan(points: Points, params: Params) -> Plan:
     tol_at, tol_eq = EPS_AT_REL * s, EPS_EQ_REL * s
     r = target_radius(n, params.a)
     orientation = _orientation(points, circle.center[0], tol_at, tol_eq)
-    ctx = _Ctx(points, circle, tol_at, tol_eq, orientation, orientation == 0.0)
+    ctx = _Ctx(points, circle, tol_at, tol_eq, orientation)
     if circle.radius < r - tol_eq:  # G2
         return _expansion(ctx, r)
     return _formation(ctx, n)
