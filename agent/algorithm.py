@@ -334,7 +334,7 @@ def _keeps_sec(ctx: _Ctx, moves: dict[int, Path]) -> bool:
     for subset in subsets:
         after = pts.copy()
         for i in subset:
-            after[i] = _end(pts[i], moves[i])
+            after[i] = end_point((float(pts[i, 0]), float(pts[i, 1])), moves[i])
         new = sec(after)
         if (
             math.hypot(new.center[0] - cx, new.center[1] - cy) > ctx.tol_at
@@ -343,9 +343,6 @@ def _keeps_sec(ctx: _Ctx, moves: dict[int, Path]) -> bool:
             return False
     return True
 
-
-def _end(start: np.ndarray, path: Path) -> tuple[float, float]:
-    return end_point((float(start[0]), float(start[1])), path)
 
 
 def _free_path(ctx: _Ctx, start: Point, target: Point, others: Points) -> Path | None:

@@ -81,7 +81,7 @@ def run_lockstep(
     `seed` fixes the robots' private frames and view orders; the scheduler carries its own seed.
     Raises InvalidConfigurationError for an invalid start, ValueError if n disagrees with params.
     """
-    positions = validate_configuration(initial).copy()
+    positions = validate_configuration(initial)  # already a fresh float64 copy
     n = len(positions)
     if n != params.n:
         raise ValueError(f"the start has {n} robots but params say n={params.n}")

@@ -21,11 +21,10 @@ from typing import Any, Final
 
 import numpy as np
 
-from agent.geometry import target_radius
+from agent.geometry import CONTACT, target_radius
 from agent.path import Points
+from world.physics import CONTACT_SLACK
 
-CONTACT: Final = 2.0  # unit discs touch when their centres are 2 apart
-CONTACT_SLACK: Final = 1e-7  # the physics' overlap tolerance (brief: "Tolerances")
 KINDS: Final = ("clustered", "dense", "spread", "loose", "clumped")
 START_STREAM: Final = 0x57A7  # keeps start draws apart from other seeded streams of the same run
 MAX_OFFSET: Final = 50.0  # starts are translated by up to this much: nothing may rely on the origin
