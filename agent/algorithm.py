@@ -15,19 +15,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from agent.canonical import Canonical, canonical
 from agent.geometry import (
-    CONTACT,
-    EPS_AT_REL,
-    EPS_CLEAR,
-    EPS_EQ_REL,
     Circle,
     is_free,
     is_uniform_circle,
     mirror_matched,
     north_point,
     path_x_range,
+    required_clearance,
     robot_at,
-    scale,
     sec,
     segment_distances,
     target_radius,
@@ -46,6 +43,15 @@ from agent.path import (
     path_length,
     segment_end,
     transform,
+)
+from agent.tolerance import (
+    CLEAR_SLACK,
+    CONTACT,
+    EPS_AT_REL,
+    EPS_EQ_REL,
+    MAX_COORD,
+    scale,
+    snap,
 )
 
 EXPANSION_OVERSHOOT = 1e-9
@@ -75,6 +81,7 @@ class _Ctx:
     circle: Circle
     tol_at: float
     tol_eq: float
+    r: float  # the target radius: FormUCircle moves never bring the SEC below it (G9)
     orientation: float  # +1/-1: the agreed "right" in an asymmetric configuration; 0 if symmetric
 
     @property
@@ -87,9 +94,18 @@ class _Ctx:
 
 
 def compute(view: Points, params: Params) -> Path:
-    """The observer's path: `view` (n-1, 2) holds the others relative to it, in its own frame."""
-    pts = _with_observer(view, params)
-    return plan(pts, params).moves.get(0, STAY)
+    """The observer's path: `view` (n-1, 2) holds the others relative to it, in its own frame.
+
+    The view is put on the grid and in canonical form (agent/canonical.py), the plan is made there,
+    on the same bits in every robot, and the observer's part is mapped back to its own frame.
+    """
+    canon = canonical_view(view, params)
+    return canon.to_frame(plan(canon.points, params).moves.get(canon.observer, STAY))
+
+
+def canonical_view(view: Points, params: Params) -> Canonical:
+    """The observer (at the origin) and its view, on the grid and in canonical form."""
+    return canonical(_with_observer(view, params), 0)
 
 
 def _with_observer(view: Points, params: Params) -> Points:
@@ -102,11 +118,19 @@ def _with_observer(view: Points, params: Params) -> Points:
         raise ViewError(f"the view holds {len(arr)} robots, expected n-1 = {params.n - 1}")
     if not np.isfinite(arr).all():
         raise ViewError("the view holds non-finite coordinates")
-    return np.vstack([np.zeros((1, 2)), arr])
+    if len(arr) and float(np.abs(arr).max()) > 4.0 * MAX_COORD:
+        raise ViewError(f"the view reaches beyond +-{4.0 * MAX_COORD:g}, outside the grid's range")
+    out = np.empty((len(arr) + 1, 2), dtype=np.float64)
+    out[0] = 0.0
+    out[1:] = snap(arr)
+    return out
 
 
 def plan(points: Points, params: Params) -> Plan:
-    """The plan of the configuration `points` (n, 2) in any frame (robot 0 is the observer)."""
+    """The plan of the configuration `points` (n, 2): which robots move, and how, in that frame.
+
+    `compute` calls it on the canonical form, so that every robot makes the very same plan.
+    """
     n = len(points)
     if n <= 1:
         return Plan("done", "done")
@@ -117,7 +141,7 @@ def plan(points: Points, params: Params) -> Plan:
     tol_at, tol_eq = EPS_AT_REL * s, EPS_EQ_REL * s
     r = target_radius(n, params.a)
     orientation = _orientation(points, circle.center[0], tol_at, tol_eq)
-    ctx = _Ctx(points, circle, tol_at, tol_eq, orientation)
+    ctx = _Ctx(points, circle, tol_at, tol_eq, r, orientation)
     if circle.radius < r - tol_eq:  # G2
         return _expansion(ctx, r)
     return _formation(ctx, n)
@@ -250,7 +274,7 @@ def _formation(ctx: _Ctx, n: int) -> Plan:
     nearest = np.rint(theta / step).astype(np.intp) % n
     d_near = np.hypot(pts[:, 0] - targets[nearest, 0], pts[:, 1] - targets[nearest, 1])
     settled_robot = d_near <= ctx.tol_at  # G8: settled robots never move
-    blocking = d_near < CONTACT - EPS_CLEAR  # G7: R blocks T iff their discs overlap
+    blocking = d_near < CONTACT - CLEAR_SLACK  # G7: R blocks T iff their discs overlap
     settled_target = np.zeros(n, dtype=bool)
     settled_target[nearest[settled_robot]] = True
     unsettled = (~settled_robot).nonzero()[0]
@@ -308,16 +332,25 @@ def _try_move(ctx: _Ctx, i: int, targets: Points, k: int, n: int) -> dict[int, P
         return None
     moves = {i: path}
     if ctx.symmetric and not i_on_l:  # the mirror partner makes the mirrored move (G11)
-        lo, hi = path_x_range(start, path)
-        # Exactly 1 from L (touching mirror discs) is allowed; the slack keeps frames that round
-        # differently from disagreeing on such a boundary configuration.
-        need = PAIR_CLEARANCE_FROM_L - EPS_CLEAR
-        if (x_i > 0 and lo - cx < need) or (x_i < 0 and cx - hi < need):
-            return None
-        partner = int(np.argmin(np.hypot(pts[:, 0] - (2.0 * cx - start[0]), pts[:, 1] - start[1])))
+        mirror_start = (2.0 * cx - start[0], start[1])
+        partner = int(np.argmin(np.hypot(pts[:, 0] - mirror_start[0], pts[:, 1] - mirror_start[1])))
         if partner == i:
             return None
-        moves[partner] = transform(mirror(transform(path, (-cx, 0.0), False)), (cx, 0.0), False)
+        p_start = (float(pts[partner, 0]), float(pts[partner, 1]))
+        # The partner is the mirror image only within EPS_AT: it starts `off` away from it, and
+        # follows the mirrored path within a few times that, so the pair keeps 1 + 4 off from L.
+        off = math.hypot(p_start[0] - mirror_start[0], p_start[1] - mirror_start[1])
+        lo, hi = path_x_range(start, path)
+        need = PAIR_CLEARANCE_FROM_L - 0.5 * CLEAR_SLACK + 4.0 * off
+        if (x_i > 0 and lo - cx < need) or (x_i < 0 and cx - hi < need):
+            return None
+        mirrored = transform(mirror(transform(path, (-cx, 0.0), False)), (cx, 0.0), False)
+        if off > 0.0:
+            rest = np.concatenate((pts[:min(i, partner)], pts[min(i, partner) + 1:max(i, partner)],
+                                   pts[max(i, partner) + 1:]))
+            if not is_free(p_start, mirrored, rest):
+                return None
+        moves[partner] = mirrored
     if not _keeps_sec(ctx, moves):
         return None
     return moves
@@ -339,6 +372,7 @@ def _keeps_sec(ctx: _Ctx, moves: dict[int, Path]) -> bool:
         if (
             math.hypot(new.center[0] - cx, new.center[1] - cy) > ctx.tol_at
             or abs(new.radius - c.radius) > ctx.tol_at
+            or new.radius < ctx.r - ctx.tol_eq  # it would send the swarm back to expansion
         ):
             return False
     return True
@@ -392,7 +426,7 @@ def _first_blocker(start: Point, target: Point, others: Points) -> Point | None:
     if len(others) == 0:
         return None
     d = segment_distances(start, target, others)
-    hit = (d < CONTACT - EPS_CLEAR).nonzero()[0]
+    hit = (d < required_clearance(start, others)).nonzero()[0]
     if len(hit) == 0:
         return None
     dx, dy = target[0] - start[0], target[1] - start[1]
@@ -407,7 +441,7 @@ def _slides(start: Point, target: Point, obstacle: Point) -> list[Path]:
     out: list[Path] = []
     ds = math.hypot(start[0] - ox, start[1] - oy)
     dt = math.hypot(target[0] - ox, target[1] - oy)
-    if dt < CONTACT - EPS_CLEAR:
+    if dt < CONTACT - CLEAR_SLACK:
         return out
     phi_s = math.atan2(start[1] - oy, start[0] - ox)
     phi_t = math.atan2(target[1] - oy, target[0] - ox)
@@ -459,6 +493,8 @@ def _note_swap(
             r2 = robot_at(pts, tj, ctx.tol_at)
             if r2 is None or (at_o and math.hypot(tj[0] - o_pt[0], tj[1] - o_pt[1]) <= ctx.tol_at):
                 continue
+            if ctx.symmetric and abs(tj[0] - cx) > ctx.tol_at:
+                continue  # a lone mover off L would break G11 in a mirror-symmetric swarm
             others = _without(pts, r2)
             path = _arc_to(c.center, -ang, tj, tk)
             if not is_free(tj, path, others) or not _keeps_sec(ctx, {r2: path}):

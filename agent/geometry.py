@@ -11,29 +11,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from agent.canonical import canonical
 from agent.path import Arc, Line, Path, Point, Points, segment_end
+from agent.tolerance import (
+    CLEAR_SLACK,
+    CONTACT,
+    EPS_AT_REL,
+    ROUND_ABS,
+    SEC_SLACK_REL,
+    scale,
+    snap,
+)
 
-ROBOT_RADIUS = 1.0
-CONTACT = 2.0 * ROBOT_RADIUS  # centre distance at which two unit discs touch
-
-# Tolerances. Relative ones are multiplied by `scale(r_c) = max(1, r_c)` so that they mean the
-# same thing for a swarm of radius 5 and one of radius 500.
-EPS_EQ_REL = 1e-9
-"""Equalities and ties: far above the float error of O(n) sums, far below any real gap."""
-EPS_AT_REL = 1e-6
-""""Robot at o / at p / on the SEC / settled on a target / mirror image of": above the precision of
-any computed position (~1e-12), below any distance the algorithm creates on purpose (>= 1e-3)."""
-EPS_CLEAR = 1e-9
-"""Absolute slack in clearance tests (free path, vacant point): a planned path keeps every other
-centre at >= 2 - EPS_CLEAR, so touching (exactly 2, up to rounding) is allowed. It is 100x below the
-physics' overlap slack (1e-7), so a path planned free can never be stopped by contact."""
-SEC_SLACK_REL = 1e-12
-"""A point counts as inside a candidate circle if within radius*(1 + this): rounding only."""
-
-
-def scale(radius: float) -> float:
-    """The length scale tolerances are relative to."""
-    return max(1.0, radius)
+# The tolerance model lives in agent/tolerance.py (one definition for the world and the robots).
 
 
 @dataclass(frozen=True, slots=True)
@@ -240,6 +230,15 @@ def is_uniform_circle(points: Points, a: float, circle: Circle | None = None) ->
     return side >= a - tol
 
 
+def is_formed(points: Points, a: float) -> bool:
+    """The goal test of the world and of every robot: `is_uniform_circle` on the canonical form,
+    so that it is decided on the same bits as the robots' own G10 test, wherever the swarm is."""
+    pts = np.asarray(points, dtype=np.float64)
+    if len(pts) <= 1:
+        return True
+    return is_uniform_circle(canonical(snap(pts)).points, a)
+
+
 # --- free paths --------------------------------------------------------------------------------
 
 
@@ -295,23 +294,36 @@ def path_distances(start: Point, path: Path, others: Points) -> np.ndarray:
     return np.asarray(best)
 
 
+def required_clearance(start: Point, others: Points) -> np.ndarray:
+    """How close a path from `start` may come to each of `others` (G6 and the tolerance model).
+
+    CONTACT - CLEAR_SLACK, or, for a robot already closer than that (touching within the world's
+    overlap slack), its current distance: a path may leave a touching neighbour, never approach it.
+    ROUND_ABS absorbs the rounding of the distance computations themselves.
+    """
+    d0 = np.hypot(others[:, 0] - start[0], others[:, 1] - start[1])
+    return np.asarray(np.minimum(d0, CONTACT - CLEAR_SLACK) - ROUND_ABS)
+
+
 def is_free(start: Point, path: Path, others: Points) -> bool:
     """Free path (G6): the unit disc swept along the path, end disc included, meets no other disc.
 
     The paper's rectangle of width 2 misses the half disc ahead of the destination; the capsule
-    (every other centre >= 2 from every point of the path) is the sound version. Starting in
-    contact is allowed: only the minimum distance counts, with EPS_CLEAR slack.
+    (every other centre >= 2 from every point of the path, up to `required_clearance`) is the
+    sound version. Starting in contact is allowed.
     """
     if len(others) == 0:
         return True
-    return bool(path_distances(start, path, others).min() >= CONTACT - EPS_CLEAR)
+    need = required_clearance(start, others)
+    return bool((path_distances(start, path, others) >= need).all())
 
 
 def is_vacant(p: Point, others: Points) -> bool:
-    """Vacant point: no part of another robot within the unit disc around p."""
+    """Vacant point: no part of another robot within the unit disc around p (touching allowed)."""
     if len(others) == 0:
         return True
-    return bool(np.hypot(others[:, 0] - p[0], others[:, 1] - p[1]).min() >= CONTACT - EPS_CLEAR)
+    d = np.hypot(others[:, 0] - p[0], others[:, 1] - p[1])
+    return bool(d.min() >= CONTACT - CLEAR_SLACK)
 
 
 def path_x_range(start: Point, path: Path) -> tuple[float, float]:

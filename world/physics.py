@@ -31,18 +31,25 @@ from agent.path import (
     segment_end,
     segment_length,
 )
+from agent.tolerance import (
+    CLEAR_SLACK,
+    CONTACT,
+    GRID,
+    MAX_COORD,
+    OVERLAP_DISTANCE,
+    OVERLAP_SLACK,
+    snap,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 BoolArray = NDArray[np.bool_]
 
-CONTACT_SLACK = 1e-7
-"""Two discs overlap iff their centres are closer than 2 - CONTACT_SLACK. Touching (2) is allowed;
-1e-7 is far above float error at coordinates ~1e3 (~1e-13) and far below any planned distance."""
-OVERLAP_DISTANCE = 2.0 - CONTACT_SLACK
-PLAN_ROUNDING = 1e-9
-"""The algorithm keeps every other centre at >= 2 - PLAN_ROUNDING; such a path is never stopped
-(only overlap, below OVERLAP_DISTANCE, stops a robot)."""
+CONTACT_SLACK = OVERLAP_SLACK
+"""Two discs overlap iff their centres are closer than 2 - CONTACT_SLACK (agent/tolerance.py)."""
+PLAN_ROUNDING = CLEAR_SLACK
+"""The algorithm keeps every other centre at >= 2 - PLAN_ROUNDING (or, touching, never brings it
+closer); such a path is never stopped: only overlap, below OVERLAP_DISTANCE, stops a robot."""
 STOP_DISTANCE = 2.0
 """A robot stopped by contact ends at the last time before the overlap at which its centre was at
 least this far from the robot it hit: touching, on the safe side (to ~1e-12)."""
@@ -142,12 +149,21 @@ def _first_overlap(points: Points, rows: IntArray) -> tuple[int, int, float] | N
 
 
 def validate_configuration(positions: Points) -> Points:
-    """Return positions as an (n, 2) float64 copy or raise InvalidConfigurationError.
+    """Return positions on the grid as an (n, 2) float64 copy or raise InvalidConfigurationError.
 
-    Refused: a wrong shape, no robot, NaN or infinite coordinates, two centres closer than
-    2 - CONTACT_SLACK (overlapping unit discs).
+    Positions are snapped to the nearest multiples of GRID (moving each by at most 6.6e-10), so
+    that every robot's view is exact (agent/tolerance.py). Refused: a wrong shape, no robot, NaN or
+    infinite coordinates, coordinates beyond +-MAX_COORD, two centres closer than
+    2 - CONTACT_SLACK (overlapping unit discs) once on the grid.
     """
     points = _as_points(positions)
+    far = float(np.abs(points).max())
+    if far > MAX_COORD:
+        raise InvalidConfigurationError(
+            f"coordinates must lie within +-{MAX_COORD:.0f} (where positions on the grid of "
+            f"{GRID:.2g} stay exact), got {far:.6g}"
+        )
+    points = snap(points)
     pair = _first_overlap(points, np.arange(len(points), dtype=np.intp))
     if pair is not None:
         a, b, dist = pair
@@ -616,12 +632,41 @@ def _closest_pair(points: Points, pi: IntArray, pj: IntArray) -> tuple[int, int,
     return min(a, b), max(a, b), float(dist[k])
 
 
+_CORNERS = np.array([[0, 0], [0, 1], [1, 0], [1, 1]], dtype=np.float64)
+
+
+def _snap_movers(final: Points, movers: IntArray) -> None:
+    """Put the movers' end positions on the grid, in place, without bringing anyone closer.
+
+    Of the four grid points around an end position the nearest is taken unless it brings some
+    other robot closer than it was and closer than 2 (into the touching band); then the nearest
+    corner that does not. Planned paths thus keep what the planner promised (CLEAR_SLACK) after
+    snapping, and touching neighbours do not creep towards each other round after round.
+    """
+    for robot in movers:
+        p = final[robot].copy()
+        base = np.floor(p / GRID) * GRID
+        corners = base + _CORNERS * GRID
+        order = np.argsort(np.hypot(corners[:, 0] - p[0], corners[:, 1] - p[1]), kind="stable")
+        others = np.delete(final, robot, axis=0)
+        before = np.hypot(others[:, 0] - p[0], others[:, 1] - p[1])
+        floor = np.minimum(before, CONTACT)
+        chosen = corners[order[0]]
+        for k in order:
+            c = corners[k]
+            if (np.hypot(others[:, 0] - c[0], others[:, 1] - c[1]) >= floor).all():
+                chosen = c
+                break
+        final[robot] = chosen + 0.0
+
+
 def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
     """Move every robot of `paths` along its path (world frame) at once, stopping at contact.
 
     All movers start at t = 0 and move at unit speed; a robot whose disc would overlap another
     (centres closer than 2 - CONTACT_SLACK) stops at first contact and the contact is recorded
     (both robots if both were moving). An empty path means stay. `positions` is not modified.
+    Movers end on the grid (agent/tolerance.py): `_snap_movers`.
     Raises InvalidConfigurationError (bad positions, a mover overlapping at the start),
     InvalidRoundError (unknown robot) or PathFormatError (non-finite or oversized path) before
     anything moves; PhysicsInvariantError if discs overlap afterwards (a physics bug).
@@ -645,6 +690,11 @@ def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
     collisions = _simulate(mo, pi, pj)
     final = start.copy()
     final[mo.robots] = _positions(mo, mo.robots, mo.stop)
+    _snap_movers(final, mo.robots)
+    collisions = [  # a stopped robot's recorded point is where it is: on the grid
+        Collision(c.robot, c.other, c.t, (float(final[c.robot, 0]), float(final[c.robot, 1])))
+        for c in collisions
+    ]
     if pi.size:
         a, b, dist = _closest_pair(final, pi, pj)
         if dist < OVERLAP_DISTANCE:

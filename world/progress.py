@@ -12,7 +12,7 @@ from typing import Final
 
 import numpy as np
 
-from agent.geometry import is_uniform_circle
+from agent.geometry import is_formed
 from agent.path import Points
 
 FORMED: Final = "formed"
@@ -122,7 +122,7 @@ class ProgressTracker:
             self._seen_since_change |= active_set
             self._wanting_since_change |= set(movers)
             if len(self._seen_since_change) == self.n:
-                formed = not self._wanting_since_change and is_uniform_circle(after_arr, self.a)
+                formed = not self._wanting_since_change and is_formed(after_arr, self.a)
                 self._status = FORMED if formed else STALLED
         if self._status is None and self.max_rounds is not None and self._rounds >= self.max_rounds:
             self._status = MAX_ROUNDS

@@ -21,8 +21,9 @@ from typing import Any, Final
 
 import numpy as np
 
-from agent.geometry import CONTACT, target_radius
+from agent.geometry import target_radius
 from agent.path import Points
+from agent.tolerance import CONTACT, snap
 from world.physics import CONTACT_SLACK
 
 KINDS: Final = ("clustered", "dense", "spread", "loose", "clumped")
@@ -153,7 +154,8 @@ def _attempt(rng: np.random.Generator, n: int, kind: str, a: float, r: float) ->
 def random_start(
     n: int, rng_or_seed: np.random.Generator | int, kind: str = "clustered", a: float = 4.0
 ) -> Points:
-    """A valid (n, 2) start of the given kind (see the module table), seeded and reproducible."""
+    """A valid (n, 2) start of the given kind (see the module table), seeded and reproducible,
+    on the world's grid (agent/tolerance.py)."""
     if kind not in KINDS:
         raise ValueError(f"unknown start kind {kind!r}; choose one of {', '.join(KINDS)}")
     if n < 1:
@@ -161,13 +163,13 @@ def random_start(
     rng = _rng(rng_or_seed)
     offset = rng.uniform(-MAX_OFFSET, MAX_OFFSET, size=2)
     if n == 1:
-        return offset[None, :].astype(np.float64)
+        return snap(offset[None, :].astype(np.float64))
     r = target_radius(n, a)
     for _ in range(200):
         pts = _attempt(rng, n, kind, a, r)
         if pts is not None and overlapping_pair(pts) is None:
             order = rng.permutation(n)  # robot numbers carry no geometric meaning
-            return np.ascontiguousarray(pts[order] + offset, dtype=np.float64)
+            return snap(np.ascontiguousarray(pts[order] + offset, dtype=np.float64))
     raise RuntimeError(f"could not draw a {kind} start for n={n}, a={a}")  # pragma: no cover
 
 
@@ -230,6 +232,7 @@ def degenerate_starts() -> dict[str, tuple[Points, float]]:
         # a just above the paper's bound 3 (ComputeRadius uses a* = max(a, 4)).
         "low-a-cluster": (np.vstack([np.zeros((1, 2)), _polygon(5, 2.3)]), 3.2),
     }
+    starts = {name: (snap(pts), a) for name, (pts, a) in starts.items()}  # on the world's grid
     for name, (pts, _a) in starts.items():
         bad = overlapping_pair(pts)
         assert bad is None, f"degenerate start {name} overlaps: {bad}"

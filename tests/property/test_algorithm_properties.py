@@ -11,10 +11,13 @@ from hypothesis import strategies as st
 
 import agent.algorithm as algorithm_module
 import agent.geometry as geometry_module
-from agent.algorithm import compute, plan
+from agent.algorithm import canonical_view, compute, plan
+from agent.canonical import canonical
+from agent.frames import path_to_world, to_local
 from agent.geometry import mirror_matched, sec
 from agent.params import Params
-from agent.path import Path, end_point, mirror, path_length, transform
+from agent.path import Path, end_point, mirror, path_length
+from agent.tolerance import snap
 
 CELL = 2.6  # grid spacing; with jitter <= 0.25 every pair of centres is >= 2.1 apart
 
@@ -77,21 +80,24 @@ def test_result_in_a_mirrored_frame_is_the_mirrored_path(
     cx = sec(pts).center[0]
     assert mirror_matched(pts, cx, 1e-6).all(), "asymmetric configuration: must be equivariant"
     assert abs(pts[me, 0] - cx) <= 1e-6, "only a robot on L may keep its own side"
-    assert plan(pts, params).moves.keys() == {me}, "and only when it is the single mover"
+    canon = canonical_view(view, params)
+    moves = plan(canon.points, params).moves
+    assert moves.keys() == {canon.observer}, "and only when it is the single mover"
     assert same_path(in_mirror, direct)
 
 
 @SETTINGS
-@given(configurations(), side, st.tuples(st.floats(-100, 100), st.floats(-100, 100)))
-def test_plan_is_translation_invariant(pts: np.ndarray, a: float, d: tuple[float, float]) -> None:
-    params = Params(len(pts), a)
-    base = plan(pts, params)
-    moved = plan(pts + np.array(d), params)
-    assert base.kind == moved.kind
-    assert base.moves.keys() == moved.moves.keys()
-    for i, path in base.moves.items():
-        start = (float(pts[i, 0] + d[0]), float(pts[i, 1] + d[1]))
-        assert same_path(moved.moves[i], transform(path, d, False), start)
+@given(configurations(), side, st.tuples(st.integers(-10**6, 10**6), st.integers(-10**6, 10**6)))
+def test_the_canonical_form_ignores_translation_and_mirror(
+    pts: np.ndarray, a: float, d: tuple[int, int]
+) -> None:
+    # On the grid, every robot's view is an exact translate (and maybe mirror) of the others':
+    # the canonical form, where the algorithm decides, is then the very same bits.
+    grid = snap(pts)
+    shift = snap(np.array(d, dtype=np.float64) / 7.0)
+    base = canonical(grid).key()
+    assert canonical(grid + shift).key() == base
+    assert canonical(grid * np.array([-1.0, 1.0])).key() == base
 
 
 @SETTINGS
@@ -126,19 +132,40 @@ def test_algorithm_and_geometry_modules_hold_no_mutable_state() -> None:
             assert callable(value) or immutable, (module, name)
 
 
-def movers_seen_by(pts: np.ndarray, observer: int, flip: bool, params: Params) -> frozenset[int]:
-    """The world indices of the robots that `observer`, in its own frame, plans to move."""
-    others = [j for j in range(len(pts)) if j != observer]
-    local = pts - pts[observer]
-    if flip:
-        local = local * np.array([-1.0, 1.0])
-    order = [observer, *others]
-    return frozenset(order[k] for k in plan(local[order], params).moves)
+def world_end(pts: np.ndarray, robot: int, flip: bool, params: Params, seed: int) -> tuple[
+    bytes, tuple[float, float] | None
+]:
+    """What `robot` decides in its own frame (shuffled view): its canonical key and where its
+    path ends in the world frame (None: it stays)."""
+    others = np.delete(pts, robot, axis=0)
+    others = others[np.random.default_rng(seed).permutation(len(others))]
+    view = to_local(others, (float(pts[robot, 0]), float(pts[robot, 1])), flip)
+    key = canonical_view(view, params).key()
+    path = compute(view, params)
+    if not path:
+        return key, None
+    world = path_to_world(path, (float(pts[robot, 0]), float(pts[robot, 1])), flip)
+    return key, end_point((float(pts[robot, 0]), float(pts[robot, 1])), world)
 
 
 def assert_observers_agree(pts: np.ndarray, params: Params) -> None:
-    seen = {movers_seen_by(pts, i, flip, params) for i in range(len(pts)) for flip in (False, True)}
-    assert len(seen) == 1, f"observers disagree on who moves: {sorted(map(sorted, seen))}"
+    """Every robot, in both of its frames and whatever the order of its view, decides on the same
+    bits, and so the same thing: it moves in both frames or in neither, to the same end point
+    (or, the one exception of G12, a robot on L in an exactly mirror-symmetric swarm, to the
+    mirror image of it)."""
+    grid = snap(pts)
+    keys = set()
+    for robot in range(len(grid)):
+        (k0, e0), (k1, e1) = (world_end(grid, robot, flip, params, robot) for flip in (0, 1))
+        keys |= {k0, k1}
+        assert (e0 is None) == (e1 is None), f"robot {robot} moves in one frame only"
+        if e0 is not None and e1 is not None and not np.allclose(e0, e1, atol=1e-9):
+            canon = canonical(grid)
+            assert canon.mirror_symmetric, f"robot {robot} goes to {e0} or {e1} by its frame"
+            cx = sec(grid).center[0]
+            assert abs(grid[robot, 0] - cx) <= 1e-6, "only a robot on L keeps its own side"
+            assert np.allclose(e0, (2 * grid[robot, 0] - e1[0], e1[1]), atol=1e-9)
+    assert len(keys) == 1, "observers computed on different canonical forms"
 
 
 @SETTINGS

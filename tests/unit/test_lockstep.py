@@ -11,6 +11,7 @@ import pytest
 from agent.frames import draw_flip
 from agent.params import Params
 from agent.path import STAY, Line, Path, Points
+from agent.tolerance import GRID
 from coordinator.schedule import make_scheduler
 from deploy.lockstep import RoundReport, default_max_rounds, run_lockstep
 from world.physics import InvalidConfigurationError
@@ -52,7 +53,7 @@ def test_endless_movers_hit_the_round_cap() -> None:
                           max_rounds=7, compute=north)
     assert (result.status, result.rounds, result.moves) == ("max_rounds", 7, 28)
     assert result.total_distance == pytest.approx(14.0)
-    np.testing.assert_allclose(result.positions, polygon(4, 4.0) + np.array([0.0, 3.5]))
+    np.testing.assert_allclose(result.positions, polygon(4, 4.0) + np.array([0.0, 3.5]), atol=GRID)
 
 
 def test_each_robot_sees_the_others_in_its_own_flipped_frame() -> None:

@@ -21,12 +21,12 @@ P1 = P0 + np.array([[1.0, 0.0], [0.0, 0.0], [0.0, 0.0]])
 
 @pytest.fixture
 def uniform(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(progress, "is_uniform_circle", lambda points, a: True)
+    monkeypatch.setattr(progress, "is_formed", lambda points, a: True)
 
 
 @pytest.fixture
 def not_uniform(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(progress, "is_uniform_circle", lambda points, a: False)
+    monkeypatch.setattr(progress, "is_formed", lambda points, a: False)
 
 
 def test_counts_moves_distance_collisions() -> None:
