@@ -56,6 +56,8 @@ from agent.tolerance import (
 
 EXPANSION_OVERSHOOT = 1e-9
 """Expansion aims at 2r(1 + this) so that rounding cannot leave r_c just below r (G2)."""
+VIEW_LIMIT = 4.0 * MAX_COORD
+"""Relative coordinates a view may hold: twice the span of supported world coordinates, and room."""
 PAIR_CLEARANCE_FROM_L = 1.0
 """A mirror pair moves only if both paths stay this far from L: the two discs then never touch."""
 
@@ -116,14 +118,14 @@ def _with_observer(view: Points, params: Params) -> Points:
         raise ViewError(f"the view must be an (n-1, 2) array, got shape {arr.shape}")
     if len(arr) != params.n - 1:
         raise ViewError(f"the view holds {len(arr)} robots, expected n-1 = {params.n - 1}")
-    if not np.isfinite(arr).all():
-        raise ViewError("the view holds non-finite coordinates")
-    if len(arr) and float(np.abs(arr).max()) > 4.0 * MAX_COORD:
-        raise ViewError(f"the view reaches beyond +-{4.0 * MAX_COORD:g}, outside the grid's range")
+    if len(arr) and not float(np.abs(arr).max()) <= VIEW_LIMIT:  # NaN fails the comparison too
+        if not np.isfinite(arr).all():
+            raise ViewError("the view holds non-finite coordinates")
+        raise ViewError(f"the view reaches beyond +-{VIEW_LIMIT:g}, outside the grid's range")
     out = np.empty((len(arr) + 1, 2), dtype=np.float64)
     out[0] = 0.0
-    out[1:] = snap(arr)
-    return out
+    out[1:] = arr
+    return snap(out, out=out)
 
 
 def plan(points: Points, params: Params) -> Plan:

@@ -47,8 +47,13 @@ class Canonical:
 def canonical(points: Points, observer: int = 0) -> Canonical:
     """The canonical form of `points` (n, 2, on the grid), with `observer`'s row located in it."""
     xs, ys = points[:, 0], points[:, 1]
-    up = np.lexsort((xs, ys))
-    down = np.lexsort((-xs, ys))
+    up = np.argsort(ys, kind="stable")
+    ys_sorted = ys[up]
+    if (ys_sorted[1:] == ys_sorted[:-1]).any():  # equal heights: order them by x, both ways
+        up = np.lexsort((xs, ys))
+        down = np.lexsort((-xs, ys))
+    else:
+        down = up
     # Both orders list the same y values; the mirror image differs only in x.
     ref_up, ref_down = up[0], down[0]
     x_up = xs[up] - xs[ref_up]
@@ -62,7 +67,7 @@ def canonical(points: Points, observer: int = 0) -> Canonical:
     ref = order[0]
     out = np.empty((len(points), 2), dtype=np.float64)
     out[:, 0] = cx
-    out[:, 1] = ys[order] - ys[ref]
+    out[:, 1] = ys_sorted - ys[ref]
     out += 0.0  # -0.0 -> +0.0: equal positions are equal bits
-    where = int((order == observer).nonzero()[0][0])
+    where = int((order == observer).argmax())
     return Canonical(out, where, (flip * float(xs[ref]), float(ys[ref])), flip, symmetric)

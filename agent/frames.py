@@ -17,9 +17,9 @@ def draw_flip(seed: int, robot: int) -> bool:
 
 def to_local(others_world: Points, me_world: Point, flip_x: bool) -> Points:
     """Other robots' positions as the robot at `me_world` sees them in its own frame."""
-    view = np.asarray(others_world, dtype=np.float64) - np.asarray(me_world, dtype=np.float64)
+    view = np.subtract(others_world, me_world, dtype=np.float64)
     if flip_x:
-        view[:, 0] = -view[:, 0]
+        view[:, 0] *= -1.0
     return view
 
 

@@ -205,7 +205,8 @@ def mirror_matched(points: Points, axis_x: float, tol: float) -> np.ndarray:
 
 
 def is_uniform_circle(points: Points, a: float, circle: Circle | None = None) -> bool:
-    """True when the centres form a regular n-gon with side >= a (the paper's goal; G10).
+    """True when the centres form a regular n-gon with side >= a (the paper's goal; G10), within
+    the tolerance of "settled" (G8): radii within EPS_AT of the SEC's, angular gaps within twice.
 
     `circle`, if given, must be the SEC of `points` (saves recomputing it).
     """
@@ -224,7 +225,9 @@ def is_uniform_circle(points: Points, a: float, circle: Circle | None = None) ->
         return False
     ang = np.sort(np.arctan2(dy, dx))
     gaps = np.diff(np.append(ang, ang[0] + 2.0 * math.pi))
-    if (np.abs(gaps - 2.0 * math.pi / n) * circle.radius > tol).any():
+    # Two neighbours each within tol of their targets (settled, G8) are 2 tol off in their gap:
+    # with every robot settled the swarm must count as formed, or nobody could ever end it.
+    if (np.abs(gaps - 2.0 * math.pi / n) * circle.radius > 2.0 * tol).any():
         return False
     side = 2.0 * circle.radius * math.sin(math.pi / n)
     return side >= a - tol

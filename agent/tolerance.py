@@ -54,12 +54,19 @@ def scale(radius: float) -> float:
     return max(1.0, radius)
 
 
-def snap(values: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The nearest grid values (exact: scaling by a power of two and rounding lose nothing else)."""
-    out: NDArray[np.float64] = np.rint(np.asarray(values, dtype=np.float64) * 2.0**GRID_BITS)
-    out *= GRID
-    out += 0.0  # -0.0 -> +0.0, so that equal positions are equal bits
-    return out
+def snap(
+    values: NDArray[np.float64], out: NDArray[np.float64] | None = None
+) -> NDArray[np.float64]:
+    """The nearest grid values (exact: scaling by a power of two and rounding lose nothing else).
+
+    `out`, if given, receives the result (it may be `values` itself, a float64 array).
+    """
+    arr = np.asarray(values, dtype=np.float64)
+    res: NDArray[np.float64] = np.multiply(arr, 2.0**GRID_BITS, out=out)
+    np.rint(res, out=res)
+    res *= GRID
+    res += 0.0  # -0.0 -> +0.0, so that equal positions are equal bits
+    return res
 
 
 def snap_point(x: float, y: float) -> tuple[float, float]:

@@ -2,20 +2,23 @@
 
 Each active robot Looks at the same snapshot in its own private frame (seeded X flip, as a
 networked agent), the paths are mapped back to the world frame and applied at once by the physics.
+By default each robot's view is put in canonical form and the plan of a canonical form is made
+once and shared (`SharedPlans`): every robot would have computed exactly those bits.
 """
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
 
-from agent import algorithm
+from agent.algorithm import Plan, canonical_view, plan
 from agent.frames import draw_flip, path_to_world, to_local
 from agent.params import Params
-from agent.path import Path, Points
+from agent.path import STAY, Path, Points
 from coordinator.schedule import Scheduler
 from world.physics import RoundOutcome, apply_round, validate_configuration
 from world.progress import Progress, ProgressTracker
@@ -30,6 +33,32 @@ STEP_SLACK: Final = 10
 ROUNDS_PER_STEP: Final = {"fsync": 10, "ssync": 40}  # others (centralized, scripted): 10 n
 
 ComputeFn = Callable[[Points, Params], Path]
+SHARED_PLANS: Final = 8  # canonical forms remembered: a round has one; ssync revisits a few
+
+
+class SharedPlans:
+    """`algorithm.compute`, with the plan of each recent canonical form made once.
+
+    Each call still puts the robot's own view on the grid and in canonical form; only `plan`, a
+    pure function of those bits, is looked up. So the result equals `algorithm.compute` exactly.
+    """
+
+    def __init__(self, size: int = SHARED_PLANS) -> None:
+        self._plans: OrderedDict[tuple[bytes, Params], Plan] = OrderedDict()
+        self._size = size
+        self.planned = 0  # how many plans were actually made (the rest were shared)
+
+    def __call__(self, view: Points, params: Params) -> Path:
+        canon = canonical_view(view, params)
+        key = (canon.key(), params)
+        made = self._plans.get(key)
+        if made is None:
+            made = plan(canon.points, params)
+            self.planned += 1
+            self._plans[key] = made
+            if len(self._plans) > self._size:
+                self._plans.popitem(last=False)
+        return canon.to_frame(made.moves.get(canon.observer, STAY))
 
 
 def default_max_rounds(n: int, scheduler: str) -> int:
@@ -74,14 +103,17 @@ def run_lockstep(
     max_rounds: int | None = None,
     record: RecordWriter | None = None,
     on_round: Callable[[RoundReport], None] | None = None,
-    compute: ComputeFn = algorithm.compute,
+    compute: ComputeFn | None = None,
 ) -> RunResult:
     """Run until formed, stalled or `max_rounds` (default `default_max_rounds`).
 
     `seed` fixes the robots' private frames and view orders; the scheduler carries its own seed.
+    `compute` defaults to the reference algorithm with shared plans (`SharedPlans`).
     Raises InvalidConfigurationError for an invalid start, ValueError if n disagrees with params.
     """
-    positions = validate_configuration(initial)  # already a fresh float64 copy
+    positions = validate_configuration(initial)  # a fresh float64 copy, on the grid
+    if compute is None:
+        compute = SharedPlans()
     n = len(positions)
     if n != params.n:
         raise ValueError(f"the start has {n} robots but params say n={params.n}")
@@ -155,6 +187,7 @@ __all__ = [
     "ComputeFn",
     "RoundReport",
     "RunResult",
+    "SharedPlans",
     "default_max_rounds",
     "run_lockstep",
 ]

@@ -1,0 +1,94 @@
+"""Issue 7's classes of failure, each as a named start: every robot agrees, and the run forms the
+circle without a collision in at most n + 2 moves, under fsync, ssync and centralized."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from agreement import assert_observers_agree
+
+from agent.geometry import target_radius
+from agent.params import Params
+from coordinator.schedule import make_scheduler
+from deploy.lockstep import run_lockstep
+
+
+def polygon(n: int, radius: float, phase: float = 0.0) -> np.ndarray:
+    k = np.arange(n)
+    t = phase + 2.0 * math.pi * k / n
+    return np.column_stack([radius * np.cos(t), radius * np.sin(t)])
+
+
+def near_symmetric_pair_one_from_l(eps: float) -> np.ndarray:
+    """Mirror discs touching across L, one of them off by eps (below EPS_AT: 'symmetric')."""
+    pts = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 5.0], [4.0, 3.0], [-4.0, 3.0], [0.0, -4.0]])
+    pts[0, 0] += eps
+    return pts
+
+
+def nudged(pts: np.ndarray, row: int, by: tuple[float, float]) -> np.ndarray:
+    out = pts.astype(np.float64).copy()
+    out[row] += by
+    return out
+
+
+SQUARE = np.array([[2.0 * i, 2.0 * j] for i in range(3) for j in range(3)])
+HEXAGONAL = np.array([[2.0 * i + (j % 2), math.sqrt(3.0) * j] for i in range(3) for j in range(3)])
+LINE = np.array([[0.0, 2.0 * i] for i in range(4)])
+R5 = target_radius(5, 4.0)
+R9 = target_radius(9, 4.0)
+
+CASES: dict[str, tuple[np.ndarray, float]] = {
+    # 1. Frames that disagreed at thresholds.
+    "near-symmetric pair 1 from L, 1e-7": (near_symmetric_pair_one_from_l(1e-7), 4.0),
+    "near-symmetric pair 1 from L, 1e-9": (near_symmetric_pair_one_from_l(1e-9), 4.0),
+    "square lattice nudged 3e-8": (nudged(SQUARE, 4, (3e-8, 0.0)), 4.0),
+    "hexagonal lattice nudged 3e-8": (nudged(HEXAGONAL, 4, (0.0, 3e-8)), 4.0),
+    "vertical line, one off by 1e-7": (nudged(LINE, 2, (1e-7, 0.0)), 4.0),
+    # 2. Exact ties: mirror-symmetric starts with equal distances to the first target.
+    "symmetric, robot on L tied with a pair": (
+        np.array([[0.0, 0.0], [3.0, 4.0], [-3.0, 4.0], [0.0, 9.0], [6.0, 9.0], [-6.0, 9.0]]),
+        4.0,
+    ),
+    "two mirror pairs tied": (
+        np.array([[3.0, 0.0], [-3.0, 0.0], [0.0, 3.0], [0.0, -3.0], [6.0, 6.0], [-6.0, 6.0]]),
+        4.0,
+    ),
+    # 3. Touching within the world's slack but not within the old agent's.
+    "two discs 2 - 5e-8 apart": (np.array([[0.0, 0.0], [2.0 - 5e-8, 0.0]]), 4.0),
+    "rosette to 7 decimals": (np.vstack([[0.0, 0.0], np.round(polygon(6, 2.0), 7)]), 4.0),
+    "touching pentagon to 7 decimals": (np.round(polygon(5, 1.0 / math.sin(math.pi / 5)), 7), 4.0),
+    # 4. Formed far away.
+    "formed pentagon at 1e6": (polygon(5, R5) + 1e6, 4.0),
+    "formed 9-gon at 1e5": (polygon(9, R9, 0.3) + 1e5, 4.0),
+    "cluster at -1e6": (polygon(7, 3.0) - 1e6, 4.0),
+    # 7. A FormUCircle move that would shrink the SEC back below r (8 moves for n = 4 before),
+    # and robots all settled within EPS_AT whose angular gaps were judged twice as strictly.
+    "square of radius r(1 - 1e-6), one off by 1e-6": (
+        nudged(polygon(4, target_radius(4, 4.0) * (1 - 1e-6)), 0, (1e-6, 0.0)),
+        4.0,
+    ),
+    "settled square, gaps off by 2 EPS_AT": (
+        nudged(polygon(4, target_radius(4, 4.0) * (1 - 1e-6), math.pi / 4), 2, (-1e-6, 0.0)),
+        4.0,
+    ),
+}
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_every_observer_agrees_on_the_start(name: str) -> None:
+    pts, a = CASES[name]
+    assert_observers_agree(pts, Params(len(pts), a))
+
+
+@pytest.mark.parametrize("scheduler", ["fsync", "ssync", "centralized"])
+@pytest.mark.parametrize("name", list(CASES))
+def test_the_circle_forms_without_collision_in_n_plus_2_moves(name: str, scheduler: str) -> None:
+    pts, a = CASES[name]
+    n = len(pts)
+    for seed in range(3):  # the seed draws the private flips and the schedule
+        result = run_lockstep(pts, Params(n, a), make_scheduler(scheduler, n, seed), seed=seed)
+        assert (result.status, result.collisions) == ("formed", 0), (seed, result.status)
+        assert result.moves <= n + 2, (seed, result.moves)
