@@ -50,6 +50,7 @@ from agent.tolerance import (
     EPS_AT_REL,
     EPS_EQ_REL,
     MAX_COORD,
+    ROUND_ABS,
     scale,
     snap,
 )
@@ -58,8 +59,6 @@ EXPANSION_OVERSHOOT = 1e-9
 """Expansion aims at 2r(1 + this) so that rounding cannot leave r_c just below r (G2)."""
 VIEW_LIMIT = 4.0 * MAX_COORD
 """Relative coordinates a view may hold: twice the span of supported world coordinates, and room."""
-PAIR_CLEARANCE_FROM_L = 1.0
-"""A mirror pair moves only if both paths stay this far from L: the two discs then never touch."""
 
 
 class ViewError(ValueError):
@@ -334,28 +333,45 @@ def _try_move(ctx: _Ctx, i: int, targets: Points, k: int, n: int) -> dict[int, P
         return None
     moves = {i: path}
     if ctx.symmetric and not i_on_l:  # the mirror partner makes the mirrored move (G11)
-        mirror_start = (2.0 * cx - start[0], start[1])
-        partner = int(np.argmin(np.hypot(pts[:, 0] - mirror_start[0], pts[:, 1] - mirror_start[1])))
-        if partner == i:
+        partner_path = _partner_move(ctx, i, start, path)
+        if partner_path is None:
             return None
-        p_start = (float(pts[partner, 0]), float(pts[partner, 1]))
-        # The partner is the mirror image only within EPS_AT: it starts `off` away from it, and
-        # follows the mirrored path within a few times that, so the pair keeps 1 + 4 off from L.
-        off = math.hypot(p_start[0] - mirror_start[0], p_start[1] - mirror_start[1])
-        lo, hi = path_x_range(start, path)
-        need = PAIR_CLEARANCE_FROM_L - 0.5 * CLEAR_SLACK + 4.0 * off
-        if (x_i > 0 and lo - cx < need) or (x_i < 0 and cx - hi < need):
-            return None
-        mirrored = transform(mirror(transform(path, (-cx, 0.0), False)), (cx, 0.0), False)
-        if off > 0.0:
-            rest = np.concatenate((pts[:min(i, partner)], pts[min(i, partner) + 1:max(i, partner)],
-                                   pts[max(i, partner) + 1:]))
-            if not is_free(p_start, mirrored, rest):
-                return None
-        moves[partner] = mirrored
+        moves[partner_path[0]] = partner_path[1]
     if not _keeps_sec(ctx, moves):
         return None
     return moves
+
+
+def _partner_move(ctx: _Ctx, i: int, start: Point, path: Path) -> tuple[int, Path] | None:
+    """G11: robot i's mirror partner and its move, the mirror image of i's, or None if unsafe.
+
+    The partner repeats i's displacement mirrored, from where it is: in a swarm symmetric only
+    within EPS_AT it is `d` = (dx, dy) off the exact mirror image of i, and then the two centres
+    are, at every instant, hypot(2 (x_i(t) - c_x) - dx, dy) apart (for i right of L; mirrored
+    for the left). So the pair is safe iff that holds at i's extreme x towards L, by the rule of
+    G6: >= 2 - CLEAR_SLACK, or, already touching closer, no closer than now.
+    """
+    pts, cx = ctx.pts, ctx.cx
+    mirror_start = (2.0 * cx - start[0], start[1])
+    partner = int(np.argmin(np.hypot(pts[:, 0] - mirror_start[0], pts[:, 1] - mirror_start[1])))
+    if partner == i:
+        return None
+    p_start = (float(pts[partner, 0]), float(pts[partner, 1]))
+    dx, dy = p_start[0] - mirror_start[0], p_start[1] - mirror_start[1]
+    side = 1.0 if start[0] > cx else -1.0
+    lo, hi = path_x_range(start, path)
+    gap = side * (2.0 * ((lo if side > 0 else hi) - cx) - dx)
+    now = math.hypot(start[0] - p_start[0], start[1] - p_start[1])
+    if gap <= 0.0 or math.hypot(gap, dy) < min(CONTACT - CLEAR_SLACK, now) - ROUND_ABS:
+        return None
+    relative = transform(path, (-start[0], -start[1]), False)
+    mirrored = transform(mirror(relative), p_start, False)
+    if dx != 0.0 or dy != 0.0:  # not an exact mirror image: its own path must be free too
+        lo_i, hi_i = min(i, partner), max(i, partner)
+        rest = np.concatenate((pts[:lo_i], pts[lo_i + 1 : hi_i], pts[hi_i + 1 :]))
+        if not is_free(p_start, mirrored, rest):
+            return None
+    return partner, mirrored
 
 
 def _keeps_sec(ctx: _Ctx, moves: dict[int, Path]) -> bool:

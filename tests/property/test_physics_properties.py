@@ -10,6 +10,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from agent.path import Arc, Line, Path, Point, Segment, path_length, point_at
+from agent.tolerance import GRID
 from world.physics import CONTACT_SLACK, PLAN_ROUNDING, apply_round, validate_configuration
 
 OVERLAP = 2.0 - CONTACT_SLACK
@@ -92,7 +93,8 @@ def test_no_overlap_and_every_robot_stays_on_its_own_path(r: Round) -> None:
         length = path_length(here, r.paths[i])
         assert 0.0 <= out.traveled[i] <= length
         expected = point_at(here, r.paths[i], out.traveled[i])
-        assert np.hypot(*(out.positions[i] - expected)) <= 1e-9
+        # ... up to the snap to the grid: one of the four grid points around the end.
+        assert np.hypot(*(out.positions[i] - expected)) <= 1e-12 + math.sqrt(2.0) * GRID
 
     # No overlap after the round, nor at any sampled time during it.
     assert min_pair_distance(out.positions[:, None, :]) >= OVERLAP
