@@ -27,14 +27,14 @@ from rich.style import Style
 from rich.table import Table
 from rich.text import Text
 
-from agent import geometry
+from agent import geometry, tolerance
 from agent.path import Points
 from deploy.canvas import Canvas, Mode, Viewport
 
 if TYPE_CHECKING:
     from world.protocol import WorldState
 
-EXIT_FORMED, EXIT_NOT_FORMED, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_NOT_FORMED, EXIT_BAD_INPUT = 1, 2
 DEFAULT_SWARM = "default"
 FINAL_STATUSES = ("formed", "stalled", "max_rounds")
 
@@ -110,7 +110,7 @@ def derive(frame: Frame) -> Figures:
     pts = np.asarray(frame.positions, dtype=np.float64).reshape(-1, 2)
     center, rc = enclosing_circle(pts)
     targets = geometry.target_points(pts, frame.n) if len(pts) else np.zeros((0, 2))
-    tol = geometry.EPS_AT_REL * geometry.scale(rc)  # "a robot at the point", as the algorithm
+    tol = tolerance.EPS_AT_REL * tolerance.scale(rc)  # "a robot at the point", as the algorithm
     filled = 0
     if len(targets) and len(pts):
         dist = np.hypot(*(targets[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
@@ -174,6 +174,12 @@ def _fmt_rate(rate: float | None) -> str:
 
 def outcome_text(frame: Frame) -> str:
     """One line saying how the run ended, or that it still runs."""
+    k = frame.collisions_total
+    if frame.status == "formed" and k:
+        return (
+            f"FORMED WITH {k} COLLISION{'' if k == 1 else 'S'}: uniform circle of {frame.n} robots "
+            f"after {frame.round} rounds, not the collision-free formation the paper guarantees"
+        )
     if frame.status == "formed":
         head = f"FORMED: uniform circle of {frame.n} robots after {frame.round} rounds"
     elif frame.status == "stalled":
@@ -271,9 +277,10 @@ def render_frame(frame: Frame, *, footer: str | None = None, mode: Mode = "brail
     bottom = outcome_text(frame)
     if footer:
         bottom = f"{bottom}    {footer}"
-    style = (
-        "bold green" if frame.status == "formed" else "bold" if frame.status != "running" else ""
-    )
+    if frame.status == "formed":
+        style = "bold green" if frame.collisions_total == 0 else "bold yellow"
+    else:
+        style = "bold" if frame.status != "running" else ""
     layout.split_column(
         Layout(Text(title, style="bold", no_wrap=True, overflow="ellipsis"), name="header", size=1),
         Layout(name="body"),
@@ -678,4 +685,6 @@ def main(args: argparse.Namespace) -> int:
     last = watcher.latest
     if last is None or last.status == "running":
         return EXIT_NOT_FORMED
-    return EXIT_FORMED if last.status == "formed" else EXIT_NOT_FORMED
+    from deploy.run import exit_code_for
+
+    return exit_code_for(last.status, last.collisions_total)  # as `fatswarm run`: 3 if collided

@@ -21,16 +21,22 @@ from collections.abc import Sequence
 from types import TracebackType
 from typing import Any
 
+from deploy.run import (
+    EXIT_BAD_INPUT,
+    EXIT_FORMED,
+    EXIT_INTERRUPTED,
+    EXIT_NOT_FORMED,
+    Outcome,
+    exit_code,
+    summary,
+)
 from deploy.zconf import DEFAULT_SWARM, ROUTER_ENDPOINT_HELP, loopback_endpoint
 
 log = logging.getLogger("fatswarm.launcher")
 
-EXIT_FORMED = 0
-EXIT_NOT_FORMED = 1
-EXIT_BAD_INPUT = 2
-EXIT_INTERRUPTED = 130
 STOP_GRACE_S = 5.0  # SIGTERM first; SIGKILL whatever is still there after this
 STOP_GRACE_PER_AGENT_S = 0.1  # hundreds of agents closing sessions at once share two cores
+FINAL_STATE_WAIT_S = 5.0  # the dashboard's wait for the final state (re-published every second)
 
 
 def stop_grace_s(agents: int) -> float:
@@ -130,7 +136,7 @@ def _child_endpoint(listen: str) -> str:
 
 
 def run_networked(args: argparse.Namespace) -> int:
-    """Run the swarm over Zenoh as `fatswarm run` asks; returns the exit code (0 formed)."""
+    """Run the swarm over Zenoh as `fatswarm run` asks; returns the exit code (deploy.run's)."""
     problem, seed = check_inputs(args)
     if problem is not None:
         print(f"fatswarm run: {problem}", file=sys.stderr)
@@ -191,6 +197,8 @@ def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
             # the agents host needs its own grace first, to stop its agents one by one
             with Children(stop_grace_s(_robot_count(args)) + STOP_GRACE_S) as children:
                 code = _run_children(args, seed, record, swarm, endpoints, children, stop)
+                if watcher is not None and code in (EXIT_FORMED, EXIT_NOT_FORMED):
+                    _await_final_state(watcher, FINAL_STATE_WAIT_S)
         finally:
             if watcher is not None:
                 watcher.stop()
@@ -200,7 +208,10 @@ def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     if code in (EXIT_FORMED, EXIT_NOT_FORMED):
-        print_summary(record, sys.stdout)
+        # the record, not the coordinator's 0/1, says whether robots collided on the way
+        outcome = print_summary(record, sys.stdout)
+        if outcome is not None:
+            code = exit_code(outcome)
         if args.record:
             print(f"record: {args.record}")
     return code
@@ -215,6 +226,20 @@ def _follow(args: argparse.Namespace, swarm: str, router: Any, endpoint: str) ->
     if router is not None:
         return follow(args, swarm, session=router)
     return follow(args, swarm, connect=endpoint)
+
+
+def _await_final_state(watcher: Any, timeout_s: float) -> None:
+    """Let the display see the world's final state before the world is stopped.
+
+    The world answers the last commit before it publishes the state, so the coordinator may be
+    gone before the state arrives; the world, still up, re-publishes it every second.
+    """
+    deadline = time.monotonic() + timeout_s
+    while not (watcher.ended.is_set() or watcher.finished.is_set()):
+        if time.monotonic() >= deadline:
+            log.warning("the display did not see the run's final state within %g s", timeout_s)
+            return
+        watcher.ended.wait(0.05)
 
 
 def _part(name: str, *flags: str) -> list[str]:
@@ -279,28 +304,39 @@ def _robot_count(args: argparse.Namespace) -> int:
     return int(args.n if args.n is not None else DEFAULT_N)
 
 
-def print_summary(record: str, out: Any) -> None:
-    """The same summary lines as the lockstep run, read back from the record."""
+def print_summary(record: str, out: Any) -> Outcome | None:
+    """Print the same summary as a lockstep run, read back from the record; the outcome, None if
+    the record holds no result (the run did not end)."""
     from world.record import RecordFormatError, read_record
 
     try:
         rec = read_record(record)
     except RecordFormatError as exc:
         print(f"no summary: {exc}", file=sys.stderr)
-        return
+        return None
     h, res = rec.header, rec.result
     if res is None:
         print(f"unfinished: n={h.n} after {len(rec.rounds)} rounds", file=out)
-        return
+        return None
     x = res.extra
-    moves = int(x.get("moves", 0))
-    print(
-        f"{res.status}: n={h.n} a={h.a:g} seed={h.seed} scheduler={h.scheduler}\n"
-        f"rounds {res.rounds}  epochs {x.get('epochs', '?')}  moves {moves} "
-        f"({moves / h.n:.2f} per robot)  total distance {float(x.get('total_distance', 0.0)):.3f}  "
-        f"collisions {x.get('collisions', '?')}",
-        file=out,
+    collisions = x.get("collisions")
+    epochs = x.get("epochs")
+    outcome = Outcome(
+        status=res.status,
+        rounds=res.rounds,
+        # the world writes the count; else the rounds' own collisions say it
+        collisions=(collisions if isinstance(collisions, int)
+                    else sum(len(r.collisions) for r in rec.rounds)),
+        n=h.n,
+        a=h.a,
+        seed=h.seed,
+        scheduler=h.scheduler,
+        epochs=epochs if isinstance(epochs, int) else None,
+        moves=int(x.get("moves", 0)),
+        total_distance=float(x.get("total_distance", 0.0)),
     )
+    print(summary(outcome), file=out)
+    return outcome
 
 
 __all__ = ["Children", "add_network_arguments", "run_networked"]

@@ -121,35 +121,29 @@ def add_world_arguments(p: argparse.ArgumentParser) -> None:
 
 def main_world(args: argparse.Namespace) -> int:
     """Run the world until SIGTERM/SIGINT."""
-    from agent.params import Params, ParamsError
     from deploy.lockstep import default_max_rounds
-    from world.physics import InvalidConfigurationError, validate_configuration
+    from deploy.run import input_errors, resolve_start
     from world.record import RecordFormatError
     from world.service import WorldSetup, open_world, serve
-    from world.starts import InitFileError, load_init, random_start
 
     _logging(args, "info")
     stop = install_stop_signals(args.exit_with_parent)
 
     def make_setup() -> WorldSetup:
-        if args.init is not None:
-            initial, file_a = load_init(args.init)
-            a = args.a if args.a is not None else (file_a if file_a is not None else 4.0)
-        else:
-            a = 4.0 if args.a is None else args.a
-            initial = random_start(args.n, args.seed, args.start, a)
-        params = Params(len(initial), a)
-        initial = validate_configuration(initial)
+        # the same checks and supported range as `fatswarm run`; -n only without --init
+        params, initial = resolve_start(
+            args.init, None if args.init is not None else args.n, args.a, args.seed, args.start
+        )
         max_rounds = args.max_rounds or default_max_rounds(params.n, args.scheduler)
         return WorldSetup(args.swarm, params.n, params.a, args.seed, args.scheduler, initial,
                           max_rounds)
 
+    bad_input: tuple[type[Exception], ...] = (ValueError, RecordFormatError, *input_errors())
     try:
         conf = _client_config(args)
         core = open_world(args.state, make_setup, args.swarm, args.max_rounds,
                           fsync=not args.no_fsync)
-    except (ValueError, ParamsError, InitFileError, RecordFormatError,
-            InvalidConfigurationError) as exc:
+    except bad_input as exc:
         return _fail("world", str(exc))
     return serve(core, conf, stop)
 

@@ -1,6 +1,7 @@
 """`fatswarm run`: run a swarm, networked (default, deploy.launcher) or in one process (--lockstep).
 
-Exit codes: 0 formed, 1 not formed (stalled or max_rounds), 2 bad input (one line on stderr).
+Exit codes: 0 formed with no collision, 1 not formed (stalled or max_rounds, with or without
+collisions), 2 bad input (one line on stderr), 3 formed but with collisions, 130 interrupted.
 """
 
 from __future__ import annotations
@@ -21,9 +22,17 @@ if TYPE_CHECKING:
     from coordinator.schedule import Scheduler
     from deploy.lockstep import RoundReport
 
-EXIT_FORMED: Final = 0
-EXIT_NOT_FORMED: Final = 1
+EXIT_FORMED: Final = 0  # formed, and no robot was ever stopped by contact
+EXIT_NOT_FORMED: Final = 1  # stalled or max_rounds, collisions or not
 EXIT_BAD_INPUT: Final = 2
+EXIT_FORMED_WITH_COLLISIONS: Final = 3  # formed, but not the collision-free formation
+EXIT_INTERRUPTED: Final = 130
+EXIT_CODES_HELP: Final = (
+    f"exit codes: {EXIT_FORMED} formed with no collision; {EXIT_NOT_FORMED} not formed (stalled "
+    f"or out of rounds); {EXIT_BAD_INPUT} bad input (one line on stderr says what to fix); "
+    f"{EXIT_FORMED_WITH_COLLISIONS} formed, but with collisions (robots stopped at contact: not "
+    f"the collision-free formation the paper guarantees); {EXIT_INTERRUPTED} interrupted."
+)
 DEFAULT_N: Final = 8
 DEFAULT_A: Final = 4.0
 DEFAULT_SCHEDULER: Final = "ssync"  # the paper's model
@@ -51,6 +60,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from coordinator.schedule import NAMES
     from world.starts import KINDS
 
+    p.epilog = EXIT_CODES_HELP
     p.add_argument(
         "--lockstep",
         action="store_true",
@@ -127,35 +137,54 @@ class RunSetup:
 def input_errors() -> tuple[type[Exception], ...]:
     """The exceptions `resolve_run` raises for bad input (each message says what to fix)."""
     from agent.params import ParamsError
+    from agent.tolerance import UnsupportedInputError
     from coordinator.schedule import ScheduleError
     from world.physics import InvalidConfigurationError
     from world.starts import InitFileError
 
-    return (ParamsError, InitFileError, ScheduleError, InvalidConfigurationError, RunInputError)
+    return (ParamsError, InitFileError, ScheduleError, InvalidConfigurationError,
+            UnsupportedInputError, RunInputError)
+
+
+def resolve_start(
+    init: str | None, n: int | None, a: float | None, seed: int, kind: str
+) -> tuple[Params, Points]:
+    """The parameters and (n, 2) start that `--init` or `-n`/`-a`/`--seed`/`--start` ask for,
+    valid and inside the supported range (agent/tolerance.py); raises one of `input_errors()`.
+
+    Shared by `fatswarm run` and `fatswarm world`, so both refuse the same start the same way.
+    """
+    import numpy as np
+
+    from agent.params import Params
+    from agent.tolerance import check_supported
+    from world.physics import validate_configuration
+    from world.starts import load_init, random_start
+
+    if init is not None:
+        initial, file_a = load_init(init)  # finite numbers, as check_supported needs
+        if n is not None and n != len(initial):
+            raise RunInputError(
+                f"-n {n} disagrees with the {len(initial)} robots of {init}; drop -n"
+            )
+        side = a if a is not None else (file_a if file_a is not None else DEFAULT_A)
+        params = Params(len(initial), side)
+    else:
+        params = Params(DEFAULT_N if n is None else n, DEFAULT_A if a is None else a)
+        # the side first: a random start is drawn at its scale (a = 1e308 would overflow it)
+        check_supported(np.zeros((params.n, 2)), params.a)
+        initial = random_start(params.n, seed, kind, params.a)
+    check_supported(initial, params.a)
+    return params, validate_configuration(initial)
 
 
 def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
     """Build the run the flags describe (shared by lockstep and networked runs, so both refuse
     the same input with the same message); raises one of `input_errors()`."""
-    from agent.params import Params
     from coordinator.schedule import make_scheduler
     from deploy.lockstep import default_max_rounds
-    from world.physics import validate_configuration
-    from world.starts import load_init, random_start
 
-    if args.init is not None:
-        initial, file_a = load_init(args.init)
-        if args.n is not None and args.n != len(initial):
-            raise RunInputError(
-                f"-n {args.n} disagrees with the {len(initial)} robots of {args.init}; drop -n"
-            )
-        a = args.a if args.a is not None else (file_a if file_a is not None else DEFAULT_A)
-        params = Params(len(initial), a)
-    else:
-        params = Params(DEFAULT_N if args.n is None else args.n,
-                        DEFAULT_A if args.a is None else args.a)
-        initial = random_start(params.n, seed, args.start, params.a)
-    validate_configuration(initial)
+    params, initial = resolve_start(args.init, args.n, args.a, seed, args.start)
     if args.scheduler != "scripted" and args.schedule is not None:
         raise RunInputError("--schedule only goes with --scheduler scripted")
     if args.max_rounds is not None and args.max_rounds < 1:
@@ -203,14 +232,19 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
         if record is not None:
             record.close()
 
-    per_robot = result.moves / params.n
-    print(
-        f"{result.status}: n={params.n} a={params.a:g} seed={seed} scheduler={scheduler.name}\n"
-        f"rounds {result.rounds}  epochs {result.epochs}  moves {result.moves} "
-        f"({per_robot:.2f} per robot)  total distance {result.total_distance:.3f}  "
-        f"collisions {result.collisions}",
-        file=out,
+    outcome = Outcome(
+        status=result.status,
+        rounds=result.rounds,
+        collisions=result.collisions,
+        n=params.n,
+        a=params.a,
+        seed=seed,
+        scheduler=scheduler.name,
+        epochs=result.epochs,
+        moves=result.moves,
+        total_distance=result.total_distance,
     )
+    print(summary(outcome), file=out)
     if args.record:
         print(f"record: {args.record}", file=out)
     svg = getattr(args, "svg", None)  # the dashboard's flag, when deploy.dashboard is there
@@ -234,7 +268,65 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
         except OSError as exc:
             return _fail(f"cannot write {svg}: {exc.strerror}")
         print(f"svg: {svg}", file=out)
-    return EXIT_FORMED if result.status == "formed" else EXIT_NOT_FORMED
+    return exit_code(outcome)
+
+
+@dataclass(frozen=True, slots=True)
+class Outcome:
+    """How a finished run ended (lockstep result or networked record): what the summary says."""
+
+    status: str  # "formed" | "stalled" | "max_rounds"
+    rounds: int
+    collisions: int  # robots stopped at contact, over the whole run
+    n: int
+    a: float
+    seed: int | None
+    scheduler: str
+    epochs: int | None  # None when the record does not say
+    moves: int
+    total_distance: float
+
+
+def exit_code_for(status: str, collisions: int) -> int:
+    """0 only for a collision-free formation; formed through collisions is 3, not formed is 1."""
+    if status != "formed":
+        return EXIT_NOT_FORMED
+    return EXIT_FORMED if collisions == 0 else EXIT_FORMED_WITH_COLLISIONS
+
+
+def exit_code(outcome: Outcome) -> int:
+    """The exit code of `fatswarm run` for this outcome (see EXIT_CODES_HELP)."""
+    return exit_code_for(outcome.status, outcome.collisions)
+
+
+def verdict(outcome: Outcome) -> str:
+    """One line: formed or not, in how many rounds, and whether robots collided on the way."""
+    k, rounds = outcome.collisions, outcome.rounds
+    collisions = f"{k} collision{'' if k == 1 else 's'}"
+    if outcome.status == "formed":
+        if k == 0:
+            return f"formed in {rounds} rounds, collision-free"
+        return (f"formed in {rounds} rounds, but with {collisions}: not the collision-free "
+                "formation the paper guarantees")
+    if outcome.status == "stalled":
+        head = f"not formed: stalled after {rounds} rounds"
+    elif outcome.status == "max_rounds":
+        head = f"not formed: stopped at the round limit ({rounds} rounds)"
+    else:
+        head = f"not formed: {outcome.status} after {rounds} rounds"
+    return head if k == 0 else f"{head}, with {collisions}"
+
+
+def summary(outcome: Outcome) -> str:
+    """The summary both kinds of run print at the end: the verdict, the run, its figures."""
+    o = outcome
+    epochs = "?" if o.epochs is None else str(o.epochs)
+    return (
+        f"{verdict(o)}\n"
+        f"n={o.n} a={o.a:g} seed={'?' if o.seed is None else o.seed} scheduler={o.scheduler}\n"
+        f"rounds {o.rounds}  epochs {epochs}  moves {o.moves} ({o.moves / o.n:.2f} per robot)  "
+        f"total distance {o.total_distance:.3f}  collisions {o.collisions}"
+    )
 
 
 def _progress_printer(max_rounds: int) -> Callable[[RoundReport], None]:
@@ -257,4 +349,14 @@ def _progress_printer(max_rounds: int) -> Callable[[RoundReport], None]:
     return show
 
 
-__all__ = ["add_arguments", "main", "run_lockstep_command"]
+__all__ = [
+    "Outcome",
+    "add_arguments",
+    "exit_code",
+    "exit_code_for",
+    "main",
+    "resolve_start",
+    "run_lockstep_command",
+    "summary",
+    "verdict",
+]

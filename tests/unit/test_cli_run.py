@@ -3,14 +3,25 @@
 from __future__ import annotations
 
 import argparse
+import functools
+import io
 import json
+import re
+import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from deploy import run
+from agent.params import Params
+from agent.path import STAY, Line, Points
+from agent.path import Path as RobotPath
+from deploy import lockstep, run
 from world.record import read_record
+
+ROOT = Path(__file__).resolve().parents[2]
+NOT_COLLISION_FREE = "not the collision-free formation the paper guarantees"
 
 
 def fatswarm_run(argv: list[str]) -> int:
@@ -21,11 +32,12 @@ def fatswarm_run(argv: list[str]) -> int:
 
 def test_formed_run_exits_zero_and_prints_the_summary(capsys: pytest.CaptureFixture[str]) -> None:
     code = fatswarm_run(["--lockstep", "-n", "5", "--seed", "2", "--scheduler", "fsync", "-q"])
-    out = capsys.readouterr().out
+    verdict, setup, figures = capsys.readouterr().out.splitlines()[:3]
     assert code == 0
-    assert out.startswith("formed: n=5 a=4 seed=2 scheduler=fsync")
+    assert re.fullmatch(r"formed in \d+ rounds, collision-free", verdict)
+    assert setup == "n=5 a=4 seed=2 scheduler=fsync"
     for word in ("rounds", "epochs", "moves", "total distance", "collisions 0"):
-        assert word in out
+        assert word in figures
 
 
 def test_record_is_written(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -33,7 +45,7 @@ def test_record_is_written(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     code = fatswarm_run(["--lockstep", "-n", "4", "--seed", "1", "--record", str(target), "-q"])
     record = read_record(target)
     assert record.result is not None
-    assert code == (0 if record.result.status == "formed" else 1)
+    assert code == run.exit_code_for(record.result.status, record.result.extra["collisions"])
     assert (record.header.n, record.header.seed, record.header.scheduler) == (4, 1, "ssync")
     assert f"record: {target}" in capsys.readouterr().out
 
@@ -41,7 +53,7 @@ def test_record_is_written(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
 def test_run_not_formed_exits_one(capsys: pytest.CaptureFixture[str]) -> None:
     code = fatswarm_run(["--lockstep", "-n", "6", "--seed", "0", "--max-rounds", "1", "-q"])
     assert code == 1
-    assert capsys.readouterr().out.startswith("max_rounds:")
+    assert capsys.readouterr().out.startswith("not formed: stopped at the round limit (1 rounds)")
 
 
 def test_init_file_gives_n_and_a(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -120,3 +132,131 @@ def test_svg_of_the_final_frame(tmp_path: Path, capsys: pytest.CaptureFixture[st
     target = tmp_path / "final.svg"
     assert fatswarm_run(["--lockstep", "-n", "4", "--seed", "3", "-q", "--svg", str(target)]) == 0
     assert target.read_text().lstrip().startswith("<svg")
+
+
+# --- collisions: formed through contact is not the paper's collision-free formation -------------
+
+
+def outcome(status: str, collisions: int, rounds: int = 31) -> run.Outcome:
+    return run.Outcome(status=status, rounds=rounds, collisions=collisions, n=4, a=4.0, seed=1,
+                       scheduler="ssync", epochs=9, moves=12, total_distance=30.0)
+
+
+@pytest.mark.parametrize(
+    ("status", "collisions", "code", "verdict"),
+    [
+        ("formed", 0, 0, "formed in 31 rounds, collision-free"),
+        ("formed", 1, 3, f"formed in 31 rounds, but with 1 collision: {NOT_COLLISION_FREE}"),
+        ("formed", 2, 3, f"formed in 31 rounds, but with 2 collisions: {NOT_COLLISION_FREE}"),
+        ("stalled", 0, 1, "not formed: stalled after 31 rounds"),
+        ("stalled", 2, 1, "not formed: stalled after 31 rounds, with 2 collisions"),
+        ("max_rounds", 5, 1,
+         "not formed: stopped at the round limit (31 rounds), with 5 collisions"),
+    ],
+)
+def test_exit_code_and_verdict_say_whether_robots_collided(
+    status: str, collisions: int, code: int, verdict: str
+) -> None:
+    o = outcome(status, collisions)
+    assert run.exit_code(o) == code
+    assert run.verdict(o) == verdict
+    assert run.summary(o).splitlines()[0] == verdict
+    assert run.summary(o).splitlines()[2].endswith(f"collisions {collisions}")
+
+
+def test_exit_codes_are_listed_in_the_help() -> None:
+    parser = argparse.ArgumentParser(prog="fatswarm run")
+    run.add_arguments(parser)
+    text = " ".join(parser.format_help().split())
+    for listed in ("0 formed with no collision", "1 not formed", "2 bad input",
+                   "3 formed, but with collisions"):
+        assert listed in text
+
+
+def bump(view: Points, params: Params) -> RobotPath:
+    """Two robots: rush at the other when far (contact stops both), back off to side a when near."""
+    ((x, y),) = view
+    distance = float(np.hypot(x, y))
+    if distance > 6.0:
+        return RobotPath((Line((x, y)),))
+    if distance < params.a:
+        k = (params.a - distance) / (2.0 * distance)
+        return RobotPath((Line((-k * x, -k * y)),))
+    return STAY
+
+
+def test_a_formation_reached_through_collisions_exits_three_and_says_so(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    init = tmp_path / "far-apart.json"
+    init.write_text(json.dumps({"positions": [[0, 0], [8, 0]], "a": 4}))
+    monkeypatch.setattr(lockstep, "run_lockstep",
+                        functools.partial(lockstep.run_lockstep, compute=bump))
+    target = tmp_path / "run.jsonl"
+    code = fatswarm_run(["--lockstep", "--init", str(init), "--seed", "0", "--scheduler", "fsync",
+                         "--record", str(target), "-q"])
+    out = capsys.readouterr().out
+    assert code == run.EXIT_FORMED_WITH_COLLISIONS == 3
+    assert re.match(rf"formed in \d+ rounds, but with 2 collisions: {NOT_COLLISION_FREE}\n", out)
+    assert "collisions 2" in out
+
+    # the networked run reads its summary and exit code back from the same kind of record
+    from deploy.launcher import print_summary
+
+    printed = io.StringIO()
+    read_back = print_summary(str(target), printed)
+    assert read_back is not None and run.exit_code(read_back) == 3
+    assert printed.getvalue() == out.split("record: ")[0]
+
+
+# --- the supported range (agent/tolerance.py) -------------------------------------------------
+
+
+def unsupported_inputs(tmp_path: Path) -> list[tuple[list[str], str]]:
+    far = tmp_path / "far.json"
+    far.write_text(json.dumps({"positions": [[0, 0], [1e7, 0]]}))
+    wide = tmp_path / "wide.json"
+    wide.write_text(json.dumps({"positions": [[0, 0], [1e5, 0]]}))
+    side = "a must be at most 20000 for n = 2: the target circle must have radius <= 10000"
+    return [
+        (["-n", "2", "-a", "1e308"], side),
+        (["-n", "2", "-a", "1e10"], side),
+        (["-a", "1e10"], "the target circle must have radius <= 10000"),
+        (["--init", str(far)], "coordinates must lie within +-2000000"),
+        (["--init", str(wide)], "the start must fit in a circle of radius 10000"),
+    ]
+
+
+@pytest.mark.parametrize("mode", [["--lockstep"], []], ids=["lockstep", "networked"])
+def test_input_outside_the_supported_range_exits_two_with_one_line(
+    mode: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    for flags, message in unsupported_inputs(tmp_path):
+        code = fatswarm_run([*mode, "--seed", "0", "-q", *flags])  # networked: refused up front
+        captured = capsys.readouterr()
+        assert code == 2, flags
+        assert captured.out == ""
+        err = captured.err
+        assert message in err and err.count("\n") == 1 and err.startswith("fatswarm run: "), err
+
+
+def test_the_largest_side_inside_the_supported_range_still_runs(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    code = fatswarm_run(["--lockstep", "-n", "2", "-a", "1e4", "--seed", "1", "-q"])
+    captured = capsys.readouterr()
+    assert code == 0, captured.out
+    assert captured.err == ""
+    assert "n=2 a=10000 seed=1" in captured.out
+
+
+def test_world_part_refuses_a_start_outside_the_supported_range(tmp_path: Path) -> None:
+    # a process of its own: the part installs signal handlers and logging for its whole process
+    proc = subprocess.run(
+        [sys.executable, "-m", "deploy.parts", "world", "--state", str(tmp_path / "w.jsonl"),
+         "--connect", "tcp/127.0.0.1:9", "-n", "2", "-a", "1e10"],
+        capture_output=True, text=True, cwd=ROOT, timeout=60,
+    )  # fmt: skip
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.startswith("fatswarm world: a must be at most 20000 for n = 2")
+    assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
