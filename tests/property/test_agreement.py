@@ -7,7 +7,10 @@ import math
 
 import numpy as np
 import pytest
+import strategies
 from agreement import assert_observers_agree
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from agent.geometry import target_radius
 from agent.params import Params
@@ -92,3 +95,32 @@ def test_the_circle_forms_without_collision_in_n_plus_2_moves(name: str, schedul
         result = run_lockstep(pts, Params(n, a), make_scheduler(scheduler, n, seed), seed=seed)
         assert (result.status, result.collisions) == ("formed", 0), (seed, result.status)
         assert result.moves <= n + 2, (seed, result.moves)
+
+
+ADVERSARIAL = settings(max_examples=40, deadline=None,
+                       suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+SIDES = st.sampled_from([3.2, 4.0, 6.0])
+
+
+@ADVERSARIAL
+@given(strategies.any_adversarial_start(), SIDES)
+def test_every_observer_agrees_on_adversarial_starts(pts: np.ndarray, a: float) -> None:
+    # Near-symmetric, near-touching, tied, lattices to a few decimals, offsets, rims: every robot
+    # in both of its frames and with a shuffled view decides on the same canonical bits.
+    assert_observers_agree(pts, Params(len(pts), a))
+
+
+@ADVERSARIAL
+@given(
+    strategies.any_adversarial_start(),
+    SIDES,
+    st.sampled_from(["fsync", "ssync", "centralized"]),
+    st.integers(0, 2**16),
+)
+def test_adversarial_starts_form_without_collision(
+    pts: np.ndarray, a: float, scheduler: str, seed: int
+) -> None:
+    n = len(pts)
+    result = run_lockstep(pts, Params(n, a), make_scheduler(scheduler, n, seed), seed=seed)
+    assert (result.status, result.collisions) == ("formed", 0)
+    assert result.moves <= n + 2
