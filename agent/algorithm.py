@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from agent.canonical import Canonical, canonical
+from agent.detour import shortest_free_path
 from agent.geometry import (
     Circle,
     is_free,
@@ -32,6 +33,7 @@ from agent.geometry import (
 )
 from agent.params import Params
 from agent.path import (
+    MAX_SEGMENTS,
     STAY,
     Arc,
     Line,
@@ -70,7 +72,7 @@ class Plan:
     """What the configuration asks for: `moves` maps robot index -> path in the given frame."""
 
     phase: str  # "done" | "expansion" | "formation" | "stuck"
-    kind: str  # "done", "exp-case1", "exp-case2", "exp-case2b-north", "fill", "note-swap", "stuck"
+    kind: str  # "done", "exp-case1|2|2b-north", "fill", "detour", "note-swap", "stuck"
     moves: dict[int, Path] = field(default_factory=dict)
 
 
@@ -281,26 +283,28 @@ def _formation(ctx: _Ctx, n: int) -> Plan:
     unsettled = (~settled_robot).nonzero()[0]
     vacant = (~settled_target).nonzero()[0]
     order_keys = (-targets[vacant, 1], -ctx.orientation * (targets[vacant, 0] - cx))
-    for j_target in _ranked(order_keys, ctx.tol_eq):
-        k = int(vacant[j_target])
-        blockers = (blocking & (nearest == k)).nonzero()[0]
-        if len(blockers) >= 2:  # double-blocked: wait until one blocker has left (G7)
-            continue
-        if len(blockers) == 1:
-            cands = blockers[:0] if settled_robot[blockers[0]] else blockers
-        else:
-            cands = unsettled
-        if ctx.symmetric:
-            cands = _symmetric_candidates(ctx, cands, targets[k])
-        if len(cands) == 0:
-            continue
-        dist = np.hypot(pts[cands, 0] - targets[k, 0], pts[cands, 1] - targets[k, 1])
-        keys = (dist, -pts[cands, 1], -ctx.orientation * (pts[cands, 0] - cx))
-        for j in _ranked(keys, ctx.tol_eq):
-            moves = _try_move(ctx, int(cands[j]), targets, k, n)
-            if moves is not None:
-                return Plan("formation", "fill", moves)
     order = [int(vacant[j]) for j in _ranked(order_keys, ctx.tol_eq)]
+    # The paper's paths first (chord, arcs, one slide); only if none is admissible anywhere, any
+    # free path (G14b), so that every configuration the old rules moved still moves the same way.
+    for wide in (False, True):
+        for k in order:
+            blockers = (blocking & (nearest == k)).nonzero()[0]
+            if len(blockers) >= 2:  # double-blocked: wait until one blocker has left (G7)
+                continue
+            if len(blockers) == 1:
+                cands = blockers[:0] if settled_robot[blockers[0]] else blockers
+            else:
+                cands = unsettled
+            if ctx.symmetric:
+                cands = _symmetric_candidates(ctx, cands, targets[k])
+            if len(cands) == 0:
+                continue
+            dist = np.hypot(pts[cands, 0] - targets[k, 0], pts[cands, 1] - targets[k, 1])
+            keys = (dist, -pts[cands, 1], -ctx.orientation * (pts[cands, 0] - cx))
+            for j in _ranked(keys, ctx.tol_eq):
+                moves = _try_move(ctx, int(cands[j]), targets, k, wide)
+                if moves is not None:
+                    return Plan("formation", "detour" if wide else "fill", moves)
     swap = _note_swap(ctx, targets, order, settled_robot, at_o, n)
     if swap is not None:
         return Plan("formation", "note-swap", swap)
@@ -316,8 +320,14 @@ def _symmetric_candidates(ctx: _Ctx, cands: np.ndarray, target: np.ndarray) -> n
     return np.asarray(cands[keep])
 
 
-def _try_move(ctx: _Ctx, i: int, targets: Points, k: int, n: int) -> dict[int, Path] | None:
-    """The move of robot i to target k if it is admissible (free, keeps the SEC), else None."""
+def _try_move(
+    ctx: _Ctx, i: int, targets: Points, k: int, wide: bool = False
+) -> dict[int, Path] | None:
+    """The move of robot i to target k if it is admissible (free, keeps the SEC), else None.
+
+    `wide`: look for any free path (the shortest, `detour.shortest_free_path`) instead of the
+    chord, arcs and single slide.
+    """
     pts, cx, tol = ctx.pts, ctx.cx, ctx.tol_at
     x_i = float(pts[i, 0]) - cx
     i_on_l = abs(x_i) <= tol
@@ -328,7 +338,7 @@ def _try_move(ctx: _Ctx, i: int, targets: Points, k: int, n: int) -> dict[int, P
         target = (2.0 * cx - target[0], target[1])
     start = (float(pts[i, 0]), float(pts[i, 1]))
     others = _without(pts, i)
-    path = _free_path(ctx, start, target, others)
+    path = _detour(start, target, others) if wide else _free_path(ctx, start, target, others)
     if path is None:
         return None
     moves = {i: path}
@@ -415,6 +425,18 @@ def _free_path(ctx: _Ctx, start: Point, target: Point, others: Points) -> Path |
     if obstacle is None:
         return None
     return _first_free(ctx, start, _slides(start, target, obstacle), others)
+
+
+def _detour(start: Point, target: Point, others: Points) -> Path | None:
+    """G14b: the shortest free path of any shape (G6's clearance), if one exists."""
+    if len(others) == 0:
+        return Path((Line(target),))
+    d0 = np.hypot(others[:, 0] - start[0], others[:, 1] - start[1])
+    radii = np.minimum(d0 + CLEAR_SLACK, CONTACT)  # minus CLEAR_SLACK: required_clearance
+    path = shortest_free_path(start, target, others, radii, tol=CLEAR_SLACK)
+    if path is None or len(path) > MAX_SEGMENTS or not is_free(start, path, others):
+        return None
+    return path
 
 
 def _arc_to(center: Point, sweep: float, start: Point, target: Point) -> Path:
