@@ -16,6 +16,7 @@ from agent.geometry import target_radius
 from agent.params import Params
 from coordinator.schedule import make_scheduler
 from deploy.lockstep import run_lockstep
+from world.adversarial import adversarial_start
 
 
 def polygon(n: int, radius: float, phase: float = 0.0) -> np.ndarray:
@@ -121,6 +122,23 @@ def test_adversarial_starts_form_without_collision(
     pts: np.ndarray, a: float, scheduler: str, seed: int
 ) -> None:
     n = len(pts)
+    result = run_lockstep(pts, Params(n, a), make_scheduler(scheduler, n, seed), seed=seed)
+    assert (result.status, result.collisions) == ("formed", 0)
+    assert result.moves <= n + 2
+
+
+# 5. Robots near one circle: after most targets were filled, the last robots sat just inside the
+# rim where the chord and the single slide both hit settled robots: stalled under every
+# scheduler until G14b (any free path). Found by bench/bench_adversarial.py.
+RIM_STALLS = [(40, 1476104628, 4.0), (32, 982055690, 3.2), (59, 498886429, 4.0),
+              (70, 894669965, 6.0)]
+
+
+@pytest.mark.parametrize("scheduler", ["fsync", "ssync", "centralized"])
+@pytest.mark.parametrize(("n", "seed", "a"), RIM_STALLS)
+def test_robots_near_one_circle_fill_every_target(n: int, seed: int, a: float,
+                                                  scheduler: str) -> None:
+    pts = adversarial_start("rim", n, seed)
     result = run_lockstep(pts, Params(n, a), make_scheduler(scheduler, n, seed), seed=seed)
     assert (result.status, result.collisions) == ("formed", 0)
     assert result.moves <= n + 2
