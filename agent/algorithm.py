@@ -191,6 +191,20 @@ def _ranked(cols: tuple[np.ndarray, ...], tol: float) -> Iterator[int]:
         yield i
 
 
+class _Lazy:
+    """An iterator's items, computed as first asked for and replayed on every later pass."""
+
+    def __init__(self, items: Iterator[int]) -> None:
+        self._items = items
+        self._seen: list[int] = []
+
+    def __iter__(self) -> Iterator[int]:
+        yield from self._seen
+        for item in self._items:
+            self._seen.append(item)
+            yield item
+
+
 def _first(cols: tuple[np.ndarray, ...], tol: float) -> int:
     """Index of the smallest key under the tolerant order of `_ranked`."""
     return next(_ranked(cols, tol))
@@ -283,7 +297,7 @@ def _formation(ctx: _Ctx, n: int) -> Plan:
     unsettled = (~settled_robot).nonzero()[0]
     vacant = (~settled_target).nonzero()[0]
     order_keys = (-targets[vacant, 1], -ctx.orientation * (targets[vacant, 0] - cx))
-    order = [int(vacant[j]) for j in _ranked(order_keys, ctx.tol_eq)]
+    order = _Lazy(int(vacant[j]) for j in _ranked(order_keys, ctx.tol_eq))
     # The paper's paths first (chord, arcs, one slide); only if none is admissible anywhere, any
     # free path (G14b), so that every configuration the old rules moved still moves the same way.
     for wide in (False, True):
@@ -305,7 +319,7 @@ def _formation(ctx: _Ctx, n: int) -> Plan:
                 moves = _try_move(ctx, int(cands[j]), targets, k, wide)
                 if moves is not None:
                     return Plan("formation", "detour" if wide else "fill", moves)
-    swap = _note_swap(ctx, targets, order, settled_robot, at_o, n)
+    swap = _note_swap(ctx, targets, list(order), settled_robot, at_o, n)
     if swap is not None:
         return Plan("formation", "note-swap", swap)
     return Plan("stuck", "stuck")
