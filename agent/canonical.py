@@ -13,8 +13,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from agent.path import Path, Points, transform
+
+IntArray = NDArray[np.intp]
 
 
 @dataclass(frozen=True, slots=True)
@@ -46,28 +49,113 @@ class Canonical:
 
 def canonical(points: Points, observer: int = 0) -> Canonical:
     """The canonical form of `points` (n, 2, on the grid), with `observer`'s row located in it."""
+    form = _form(points)
+    order = form.order()
+    ref = int(order[0])
+    where = int((order == observer).argmax())
+    x_ref, y_ref = float(points[ref, 0]), float(points[ref, 1])
+    return Canonical(form.points, where, (form.sign * x_ref, y_ref), form.sign, form.symmetric)
+
+
+@dataclass(frozen=True, slots=True)
+class _Form:
+    """The canonical array and how it was made: the robots sorted by (y, x) (`up`) and by
+    (y, -x) (`down`, the mirror image's order), and which image was taken (`sign` +1: up)."""
+
+    points: Points
+    up: IntArray
+    down: IntArray
+    sign: float
+    symmetric: bool
+
+    def order(self) -> IntArray:
+        return self.up if self.sign > 0.0 else self.down
+
+
+def _form(points: Points) -> _Form:
+    up = points[:, 1].argsort(kind="stable")
+    out = points[up]
+    heights = out[:, 1]
+    if (heights[1:] == heights[:-1]).any():
+        return _form_with_equal_heights(points)
+    # All heights differ: both mirror images list the robots in this order, and their x columns
+    # are each other's negatives, so the smaller image has its first non-zero x negative.
+    out -= out[0]
+    xs = out[:, 0]
+    moved = xs.nonzero()[0]
+    symmetric = len(moved) == 0
+    sign = 1.0 if symmetric or xs[moved[0]] < 0.0 else -1.0
+    if sign < 0.0:
+        xs *= -1.0
+    out += 0.0  # -0.0 -> +0.0: equal positions are equal bits
+    return _Form(out, up, up, sign, symmetric)
+
+
+def _form_with_equal_heights(points: Points) -> _Form:
+    """`_form` when some robots share a height: each mirror image sorts them by its own x."""
     xs, ys = points[:, 0], points[:, 1]
-    up = np.argsort(ys, kind="stable")
-    ys_sorted = ys[up]
-    if (ys_sorted[1:] == ys_sorted[:-1]).any():  # equal heights: order them by x, both ways
-        up = np.lexsort((xs, ys))
-        down = np.lexsort((-xs, ys))
-    else:
-        down = up
+    up = np.lexsort((xs, ys))
+    down = np.lexsort((-xs, ys))
     # Both orders list the same y values; the mirror image differs only in x.
-    ref_up, ref_down = up[0], down[0]
-    x_up = xs[up] - xs[ref_up]
-    x_down = xs[ref_down] - xs[down]
+    x_up = xs[up] - xs[up[0]]
+    x_down = xs[down[0]] - xs[down]
     diff = (x_up - x_down).nonzero()[0]
     symmetric = len(diff) == 0
     if symmetric or x_up[diff[0]] < x_down[diff[0]]:
-        order, cx, flip = up, x_up, 1.0
+        order, cx, sign = up, x_up, 1.0
     else:
-        order, cx, flip = down, x_down, -1.0
-    ref = order[0]
+        order, cx, sign = down, x_down, -1.0
     out = np.empty((len(points), 2), dtype=np.float64)
     out[:, 0] = cx
-    out[:, 1] = ys_sorted - ys[ref]
+    out[:, 1] = ys[order] - ys[order[0]]
     out += 0.0  # -0.0 -> +0.0: equal positions are equal bits
-    where = int((order == observer).argmax())
-    return Canonical(out, where, (flip * float(xs[ref]), float(ys[ref])), flip, symmetric)
+    return _Form(out, up, down, sign, symmetric)
+
+
+@dataclass(frozen=True, slots=True)
+class SharedForm:
+    """The canonical form of a whole configuration, made once, and every robot's way into it.
+
+    `for_robot(i, flip)` equals, bit for bit, `canonical` of robot i's own view (itself at the
+    origin, X negated if `flip`): on the grid the view is an exact translate or mirror image of
+    `world`, so the robot sorts the robots in one of the same two orders and takes the same image.
+    Only the lockstep runner uses this, to skip n - 1 identical canonicalisations a round.
+    """
+
+    world: Points
+    form: _Form
+    rank_up: IntArray
+    rank_down: IntArray
+
+    @classmethod
+    def of(cls, world: Points) -> SharedForm:
+        """The shared form of `world` (n, 2, on the grid)."""
+        form = _form(world)
+        return cls(world, form, _ranks(form.up), _ranks(form.down))
+
+    @property
+    def points(self) -> Points:
+        return self.form.points
+
+    def for_robot(self, robot: int, flip: bool) -> Canonical:
+        """What `canonical` gives robot `robot` on its own view in its own frame."""
+        f = -1.0 if flip else 1.0
+        form = self.form
+        # The image the robot takes: the world's, or, in a mirror-symmetric swarm, the one that
+        # is 'up' in its own frame. `sign` says which world order that image lists the robots in.
+        sign = f if form.symmetric else form.sign
+        order, rank = (form.up, self.rank_up) if sign > 0.0 else (form.down, self.rank_down)
+        ref = int(order[0])
+        # The reference robot in the robot's own (snapped) view, as `canonical` reads it there.
+        x_ref = f * (float(self.world[ref, 0]) - float(self.world[robot, 0])) + 0.0
+        y_ref = (float(self.world[ref, 1]) - float(self.world[robot, 1])) + 0.0
+        flip_r = sign * f
+        return Canonical(form.points, int(rank[robot]), (flip_r * x_ref, y_ref), flip_r,
+                         form.symmetric)
+
+
+def _ranks(order: IntArray) -> IntArray:
+    """rank[i] = position of robot i in `order`."""
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    return rank

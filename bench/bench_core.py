@@ -15,6 +15,7 @@ import argparse
 import contextlib
 import math
 import multiprocessing as mp
+import os
 import sys
 import time
 from collections import Counter, defaultdict
@@ -240,8 +241,13 @@ class _Budget(Exception):
     """Raised from the round callback when a speed run has used its time."""
 
 
-def looks_per_second(n: int, budget: float) -> tuple[int, float]:
-    """Looks and seconds of a lockstep fsync run from a clustered start, cut after `budget` s."""
+def looks_per_second(
+    n: int, budget: float, compute: Callable[[Points, Params], Path] | None = None
+) -> tuple[int, float]:
+    """Looks and seconds of a lockstep fsync run from a clustered start, cut after `budget` s.
+
+    `compute` None: the default (shared plans); `algorithm.compute`: every robot computes alone.
+    """
     start = random_start(n, 0, "clustered")
     looks = 0
     t0 = time.perf_counter()
@@ -253,8 +259,43 @@ def looks_per_second(n: int, budget: float) -> tuple[int, float]:
             raise _Budget
 
     with contextlib.suppress(_Budget):
-        run_lockstep(start, Params(n), make_scheduler("fsync", n, 0), seed=0, on_round=count)
+        run_lockstep(start, Params(n), make_scheduler("fsync", n, 0), seed=0, on_round=count,
+                     compute=compute)
     return looks, time.perf_counter() - t0
+
+
+BASELINE_SNIPPET = """
+import sys, time, contextlib
+from agent.params import Params
+from coordinator.schedule import make_scheduler
+from deploy.lockstep import run_lockstep
+from world.starts import random_start
+n, budget = int(sys.argv[1]), float(sys.argv[2])
+start = random_start(n, 0, "clustered"); looks = 0; t0 = time.perf_counter()
+class Stop(Exception): pass
+def count(report):
+    global looks
+    looks += len(report.active)
+    if time.perf_counter() - t0 > budget: raise Stop
+with contextlib.suppress(Stop):
+    run_lockstep(start, Params(n), make_scheduler("fsync", n, 0), seed=0, on_round=count)
+print(looks, time.perf_counter() - t0)
+"""
+
+
+def baseline_looks_per_second(checkout: str, n: int, budget: float) -> float | None:
+    """Looks/s of another checkout's lockstep (e.g. a git worktree of an older commit), same run."""
+    import subprocess
+
+    env = {**os.environ, "PYTHONPATH": checkout}
+    done = subprocess.run([sys.executable, "-c", BASELINE_SNIPPET, str(n), str(budget)],
+                          cwd=checkout, env=env, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        print(f"baseline at {checkout} failed: {done.stderr.strip().splitlines()[-1:]}",
+              file=sys.stderr)
+        return None
+    looks, secs = done.stdout.split()
+    return int(looks) / float(secs)
 
 
 # PHASE HOOK: until agent/algorithm.py exposes its phases, compute's time is split by wrapping the
@@ -332,13 +373,24 @@ def compute_split(n: int, count: int) -> dict[str, float]:
     return split
 
 
-def speed(quick: bool, out: Any = sys.stdout) -> None:
-    """Looks/s of the lockstep runner at n = 16, 64, 256 (fsync), time per compute call by phase."""
+def speed(quick: bool, baseline: str | None = None, out: Any = sys.stdout) -> None:
+    """Looks/s of the lockstep runner at n = 16, 64, 256 (fsync), time per compute call by phase.
+
+    Three ways side by side: shared plans (the default: one canonical form and one plan a round),
+    every robot computing alone (what a networked agent does), and `baseline`, another checkout.
+    """
     budget = 3.0 if quick else 15.0
     print("\n== speed (lockstep, fsync, clustered start, one process) ==", file=out)
+    head = f"{'n':<5} {'shared plans':>14} {'every robot':>12}"
+    print(head + (f" {'baseline':>10}" if baseline else "") + "   Looks/s", file=out)
     for n in SPEED_SIZES:
         looks, secs = looks_per_second(n, budget)
-        print(f"n={n:<4} {looks:>7} looks in {secs:6.2f}s  = {looks / secs:8.0f} Looks/s", file=out)
+        alone, alone_secs = looks_per_second(n, budget, algorithm.compute)
+        row = f"{n:<5} {looks / secs:>14,.0f} {alone / alone_secs:>12,.0f}"
+        if baseline:
+            base = baseline_looks_per_second(baseline, n, budget)
+            row += f" {base:>10,.0f}" if base is not None else f" {'failed':>10}"
+        print(row, file=out)
     print("\ncompute per call, microseconds (mean over sampled views; split approximate):",
           file=out)
     for n in SPEED_SIZES:
@@ -356,6 +408,9 @@ def _iter_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--speed-only", action="store_true", help="skip the evidence matrix")
     p.add_argument("--evidence-only", action="store_true", help="skip the speed part")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    p.add_argument("--baseline", metavar="DIR",
+                   help="also time the lockstep of another checkout (e.g. `git worktree add DIR "
+                   "REV`), in the same run")
     return p.parse_args(argv)
 
 
@@ -375,7 +430,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         report(outcomes)
         print(f"\nmatrix wall time {time.monotonic() - t0:.0f}s", file=sys.stdout)
     if not args.evidence_only:
-        speed(args.quick)
+        speed(args.quick, args.baseline)
     return 0
 
 

@@ -2,8 +2,10 @@
 
 Each active robot Looks at the same snapshot in its own private frame (seeded X flip, as a
 networked agent), the paths are mapped back to the world frame and applied at once by the physics.
-By default each robot's view is put in canonical form and the plan of a canonical form is made
-once and shared (`SharedPlans`): every robot would have computed exactly those bits.
+By default the reference algorithm runs for a whole round at once (`SharedPlans`): the canonical
+form of the configuration is made once, the plan once, and each robot gets exactly the path its
+own `compute` returns (every robot would have computed those very bits). A `compute` passed in is
+called once per robot and Look, on its own shuffled view.
 """
 
 from __future__ import annotations
@@ -15,7 +17,8 @@ from typing import Final
 
 import numpy as np
 
-from agent.algorithm import Plan, canonical_view, plan
+from agent.algorithm import Plan, plan
+from agent.canonical import SharedForm
 from agent.frames import draw_flip, path_to_world, to_local
 from agent.params import Params
 from agent.path import STAY, Path, Points
@@ -37,10 +40,12 @@ SHARED_PLANS: Final = 8  # canonical forms remembered: a round has one; ssync re
 
 
 class SharedPlans:
-    """`algorithm.compute`, with the plan of each recent canonical form made once.
+    """The reference algorithm for all the robots of a round at once, exactly as each computes it.
 
-    Each call still puts the robot's own view on the grid and in canonical form; only `plan`, a
-    pure function of those bits, is looked up. So the result equals `algorithm.compute` exactly.
+    Every robot's own `algorithm.compute` puts its view in canonical form (the same bits for all,
+    agent/canonical.py) and plans there. This makes the canonical form once a round
+    (`SharedForm`), the plan once per distinct canonical form, and hands each robot its part in
+    its own frame: the very paths the robots' own computations return, without n of them.
     """
 
     def __init__(self, size: int = SHARED_PLANS) -> None:
@@ -48,16 +53,21 @@ class SharedPlans:
         self._size = size
         self.planned = 0  # how many plans were actually made (the rest were shared)
 
-    def __call__(self, view: Points, params: Params) -> Path:
-        canon = canonical_view(view, params)
-        key = (canon.key(), params)
+    def plan_of(self, form: SharedForm, params: Params) -> Plan:
+        """The plan of the configuration `form` (made at most once while remembered)."""
+        key = (form.points.tobytes(), params)
         made = self._plans.get(key)
         if made is None:
-            made = plan(canon.points, params)
+            made = plan(form.points, params)
             self.planned += 1
             self._plans[key] = made
             if len(self._plans) > self._size:
                 self._plans.popitem(last=False)
+        return made
+
+    def path(self, form: SharedForm, made: Plan, robot: int, flip: bool) -> Path:
+        """Robot `robot`'s path in its own frame: what `algorithm.compute` returns it."""
+        canon = form.for_robot(robot, flip)
         return canon.to_frame(made.moves.get(canon.observer, STAY))
 
 
@@ -108,12 +118,11 @@ def run_lockstep(
     """Run until formed, stalled or `max_rounds` (default `default_max_rounds`).
 
     `seed` fixes the robots' private frames and view orders; the scheduler carries its own seed.
-    `compute` defaults to the reference algorithm with shared plans (`SharedPlans`).
+    `compute` defaults to the reference algorithm, run for the whole round at once (`SharedPlans`).
     Raises InvalidConfigurationError for an invalid start, ValueError if n disagrees with params.
     """
     positions = validate_configuration(initial)  # a fresh float64 copy, on the grid
-    if compute is None:
-        compute = SharedPlans()
+    shared = SharedPlans()
     n = len(positions)
     if n != params.n:
         raise ValueError(f"the start has {n} robots but params say n={params.n}")
@@ -132,12 +141,17 @@ def run_lockstep(
         round_no += 1
         active = scheduler.active(round_no, everyone)
         paths: dict[int, Path] = {}
+        if compute is None and active:
+            form = SharedForm.of(positions)
+            made = shared.plan_of(form, params)
         for robot in active:
             me = positions[robot]
-            order = look_rng.permutation(n - 1)
-            order[order >= robot] += 1  # a shuffled order of everyone but `robot`
-            others = positions[order]
-            path_local = compute(to_local(others, me, flips[robot]), params)
+            if compute is None:
+                path_local = shared.path(form, made, robot, flips[robot])
+            else:
+                order = look_rng.permutation(n - 1)
+                order[order >= robot] += 1  # a shuffled order of everyone but `robot`
+                path_local = compute(to_local(positions[order], me, flips[robot]), params)
             looks += 1
             if path_local:
                 paths[robot] = path_to_world(path_local, (float(me[0]), float(me[1])), flips[robot])

@@ -6,6 +6,7 @@ import dataclasses
 import types
 
 import numpy as np
+import strategies
 from agreement import assert_observers_agree
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -13,7 +14,8 @@ from hypothesis import strategies as st
 import agent.algorithm as algorithm_module
 import agent.geometry as geometry_module
 from agent.algorithm import canonical_view, compute, plan
-from agent.canonical import canonical
+from agent.canonical import SharedForm, canonical
+from agent.frames import to_local
 from agent.geometry import mirror_matched, sec
 from agent.params import Params
 from agent.path import Path, end_point, mirror, path_length
@@ -153,3 +155,25 @@ def test_observers_agree_when_a_mirror_pair_is_exactly_one_from_l() -> None:
         [1.0000000000000002, -1.7320508075688772],
     ])
     assert_observers_agree(pts, Params(7, 4.0))
+
+
+@SETTINGS
+@given(st.one_of(configurations(), strategies.any_adversarial_start()), st.data())
+def test_the_shared_form_gives_every_robot_its_own_canonical_form(
+    pts: np.ndarray, data: st.DataObject
+) -> None:
+    # Lockstep makes the canonical form once a round (SharedForm) instead of once per robot: it
+    # must be exactly what each robot computes on its own shuffled view in its own frame.
+    world = snap(pts)
+    shared = SharedForm.of(world)
+    params = Params(len(world), 4.0)
+    for robot in range(len(world)):
+        flip = data.draw(st.booleans())
+        others = np.delete(world, robot, axis=0)
+        others = others[data.draw(st.permutations(range(len(others))))]
+        own = canonical_view(to_local(others, (world[robot, 0], world[robot, 1]), flip), params)
+        mine = shared.for_robot(robot, flip)
+        assert mine.key() == own.key()
+        assert (mine.observer, mine.flip, mine.mirror_symmetric) == (
+            own.observer, own.flip, own.mirror_symmetric)
+        assert np.array(mine.offset).tobytes() == np.array(own.offset).tobytes()

@@ -8,6 +8,7 @@ from pathlib import Path as FsPath
 import numpy as np
 import pytest
 
+from agent import algorithm
 from agent.frames import draw_flip
 from agent.params import Params
 from agent.path import STAY, Line, Path, Points
@@ -159,3 +160,25 @@ def test_every_named_degenerate_start_forms_without_collisions(scheduler: str) -
         n = len(start)
         result = run_lockstep(start, Params(n, a), make_scheduler(scheduler, n, 7), seed=7)
         assert (result.status, result.collisions) == ("formed", 0), name
+
+
+@pytest.mark.parametrize("scheduler", ["fsync", "ssync", "centralized"])
+@pytest.mark.parametrize(("kind", "n"), [("clustered", 9), ("spread", 7), ("dense", 12)])
+def test_shared_plans_equal_every_robot_computing_its_own(kind: str, n: int,
+                                                          scheduler: str) -> None:
+    # The default lockstep makes the canonical form and the plan once a round; passing the
+    # reference `compute` makes every robot compute on its own shuffled view. Same run, bit for bit.
+    start = random_start(n, 3, kind)
+    runs = []
+    for compute in (None, algorithm.compute):
+        rounds: list[tuple[int, tuple[int, ...], bytes]] = []
+
+        def keep(report: RoundReport, rounds: list[tuple[int, tuple[int, ...], bytes]] = rounds,
+                 ) -> None:
+            rounds.append((report.round, report.active, report.outcome.positions.tobytes()))
+
+        result = run_lockstep(start, Params(n), make_scheduler(scheduler, n, 5), seed=5,
+                              compute=compute, on_round=keep)
+        runs.append((result.status, result.moves, rounds))
+    assert runs[0] == runs[1]
+    assert runs[0][0] == "formed"
