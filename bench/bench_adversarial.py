@@ -1,6 +1,6 @@
 """Evidence matrix over adversarial starts (world/adversarial.py) under fsync, ssync, centralized.
 
-    python bench/bench_adversarial.py                    # 700 cases x 3 schedulers = 2,100 runs
+    python bench/bench_adversarial.py                    # 2,000 starts x 3 schedulers = 6,000 runs
     python bench/bench_adversarial.py --quick --jobs 2   # 60 cases (n <= 16) x 3 = 180 runs
     python bench/bench_adversarial.py --families rim,lattice --csv runs.csv
     python bench/bench_adversarial.py --emit-start lattice 12 345 4.0 > start.json
@@ -38,7 +38,7 @@ from coordinator.schedule import make_scheduler
 from deploy.lockstep import run_lockstep
 from world.adversarial import DESCRIPTIONS, FAMILIES, Case, adversarial_cases, build_adversarial
 
-DEFAULT_COUNT: Final = 700  # x 3 schedulers = 2,100 runs
+DEFAULT_COUNT: Final = 2000  # adversarial starts, x 3 schedulers = 6,000 runs
 DEFAULT_N_MAX: Final = 40
 QUICK_COUNT: Final = 60  # cases, x 3 schedulers = 180 runs
 QUICK_N_MAX: Final = 16
