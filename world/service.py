@@ -21,6 +21,7 @@ import numpy as np
 
 from agent.path import Path, path_length, transform
 from agent.protocol import MoveSubmitted, alive_any_key, move_any_key, robot_of_alive_key
+from agent.tolerance import snap
 from world.physics import Collision, RoundOutcome, apply_round
 from world.progress import ProgressTracker
 from world.protocol import (
@@ -107,7 +108,9 @@ class WorldCore:
         self.setup = setup
         self.journal = journal
         n = setup.n
-        self.positions: Points = np.array(setup.initial, dtype=np.float64).reshape(n, 2)
+        # On the grid, so that every robot's view is exact (agent/tolerance.py); a start that came
+        # through validate_configuration is there already.
+        self.positions: Points = snap(np.array(setup.initial, dtype=np.float64).reshape(n, 2))
         self.tracker = ProgressTracker(n, setup.a, setup.max_rounds)
         self.status = "running"
         self.committed = 0
