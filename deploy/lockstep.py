@@ -22,6 +22,7 @@ from agent.canonical import SharedForm
 from agent.frames import draw_flip, path_to_world, to_local
 from agent.params import Params
 from agent.path import STAY, Path, Points
+from agent.tolerance import check_supported
 from coordinator.schedule import Scheduler
 from world.physics import RoundOutcome, apply_round, validate_configuration
 from world.progress import Progress, ProgressTracker
@@ -119,13 +120,15 @@ def run_lockstep(
 
     `seed` fixes the robots' private frames and view orders; the scheduler carries its own seed.
     `compute` defaults to the reference algorithm, run for the whole round at once (`SharedPlans`).
-    Raises InvalidConfigurationError for an invalid start, ValueError if n disagrees with params.
+    Raises InvalidConfigurationError for an invalid start, UnsupportedInputError outside the
+    supported range (agent/tolerance.py), ValueError if n disagrees with params.
     """
     positions = validate_configuration(initial)  # a fresh float64 copy, on the grid
     shared = SharedPlans()
     n = len(positions)
     if n != params.n:
         raise ValueError(f"the start has {n} robots but params say n={params.n}")
+    check_supported(positions, params.a)
     cap = default_max_rounds(n, scheduler.name) if max_rounds is None else max_rounds
     tracker = ProgressTracker(n, params.a, cap)
     flips = [draw_flip(seed, robot) for robot in range(n)]

@@ -12,7 +12,7 @@ from agent import algorithm
 from agent.frames import draw_flip
 from agent.params import Params
 from agent.path import STAY, Line, Path, Points
-from agent.tolerance import GRID
+from agent.tolerance import GRID, UnsupportedInputError
 from coordinator.schedule import make_scheduler
 from deploy.lockstep import RoundReport, default_max_rounds, run_lockstep
 from world.physics import InvalidConfigurationError
@@ -182,3 +182,12 @@ def test_shared_plans_equal_every_robot_computing_its_own(kind: str, n: int,
         runs.append((result.status, result.moves, rounds))
     assert runs[0] == runs[1]
     assert runs[0][0] == "formed"
+
+
+@pytest.mark.parametrize(("a", "offset"), [(1e10, 0.0), (1e308, 0.0), (4.0, 5e6)])
+def test_inputs_outside_the_supported_range_are_refused_before_any_round(
+    a: float, offset: float
+) -> None:
+    start = polygon(4, 4.0) + offset
+    with pytest.raises((UnsupportedInputError, InvalidConfigurationError), match="must"):
+        run_lockstep(start, Params(4, a), make_scheduler("fsync", 4, 0), seed=0)
