@@ -15,9 +15,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from agent.canonical import Canonical, canonical
-from agent.detour import shortest_free_path
-from agent.geometry import (
+from fatswarm.agent.canonical import Canonical, canonical
+from fatswarm.agent.detour import shortest_free_path
+from fatswarm.agent.geometry import (
     Circle,
     is_free,
     is_uniform_circle,
@@ -31,8 +31,8 @@ from agent.geometry import (
     target_radius,
     targets_on,
 )
-from agent.params import Params
-from agent.path import (
+from fatswarm.agent.params import Params
+from fatswarm.agent.path import (
     MAX_SEGMENTS,
     STAY,
     Arc,
@@ -46,7 +46,7 @@ from agent.path import (
     segment_end,
     transform,
 )
-from agent.tolerance import (
+from fatswarm.agent.tolerance import (
     CLEAR_SLACK,
     CONTACT,
     EPS_AT_REL,

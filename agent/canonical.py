@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from agent.path import Path, Points, transform
+from fatswarm.agent.path import Path, Points, transform
 
 IntArray = NDArray[np.intp]
 

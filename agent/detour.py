@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from agent.geometry import path_distances, segment_distances
-from agent.path import Arc, Line, Path, Point, Points, Segment, end_point, segment_end
+from fatswarm.agent.geometry import path_distances, segment_distances
+from fatswarm.agent.path import Arc, Line, Path, Point, Points, Segment, end_point, segment_end
 
 Floats = NDArray[np.float64]  # (k,)
 Ints = NDArray[np.int64]  # (k,)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from agent.path import Path, Point, Points, transform
+from fatswarm.agent.path import Path, Point, Points, transform
 
 FRAME_STREAM = 0xF1A9  # keeps frame draws apart from other seeded streams of the same run
 

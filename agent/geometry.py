@@ -11,9 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from agent.canonical import canonical
-from agent.path import Arc, Line, Path, Point, Points, segment_end
-from agent.tolerance import (
+from fatswarm.agent.canonical import canonical
+from fatswarm.agent.path import Arc, Line, Path, Point, Points, segment_end
+from fatswarm.agent.tolerance import (
     CLEAR_SLACK,
     CONTACT,
     EPS_AT_REL,

@@ -11,8 +11,8 @@ import math
 import re
 from dataclasses import dataclass
 
-from agent.path import Arc, Path, PathFormatError, from_record, to_record, vertices
-from world.protocol import (
+from fatswarm.agent.path import Arc, Path, PathFormatError, from_record, to_record, vertices
+from fatswarm.world.protocol import (
     MAX_COORD,
     MAX_ROBOTS,
     ProtocolError,

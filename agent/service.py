@@ -15,13 +15,13 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from agent.algorithm import compute
-from agent.frames import draw_flip, path_to_world
-from agent.params import Params, ParamsError
-from agent.path import Path
-from agent.protocol import MoveSubmitted, alive_key, move_key
-from coordinator.protocol import RoundStart, round_key
-from world.protocol import ProtocolError, Snapshot, snapshot_key
+from fatswarm.agent.algorithm import compute
+from fatswarm.agent.frames import draw_flip, path_to_world
+from fatswarm.agent.params import Params, ParamsError
+from fatswarm.agent.path import Path
+from fatswarm.agent.protocol import MoveSubmitted, alive_key, move_key
+from fatswarm.coordinator.protocol import RoundStart, round_key
+from fatswarm.world.protocol import ProtocolError, Snapshot, snapshot_key
 
 log = logging.getLogger("fatswarm.agent")
 

@@ -33,10 +33,16 @@ from typing import Any, Final, TextIO
 import numpy as np
 from bench_core import PROGRESS_SECONDS, SCHEDULERS, _stats
 
-from agent.params import Params
-from coordinator.schedule import make_scheduler
-from deploy.lockstep import run_lockstep
-from world.adversarial import DESCRIPTIONS, FAMILIES, Case, adversarial_cases, build_adversarial
+from fatswarm.agent.params import Params
+from fatswarm.coordinator.schedule import make_scheduler
+from fatswarm.deploy.lockstep import run_lockstep
+from fatswarm.world.adversarial import (
+    DESCRIPTIONS,
+    FAMILIES,
+    Case,
+    adversarial_cases,
+    build_adversarial,
+)
 
 DEFAULT_COUNT: Final = 2000  # adversarial starts, x 3 schedulers = 6,000 runs
 DEFAULT_N_MAX: Final = 40

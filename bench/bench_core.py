@@ -25,12 +25,12 @@ from typing import Any
 
 import numpy as np
 
-from agent import algorithm
-from agent.params import Params
-from agent.path import Path, Points
-from coordinator.schedule import make_scheduler
-from deploy.lockstep import RoundReport, run_lockstep
-from world.starts import KINDS, degenerate_starts, random_start
+from fatswarm.agent import algorithm
+from fatswarm.agent.params import Params
+from fatswarm.agent.path import Path, Points
+from fatswarm.coordinator.schedule import make_scheduler
+from fatswarm.deploy.lockstep import RoundReport, run_lockstep
+from fatswarm.world.starts import KINDS, degenerate_starts, random_start
 
 SCHEDULERS = ("fsync", "ssync", "centralized")
 SIZES = tuple(range(2, 41))  # n from 2 to 40
@@ -266,10 +266,10 @@ def looks_per_second(
 
 BASELINE_SNIPPET = """
 import sys, time, contextlib
-from agent.params import Params
-from coordinator.schedule import make_scheduler
-from deploy.lockstep import run_lockstep
-from world.starts import random_start
+from fatswarm.agent.params import Params
+from fatswarm.coordinator.schedule import make_scheduler
+from fatswarm.deploy.lockstep import run_lockstep
+from fatswarm.world.starts import random_start
 n, budget = int(sys.argv[1]), float(sys.argv[2])
 start = random_start(n, 0, "clustered"); looks = 0; t0 = time.perf_counter()
 class Stop(Exception): pass

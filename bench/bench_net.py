@@ -23,18 +23,18 @@ from typing import Any
 
 import numpy as np
 
-from agent.params import Params
-from agent.protocol import alive_any_key, robot_of_alive_key
-from coordinator.schedule import make_scheduler
-from deploy.launcher import Children
-from deploy.parts import agent_command, agents_command
-from deploy.zconf import loopback_endpoint, make_config
-from world.protocol import ProtocolError, WorldState, state_key
-from world.starts import random_start
+from fatswarm.agent.params import Params
+from fatswarm.agent.protocol import alive_any_key, robot_of_alive_key
+from fatswarm.coordinator.schedule import make_scheduler
+from fatswarm.deploy.launcher import Children
+from fatswarm.deploy.parts import agent_command, agents_command
+from fatswarm.deploy.zconf import loopback_endpoint, make_config
+from fatswarm.world.protocol import ProtocolError, WorldState, state_key
+from fatswarm.world.starts import random_start
 
 REPLIER = """
 import sys, threading, zenoh
-from deploy.zconf import make_config
+from fatswarm.deploy.zconf import make_config
 conf = make_config("client", [sys.argv[1]])
 with zenoh.open(conf) as s:
     q = s.declare_queryable("bench/rtt", lambda q: (q.reply(q.key_expr, b"x" * 100), q.drop()))
@@ -173,9 +173,10 @@ def networked(
     net = ["--connect", endpoint, "--swarm", swarm, "--log-level", "warning"]
     state = os.path.join(tmp, f"{swarm}.jsonl")
     with Children() as children:
-        children.start("world", [sys.executable, "-m", "deploy.parts", "world", *net, "--state",
+        part = [sys.executable, "-m", "fatswarm.deploy.parts"]
+        children.start("world", [*part, "world", *net, "--state",
                                  state, "-n", str(n), "--seed", str(seed), "--scheduler", "fsync"])
-        children.start("coordinator", [sys.executable, "-m", "deploy.parts", "coordinator", *net,
+        children.start("coordinator", [*part, "coordinator", *net,
                                        "--seed", str(seed), "--scheduler", "fsync",
                                        "--start-timeout", "600", "--move-timeout", "30"])
         t0 = time.perf_counter()
@@ -216,7 +217,7 @@ def networked(
 
 
 def lockstep(n: int, seed: int) -> tuple[str, int, int, float, float]:
-    from deploy.lockstep import run_lockstep
+    from fatswarm.deploy.lockstep import run_lockstep
 
     initial = random_start(n, seed, "clustered", 4.0)
     t0, c0 = time.perf_counter(), time.process_time()

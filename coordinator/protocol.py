@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from world.protocol import MAX_ROBOTS, get_int, get_robots, pack, prefix, unpack
+from fatswarm.world.protocol import MAX_ROBOTS, get_int, get_robots, pack, prefix, unpack
 
 
 def round_key(swarm: str) -> str:

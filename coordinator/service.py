@@ -15,10 +15,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from agent.protocol import alive_any_key, robot_of_alive_key
-from coordinator.protocol import RoundStart, alive_key, round_key
-from coordinator.schedule import Scheduler
-from world.protocol import (
+from fatswarm.agent.protocol import alive_any_key, robot_of_alive_key
+from fatswarm.coordinator.protocol import RoundStart, alive_key, round_key
+from fatswarm.coordinator.schedule import Scheduler
+from fatswarm.world.protocol import (
     Begin,
     Commit,
     ControlReply,

@@ -15,15 +15,15 @@ from collections.abc import Sequence
 
 # name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "run": ("deploy.run", "run a swarm (networked by default, --lockstep for one process)"),
-    "router": ("deploy.parts", "run a Zenoh router alone (for several hosts)"),
-    "world": ("deploy.parts", "run the world process alone"),
-    "coordinator": ("deploy.parts", "run the coordinator process alone"),
-    "agent": ("deploy.parts", "run one agent (robot) process alone"),
-    "agents": ("deploy.parts", "run K agent processes on this host"),
-    "dashboard": ("deploy.dashboard", "attach a read-only dashboard to a running swarm"),
-    "replay": ("deploy.replay", "play a run record in the dashboard"),
-    "plot": ("deploy.plot", "draw a record's trajectories to SVG or PNG (needs fatswarm[plot])"),
+    "run": ("fatswarm.deploy.run", "run a swarm (networked by default, --lockstep: one process)"),
+    "router": ("fatswarm.deploy.parts", "run a Zenoh router alone (for several hosts)"),
+    "world": ("fatswarm.deploy.parts", "run the world process alone"),
+    "coordinator": ("fatswarm.deploy.parts", "run the coordinator process alone"),
+    "agent": ("fatswarm.deploy.parts", "run one agent (robot) process alone"),
+    "agents": ("fatswarm.deploy.parts", "run K agent processes on this host"),
+    "dashboard": ("fatswarm.deploy.dashboard", "attach a read-only dashboard to a running swarm"),
+    "replay": ("fatswarm.deploy.replay", "play a run record in the dashboard"),
+    "plot": ("fatswarm.deploy.plot", "draw a record's trajectories to SVG or PNG (fatswarm[plot])"),
 }
 
 EXIT_BAD_INPUT = 2

@@ -27,12 +27,12 @@ from rich.style import Style
 from rich.table import Table
 from rich.text import Text
 
-from agent import geometry, tolerance
-from agent.path import Points
-from deploy.canvas import Canvas, Mode, Viewport
+from fatswarm.agent import geometry, tolerance
+from fatswarm.agent.path import Points
+from fatswarm.deploy.canvas import Canvas, Mode, Viewport
 
 if TYPE_CHECKING:
-    from world.protocol import WorldState
+    from fatswarm.world.protocol import WorldState
 
 EXIT_NOT_FORMED, EXIT_BAD_INPUT = 1, 2
 DEFAULT_SWARM = "default"
@@ -495,7 +495,7 @@ class StateWatcher:
     def _run(self) -> None:
         import zenoh
 
-        from world.protocol import ProtocolError, WorldState, state_key
+        from fatswarm.world.protocol import ProtocolError, WorldState, state_key
 
         own = self.session is None
         try:
@@ -656,7 +656,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     """`fatswarm dashboard`: follow a running swarm read-only until Ctrl-C (or its end)."""
-    from world.protocol import check_swarm
+    from fatswarm.world.protocol import check_swarm
 
     try:
         check_swarm(args.swarm)
@@ -685,6 +685,6 @@ def main(args: argparse.Namespace) -> int:
     last = watcher.latest
     if last is None or last.status == "running":
         return EXIT_NOT_FORMED
-    from deploy.run import exit_code_for
+    from fatswarm.deploy.run import exit_code_for
 
     return exit_code_for(last.status, last.collisions_total)  # as `fatswarm run`: 3 if collided

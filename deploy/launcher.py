@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from types import TracebackType
 from typing import Any
 
-from deploy.run import (
+from fatswarm.deploy.run import (
     EXIT_BAD_INPUT,
     EXIT_FORMED,
     EXIT_INTERRUPTED,
@@ -30,7 +30,7 @@ from deploy.run import (
     exit_code,
     summary,
 )
-from deploy.zconf import DEFAULT_SWARM, ROUTER_ENDPOINT_HELP, loopback_endpoint
+from fatswarm.deploy.zconf import DEFAULT_SWARM, ROUTER_ENDPOINT_HELP, loopback_endpoint
 
 log = logging.getLogger("fatswarm.launcher")
 
@@ -155,14 +155,14 @@ def run_networked(args: argparse.Namespace) -> int:
 
 def check_inputs(args: argparse.Namespace) -> tuple[str | None, int]:
     """(what to fix or None, the seed): the lockstep run's checks, before any process starts."""
-    from deploy.run import input_errors, resolve_run
+    from fatswarm.deploy.run import input_errors, resolve_run
 
     seed: int = args.seed if args.seed is not None else secrets.randbelow(2**31)
     bad_input: tuple[type[Exception], ...] = (*input_errors(), ValueError)  # ValueError: swarm
     try:
         resolve_run(args, seed)
         if args.swarm is not None:
-            from world.protocol import check_swarm
+            from fatswarm.world.protocol import check_swarm
 
             check_swarm(args.swarm)
     except bad_input as exc:
@@ -184,7 +184,7 @@ def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
         if args.connect:
             endpoints = list(args.connect)
         else:
-            from deploy.router import open_router
+            from fatswarm.deploy.router import open_router
 
             listen = list(args.listen) or [loopback_endpoint()]
             router = open_router(listen)
@@ -220,7 +220,7 @@ def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
 def _follow(args: argparse.Namespace, swarm: str, router: Any, endpoint: str) -> Any:
     """The dashboard (on a terminal) or progress lines, from the world's state stream."""
     try:
-        from deploy.dashboard import follow
+        from fatswarm.deploy.dashboard import follow
     except ImportError:
         return None
     if router is not None:
@@ -243,7 +243,7 @@ def _await_final_state(watcher: Any, timeout_s: float) -> None:
 
 
 def _part(name: str, *flags: str) -> list[str]:
-    return [sys.executable, "-m", "deploy.parts", name, *flags]
+    return [sys.executable, "-m", "fatswarm.deploy.parts", name, *flags]
 
 
 def _run_children(
@@ -255,7 +255,7 @@ def _run_children(
     children: Children,
     stop: threading.Event,
 ) -> int:
-    from deploy.parts import agents_command
+    from fatswarm.deploy.parts import agents_command
 
     net = ["--swarm", swarm]
     for ep in endpoints:
@@ -296,10 +296,10 @@ def _run_children(
 
 def _robot_count(args: argparse.Namespace) -> int:
     if args.init is not None:
-        from world.starts import load_init
+        from fatswarm.world.starts import load_init
 
         return len(load_init(args.init)[0])
-    from deploy.run import DEFAULT_N
+    from fatswarm.deploy.run import DEFAULT_N
 
     return int(args.n if args.n is not None else DEFAULT_N)
 
@@ -307,7 +307,7 @@ def _robot_count(args: argparse.Namespace) -> int:
 def print_summary(record: str, out: Any) -> Outcome | None:
     """Print the same summary as a lockstep run, read back from the record; the outcome, None if
     the record holds no result (the run did not end)."""
-    from world.record import RecordFormatError, read_record
+    from fatswarm.world.record import RecordFormatError, read_record
 
     try:
         rec = read_record(record)

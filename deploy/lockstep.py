@@ -17,16 +17,16 @@ from typing import Final
 
 import numpy as np
 
-from agent.algorithm import Plan, plan
-from agent.canonical import SharedForm
-from agent.frames import draw_flip, path_to_world, to_local
-from agent.params import Params
-from agent.path import STAY, Path, Points
-from agent.tolerance import check_supported
-from coordinator.schedule import Scheduler
-from world.physics import RoundOutcome, apply_round, validate_configuration
-from world.progress import Progress, ProgressTracker
-from world.record import RecordWriter
+from fatswarm.agent.algorithm import Plan, plan
+from fatswarm.agent.canonical import SharedForm
+from fatswarm.agent.frames import draw_flip, path_to_world, to_local
+from fatswarm.agent.params import Params
+from fatswarm.agent.path import STAY, Path, Points
+from fatswarm.agent.tolerance import check_supported
+from fatswarm.coordinator.schedule import Scheduler
+from fatswarm.world.physics import RoundOutcome, apply_round, validate_configuration
+from fatswarm.world.progress import Progress, ProgressTracker
+from fatswarm.world.record import RecordWriter
 
 LOOK_STREAM: Final = 0x100C  # orders the others in a robot's view (compute must ignore the order)
 

@@ -15,7 +15,7 @@ import threading
 import time
 from collections.abc import Sequence
 
-from deploy.zconf import AGENT_LEASE_MS, add_zenoh_arguments, make_config
+from fatswarm.deploy.zconf import AGENT_LEASE_MS, add_zenoh_arguments, make_config
 
 EXIT_BAD_INPUT = 2
 DEFAULT_ROUTER_LISTEN = "tcp/127.0.0.1:7447"
@@ -85,7 +85,7 @@ def add_router_arguments(p: argparse.ArgumentParser) -> None:
 
 def main_router(args: argparse.Namespace) -> int:
     """Run a router until SIGTERM/SIGINT."""
-    from deploy.router import run_router
+    from fatswarm.deploy.router import run_router
 
     _logging(args, "info")
     stop = install_stop_signals(args.exit_with_parent)
@@ -100,8 +100,8 @@ def main_router(args: argparse.Namespace) -> int:
 
 def add_world_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm world` (the start flags matter only for a new state file)."""
-    from coordinator.schedule import NAMES
-    from world.starts import KINDS
+    from fatswarm.coordinator.schedule import NAMES
+    from fatswarm.world.starts import KINDS
 
     _add_common(p)
     p.add_argument("--state", required=True, metavar="PATH",
@@ -121,10 +121,10 @@ def add_world_arguments(p: argparse.ArgumentParser) -> None:
 
 def main_world(args: argparse.Namespace) -> int:
     """Run the world until SIGTERM/SIGINT."""
-    from deploy.lockstep import default_max_rounds
-    from deploy.run import input_errors, resolve_start
-    from world.record import RecordFormatError
-    from world.service import WorldSetup, open_world, serve
+    from fatswarm.deploy.lockstep import default_max_rounds
+    from fatswarm.deploy.run import input_errors, resolve_start
+    from fatswarm.world.record import RecordFormatError
+    from fatswarm.world.service import WorldSetup, open_world, serve
 
     _logging(args, "info")
     stop = install_stop_signals(args.exit_with_parent)
@@ -153,7 +153,7 @@ def main_world(args: argparse.Namespace) -> int:
 
 def add_coordinator_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm coordinator` (n comes from the world)."""
-    from coordinator.schedule import NAMES
+    from fatswarm.coordinator.schedule import NAMES
 
     _add_common(p)
     p.add_argument("--seed", type=int, default=0, metavar="S", help="seed of the scheduler")
@@ -171,8 +171,8 @@ def add_coordinator_arguments(p: argparse.ArgumentParser) -> None:
 
 def main_coordinator(args: argparse.Namespace) -> int:
     """Run rounds until the run ends; exit 0 formed, 1 not formed."""
-    from coordinator.schedule import ScheduleError, Scheduler, make_scheduler
-    from coordinator.service import Coordinator, CoordinatorConfig
+    from fatswarm.coordinator.schedule import ScheduleError, Scheduler, make_scheduler
+    from fatswarm.coordinator.service import Coordinator, CoordinatorConfig
 
     _logging(args, "info")
     stop = install_stop_signals(args.exit_with_parent)
@@ -203,7 +203,7 @@ def add_agent_arguments(p: argparse.ArgumentParser) -> None:
 
 def main_agent(args: argparse.Namespace) -> int:
     """Run one robot until SIGTERM/SIGINT."""
-    from agent.service import AgentConfig, serve
+    from fatswarm.agent.service import AgentConfig, serve
 
     _logging(args, "warning")
     stop = install_stop_signals(args.exit_with_parent)
@@ -235,7 +235,7 @@ SPAWN_MODES = ("fork", "exec")
 def agent_command(robot: int, seed: int, swarm: str, connect: Sequence[str],
                   log_level: str | None = None) -> list[str]:
     """The argv that starts one agent process."""
-    argv = [sys.executable, "-m", "deploy.parts", "agent", "--robot", str(robot),
+    argv = [sys.executable, "-m", "fatswarm.deploy.parts", "agent", "--robot", str(robot),
             "--seed", str(seed), "--swarm", swarm]
     for endpoint in connect:
         argv += ["--connect", endpoint]
@@ -247,7 +247,7 @@ def agent_command(robot: int, seed: int, swarm: str, connect: Sequence[str],
 def agents_command(count: int, seed: int, swarm: str, connect: Sequence[str],
                    log_level: str | None = None, spawn: str = "fork", first: int = 0) -> list[str]:
     """The argv of one `agents` host process starting `count` agent processes."""
-    argv = [sys.executable, "-m", "deploy.parts", "agents", "-n", str(count), "--first",
+    argv = [sys.executable, "-m", "fatswarm.deploy.parts", "agents", "-n", str(count), "--first",
             str(first), "--seed", str(seed), "--swarm", swarm, "--spawn", spawn]
     for endpoint in connect:
         argv += ["--connect", endpoint]
@@ -270,7 +270,7 @@ def main_agents(args: argparse.Namespace) -> int:
 
 
 def _exec_agents(args: argparse.Namespace, robots: range) -> int:
-    from deploy.launcher import Children, stop_grace_s
+    from fatswarm.deploy.launcher import Children, stop_grace_s
 
     stop = install_stop_signals(args.exit_with_parent)
     with Children(stop_grace_s(1)) as children:
@@ -292,7 +292,7 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
     """
     import zenoh  # noqa: F401  (the module only: no session, no runtime thread in this process)
 
-    from agent.service import AgentConfig, serve
+    from fatswarm.agent.service import AgentConfig, serve
 
     log = logging.getLogger("fatswarm.agents")
     children: dict[int, int] = {}
@@ -315,7 +315,7 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
         _reap(children, log)
         stop.wait(0.2)
     code = 0 if stop.is_set() else 1  # every agent gone by itself: something is wrong
-    from deploy.launcher import stop_grace_s
+    from fatswarm.deploy.launcher import stop_grace_s
 
     for pid in children:
         _kill(pid, signal.SIGTERM)

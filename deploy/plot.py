@@ -12,8 +12,8 @@ import sys
 
 import numpy as np
 
-from agent.path import Points, sample, truncate
-from world.record import RecordFormatError, RunRecord, read_record
+from fatswarm.agent.path import Points, sample, truncate
+from fatswarm.world.record import RecordFormatError, RunRecord, read_record
 
 EXIT_OK, EXIT_BAD_INPUT = 0, 2
 FORMATS = (".svg", ".png")
@@ -56,7 +56,7 @@ def draw(record: RunRecord, out: str, title: str | None = None) -> None:
     import matplotlib.pyplot as plt
     from matplotlib.patches import Circle
 
-    from deploy.dashboard import enclosing_circle
+    from fatswarm.deploy.dashboard import enclosing_circle
 
     header = record.header
     end = final_positions(record)

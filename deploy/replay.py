@@ -16,9 +16,9 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import Any
 
-from agent.path import sample, truncate
-from deploy.dashboard import Frame, print_frame, render_frame, save_svg
-from world.record import RecordFormatError, RunRecord, read_record
+from fatswarm.agent.path import sample, truncate
+from fatswarm.deploy.dashboard import Frame, print_frame, render_frame, save_svg
+from fatswarm.world.record import RecordFormatError, RunRecord, read_record
 
 EXIT_OK, EXIT_BAD_INPUT = 0, 2
 TRAIL_STEP = 0.25  # world units between samples of a drawn path (a quarter of a robot radius)

@@ -7,7 +7,7 @@ import threading
 from collections.abc import Sequence
 from typing import Any
 
-from deploy.zconf import make_config
+from fatswarm.deploy.zconf import make_config
 
 log = logging.getLogger("fatswarm.router")
 

@@ -17,10 +17,10 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Final, TextIO
 
 if TYPE_CHECKING:
-    from agent.params import Params
-    from agent.path import Points
-    from coordinator.schedule import Scheduler
-    from deploy.lockstep import RoundReport
+    from fatswarm.agent.params import Params
+    from fatswarm.agent.path import Points
+    from fatswarm.coordinator.schedule import Scheduler
+    from fatswarm.deploy.lockstep import RoundReport
 
 EXIT_FORMED: Final = 0  # formed, and no robot was ever stopped by contact
 EXIT_NOT_FORMED: Final = 1  # stalled or max_rounds, collisions or not
@@ -57,8 +57,8 @@ def _optional_adder(module_name: str, function: str) -> Callable[[argparse.Argum
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm run` (plus the launcher's and dashboard's, once those modules exist)."""
-    from coordinator.schedule import NAMES
-    from world.starts import KINDS
+    from fatswarm.coordinator.schedule import NAMES
+    from fatswarm.world.starts import KINDS
 
     p.epilog = EXIT_CODES_HELP
     p.add_argument(
@@ -91,10 +91,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--record", metavar="PATH", help="write the run record (JSON Lines) to PATH")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="no progress lines while running (the summary is still printed)")
-    _optional_adder("deploy.launcher", "add_network_arguments")(p)
+    _optional_adder("fatswarm.deploy.launcher", "add_network_arguments")(p)
     # The dashboard's run flags (--no-dashboard, --svg): `add_run_arguments`, because the CLI
     # would hand an `add_dashboard_arguments` to `fatswarm dashboard` itself.
-    _optional_adder("deploy.dashboard", "add_run_arguments")(p)
+    _optional_adder("fatswarm.deploy.dashboard", "add_run_arguments")(p)
 
 
 def _fail(message: str) -> int:
@@ -111,9 +111,9 @@ def main(args: argparse.Namespace) -> int:
 
 def _networked(args: argparse.Namespace) -> int:
     try:
-        launcher = importlib.import_module("deploy.launcher")
+        launcher = importlib.import_module("fatswarm.deploy.launcher")
     except ModuleNotFoundError as exc:
-        if exc.name != "deploy.launcher":
+        if exc.name != "fatswarm.deploy.launcher":
             raise
         launcher = None
     run_networked: Any = getattr(launcher, "run_networked", None)
@@ -136,11 +136,11 @@ class RunSetup:
 
 def input_errors() -> tuple[type[Exception], ...]:
     """The exceptions `resolve_run` raises for bad input (each message says what to fix)."""
-    from agent.params import ParamsError
-    from agent.tolerance import UnsupportedInputError
-    from coordinator.schedule import ScheduleError
-    from world.physics import InvalidConfigurationError
-    from world.starts import InitFileError
+    from fatswarm.agent.params import ParamsError
+    from fatswarm.agent.tolerance import UnsupportedInputError
+    from fatswarm.coordinator.schedule import ScheduleError
+    from fatswarm.world.physics import InvalidConfigurationError
+    from fatswarm.world.starts import InitFileError
 
     return (ParamsError, InitFileError, ScheduleError, InvalidConfigurationError,
             UnsupportedInputError, RunInputError)
@@ -156,10 +156,10 @@ def resolve_start(
     """
     import numpy as np
 
-    from agent.params import Params
-    from agent.tolerance import check_supported
-    from world.physics import validate_configuration
-    from world.starts import load_init, random_start
+    from fatswarm.agent.params import Params
+    from fatswarm.agent.tolerance import check_supported
+    from fatswarm.world.physics import validate_configuration
+    from fatswarm.world.starts import load_init, random_start
 
     if init is not None:
         initial, file_a = load_init(init)  # finite numbers, as check_supported needs
@@ -181,8 +181,8 @@ def resolve_start(
 def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
     """Build the run the flags describe (shared by lockstep and networked runs, so both refuse
     the same input with the same message); raises one of `input_errors()`."""
-    from coordinator.schedule import make_scheduler
-    from deploy.lockstep import default_max_rounds
+    from fatswarm.coordinator.schedule import make_scheduler
+    from fatswarm.deploy.lockstep import default_max_rounds
 
     params, initial = resolve_start(args.init, args.n, args.a, seed, args.start)
     if args.scheduler != "scripted" and args.schedule is not None:
@@ -196,9 +196,9 @@ def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
 
 def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """`fatswarm run --lockstep`: build the run from the flags, run it, print the summary."""
-    from deploy.lockstep import run_lockstep
-    from world.physics import InvalidConfigurationError
-    from world.record import RecordFormatError, RecordWriter
+    from fatswarm.deploy.lockstep import run_lockstep
+    from fatswarm.world.physics import InvalidConfigurationError
+    from fatswarm.world.record import RecordFormatError, RecordWriter
 
     out = sys.stdout if out is None else out
     seed_given = args.seed is not None
@@ -249,7 +249,7 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
         print(f"record: {args.record}", file=out)
     svg = getattr(args, "svg", None)  # the dashboard's flag, when deploy.dashboard is there
     if svg:
-        from deploy.dashboard import Frame, save_svg
+        from fatswarm.deploy.dashboard import Frame, save_svg
 
         final = Frame(
             round=result.rounds,

@@ -16,10 +16,10 @@ from typing import Final
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from agent.geometry import target_radius
-from agent.path import Points
-from agent.tolerance import CONTACT
-from world.physics import CONTACT_SLACK, validate_configuration
+from fatswarm.agent.geometry import target_radius
+from fatswarm.agent.path import Points
+from fatswarm.agent.tolerance import CONTACT
+from fatswarm.world.physics import CONTACT_SLACK, validate_configuration
 
 ADVERSARIAL_STREAM: Final = 0xAD5E  # keeps these draws apart from every other seeded stream
 CASES_STREAM: Final = 0xCA5E

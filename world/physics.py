@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from agent.path import (
+from fatswarm.agent.path import (
     MAX_SEGMENTS,
     Arc,
     Line,
@@ -31,7 +31,7 @@ from agent.path import (
     segment_end,
     segment_length,
 )
-from agent.tolerance import (
+from fatswarm.agent.tolerance import (
     CLEAR_SLACK,
     CONTACT,
     GRID,

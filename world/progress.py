@@ -12,8 +12,8 @@ from typing import Final
 
 import numpy as np
 
-from agent.geometry import is_formed
-from agent.path import Points
+from fatswarm.agent.geometry import is_formed
+from fatswarm.agent.path import Points
 
 FORMED: Final = "formed"
 STALLED: Final = "stalled"

@@ -17,9 +17,9 @@ from typing import IO, Any, Final
 
 import numpy as np
 
-from agent.path import Path, PathFormatError, Points, from_record, to_record
-from world.physics import Collision
-from world.progress import STATUSES
+from fatswarm.agent.path import Path, PathFormatError, Points, from_record, to_record
+from fatswarm.world.physics import Collision
+from fatswarm.world.progress import STATUSES
 
 VERSION: Final = 1
 

@@ -19,12 +19,12 @@ from typing import Any
 
 import numpy as np
 
-from agent.path import Path, path_length, transform
-from agent.protocol import MoveSubmitted, alive_any_key, move_any_key, robot_of_alive_key
-from agent.tolerance import snap
-from world.physics import Collision, RoundOutcome, apply_round
-from world.progress import ProgressTracker
-from world.protocol import (
+from fatswarm.agent.path import Path, path_length, transform
+from fatswarm.agent.protocol import MoveSubmitted, alive_any_key, move_any_key, robot_of_alive_key
+from fatswarm.agent.tolerance import snap
+from fatswarm.world.physics import Collision, RoundOutcome, apply_round
+from fatswarm.world.progress import ProgressTracker
+from fatswarm.world.protocol import (
     AgentInfo,
     Begin,
     Commit,
@@ -43,7 +43,7 @@ from world.protocol import (
     snapshot_any_key,
     state_key,
 )
-from world.record import Header, RecordWriter, RoundEntry, RunRecord, read_record
+from fatswarm.world.record import Header, RecordWriter, RoundEntry, RunRecord, read_record
 
 log = logging.getLogger("fatswarm.world")
 

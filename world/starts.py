@@ -21,10 +21,10 @@ from typing import Any, Final
 
 import numpy as np
 
-from agent.geometry import target_radius
-from agent.path import Points
-from agent.tolerance import CONTACT, snap
-from world.physics import CONTACT_SLACK
+from fatswarm.agent.geometry import target_radius
+from fatswarm.agent.path import Points
+from fatswarm.agent.tolerance import CONTACT, snap
+from fatswarm.world.physics import CONTACT_SLACK
 
 KINDS: Final = ("clustered", "dense", "spread", "loose", "clumped")
 START_STREAM: Final = 0x57A7  # keeps start draws apart from other seeded streams of the same run

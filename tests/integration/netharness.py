@@ -13,10 +13,10 @@ from typing import Any
 import numpy as np
 import pytest
 
-from deploy.launcher import Children
-from deploy.zconf import loopback_endpoint, make_config
-from world.protocol import ProtocolError, WorldState, state_key
-from world.record import RecordWriter, RunRecord, read_record
+from fatswarm.deploy.launcher import Children
+from fatswarm.deploy.zconf import loopback_endpoint, make_config
+from fatswarm.world.protocol import ProtocolError, WorldState, state_key
+from fatswarm.world.record import RecordWriter, RunRecord, read_record
 
 DEADLINE_S = 120.0  # generous: the machine is shared; tests wait on predicates, never on sleeps
 
@@ -38,7 +38,7 @@ class Swarm:
 
     def _start(self, name: str, part: str, *flags: str) -> None:
         log = open(self.tmp / f"{name.replace(' ', '-')}.log", "ab")  # noqa: SIM115
-        argv = [sys.executable, "-m", "deploy.parts", part, *flags]
+        argv = [sys.executable, "-m", "fatswarm.deploy.parts", part, *flags]
         self.children.start(name, argv, stdout=log, stderr=log)
         log.close()
 
@@ -139,10 +139,10 @@ class Swarm:
 
 def lockstep_record(path: Path, n: int, seed: int, scheduler: str = "ssync") -> RunRecord:
     """The lockstep run of the same start, seed and scheduler, as a record."""
-    from agent.params import Params
-    from coordinator.schedule import make_scheduler
-    from deploy.lockstep import run_lockstep
-    from world.starts import random_start
+    from fatswarm.agent.params import Params
+    from fatswarm.coordinator.schedule import make_scheduler
+    from fatswarm.deploy.lockstep import run_lockstep
+    from fatswarm.world.starts import random_start
 
     initial = random_start(n, seed, "clustered", 4.0)
     with RecordWriter(path) as rec:

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import contextlib
 import fcntl
-import importlib.util
 import math
 import os
 import pty
@@ -27,7 +26,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from world.protocol import AgentInfo, WorldState, state_key
+from fatswarm.world.protocol import AgentInfo, WorldState, state_key
 
 pytestmark = pytest.mark.integration
 
@@ -240,30 +239,12 @@ def test_replay_on_a_terminal_steps_with_keys_and_quits() -> None:
         child.kill()
 
 
-def _launcher_shows_dashboard() -> bool:
-    """True once `deploy.launcher` exists and starts `deploy.dashboard.follow` during a run."""
-    if importlib.util.find_spec("deploy.launcher") is None:
-        return False
-    import inspect
-
-    import deploy.launcher
-
-    return "follow(" in inspect.getsource(deploy.launcher)
-
-
-needs_launcher = pytest.mark.skipif(
-    not _launcher_shows_dashboard(),
-    reason="deploy.launcher does not start the dashboard (deploy.dashboard.follow) yet",
-)
-
-
-@needs_launcher
 def test_fatswarm_run_shows_the_live_dashboard_on_a_terminal(tmp_path: Path) -> None:
     svg = tmp_path / "final.svg"
     # Paced rounds: unpaced, the whole run can end between two looks of the live view (5 per
     # second), which then never sees two states and cannot measure a rate.
     child = PtyProcess(
-        [sys.executable, "-m", "deploy.cli", "run", "-n", "5", "--seed", "3",
+        [sys.executable, "-m", "fatswarm.deploy.cli", "run", "-n", "5", "--seed", "3",
          "--scheduler", "fsync", "--max-rounds", "400", "--pace", "0.5", "--svg", str(svg)]
     )  # fmt: skip
     try:
@@ -285,10 +266,9 @@ def test_fatswarm_run_shows_the_live_dashboard_on_a_terminal(tmp_path: Path) -> 
         child.kill()
 
 
-@needs_launcher
 def test_fatswarm_run_prints_progress_lines_when_not_a_terminal() -> None:
     proc = subprocess.Popen(
-        [sys.executable, "-m", "deploy.cli", "run", "-n", "4", "--seed", "2",
+        [sys.executable, "-m", "fatswarm.deploy.cli", "run", "-n", "4", "--seed", "2",
          "--scheduler", "fsync", "--max-rounds", "400"],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, cwd=ROOT, text=True,
         start_new_session=True,

@@ -13,24 +13,26 @@ from pathlib import Path
 import pytest
 from netharness import Swarm, assert_same_run, lockstep_record
 
-from agent.path import Line
-from agent.path import Path as RobotPath
-from agent.protocol import MoveSubmitted, move_key
-from coordinator.protocol import RoundStart, round_key
-from world.protocol import Begin, Commit, control_key, snapshot_key
-from world.record import read_record
+from fatswarm.agent.path import Line
+from fatswarm.agent.path import Path as RobotPath
+from fatswarm.agent.protocol import MoveSubmitted, move_key
+from fatswarm.coordinator.protocol import RoundStart, round_key
+from fatswarm.world.protocol import Begin, Commit, control_key, snapshot_key
+from fatswarm.world.record import read_record
 
 pytestmark = pytest.mark.integration
 
 SEED = 3  # a start that needs SEC expansion and forms under ssync for n = 8 and n = 24
 
 
-def _run_cli(tmp_path: Path, n: int, seed: int) -> tuple[int, str, Path]:
+def _run_cli(
+    tmp_path: Path, n: int, seed: int, cwd: Path | None = None
+) -> tuple[int, str, Path]:
     record = tmp_path / "net.jsonl"
-    argv = [sys.executable, "-m", "deploy.cli", "run", "-n", str(n), "--seed", str(seed),
+    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", "-n", str(n), "--seed", str(seed),
             "--scheduler", "ssync", "--record", str(record), "-q"]
     proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            start_new_session=True)
+                            start_new_session=True, cwd=cwd)
     try:
         out, _ = proc.communicate(timeout=240)
     finally:
@@ -40,6 +42,21 @@ def _run_cli(tmp_path: Path, n: int, seed: int) -> tuple[int, str, Path]:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
     return proc.returncode, out.decode(errors="replace"), record
+
+
+def test_files_named_like_the_parts_in_the_working_directory_change_nothing(
+    tmp_path: Path,
+) -> None:
+    # The parts are installed and imported only as fatswarm.*: a world.py (or agent.py, ...) of
+    # the user's own in the working directory, first on sys.path, must not be picked up.
+    work = tmp_path / "work"
+    work.mkdir()
+    for name in ("world", "agent", "coordinator", "deploy"):
+        (work / f"{name}.py").write_text(f"raise SystemExit('{name}.py was imported')\n")
+    code, out, record = _run_cli(tmp_path, 4, SEED, cwd=work)
+    assert code == 0, out
+    assert out.startswith("formed"), out
+    assert read_record(str(record)).result is not None
 
 
 @pytest.mark.parametrize("n", [8, 24])
@@ -199,8 +216,8 @@ def _wait_for_parts(proc: subprocess.Popen[bytes], n: int) -> list[int]:
 
 
 def _paced_launcher(n: int, output: int | None) -> subprocess.Popen[bytes]:
-    argv = [sys.executable, "-m", "deploy.cli", "run", "-n", str(n), "--seed", "1", "--pace",
-            "0.5", "-q"]
+    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", "-n", str(n), "--seed", "1",
+            "--pace", "0.5", "-q"]
     return subprocess.Popen(argv, stdout=output, stderr=output, start_new_session=True)
 
 
@@ -226,16 +243,16 @@ def test_sigterm_to_the_launcher_stops_every_process_it_started(tmp_path: Path) 
 @pytest.mark.slow
 def test_64_agents_under_fsync_record_the_lockstep_run(tmp_path: Path) -> None:
     record = tmp_path / "net.jsonl"
-    argv = [sys.executable, "-m", "deploy.cli", "run", "-n", "64", "--seed", "2", "--scheduler",
-            "fsync", "--record", str(record), "-q"]
+    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", "-n", "64", "--seed", "2",
+            "--scheduler", "fsync", "--record", str(record), "-q"]
     done = subprocess.run(argv, capture_output=True, timeout=900, check=False)
     assert done.returncode == 0, done.stdout + done.stderr
     lock = tmp_path / "lock.jsonl"
-    from agent.params import Params
-    from coordinator.schedule import make_scheduler
-    from deploy.lockstep import run_lockstep
-    from world.record import RecordWriter
-    from world.starts import random_start
+    from fatswarm.agent.params import Params
+    from fatswarm.coordinator.schedule import make_scheduler
+    from fatswarm.deploy.lockstep import run_lockstep
+    from fatswarm.world.record import RecordWriter
+    from fatswarm.world.starts import random_start
 
     with RecordWriter(lock) as rec:
         run_lockstep(random_start(64, 2, "clustered", 4.0), Params(64, 4.0),

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from agent.algorithm import canonical_view, compute
-from agent.canonical import canonical
-from agent.frames import path_to_world, to_local
-from agent.geometry import sec
-from agent.params import Params
-from agent.path import end_point
-from agent.tolerance import snap
+from fatswarm.agent.algorithm import canonical_view, compute
+from fatswarm.agent.canonical import canonical
+from fatswarm.agent.frames import path_to_world, to_local
+from fatswarm.agent.geometry import sec
+from fatswarm.agent.params import Params
+from fatswarm.agent.path import end_point
+from fatswarm.agent.tolerance import snap
 
 
 def world_end(pts: np.ndarray, robot: int, flip: bool, params: Params, seed: int) -> tuple[

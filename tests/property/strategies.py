@@ -15,8 +15,8 @@ from hypothesis import assume
 from hypothesis import strategies as st
 from numpy.typing import NDArray
 
-from agent.path import Points
-from world import adversarial as adv
+from fatswarm.agent.path import Points
+from fatswarm.world import adversarial as adv
 
 CELL: Final = 2.5  # grid spacing of jittered cells
 JITTER: Final = 0.2  # |jitter| of a cell's robot: every pair of cells stays >= 2.1 apart

@@ -12,11 +12,11 @@ from agreement import assert_observers_agree
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from agent.geometry import target_radius
-from agent.params import Params
-from coordinator.schedule import make_scheduler
-from deploy.lockstep import run_lockstep
-from world.adversarial import adversarial_start
+from fatswarm.agent.geometry import target_radius
+from fatswarm.agent.params import Params
+from fatswarm.coordinator.schedule import make_scheduler
+from fatswarm.deploy.lockstep import run_lockstep
+from fatswarm.world.adversarial import adversarial_start
 
 
 def polygon(n: int, radius: float, phase: float = 0.0) -> np.ndarray:

@@ -11,15 +11,15 @@ from agreement import assert_observers_agree
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import agent.algorithm as algorithm_module
-import agent.geometry as geometry_module
-from agent.algorithm import canonical_view, compute, plan
-from agent.canonical import SharedForm, canonical
-from agent.frames import to_local
-from agent.geometry import mirror_matched, sec
-from agent.params import Params
-from agent.path import Path, end_point, mirror, path_length
-from agent.tolerance import snap
+import fatswarm.agent.algorithm as algorithm_module
+import fatswarm.agent.geometry as geometry_module
+from fatswarm.agent.algorithm import canonical_view, compute, plan
+from fatswarm.agent.canonical import SharedForm, canonical
+from fatswarm.agent.frames import to_local
+from fatswarm.agent.geometry import mirror_matched, sec
+from fatswarm.agent.params import Params
+from fatswarm.agent.path import Path, end_point, mirror, path_length
+from fatswarm.agent.tolerance import snap
 
 CELL = 2.6  # grid spacing; with jitter <= 0.25 every pair of centres is >= 2.1 apart
 

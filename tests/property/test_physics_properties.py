@@ -9,9 +9,9 @@ import numpy as np
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from agent.path import Arc, Line, Path, Point, Segment, path_length, point_at
-from agent.tolerance import GRID
-from world.physics import CONTACT_SLACK, PLAN_ROUNDING, apply_round, validate_configuration
+from fatswarm.agent.path import Arc, Line, Path, Point, Segment, path_length, point_at
+from fatswarm.agent.tolerance import GRID
+from fatswarm.world.physics import CONTACT_SLACK, PLAN_ROUNDING, apply_round, validate_configuration
 
 OVERLAP = 2.0 - CONTACT_SLACK
 SAMPLES = 400  # times per round at which the trajectories are checked for overlap

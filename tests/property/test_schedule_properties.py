@@ -5,7 +5,7 @@ from __future__ import annotations
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from coordinator.schedule import make_scheduler
+from fatswarm.coordinator.schedule import make_scheduler
 
 names = st.sampled_from(["fsync", "ssync", "centralized"])
 

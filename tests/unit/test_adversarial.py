@@ -11,9 +11,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from agent.geometry import is_uniform_circle, sec
-from agent.path import Points
-from world.adversarial import (
+from fatswarm.agent.geometry import is_uniform_circle, sec
+from fatswarm.agent.path import Points
+from fatswarm.world.adversarial import (
     FAMILIES,
     FAMILY_TABLE,
     NEAR_RANGE,
@@ -29,7 +29,7 @@ from world.adversarial import (
     nudge_extreme,
     translate_exactly,
 )
-from world.physics import CONTACT_SLACK, validate_configuration
+from fatswarm.world.physics import CONTACT_SLACK, validate_configuration
 
 # The strategies live beside the property tests, which import them as `strategies`; make that
 # name importable here too, whether pytest runs from the checkout or not.

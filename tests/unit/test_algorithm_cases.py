@@ -12,11 +12,11 @@ from pathlib import Path as FsPath
 import numpy as np
 import pytest
 
-from agent.algorithm import plan
-from agent.params import Params
-from agent.path import end_point, path_length
-from coordinator.schedule import make_scheduler
-from deploy.lockstep import run_lockstep
+from fatswarm.agent.algorithm import plan
+from fatswarm.agent.params import Params
+from fatswarm.agent.path import end_point, path_length
+from fatswarm.coordinator.schedule import make_scheduler
+from fatswarm.deploy.lockstep import run_lockstep
 
 CASES = json.loads((FsPath(__file__).parents[1] / "data" / "algorithm-cases.json").read_text())
 PHASE = {"SECExpansion": "expansion", "FormUCircle": "formation"}

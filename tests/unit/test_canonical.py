@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from agent.canonical import canonical
-from agent.path import Line, Path, end_point
-from agent.tolerance import GRID, snap
+from fatswarm.agent.canonical import canonical
+from fatswarm.agent.path import Line, Path, end_point
+from fatswarm.agent.tolerance import GRID, snap
 
 RNG = np.random.default_rng(7)
 

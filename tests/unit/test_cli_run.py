@@ -14,11 +14,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agent.params import Params
-from agent.path import STAY, Line, Points
-from agent.path import Path as RobotPath
-from deploy import lockstep, run
-from world.record import read_record
+from fatswarm.agent.params import Params
+from fatswarm.agent.path import STAY, Line, Points
+from fatswarm.agent.path import Path as RobotPath
+from fatswarm.deploy import lockstep, run
+from fatswarm.world.record import read_record
 
 ROOT = Path(__file__).resolve().parents[2]
 NOT_COLLISION_FREE = "not the collision-free formation the paper guarantees"
@@ -122,13 +122,13 @@ def test_n_disagreeing_with_init_file_is_refused(
 def test_networked_mode_without_launcher_exits_two(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    monkeypatch.setitem(sys.modules, "deploy.launcher", None)
+    monkeypatch.setitem(sys.modules, "fatswarm.deploy.launcher", None)
     assert fatswarm_run(["-n", "3"]) == 2
     assert "use --lockstep" in capsys.readouterr().err
 
 
 def test_svg_of_the_final_frame(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    pytest.importorskip("deploy.dashboard")
+    pytest.importorskip("fatswarm.deploy.dashboard")
     target = tmp_path / "final.svg"
     assert fatswarm_run(["--lockstep", "-n", "4", "--seed", "3", "-q", "--svg", str(target)]) == 0
     assert target.read_text().lstrip().startswith("<svg")
@@ -201,7 +201,7 @@ def test_a_formation_reached_through_collisions_exits_three_and_says_so(
     assert "collisions 2" in out
 
     # the networked run reads its summary and exit code back from the same kind of record
-    from deploy.launcher import print_summary
+    from fatswarm.deploy.launcher import print_summary
 
     printed = io.StringIO()
     read_back = print_summary(str(target), printed)
@@ -253,8 +253,9 @@ def test_the_largest_side_inside_the_supported_range_still_runs(
 def test_world_part_refuses_a_start_outside_the_supported_range(tmp_path: Path) -> None:
     # a process of its own: the part installs signal handlers and logging for its whole process
     proc = subprocess.run(
-        [sys.executable, "-m", "deploy.parts", "world", "--state", str(tmp_path / "w.jsonl"),
-         "--connect", "tcp/127.0.0.1:9", "-n", "2", "-a", "1e10"],
+        [sys.executable, "-m", "fatswarm.deploy.parts", "world",
+         "--state", str(tmp_path / "w.jsonl"), "--connect", "tcp/127.0.0.1:9",
+         "-n", "2", "-a", "1e10"],
         capture_output=True, text=True, cwd=ROOT, timeout=60,
     )  # fmt: skip
     assert proc.returncode == 2, proc.stderr

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from rich.console import Console
 
-from deploy.dashboard import (
+from fatswarm.deploy.dashboard import (
     LAYER_ACTIVE,
     LAYER_ROBOT,
     LAYER_STOPPED,
@@ -31,7 +31,7 @@ from deploy.dashboard import (
     print_frame,
     save_svg,
 )
-from world.protocol import AgentInfo, WorldState
+from fatswarm.world.protocol import AgentInfo, WorldState
 
 
 def render_text(frame: Frame, width: int = 120, height: int = 40) -> str:
@@ -241,7 +241,7 @@ def test_svg_of_a_frame_holds_the_counters(tmp_path: object) -> None:
 
 
 def test_cli_gives_each_command_its_own_flags() -> None:
-    from deploy.cli import build_parser
+    from fatswarm.deploy.cli import build_parser
 
     parser = build_parser()
     args = parser.parse_args(["dashboard", "--connect", "tcp/127.0.0.1:7447", "--exit-at-end"])

@@ -10,9 +10,18 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from agent.detour import shortest_free_path
-from agent.geometry import path_distances, segment_distances
-from agent.path import Arc, Line, Path, Point, end_point, mirror, path_length, segment_length
+from fatswarm.agent.detour import shortest_free_path
+from fatswarm.agent.geometry import path_distances, segment_distances
+from fatswarm.agent.path import (
+    Arc,
+    Line,
+    Path,
+    Point,
+    end_point,
+    mirror,
+    path_length,
+    segment_length,
+)
 
 TOL = 1e-9
 

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from agent.geometry import (
+from fatswarm.agent.geometry import (
     CONTACT,
     Circle,
     arc_distances,
@@ -24,7 +24,7 @@ from agent.geometry import (
     target_radius,
     targets_on,
 )
-from agent.path import Arc, Line, Path
+from fatswarm.agent.path import Arc, Line, Path
 
 
 def brute_force_sec(pts: np.ndarray) -> float:

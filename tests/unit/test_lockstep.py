@@ -8,16 +8,16 @@ from pathlib import Path as FsPath
 import numpy as np
 import pytest
 
-from agent import algorithm
-from agent.frames import draw_flip
-from agent.params import Params
-from agent.path import STAY, Line, Path, Points
-from agent.tolerance import GRID, UnsupportedInputError
-from coordinator.schedule import make_scheduler
-from deploy.lockstep import RoundReport, default_max_rounds, run_lockstep
-from world.physics import InvalidConfigurationError
-from world.record import RecordWriter, read_record
-from world.starts import degenerate_starts, random_start
+from fatswarm.agent import algorithm
+from fatswarm.agent.frames import draw_flip
+from fatswarm.agent.params import Params
+from fatswarm.agent.path import STAY, Line, Path, Points
+from fatswarm.agent.tolerance import GRID, UnsupportedInputError
+from fatswarm.coordinator.schedule import make_scheduler
+from fatswarm.deploy.lockstep import RoundReport, default_max_rounds, run_lockstep
+from fatswarm.world.physics import InvalidConfigurationError
+from fatswarm.world.record import RecordWriter, read_record
+from fatswarm.world.starts import degenerate_starts, random_start
 
 
 def polygon(n: int, side: float) -> Points:

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from agent.path import Arc, Line, Path, PathFormatError, end_point, path_length, point_at
-from agent.tolerance import GRID
-from world.physics import (
+from fatswarm.agent.path import Arc, Line, Path, PathFormatError, end_point, path_length, point_at
+from fatswarm.agent.tolerance import GRID
+from fatswarm.world.physics import (
     CONTACT_SLACK,
     Collision,
     InvalidConfigurationError,

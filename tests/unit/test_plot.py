@@ -9,8 +9,14 @@ import sys
 
 import pytest
 
-from deploy.plot import MISSING_MATPLOTLIB, add_arguments, final_positions, main, trajectories
-from world.record import read_record
+from fatswarm.deploy.plot import (
+    MISSING_MATPLOTLIB,
+    add_arguments,
+    final_positions,
+    main,
+    trajectories,
+)
+from fatswarm.world.record import read_record
 
 RECORD = pathlib.Path(__file__).resolve().parents[1] / "data" / "replay-small.jsonl"
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import world.progress as progress
-from world.progress import (
+import fatswarm.world.progress as progress
+from fatswarm.world.progress import (
     FORMED,
     MAX_ROUNDS,
     MOVE_TOLERANCE,

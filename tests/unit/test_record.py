@@ -8,9 +8,9 @@ from pathlib import Path as FsPath
 import numpy as np
 import pytest
 
-from agent.path import Arc, Line, Path
-from world.physics import Collision
-from world.record import (
+from fatswarm.agent.path import Arc, Line, Path
+from fatswarm.world.physics import Collision
+from fatswarm.world.record import (
     Header,
     RecordFormatError,
     RecordWriter,

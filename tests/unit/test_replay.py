@@ -9,8 +9,8 @@ import re
 
 import pytest
 
-from deploy.replay import Player, add_arguments, build_frames, main, parse_keys
-from world.record import read_record
+from fatswarm.deploy.replay import Player, add_arguments, build_frames, main, parse_keys
+from fatswarm.world.record import read_record
 
 RECORD = pathlib.Path(__file__).resolve().parents[1] / "data" / "replay-small.jsonl"
 

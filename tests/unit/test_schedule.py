@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from coordinator.schedule import (
+from fatswarm.coordinator.schedule import (
     ScheduleError,
     ScheduleFileError,
     default_fairness,

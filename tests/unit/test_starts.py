@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agent.geometry import sec
-from world.starts import (
+from fatswarm.agent.geometry import sec
+from fatswarm.world.starts import (
     KINDS,
     InitFileError,
     degenerate_starts,

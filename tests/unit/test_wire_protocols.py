@@ -10,10 +10,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from agent.path import Arc, Line, Path
-from agent.protocol import MoveSubmitted, move_key, robot_of_alive_key
-from coordinator.protocol import RoundStart, round_key
-from world.protocol import (
+from fatswarm.agent.path import Arc, Line, Path
+from fatswarm.agent.protocol import MoveSubmitted, move_key, robot_of_alive_key
+from fatswarm.coordinator.protocol import RoundStart, round_key
+from fatswarm.world.protocol import (
     PROTOCOL_VERSION,
     AgentInfo,
     Begin,

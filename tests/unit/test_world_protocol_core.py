@@ -8,9 +8,9 @@ from pathlib import Path as FsPath
 import numpy as np
 import pytest
 
-from agent.path import STAY, Line, Path
-from agent.protocol import MoveSubmitted, move_key
-from world.protocol import (
+from fatswarm.agent.path import STAY, Line, Path
+from fatswarm.agent.protocol import MoveSubmitted, move_key
+from fatswarm.world.protocol import (
     Begin,
     Commit,
     ControlReply,
@@ -19,8 +19,8 @@ from world.protocol import (
     Snapshot,
     snapshot_key,
 )
-from world.record import read_record
-from world.service import WorldCore, WorldSetup, open_world
+from fatswarm.world.record import read_record
+from fatswarm.world.service import WorldCore, WorldSetup, open_world
 
 SWARM = "t"
 START = np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]])

@@ -1,0 +1,29 @@
+"""One import name is installed: fatswarm (its parts are fatswarm.agent, .world, ...)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+GENERIC = ("agent", "world", "coordinator", "deploy")
+
+
+def test_only_the_fatswarm_name_is_installed(tmp_path: Path) -> None:
+    # Run away from the checkout (whose folders would be importable from its own directory).
+    probe = (
+        "import importlib.util, fatswarm, fatswarm.deploy.cli, fatswarm.agent.algorithm;"
+        f"print([n for n in {GENERIC!r} if importlib.util.find_spec(n) is not None])"
+    )
+    done = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
+
+
+def test_importing_every_part_loads_no_generic_top_level_module() -> None:
+    import fatswarm.deploy.cli
+    import fatswarm.deploy.launcher
+    import fatswarm.deploy.parts  # noqa: F401
+
+    assert not [name for name in sys.modules if name.split(".")[0] in GENERIC]
