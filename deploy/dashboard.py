@@ -100,16 +100,25 @@ class Figures:
 
 
 def enclosing_circle(points: Points) -> tuple[tuple[float, float], float]:
-    """Centre and radius of the smallest circle enclosing the centres."""
-    circle = geometry.sec(points)
-    return (float(circle.center[0]), float(circle.center[1])), float(circle.radius)
+    """Centre and radius of the smallest circle enclosing the centres.
+
+    Computed relative to the first robot: the circle's rounding slack is relative to its radius,
+    so world coordinates far from the origin (1e5 and more) would swamp it.
+    """
+    if not len(points):
+        return (0.0, 0.0), 0.0
+    origin = points[0]
+    circle = geometry.sec(points - origin)
+    cx, cy = circle.center
+    return (float(cx + origin[0]), float(cy + origin[1])), float(circle.radius)
 
 
 def derive(frame: Frame) -> Figures:
     """SEC, target radius, target points and how many are filled, for the frame's positions."""
     pts = np.asarray(frame.positions, dtype=np.float64).reshape(-1, 2)
     center, rc = enclosing_circle(pts)
-    targets = geometry.target_points(pts, frame.n) if len(pts) else np.zeros((0, 2))
+    targets = (geometry.target_points(pts - pts[0], frame.n) + pts[0] if len(pts)
+               else np.zeros((0, 2)))
     tol = tolerance.EPS_AT_REL * tolerance.scale(rc)  # "a robot at the point", as the algorithm
     filled = 0
     if len(targets) and len(pts):

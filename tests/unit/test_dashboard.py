@@ -25,6 +25,7 @@ from fatswarm.deploy.dashboard import (
     agent_rows,
     build_canvas,
     derive,
+    enclosing_circle,
     follow,
     frame_from_state,
     outcome_text,
@@ -353,3 +354,13 @@ def test_follow_prints_progress_lines_off_a_terminal_unless_quiet(
     else:
         assert out.splitlines()[0].startswith("round 1 running: targets")
         assert out.splitlines()[-1].startswith("FORMED: uniform circle of 3 robots after 2 rounds")
+
+
+def test_the_enclosing_circle_is_right_far_from_the_origin() -> None:
+    # A swarm at 1e5: the SEC's rounding slack is relative to its radius, so it is computed
+    # relative to a robot (on world coordinates an equilateral triangle of side 4 came out r = 2).
+    tri = np.array([[0.0, 0.0], [4.0, 0.0], [2.0, 2.0 * math.sqrt(3.0)]])
+    for offset in (0.0, 1e5, -1.5e6):
+        (cx, cy), rc = enclosing_circle(tri + offset)
+        assert rc == pytest.approx(4.0 / math.sqrt(3.0), abs=1e-9)
+        assert (cx - offset, cy - offset) == pytest.approx((2.0, 2.0 / math.sqrt(3.0)), abs=1e-9)
