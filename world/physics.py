@@ -28,8 +28,10 @@ from fatswarm.agent.path import (
     Path,
     PathFormatError,
     Points,
+    path_length,
     segment_end,
     segment_length,
+    transform,
 )
 from fatswarm.agent.tolerance import (
     CLEAR_SLACK,
@@ -39,6 +41,7 @@ from fatswarm.agent.tolerance import (
     OVERLAP_DISTANCE,
     OVERLAP_SLACK,
     snap,
+    snap_point,
 )
 
 FloatArray = NDArray[np.float64]
@@ -520,6 +523,10 @@ def _first_unprovable(mo: _Motion, pi: IntArray, pj: IntArray, t_w: float) -> Fl
         t0, t1 = np.concatenate([t0, mid]), np.concatenate([mid, t1])
     if ip.size:  # out of budget: stop where the proof stopped (safe, maybe early)
         np.minimum.at(t_hit, ip, t0)
+    # An overlap that was sampled but never bracketed (an advance stepped over the contact) is a
+    # contact all the same: stop before it rather than let the discs pass through each other.
+    missed = np.isinf(t_hit) & np.isfinite(first_bad)
+    t_hit[missed] = first_bad[missed]
     return t_hit
 
 
@@ -673,8 +680,14 @@ def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
     """
     start = _as_points(positions)
     moves = _check_moves(paths, len(start))
-    mo = _build_motion(start, moves)
     traveled = {robot: 0.0 for robot, _ in moves}
+    # Simulate in a frame centred on a mover (a grid point: the shift is exact for grid positions
+    # and for path points near them), so that rounding is that of the round's extent, not of the
+    # swarm's offset: at 3e5 the contact search's margin (1e-10) was below the rounding there.
+    origin = snap_point(*start[moves[0][0]]) if moves else (0.0, 0.0)
+    local = start - np.array(origin)
+    shift = (-origin[0], -origin[1])
+    mo = _build_motion(local, [(robot, transform(path, shift, False)) for robot, path in moves])
     if not len(mo.robots):
         return RoundOutcome(positions=start, traveled=traveled)
     # Every pair that can meet: a robot never leaves its path's box, so no other pair can overlap,
@@ -689,7 +702,7 @@ def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
             )
     collisions = _simulate(mo, pi, pj)
     final = start.copy()
-    final[mo.robots] = _positions(mo, mo.robots, mo.stop)
+    final[mo.robots] = _positions(mo, mo.robots, mo.stop) + np.array(origin)
     _snap_movers(final, mo.robots)
     collisions = [  # a stopped robot's recorded point is where it is: on the grid
         Collision(c.robot, c.other, c.t, (float(final[c.robot, 0]), float(final[c.robot, 1])))
@@ -701,6 +714,10 @@ def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
             raise PhysicsInvariantError(
                 f"physics bug: robots {a} and {b} overlap after the round (centres {dist!r} apart)"
             )
+    world_paths = dict(moves)
     for row, robot in enumerate(mo.robots):
-        traveled[int(robot)] = float(mo.stop[row])
+        done = mo.stop[row] >= mo.total[row]  # the whole path: its length as the world measures it
+        here = (float(start[robot, 0]), float(start[robot, 1]))
+        length = path_length(here, world_paths[int(robot)]) if done else float(mo.stop[row])
+        traveled[int(robot)] = length
     return RoundOutcome(positions=final, traveled=traveled, collisions=collisions)

@@ -9,8 +9,8 @@ import numpy as np
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from fatswarm.agent.path import Arc, Line, Path, Point, Segment, path_length, point_at
-from fatswarm.agent.tolerance import GRID
+from fatswarm.agent.path import Arc, Line, Path, Point, Segment, path_length, point_at, transform
+from fatswarm.agent.tolerance import GRID, snap
 from fatswarm.world.physics import CONTACT_SLACK, PLAN_ROUNDING, apply_round, validate_configuration
 
 OVERLAP = 2.0 - CONTACT_SLACK
@@ -163,3 +163,15 @@ def test_straight_mover_stops_exactly_where_an_analytic_oracle_says(
     assert math.isclose(out.traveled[0], float(np.maximum(entry, 0.0).min()), abs_tol=1e-7)
     assert [col.robot for col in out.collisions] == [0]
     assert blocked[out.collisions[0].other - 1]
+
+
+@settings(max_examples=100, deadline=None)
+@given(rounds(), st.sampled_from([1e5, -3e5, 6.8e5, -1.9e6]))
+def test_no_overlap_far_from_the_origin(r: Round, offset: float) -> None:
+    # The same rounds, shifted by an exact grid offset: the world's positions can be anywhere
+    # within +-2e6, and the contact search must not lose contacts to the rounding there.
+    shift = (offset, -offset)
+    start = snap(r.start + np.array(shift))
+    paths = {i: transform(p, shift, False) for i, p in r.paths.items()}
+    out = apply_round(start, paths)
+    assert min_pair_distance(out.positions[:, None, :]) >= OVERLAP

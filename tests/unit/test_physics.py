@@ -347,3 +347,16 @@ def test_robots_touching_side_by_side_making_the_same_turn_are_free() -> None:
     out = apply_round(pts((50, 0), (52, 0)), paths)
     assert out.collisions == []
     assert out.traveled[1] == pytest.approx(400 * math.pi)
+
+
+@pytest.mark.parametrize("offset", [0.0, 3e5, -6.8e5, 1.9e6])
+def test_two_robots_bound_for_one_point_stop_at_contact_far_from_the_origin(offset: float) -> None:
+    # Found by the adversarial matrix on the old algorithm (two robots sent to one target at
+    # 6.8e5): rounding there exceeded the contact search's margin, which stepped over the contact,
+    # and the discs were found overlapping after the round (PhysicsInvariantError).
+    start = pts((-3.2158730536466464, 0.0), (3.2158730536466464, 0.0)) + offset
+    meet = (offset, 51.60560101713054 + offset)
+    out = apply_round(start, {0: line(meet), 1: line(meet)})
+    assert {(c.robot, c.other) for c in out.collisions} == {(0, 1), (1, 0)}
+    assert dist(out.positions, 0, 1) >= 2.0 - CONTACT_SLACK
+    assert out.traveled[0] == pytest.approx(35.627426, abs=1e-6)
