@@ -8,6 +8,7 @@ ever reaches it or leaves it.
 
 from __future__ import annotations
 
+import json
 import logging
 import queue
 import threading
@@ -27,6 +28,7 @@ log = logging.getLogger("fatswarm.agent")
 
 LOOK_TIMEOUT_S = 5.0
 OPEN_RETRY_S = 0.2  # a client cannot open a session before its router is up: retry
+WAIT_NOTICE_S = 5.0  # meanwhile, say this often that the robot still waits for its router
 
 
 @dataclass(frozen=True, slots=True)
@@ -47,27 +49,50 @@ def look_compute(snapshot: Snapshot, flip_x: bool) -> Path:
     return path_to_world(path_local, (0.0, 0.0), flip_x)  # undo the mirroring only
 
 
-def open_session(conf: Any, stop: threading.Event) -> Any:
-    """Open a Zenoh session, retrying until the router answers; None if stopped first."""
+def open_session(conf: Any, stop: threading.Event, waiting: str | None = None) -> Any:
+    """Open a Zenoh session, retrying until the router answers; None if stopped first.
+
+    With `waiting` (who waits, e.g. "robot 3"), say every WAIT_NOTICE_S that it still waits, where.
+    """
     import zenoh
 
+    started = time.monotonic()
+    noticed = 0  # notices given so far
     while not stop.is_set():
         try:
-            return zenoh.open(conf)
+            session = zenoh.open(conf)
         except zenoh.ZError as exc:
             log.debug("router not reachable yet: %s", exc)
+            waited = time.monotonic() - started
+            if waiting and waited >= (noticed + 1) * WAIT_NOTICE_S:
+                noticed = int(waited // WAIT_NOTICE_S)
+                log.warning("%s: still waiting for a Zenoh router at %s (%.0f s so far); retrying",
+                            waiting, _endpoints(conf), waited)
             stop.wait(OPEN_RETRY_S)
+            continue
+        if noticed:
+            log.warning("%s: the router at %s answered after %.0f s", waiting, _endpoints(conf),
+                        time.monotonic() - started)
+        return session
     return None
 
 
-def serve(cfg: AgentConfig, conf: Any, stop: threading.Event | None = None) -> int:
-    """Run one robot until `stop` is set; returns an exit code."""
+def _endpoints(conf: Any) -> str:
+    """The config's connect endpoints, for a notice."""
+    endpoints = json.loads(conf.get_json("connect/endpoints"))
+    return ", ".join(map(str, endpoints)) if isinstance(endpoints, list) else str(endpoints)
+
+
+def serve(
+    cfg: AgentConfig, conf: Any, stop: threading.Event | None = None, waiting: str | None = None
+) -> int:
+    """Run one robot until `stop` is set; returns an exit code (`waiting`: see open_session)."""
     import zenoh
 
     stop = stop or threading.Event()
     flip_x = draw_flip(cfg.seed, cfg.robot)
     starts: queue.Queue[bytes] = queue.Queue()
-    session = open_session(conf, stop)
+    session = open_session(conf, stop, waiting)
     if session is None:
         return 0
     with session:

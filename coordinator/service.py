@@ -142,10 +142,11 @@ class Coordinator:
 
     # -- the round loop -------------------------------------------------------------------------
 
-    def run(self, conf: Any) -> int:
+    def run(self, session: Any) -> int:
+        """Run rounds on an open Zenoh session until the run ends, then close it."""
         import zenoh
 
-        with zenoh.open(conf) as session:
+        with session:
             _token = session.liveliness().declare_token(alive_key(self.cfg.swarm))
             session.liveliness().declare_subscriber(
                 alive_any_key(self.cfg.swarm), self._on_alive, history=True

@@ -13,9 +13,17 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Any
 
-from fatswarm.deploy.zconf import AGENT_LEASE_MS, add_zenoh_arguments, make_config
+from fatswarm.deploy.zconf import (
+    AGENT_LEASE_MS,
+    CONNECT_DEADLINE_S,
+    add_zenoh_arguments,
+    check_endpoints,
+    make_config,
+    open_client,
+)
 
 EXIT_BAD_INPUT = 2
 DEFAULT_ROUTER_LISTEN = "tcp/127.0.0.1:7447"
@@ -58,8 +66,13 @@ def _fail(part: str, message: str) -> int:
     return EXIT_BAD_INPUT
 
 
-def _add_common(p: argparse.ArgumentParser) -> None:
-    add_zenoh_arguments(p)
+GIVES_UP = (f"; if no router answers within {CONNECT_DEADLINE_S:g} s, it says so and exits "
+            "with 2")
+KEEPS_WAITING = "; until a router answers it keeps retrying and says so every {:g} s on stderr"
+
+
+def _add_common(p: argparse.ArgumentParser, connect_note: str = "") -> None:
+    add_zenoh_arguments(p, connect_note=connect_note)
     p.add_argument("--log-level", choices=("debug", "info", "warning", "error"), default=None,
                    help="log level on stderr")
     p.add_argument("--exit-with-parent", type=int, default=None, metavar="PID",
@@ -68,7 +81,7 @@ def _add_common(p: argparse.ArgumentParser) -> None:
 
 def _client_config(
     args: argparse.Namespace, lease_ms: int | None = None, shared_memory: bool = True
-) -> object:
+) -> Any:
     if not args.connect:
         raise ValueError("give the router to use with --connect ENDPOINT (e.g. tcp/127.0.0.1:7447)")
     return make_config("client", connect=args.connect, listen=args.listen, lease_ms=lease_ms,
@@ -103,7 +116,7 @@ def add_world_arguments(p: argparse.ArgumentParser) -> None:
     from fatswarm.coordinator.schedule import NAMES
     from fatswarm.world.starts import KINDS
 
-    _add_common(p)
+    _add_common(p, GIVES_UP)
     p.add_argument("--state", required=True, metavar="PATH",
                    help="run record = durable log; an existing one is resumed after its last round")
     p.add_argument("-n", type=int, default=8, metavar="N", help="number of robots (default 8)")
@@ -124,7 +137,7 @@ def main_world(args: argparse.Namespace) -> int:
     from fatswarm.deploy.lockstep import default_max_rounds
     from fatswarm.deploy.run import input_errors, resolve_start
     from fatswarm.world.record import RecordFormatError
-    from fatswarm.world.service import WorldSetup, open_world, serve
+    from fatswarm.world.service import WorldCore, WorldSetup, open_world, serve
 
     _logging(args, "info")
     stop = install_stop_signals(args.exit_with_parent)
@@ -138,14 +151,29 @@ def main_world(args: argparse.Namespace) -> int:
         return WorldSetup(args.swarm, params.n, params.a, args.seed, args.scheduler, initial,
                           max_rounds)
 
+    def open_core(setup: Callable[[], WorldSetup]) -> WorldCore:
+        return open_world(args.state, setup, args.swarm, args.max_rounds, fsync=not args.no_fsync)
+
     bad_input: tuple[type[Exception], ...] = (ValueError, RecordFormatError, *input_errors())
     try:
         conf = _client_config(args)
-        core = open_world(args.state, make_setup, args.swarm, args.max_rounds,
-                          fsync=not args.no_fsync)
+        core: WorldCore | None = None
+        if os.path.exists(args.state) and os.path.getsize(args.state) > 0:
+            core = open_core(make_setup)  # resume: a bad state file is said before any wait
+        else:
+            setup = make_setup()  # a bad start is said before any wait
+        session = open_client(conf, stop)
+        if session is not None and core is None:
+            try:
+                core = open_core(lambda: setup)  # a new state file only once a router answered
+            except bad_input:
+                session.close()
+                raise
     except bad_input as exc:
         return _fail("world", str(exc))
-    return serve(core, conf, stop)
+    if session is None or core is None:
+        return 0  # stopped before a router answered
+    return serve(core, session, stop)
 
 
 # --- coordinator -------------------------------------------------------------------------------
@@ -155,7 +183,7 @@ def add_coordinator_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm coordinator` (n comes from the world)."""
     from fatswarm.coordinator.schedule import NAMES
 
-    _add_common(p)
+    _add_common(p, GIVES_UP)
     p.add_argument("--seed", type=int, default=0, metavar="S", help="seed of the scheduler")
     p.add_argument("--scheduler", choices=NAMES, default="ssync", help="who is active each round")
     p.add_argument("--schedule", metavar="PATH", help="scripted scheduler's JSON or run record")
@@ -185,7 +213,10 @@ def main_coordinator(args: argparse.Namespace) -> int:
         if args.move_timeout <= 0 or args.start_timeout < 0 or args.pace < 0:
             raise ValueError("--move-timeout must be > 0, --start-timeout and --pace >= 0")
         cfg = CoordinatorConfig(args.swarm, args.move_timeout, args.start_timeout, args.pace)
-        return Coordinator(cfg, scheduler_for, stop).run(conf)
+        session = open_client(conf, stop)
+        if session is None:
+            return 1  # stopped before a router answered: not formed
+        return Coordinator(cfg, scheduler_for, stop).run(session)
     except (ValueError, ScheduleError) as exc:
         return _fail("coordinator", str(exc))
 
@@ -195,10 +226,14 @@ def main_coordinator(args: argparse.Namespace) -> int:
 
 def add_agent_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm agent`."""
-    _add_common(p)
+    from fatswarm.agent.service import WAIT_NOTICE_S
+
+    _add_common(p, KEEPS_WAITING.format(WAIT_NOTICE_S))
     p.add_argument("--robot", type=int, required=True, metavar="I", help="robot id, 0..n-1")
     p.add_argument("--seed", type=int, default=0, metavar="S",
                    help="seed the private frame is drawn from (the run's seed)")
+    p.add_argument("--waiting-as", default=None, metavar="WHO",
+                   help=argparse.SUPPRESS)  # who the waiting notice names ("": no notice)
 
 
 def main_agent(args: argparse.Namespace) -> int:
@@ -213,12 +248,15 @@ def main_agent(args: argparse.Namespace) -> int:
         conf = _client_config(args, lease_ms=AGENT_LEASE_MS, shared_memory=False)
     except ValueError as exc:
         return _fail("agent", str(exc))
-    return serve(AgentConfig(args.swarm, args.robot, args.seed), conf, stop)
+    waiting = f"robot {args.robot}" if args.waiting_as is None else args.waiting_as
+    return serve(AgentConfig(args.swarm, args.robot, args.seed), conf, stop, waiting or None)
 
 
 def add_agents_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm agents`."""
-    _add_common(p)
+    from fatswarm.agent.service import WAIT_NOTICE_S
+
+    _add_common(p, KEEPS_WAITING.format(WAIT_NOTICE_S))
     p.add_argument("-n", type=int, required=True, metavar="K", help="number of agent processes")
     p.add_argument("--first", type=int, default=0, metavar="I",
                    help="id of the first robot (robots I..I+K-1; default 0)")
@@ -233,14 +271,16 @@ SPAWN_MODES = ("fork", "exec")
 
 
 def agent_command(robot: int, seed: int, swarm: str, connect: Sequence[str],
-                  log_level: str | None = None) -> list[str]:
-    """The argv that starts one agent process."""
+                  log_level: str | None = None, waiting_as: str | None = None) -> list[str]:
+    """The argv that starts one agent process (`waiting_as`: who its waiting notice names)."""
     argv = [sys.executable, "-m", "fatswarm.deploy.parts", "agent", "--robot", str(robot),
             "--seed", str(seed), "--swarm", swarm]
     for endpoint in connect:
         argv += ["--connect", endpoint]
     if log_level:
         argv += ["--log-level", log_level]
+    if waiting_as is not None:
+        argv += ["--waiting-as", waiting_as]
     return argv
 
 
@@ -263,6 +303,11 @@ def main_agents(args: argparse.Namespace) -> int:
         return _fail("agents", "-n must be >= 1 and --first >= 0")
     if not args.connect:
         return _fail("agents", "give the router to use with --connect ENDPOINT")
+    try:  # here, not in each agent process
+        check_endpoints(args.connect, "--connect")
+        check_endpoints(args.listen, "--listen")
+    except ValueError as exc:
+        return _fail("agents", str(exc))
     robots = range(args.first, args.first + args.n)
     if args.spawn == "exec":
         return _exec_agents(args, robots)
@@ -274,10 +319,11 @@ def _exec_agents(args: argparse.Namespace, robots: range) -> int:
 
     stop = install_stop_signals(args.exit_with_parent)
     with Children(stop_grace_s(1)) as children:
-        for robot in robots:
+        for robot in robots:  # the first one says for all that they wait for a router
+            waiting_as = _waiting_as(robots) if robot == robots[0] else ""
             children.start(f"agent {robot}",
                            agent_command(robot, args.seed, args.swarm, args.connect,
-                                         args.log_level))
+                                         args.log_level, waiting_as))
         while not stop.wait(0.5):
             if len(children.exited()) == len(robots):
                 return 1
@@ -303,7 +349,9 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
             try:
                 stop = install_stop_signals()
                 conf = _client_config(args, lease_ms=AGENT_LEASE_MS, shared_memory=False)
-                code = serve(AgentConfig(args.swarm, robot, args.seed), conf, stop)
+                # the first one says for all that they wait for a router
+                waiting = _waiting_as(robots) if robot == robots[0] else None
+                code = serve(AgentConfig(args.swarm, robot, args.seed), conf, stop, waiting)
             except BaseException:  # report, then leave without running the parent's cleanup
                 log.exception("agent %d failed", robot)
             finally:
@@ -327,6 +375,13 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
         _kill(pid, signal.SIGKILL)
         os.waitpid(pid, 0)
     return code
+
+
+def _waiting_as(robots: range) -> str:
+    """Who the waiting notice of a host's agents names: "robot 4" or "robots 0..11"."""
+    if len(robots) == 1:
+        return f"robot {robots[0]}"
+    return f"robots {robots[0]}..{robots[-1]}"
 
 
 def _reap(children: dict[int, int], log: logging.Logger) -> None:

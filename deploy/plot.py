@@ -13,7 +13,7 @@ import sys
 import numpy as np
 
 from fatswarm.agent.path import Points, sample, truncate
-from fatswarm.world.record import RecordFormatError, RunRecord, read_record
+from fatswarm.world.record import RecordFormatError, RunRecord, read_record, torn_end_note
 
 EXIT_OK, EXIT_BAD_INPUT = 0, 2
 FORMATS = (".svg", ".png")
@@ -106,10 +106,13 @@ def main(args: argparse.Namespace) -> int:
         print(f"fatswarm plot: OUT must end in .svg or .png, got {args.out!r}", file=sys.stderr)
         return EXIT_BAD_INPUT
     try:
-        record = read_record(args.record)
+        record = read_record(args.record, allow_torn_end=True)  # a crashed run shows too
     except RecordFormatError as exc:
         print(f"fatswarm plot: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    note = torn_end_note(args.record, record)
+    if note is not None:
+        print(f"fatswarm plot: {note}", file=sys.stderr)
     try:
         import matplotlib  # noqa: F401
     except ImportError:

@@ -18,7 +18,7 @@ from typing import Any
 
 from fatswarm.agent.path import sample, truncate
 from fatswarm.deploy.dashboard import Frame, print_frame, render_frame, save_svg
-from fatswarm.world.record import RecordFormatError, RunRecord, read_record
+from fatswarm.world.record import RecordFormatError, RunRecord, read_record, torn_end_note
 
 EXIT_OK, EXIT_BAD_INPUT = 0, 2
 TRAIL_STEP = 0.25  # world units between samples of a drawn path (a quarter of a robot radius)
@@ -235,10 +235,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def main(args: argparse.Namespace) -> int:
     """`fatswarm replay`: interactive on a terminal, otherwise one frame printed."""
     try:
-        record = read_record(args.record)
+        record = read_record(args.record, allow_torn_end=True)  # a crashed run shows too
     except RecordFormatError as exc:
         print(f"fatswarm replay: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    note = torn_end_note(args.record, record)
+    if note is not None:
+        print(f"fatswarm replay: {note}", file=sys.stderr)
     frames = build_frames(record, source=f"replay {os.path.basename(args.record)}")
     last = len(frames) - 1
     if args.round is not None and not 0 <= args.round <= frames[-1].round:

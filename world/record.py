@@ -73,11 +73,15 @@ class Result:
 
 @dataclass(frozen=True, slots=True)
 class RunRecord:
-    """A whole record; `result` is None when the run did not finish (e.g. the world crashed)."""
+    """A whole record; `result` is None when the run did not finish (e.g. the world crashed).
+
+    `torn_line`: number of a torn last line left out (read with `allow_torn_end`), else None.
+    """
 
     header: Header
     rounds: tuple[RoundEntry, ...]
     result: Result | None
+    torn_line: int | None = None
 
 
 def _positions_list(positions: Points) -> list[list[float]]:
@@ -327,11 +331,26 @@ def _result(entry: Mapping[str, Any], n: int) -> Result:
 Entry = Header | RoundEntry | Result
 
 
-def iter_record(path: str | os.PathLike[str]) -> Iterator[Entry]:
+@dataclass(frozen=True, slots=True)
+class _TornEnd:
+    """Internal: the last line was torn (no newline, not JSON) and left out; its number."""
+
+    line: int
+
+
+def iter_record(path: str | os.PathLike[str], *, allow_torn_end: bool = False) -> Iterator[Entry]:
     """Validated entries of a record, one per line, in order (for streaming large records).
 
-    Raises RecordFormatError("<file>:<line>: <reason>") at the first malformed line.
+    Raises RecordFormatError("<file>:<line>: <reason>") at the first malformed line. With
+    `allow_torn_end`, a torn last line (a crash mid-write: no newline, not JSON) is left out.
     """
+    for entry in _entries(path, allow_torn_end):
+        if not isinstance(entry, _TornEnd):
+            yield entry
+
+
+def _entries(path: str | os.PathLike[str], allow_torn_end: bool) -> Iterator[Entry | _TornEnd]:
+    """iter_record's entries, then a _TornEnd if a torn last line was left out."""
     name = os.fspath(path)
     try:
         fh = open(name, encoding="utf-8")  # noqa: SIM115
@@ -343,12 +362,17 @@ def iter_record(path: str | os.PathLike[str]) -> Iterator[Entry]:
         expected: int | None = None
         number = 0
         try:
-            for number, line in enumerate(fh, start=1):  # noqa: B007
+            for number, line in enumerate(fh, start=1):
                 if not line.strip():
                     continue
                 try:
                     entry = json.loads(line)
                 except json.JSONDecodeError as exc:
+                    if allow_torn_end and not line.endswith("\n"):  # only the last line can
+                        if header is None:
+                            raise _LineError("the header is torn (a crash mid-write)") from None
+                        yield _TornEnd(number)
+                        return
                     raise _LineError(f"not JSON ({exc.msg})") from None
                 if not isinstance(entry, dict):
                     raise _LineError("a line must be a JSON object")
@@ -376,19 +400,35 @@ def iter_record(path: str | os.PathLike[str]) -> Iterator[Entry]:
             raise RecordFormatError(f"{name}: empty run record (no header line)")
 
 
-def read_record(path: str | os.PathLike[str]) -> RunRecord:
-    """The whole record, validated; raises RecordFormatError naming the file, line and reason."""
-    entries = iter(iter_record(path))
+def read_record(path: str | os.PathLike[str], *, allow_torn_end: bool = False) -> RunRecord:
+    """The whole record, validated; raises RecordFormatError naming the file, line and reason.
+
+    With `allow_torn_end`, a torn last line is left out and its number kept in `torn_line`.
+    """
+    entries = iter(_entries(path, allow_torn_end))
     header = next(entries)
     assert isinstance(header, Header)
     rounds: list[RoundEntry] = []
     result: Result | None = None
+    torn_line: int | None = None
     for entry in entries:
         if isinstance(entry, RoundEntry):
             rounds.append(entry)
         elif isinstance(entry, Result):
             result = entry
-    return RunRecord(header, tuple(rounds), result)
+        elif isinstance(entry, _TornEnd):
+            torn_line = entry.line
+    return RunRecord(header, tuple(rounds), result, torn_line)
+
+
+def torn_end_note(path: str | os.PathLike[str], record: RunRecord) -> str | None:
+    """One line telling that the record's torn last line was left out, or None if it had none."""
+    if record.torn_line is None:
+        return None
+    count = len(record.rounds)
+    shown = f"the {count} complete round{'s' if count != 1 else ''}" if count else "the start only"
+    return (f"note: {os.fspath(path)} ends with a torn line (line {record.torn_line}, a crash "
+            f"mid-write); showing {shown}")
 
 
 __all__ = [
@@ -403,4 +443,5 @@ __all__ = [
     "collision_to_record",
     "iter_record",
     "read_record",
+    "torn_end_note",
 ]

@@ -377,8 +377,11 @@ def open_world(
 # --- the Zenoh shell --------------------------------------------------------------------------
 
 
-def serve(core: WorldCore, conf: Any, stop: threading.Event | None = None) -> int:
-    """Run the world over Zenoh until `stop` is set; returns an exit code."""
+def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) -> int:
+    """Run the world on an open Zenoh session until `stop` is set, then close it; returns 0.
+
+    The caller opens the session (`deploy.zconf.open_client`: a deadline, one-line errors).
+    """
     import zenoh
 
     stop = stop or threading.Event()
@@ -391,7 +394,7 @@ def serve(core: WorldCore, conf: Any, stop: threading.Event | None = None) -> in
     def on_move(sample: zenoh.Sample) -> None:
         events.put(("move", (str(sample.key_expr), sample.payload.to_bytes())))
 
-    with zenoh.open(conf) as session:
+    with session:
         state_pub = session.declare_publisher(
             state_key(swarm), congestion_control=zenoh.CongestionControl.DROP
         )

@@ -1,0 +1,165 @@
+"""The parts alone, when the network is not as given: one line and exit 2, or a periodic notice."""
+
+from __future__ import annotations
+
+import re
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+
+from fatswarm.deploy.launcher import Children
+from fatswarm.deploy.zconf import CONNECT_DEADLINE_S, ZenohSetupError, check_network, free_port
+
+pytestmark = pytest.mark.integration
+
+DEADLINE_S = 60.0  # generous: the machine is shared; waits are on predicates
+
+
+def part(name: str, *flags: str) -> list[str]:
+    return [sys.executable, "-m", "fatswarm.deploy.parts", name, *flags]
+
+
+def run_all(*argvs: list[str]) -> list[subprocess.CompletedProcess[str]]:
+    """Run the commands at once (each waits on its own deadline) and collect their outcomes."""
+    procs = [subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              start_new_session=True) for argv in argvs]
+    try:
+        done = []
+        for argv, proc in zip(argvs, procs, strict=True):
+            out, err = proc.communicate(timeout=DEADLINE_S)
+            done.append(subprocess.CompletedProcess(argv, proc.returncode, out, err))
+        return done
+    finally:
+        for proc in procs:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+
+
+def assert_one_line(done: subprocess.CompletedProcess[str], start: str) -> None:
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith(start) and done.stderr.count("\n") == 1, done.stderr
+    assert "Traceback" not in done.stderr and ".rs:" not in done.stderr, done.stderr
+
+
+@pytest.fixture
+def busy_port() -> Iterator[int]:
+    """A loopback TCP port something listens on."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        yield s.getsockname()[1]
+
+
+def test_world_and_coordinator_give_up_on_a_dead_router_in_one_line(tmp_path: Path) -> None:
+    dead = f"tcp/127.0.0.1:{free_port()}"
+    state = tmp_path / "state.jsonl"
+    world, coordinator = run_all(
+        part("world", "--connect", dead, "--state", str(state), "-n", "4"),
+        part("coordinator", "--connect", dead),
+    )
+    said = f"no Zenoh router answers at {dead} (tried for {CONNECT_DEADLINE_S:g} s)"
+    assert_one_line(world, f"fatswarm world: {said}")
+    assert_one_line(coordinator, f"fatswarm coordinator: {said}")
+    assert not state.exists()  # no run record for a world that never served
+
+
+def test_the_help_of_world_and_coordinator_says_how_long_they_wait_for_a_router() -> None:
+    for name in ("world", "coordinator"):
+        done = subprocess.run(part(name, "--help"), capture_output=True, text=True,
+                              timeout=DEADLINE_S, check=False)
+        assert re.search(rf"within\s+{CONNECT_DEADLINE_S:g}\s+s", done.stdout), done.stdout
+
+
+@pytest.mark.parametrize(
+    ("name", "flags", "said"),
+    [
+        ("world", ["--connect", "garbage", "--state", "unused.jsonl"],
+         "bad --connect endpoint 'garbage': write <protocol>/<address>"),
+        ("world", ["--connect", "tcp/notanip:x", "--state", "unused.jsonl"],
+         "bad --connect endpoint 'tcp/notanip:x': the port must be a whole number"),
+        ("coordinator", ["--connect", "garbage"], "bad --connect endpoint 'garbage'"),
+        ("coordinator", ["--connect", "tcp/notanip:x"], "bad --connect endpoint 'tcp/notanip:x'"),
+        ("router", ["--listen", "garbage"], "bad --listen endpoint 'garbage'"),
+        ("router", ["--listen", "tcp/notanip:x"], "bad --listen endpoint 'tcp/notanip:x'"),
+        ("agent", ["--robot", "0", "--connect", "garbage"], "bad --connect endpoint 'garbage'"),
+        ("agents", ["-n", "2", "--connect", "tcp/notanip:x"], "bad --connect endpoint"),
+    ],
+)
+def test_a_malformed_endpoint_exits_2_in_one_line(
+    tmp_path: Path, name: str, flags: list[str], said: str
+) -> None:
+    (done,) = run_all(part(name, *[str(tmp_path / f) if f.endswith(".jsonl") else f
+                                   for f in flags]))
+    assert_one_line(done, f"fatswarm {name}: {said}")
+    assert not (tmp_path / "unused.jsonl").exists()
+
+
+def test_a_router_on_a_port_in_use_exits_2_in_one_line(busy_port: int) -> None:
+    (done,) = run_all(part("router", "--listen", f"tcp/127.0.0.1:{busy_port}"))
+    assert_one_line(done, f"fatswarm router: cannot listen on tcp/127.0.0.1:{busy_port}: "
+                    "address already in use")
+
+
+def test_the_run_gives_up_on_a_dead_router_in_one_line() -> None:
+    dead = f"tcp/127.0.0.1:{free_port()}"
+    started = time.monotonic()
+    with pytest.raises(ZenohSetupError, match=r"^no Zenoh router answers at ") as info:
+        check_network([dead], [])
+    assert time.monotonic() - started >= CONNECT_DEADLINE_S  # it did wait for a late router
+    assert dead in str(info.value) and "\n" not in str(info.value)
+
+
+def _wait_for(what: str, predicate: Callable[[], bool], logs: Callable[[], str]) -> None:
+    end = time.monotonic() + DEADLINE_S
+    while not predicate():
+        if time.monotonic() > end:
+            pytest.fail(f"timed out waiting for {what}\n{logs()}")
+        time.sleep(0.05)
+
+
+def test_agents_say_every_few_seconds_that_they_wait_for_a_router_and_where(
+    tmp_path: Path,
+) -> None:
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    net = ["--connect", endpoint, "--swarm", "waiting"]
+    hosts = {  # name -> (argv, who the notice names)
+        "agent": (part("agent", *net, "--robot", "7"), "robot 7"),
+        "agents": (part("agents", *net, "-n", "3", "--first", "0"), "robots 0..2"),
+        "agents-exec": (part("agents", *net, "-n", "2", "--first", "3", "--spawn", "exec"),
+                        "robots 3..4"),
+    }
+
+    def log(name: str) -> str:
+        path = tmp_path / f"{name}.log"
+        return path.read_text(errors="replace") if path.exists() else ""
+
+    def logs() -> str:
+        return "\n".join(f"--- {name}\n{log(name)}" for name in hosts)
+
+    with Children() as children:
+        for name, (argv, _) in hosts.items():
+            with open(tmp_path / f"{name}.log", "wb") as out:
+                children.start(name, argv, stdout=out, stderr=out)
+        for name, (_, who) in hosts.items():
+            notice = f"{who}: still waiting for a Zenoh router at {endpoint} ("
+            _wait_for(f"{name}'s second notice",
+                      lambda notice=notice, name=name: log(name).count(notice) >= 2, logs)
+        assert not children.exited(), logs()  # waiting, by design: not giving up
+        with open(tmp_path / "router.log", "wb") as out:
+            children.start("router", part("router", "--listen", endpoint), stdout=out,
+                           stderr=out)
+        for name, (_, who) in hosts.items():
+            answered = f"{who}: the router at {endpoint} answered after"
+            _wait_for(f"{name} to connect", lambda answered=answered, name=name:
+                      answered in log(name), logs)
+    for name, (_, who) in hosts.items():
+        lines = log(name).splitlines()
+        assert all(f"] WARNING {who}: " in line for line in lines), logs()  # one speaks per host
+        waiting = [line for line in lines if "still waiting" in line]
+        assert len(waiting) >= 2 and all(re.search(r"\(\d+ s so far\)", w) for w in waiting)

@@ -1,0 +1,168 @@
+"""Zenoh endpoints and errors: malformed endpoints refused up front, Zenoh's errors in one line."""
+
+from __future__ import annotations
+
+import socket
+import threading
+from collections.abc import Iterator
+
+import pytest
+import zenoh
+
+from fatswarm.deploy import zconf
+from fatswarm.deploy.zconf import (
+    ZenohSetupError,
+    check_network,
+    endpoint_problem,
+    explain_zenoh_error,
+    free_port,
+    make_config,
+    open_client,
+    unreachable_message,
+)
+
+# Verbatim messages of eclipse-zenoh 1.10 (Rust source paths included), and what we show instead.
+RUST = "/root/.cargo/git/checkouts/zenoh-9c599d5ef3e0480e/cc83980"
+ZENOH_SAYS = [
+    (f"Unable to connect to any of [Single(tcp/127.0.0.1:1), Single(tcp/[::1]:2)]!  at "
+     f"{RUST}/zenoh/src/net/runtime/orchestrator.rs:447.",
+     "no Zenoh router answers at tcp/127.0.0.1:1, tcp/[::1]:2"),
+    ('Json5Err(Message { msg: "Endpoints must be of the form <protocol>/<address>[?<metadata>]'
+     f'[#<config>]: garbage at {RUST}/commons/zenoh-protocol/src/core/endpoint.rs:615.", '
+     f"location: Some(Location {{ line: 1, column: 2 }}) }}) at {RUST}/zenoh/src/api/config.rs:86.",
+     "'garbage' is not an endpoint: write <protocol>/<address>, e.g. tcp/127.0.0.1:7447"),
+    (f"Can not create a new TCP listener bound to tcp/127.0.0.1:7447: [127.0.0.1:7447: Address "
+     f"already in use (os error 98) at {RUST}/io/zenoh-link-commons/src/tcp.rs:61.] at "
+     f"{RUST}/io/zenoh-links/zenoh-link-tcp/src/unicast.rs:338.",
+     "cannot listen on tcp/127.0.0.1:7447: address already in use (a router already running "
+     "there? pick another port)"),
+    (f"Can not create a new TCP listener bound to tcp/10.9.9.9:7447: [10.9.9.9:7447: Cannot "
+     f"assign requested address (os error 99) at {RUST}/io/zenoh-link-commons/src/tcp.rs:61.] at "
+     f"{RUST}/io/zenoh-links/zenoh-link-tcp/src/unicast.rs:338.",
+     "cannot listen on tcp/10.9.9.9:7447: cannot assign requested address"),
+    (f"invalid port value at {RUST}/io/zenoh-link-commons/src/lib.rs:62.", "invalid port value"),
+    ("Unicast not supported for foo protocol [zenoh-link/src/lib.rs:183]",
+     "unicast not supported for foo protocol"),
+]
+
+
+@pytest.mark.parametrize(("message", "shown"), ZENOH_SAYS)
+def test_zenoh_messages_become_one_sentence_without_rust_source_paths(
+    message: str, shown: str
+) -> None:
+    assert explain_zenoh_error(zenoh.ZError(message)) == shown
+
+
+@pytest.fixture
+def busy_port() -> Iterator[int]:
+    """A loopback TCP port something listens on."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        yield s.getsockname()[1]
+
+
+def _raised_by(action: object) -> zenoh.ZError:
+    with pytest.raises(zenoh.ZError) as info:
+        action()  # type: ignore[operator]
+    return info.value
+
+
+def test_what_zenoh_really_raises_reads_as_one_line_without_paths(busy_port: int) -> None:
+    dead = f"tcp/127.0.0.1:{free_port()}"
+    router = zenoh.Config()
+    router.insert_json5("mode", '"router"')
+    router.insert_json5("scouting/multicast/enabled", "false")
+    router.insert_json5("listen/endpoints", f'["tcp/127.0.0.1:{busy_port}"]')
+    raised = [
+        _raised_by(lambda: zenoh.open(make_config("client", [dead]))),
+        _raised_by(lambda: zenoh.Config().insert_json5("connect/endpoints", '["garbage"]')),
+        _raised_by(lambda: zenoh.open(router)),
+    ]
+    shown = [explain_zenoh_error(exc) for exc in raised]
+    assert shown[0] == f"no Zenoh router answers at {dead}"
+    assert shown[1].startswith("'garbage' is not an endpoint")
+    assert shown[2].startswith(f"cannot listen on tcp/127.0.0.1:{busy_port}: address already")
+    for text in shown:
+        assert ".rs" not in text and "/root" not in text and "\n" not in text, text
+
+
+@pytest.mark.parametrize(
+    ("endpoint", "problem"),
+    [
+        ("garbage", "write <protocol>/<address>"),
+        ("tcp/notanip:x", "the port must be a whole number in 1..65535, got 'x'"),
+        ("tcp/127.0.0.1", "the address must be <host>:<port>"),
+        ("tcp/127.0.0.1:70000", "the port must be"),
+        ("tcp/127.0.0.1:0", "the port must be"),  # nothing to connect to
+        ("tcp/1.2.3:7447", "'1.2.3' is not an IPv4 address"),
+        ("tcp/[::1:7447", "neither an IP address nor a host name"),
+        ("tcp/a_b:7447", "neither an IP address nor a host name"),
+        ("TCP/127.0.0.1:7447", "unknown protocol 'TCP'"),
+        ("foo/127.0.0.1:7447", "unknown protocol 'foo'"),
+    ],
+)
+def test_malformed_endpoints_are_refused_with_the_flag_and_what_to_fix(
+    endpoint: str, problem: str
+) -> None:
+    found = endpoint_problem(endpoint)
+    assert found is not None and problem in found
+    with pytest.raises(ZenohSetupError, match=r"^bad --connect endpoint '") as info:
+        make_config("client", connect=[endpoint])
+    assert problem in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "endpoint",
+    ["tcp/127.0.0.1:7447", "tcp/localhost:7447", "tcp/[::1]:7447", "udp/10.0.0.1:7447",
+     "tcp/0.0.0.0:7447?iface=lo", "ws/router.lab:80", "unixsock-stream//tmp/zenoh.sock"],
+)
+def test_well_formed_endpoints_pass(endpoint: str) -> None:
+    assert endpoint_problem(endpoint) is None
+    assert endpoint_problem(endpoint, listening=True) is None
+
+
+def test_port_0_is_a_listening_endpoint_only() -> None:
+    assert endpoint_problem("tcp/127.0.0.1:0", listening=True) is None
+    assert endpoint_problem("tcp/127.0.0.1:0") is not None
+
+
+def test_a_client_gives_up_after_its_deadline_naming_the_endpoint_and_the_fix() -> None:
+    dead = f"tcp/127.0.0.1:{free_port()}"
+    with pytest.raises(ZenohSetupError) as info:
+        open_client(make_config("client", [dead]), deadline_s=0.3)
+    assert str(info.value) == (
+        f"no Zenoh router answers at {dead} (tried for 0.3 s): start one there "
+        f"(fatswarm router --listen {dead}) or fix --connect"
+    )
+
+
+def test_a_client_stopped_while_it_waits_returns_none() -> None:
+    stop = threading.Event()
+    stop.set()
+    conf = make_config("client", [f"tcp/127.0.0.1:{free_port()}"])
+    assert open_client(conf, stop, deadline_s=60.0) is None
+
+
+def test_an_unknown_host_is_named_when_no_router_answers(monkeypatch: pytest.MonkeyPatch) -> None:
+    def unknown(*args: object, **kwargs: object) -> None:
+        raise socket.gaierror(socket.EAI_NONAME, "Name or service not known")
+
+    monkeypatch.setattr(zconf.socket, "getaddrinfo", unknown)  # no name service is asked
+    assert unreachable_message(["tcp/127.0.0.1:9", "tcp/router.lab:7447"], 5.0) == (
+        "host 'router.lab' of --connect tcp/router.lab:7447 is not known: fix --connect"
+    )
+
+
+def test_the_run_refuses_a_listen_port_in_use_or_malformed_and_accepts_a_free_one(
+    busy_port: int,
+) -> None:
+    with pytest.raises(ZenohSetupError, match=rf"^cannot listen on tcp/127.0.0.1:{busy_port}: "
+                       "address already in use"):
+        check_network([], [f"tcp/127.0.0.1:{busy_port}"])
+    with pytest.raises(ZenohSetupError, match=r"^bad --listen endpoint 'garbage'"):
+        check_network([], ["garbage"])
+    with pytest.raises(ZenohSetupError, match=r"^bad --connect endpoint 'tcp/notanip:x'"):
+        check_network(["tcp/notanip:x"], [])
+    check_network([], [f"tcp/127.0.0.1:{free_port()}"])
+    check_network([], [])  # the launcher picks a free loopback port itself
