@@ -9,9 +9,21 @@ so `--help` stays fast and `fatswarm replay` works without a router.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import os
+import signal
 import sys
-from collections.abc import Sequence
+import threading
+from collections.abc import Callable, Sequence
+from types import FrameType
+from typing import TYPE_CHECKING, Any
+
+from fatswarm import __version__
+from fatswarm.deploy.run import ExitCode
+
+if TYPE_CHECKING:
+    from _typeshed import SupportsWrite
 
 # name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -26,18 +38,36 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "plot": ("fatswarm.deploy.plot", "draw a record's trajectories to SVG or PNG (fatswarm[plot])"),
 }
 
-EXIT_BAD_INPUT = 2
+
+_Handler = Callable[[int, FrameType | None], Any] | int | None  # what signal.signal returns
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived: unwind like Ctrl-C (closing files, stopping children), then exit 143.
+
+    A BaseException, as KeyboardInterrupt is, so that no `except Exception` swallows it.
+    """
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser, except that a failed write of --help or --version is not swallowed:
+    `main` ends a closed pipe the same way (exit 141) whatever printed into it."""
+
+    def _print_message(self, message: str, file: SupportsWrite[str] | None = None) -> None:
+        if message:
+            (file or sys.stderr).write(message)
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The full parser, with every subcommand's flags (imports each subcommand module)."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="fatswarm",
         description=(
             "Swarm emulator: every robot its own process over Eclipse Zenoh. Reference algorithm: "
             "uniform circle formation by transparent fat robots (Mondal & Gan Chaudhuri)."
         ),
     )
+    parser.add_argument("--version", action="version", version=f"fatswarm {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name, (module_name, help_text) in COMMANDS.items():
         p = sub.add_parser(name, help=help_text, description=help_text)
@@ -49,17 +79,64 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the console script; returns the process exit code."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    module = importlib.import_module(args._module)
-    run = getattr(module, f"main_{args._name}", None) or module.main
+    """Entry point of the console script; returns the process exit code.
+
+    Standard output closed early (`fatswarm run ... | head -1`) ends quietly with 141, as a
+    process killed by SIGPIPE would: no traceback, whatever was left to print is dropped.
+    """
     try:
+        try:
+            return _main(argv)
+        finally:
+            sys.stdout.flush()  # here, so that a closed pipe is caught below, not at exit
+    except BrokenPipeError:
+        _drop_stdout()
+        return ExitCode.BROKEN_PIPE
+
+
+def _main(argv: Sequence[str] | None) -> int:
+    """Parse, then run the subcommand; Ctrl-C exits 130 and SIGTERM 143, after unwinding."""
+    previous = _raise_on_sigterm()
+    try:
+        parser = build_parser()
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit as exc:  # --help, --version or a usage error: argparse printed it
+            return exc.code if isinstance(exc.code, int) else int(exc.code is not None)
+        module = importlib.import_module(args._module)
+        run = getattr(module, f"main_{args._name}", None) or module.main
         code: int = run(args)
+        return code
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
-        return 130
-    return code
+        return ExitCode.INTERRUPTED
+    except Terminated:
+        print("terminated", file=sys.stderr)
+        return ExitCode.TERMINATED
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _raise_on_sigterm() -> _Handler:
+    """Make SIGTERM raise `Terminated` (main thread only); the handler it replaces, or None."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+
+    def terminated(signum: int, frame: FrameType | None) -> None:
+        raise Terminated
+
+    return signal.signal(signal.SIGTERM, terminated)
+
+
+def _drop_stdout() -> None:
+    """Point standard output at /dev/null, so the flush at exit cannot fail again."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        with contextlib.suppress(OSError, ValueError):  # no descriptor: an in-process capture
+            os.dup2(devnull, sys.stdout.fileno())
+    finally:
+        os.close(devnull)
 
 
 if __name__ == "__main__":

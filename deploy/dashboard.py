@@ -30,11 +30,11 @@ from rich.text import Text
 from fatswarm.agent import geometry, tolerance
 from fatswarm.agent.path import Points
 from fatswarm.deploy.canvas import Canvas, Mode, Viewport
+from fatswarm.deploy.run import EXIT_BAD_INPUT, EXIT_NOT_FORMED, exit_code_for
 
 if TYPE_CHECKING:
     from fatswarm.world.protocol import WorldState
 
-EXIT_NOT_FORMED, EXIT_BAD_INPUT = 1, 2
 DEFAULT_SWARM = "default"
 FINAL_STATUSES = ("formed", "stalled", "max_rounds")
 
@@ -584,8 +584,10 @@ def watch(
     every: int = PROGRESS_EVERY,
     max_rounds: int | None = None,
     console: Console | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> StateWatcher:
-    """Start showing a running swarm: the live dashboard, else progress lines (none if `quiet`).
+    """Start showing a running swarm: the live dashboard, else progress lines (none if `quiet`)
+    passed to `progress` (default: printed on standard output).
 
     `dashboard=None` picks by whether standard output is a terminal. Call `.stop(final)` at the end.
     """
@@ -595,7 +597,7 @@ def watch(
     if dashboard:
         sink = LiveView(console)
     else:
-        sink = ProgressLog(out=(lambda line: None) if quiet else None, every=every)
+        sink = ProgressLog(out=(lambda line: None) if quiet else progress, every=every)
     try:
         watcher = StateWatcher(
             swarm, sink, session=session, connect=connect, max_rounds=max_rounds, svg=svg
@@ -607,21 +609,29 @@ def watch(
 
 
 def follow(
-    args: argparse.Namespace, swarm: str, *, session: Any = None, connect: str | None = None
+    args: argparse.Namespace,
+    swarm: str,
+    *,
+    session: Any = None,
+    connect: str | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> StateWatcher:
     """What `fatswarm run` calls once the router is up: the live view or the progress log.
 
-    Reads `--no-dashboard`, `--svg`, `--max-rounds` and `--quiet` from `args`; the dashboard is
-    shown only when standard output is a terminal. Call `.stop(final)` when the run is over.
+    Reads `--no-dashboard`, `--json`, `--svg`, `--max-rounds` and `--quiet` from `args`; the
+    dashboard is shown only when standard output is a terminal and not kept for `--json`.
+    Progress lines go to `progress` (default: standard output). Call `.stop(final)` at the end.
     """
+    plain = getattr(args, "no_dashboard", False) or getattr(args, "json", False)
     return watch(
         swarm,
         session=session,
         connect=connect,
-        dashboard=not getattr(args, "no_dashboard", False) and sys.stdout.isatty(),
+        dashboard=not plain and sys.stdout.isatty(),
         quiet=getattr(args, "quiet", False),
         svg=getattr(args, "svg", None),
         max_rounds=getattr(args, "max_rounds", None),
+        progress=progress,
     )
 
 
@@ -689,11 +699,12 @@ def main(args: argparse.Namespace) -> int:
     finally:
         watcher.stop()
     if watcher.error is not None:
-        print(f"fatswarm dashboard: cannot follow {args.connect}: {watcher.error}", file=sys.stderr)
+        from fatswarm.deploy.zconf import explain_zenoh_error
+
+        reason = explain_zenoh_error(watcher.error)
+        print(f"fatswarm dashboard: cannot follow {args.connect}: {reason}", file=sys.stderr)
         return EXIT_BAD_INPUT
     last = watcher.latest
     if last is None or last.status == "running":
         return EXIT_NOT_FORMED
-    from fatswarm.deploy.run import exit_code_for
-
     return exit_code_for(last.status, last.collisions_total)  # as `fatswarm run`: 3 if collided

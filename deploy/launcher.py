@@ -24,16 +24,23 @@ from typing import Any
 from fatswarm.deploy.run import (
     EXIT_BAD_INPUT,
     EXIT_FORMED,
-    EXIT_INTERRUPTED,
     EXIT_NOT_FORMED,
+    ExitCode,
     Outcome,
     exit_code,
+    print_outcome,
     summary,
 )
-from fatswarm.deploy.zconf import DEFAULT_SWARM, ROUTER_ENDPOINT_HELP, loopback_endpoint
+from fatswarm.deploy.zconf import (
+    DEFAULT_SWARM,
+    ROUTER_ENDPOINT_HELP,
+    check_network,
+    loopback_endpoint,
+)
 
 log = logging.getLogger("fatswarm.launcher")
 
+STDERR_FD = 2  # a file descriptor, not sys.stderr: that may be an in-process capture
 STOP_GRACE_S = 5.0  # SIGTERM first; SIGKILL whatever is still there after this
 STOP_GRACE_PER_AGENT_S = 0.1  # hundreds of agents closing sessions at once share two cores
 FINAL_STATE_WAIT_S = 5.0  # the dashboard's wait for the final state (re-published every second)
@@ -105,24 +112,32 @@ def _signal_group(proc: subprocess.Popen[bytes], sig: int) -> None:
 
 
 def add_network_arguments(p: argparse.ArgumentParser) -> None:
-    """The networked run's flags on top of the lockstep ones."""
+    """The networked run's flags on top of the lockstep ones (a lockstep run refuses them)."""
     g = p.add_argument_group("networked run (default; not with --lockstep)")
-    g.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
-                   help=f"use this router instead of starting one; {ROUTER_ENDPOINT_HELP}")
-    g.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
-                   help="endpoint(s) of the router started here (default: a free loopback port)")
-    g.add_argument("--swarm", default=None,
-                   help=f"swarm name, keys under fatswarm/<swarm>/ (default {DEFAULT_SWARM!r} on "
-                   "the router started here, a fresh random name with --connect)")
-    g.add_argument("--move-timeout", type=float, default=5.0, metavar="SECONDS",
-                   help="an active robot that has not moved by then stays put (default 5)")
-    g.add_argument("--pace", type=float, default=0.0, metavar="SECONDS",
-                   help="least time per round, to watch a run unfold (default 0: full speed)")
-    g.add_argument("--spawn", choices=("fork", "exec"), default="fork",
-                   help="agent processes forked from one preloaded host process before any Zenoh "
-                   "session exists (fork, fast) or one fresh interpreter each (exec)")
-    g.add_argument("--resume", action="store_true",
-                   help="continue the run of an existing --record instead of starting afresh")
+    flags = [
+        g.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
+                       help=f"use this router instead of starting one; {ROUTER_ENDPOINT_HELP}"),
+        g.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
+                       help="endpoint(s) of the router started here (default: a free loopback "
+                       "port)"),
+        g.add_argument("--swarm", default=None,
+                       help=f"swarm name, keys under fatswarm/<swarm>/ (default {DEFAULT_SWARM!r} "
+                       "on the router started here, a fresh random name with --connect)"),
+        g.add_argument("--move-timeout", type=float, default=5.0, metavar="SECONDS",
+                       help="an active robot that has not moved by then stays put (default 5; "
+                       "finite, > 0)"),
+        g.add_argument("--pace", type=float, default=0.0, metavar="SECONDS",
+                       help="least time per round, to watch a run unfold (default 0: full "
+                       "speed; finite, >= 0)"),
+        g.add_argument("--spawn", choices=("fork", "exec"), default="fork",
+                       help="agent processes forked from one preloaded host process before any "
+                       "Zenoh session exists (fork, fast) or one fresh interpreter each (exec)"),
+        g.add_argument("--resume", action="store_true",
+                       help="continue the run of an existing --record instead of starting afresh"),
+    ]
+    # what `fatswarm run --lockstep` refuses when given (deploy.run.networked_flags_given)
+    p.set_defaults(_networked_flags=tuple((a.option_strings[-1], a.dest, a.default)
+                                          for a in flags))
 
 
 def _child_endpoint(listen: str) -> str:
@@ -141,41 +156,55 @@ def run_networked(args: argparse.Namespace) -> int:
     if problem is not None:
         print(f"fatswarm run: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    if args.move_timeout <= 0 or args.pace < 0:
-        print("fatswarm run: --move-timeout must be > 0 and --pace >= 0 seconds", file=sys.stderr)
-        return EXIT_BAD_INPUT
     if args.seed is None and not args.quiet:
         print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
     with tempfile.TemporaryDirectory(prefix="fatswarm-") as tmp:
         record = args.record or os.path.join(tmp, "record.jsonl")
         if args.record and not args.resume and os.path.exists(record):
-            os.unlink(record)  # a new run, as in lockstep (which truncates)
+            os.unlink(record)  # --force (checked): a new run, as in lockstep (which truncates)
         return _launch(args, seed, record)
 
 
 def check_inputs(args: argparse.Namespace) -> tuple[str | None, int]:
     """(what to fix or None, the seed): the lockstep run's checks, before any process starts."""
-    from fatswarm.deploy.run import input_errors, resolve_run
+    from fatswarm.deploy.run import check_seconds, input_errors, resolve_run
 
     seed: int = args.seed if args.seed is not None else secrets.randbelow(2**31)
     bad_input: tuple[type[Exception], ...] = (*input_errors(), ValueError)  # ValueError: swarm
     try:
+        check_seconds("--move-timeout", args.move_timeout, zero_ok=False)
+        check_seconds("--pace", args.pace, zero_ok=True)
         resolve_run(args, seed)
         if args.swarm is not None:
             from fatswarm.world.protocol import check_swarm
 
             check_swarm(args.swarm)
+        check_network(args.connect, args.listen)  # a router answers; --listen well formed, free
     except bad_input as exc:
         return str(exc), seed
     return None, seed
 
 
+class StopSignal:
+    """Set by SIGTERM or SIGINT (a signal handler); remembers which, for the exit code."""
+
+    def __init__(self) -> None:
+        self.event = threading.Event()
+        self.signum: int | None = None
+
+    def __call__(self, signum: int, frame: object) -> None:
+        del frame
+        self.signum = signum
+        self.event.set()
+
+    def exit_code(self) -> ExitCode:
+        """143 after SIGTERM, 130 after Ctrl-C (SIGINT)."""
+        return ExitCode.TERMINATED if self.signum == signal.SIGTERM else ExitCode.INTERRUPTED
+
+
 def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
-    stop = threading.Event()
-    previous = {
-        sig: signal.signal(sig, lambda signum, frame: stop.set())
-        for sig in (signal.SIGTERM, signal.SIGINT)
-    }
+    stop = StopSignal()
+    previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)}
     # Our own router holds one swarm: the default name lets `fatswarm dashboard` attach as is. On
     # a shared router (--connect), a fresh name keeps two runs from mixing their messages.
     swarm = args.swarm or (f"run-{secrets.token_hex(4)}" if args.connect else DEFAULT_SWARM)
@@ -187,7 +216,11 @@ def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
             from fatswarm.deploy.router import open_router
 
             listen = list(args.listen) or [loopback_endpoint()]
-            router = open_router(listen)
+            try:
+                router = open_router(listen)
+            except ValueError as exc:  # taken since check_inputs looked, say: one line all the same
+                print(f"fatswarm run: {exc}", file=sys.stderr)
+                return EXIT_BAD_INPUT
             endpoints = [_child_endpoint(listen[0])]
         if not args.quiet:
             print(f"swarm {swarm!r} on {endpoints[0]} (watch from elsewhere: fatswarm dashboard "
@@ -209,23 +242,28 @@ def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
             signal.signal(sig, handler)
     if code in (EXIT_FORMED, EXIT_NOT_FORMED):
         # the record, not the coordinator's 0/1, says whether robots collided on the way
-        outcome = print_summary(record, sys.stdout)
+        outcome = read_outcome(record)
         if outcome is not None:
             code = exit_code(outcome)
-        if args.record:
-            print(f"record: {args.record}")
+        print_outcome(outcome, code, sys.stdout, as_json=args.json, record=args.record,
+                      svg=getattr(args, "svg", None) if watcher is not None else None)
     return code
 
 
 def _follow(args: argparse.Namespace, swarm: str, router: Any, endpoint: str) -> Any:
-    """The dashboard (on a terminal) or progress lines, from the world's state stream."""
+    """The dashboard (on a terminal, not with --json) or progress lines on stderr, from the
+    world's state stream: standard output carries only the summary."""
     try:
         from fatswarm.deploy.dashboard import follow
     except ImportError:
         return None
     if router is not None:
-        return follow(args, swarm, session=router)
-    return follow(args, swarm, connect=endpoint)
+        return follow(args, swarm, session=router, progress=_to_stderr)
+    return follow(args, swarm, connect=endpoint, progress=_to_stderr)
+
+
+def _to_stderr(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
 
 
 def _await_final_state(watcher: Any, timeout_s: float) -> None:
@@ -253,7 +291,7 @@ def _run_children(
     swarm: str,
     endpoints: Sequence[str],
     children: Children,
-    stop: threading.Event,
+    stop: StopSignal,
 ) -> int:
     from fatswarm.deploy.parts import agents_command
 
@@ -277,21 +315,25 @@ def _run_children(
         coord += ["--schedule", args.schedule]
     if args.fairness is not None:
         coord += ["--fairness", str(args.fairness)]
-    children.start("world", _part("world", *net, *quiet, *world))
-    children.start("coordinator", _part("coordinator", *net, *quiet, *coord))
+    # the parts' standard output joins ours on stderr (fd 2): stdout carries only the summary
+    children.start("world", _part("world", *net, *quiet, *world), stdout=STDERR_FD)
+    children.start("coordinator", _part("coordinator", *net, *quiet, *coord), stdout=STDERR_FD)
     n = _robot_count(args)
     children.start("agents", [*agents_command(n, seed, swarm, endpoints, "warning", args.spawn),
-                              "--exit-with-parent", str(os.getpid())])
-    while not stop.wait(0.1):
+                              "--exit-with-parent", str(os.getpid())], stdout=STDERR_FD)
+    while not stop.event.wait(0.1):
         gone = children.exited()
         if "coordinator" in gone:
-            return gone["coordinator"] if gone["coordinator"] in (0, 1) else EXIT_NOT_FORMED
+            ended = gone["coordinator"]  # the coordinator exits 0 formed, 1 not formed
+            return ExitCode(ended) if ended in (EXIT_FORMED, EXIT_NOT_FORMED) else EXIT_NOT_FORMED
         if "world" in gone:
             print(f"fatswarm run: the world process exited with code {gone['world']}",
                   file=sys.stderr)
             return EXIT_NOT_FORMED if gone["world"] != EXIT_BAD_INPUT else EXIT_BAD_INPUT
-    print("interrupted: stopping every process started", file=sys.stderr)
-    return EXIT_INTERRUPTED
+    code = stop.exit_code()
+    print(f"{'terminated' if code == ExitCode.TERMINATED else 'interrupted'}: stopping every "
+          "process started", file=sys.stderr)
+    return code
 
 
 def _robot_count(args: argparse.Namespace) -> int:
@@ -307,6 +349,14 @@ def _robot_count(args: argparse.Namespace) -> int:
 def print_summary(record: str, out: Any) -> Outcome | None:
     """Print the same summary as a lockstep run, read back from the record; the outcome, None if
     the record holds no result (the run did not end)."""
+    outcome = read_outcome(record)
+    if outcome is not None:
+        print(summary(outcome), file=out)
+    return outcome
+
+
+def read_outcome(record: str) -> Outcome | None:
+    """How the run of this record ended; None (said on stderr) if unreadable or unfinished."""
     from fatswarm.world.record import RecordFormatError, read_record
 
     try:
@@ -316,12 +366,12 @@ def print_summary(record: str, out: Any) -> Outcome | None:
         return None
     h, res = rec.header, rec.result
     if res is None:
-        print(f"unfinished: n={h.n} after {len(rec.rounds)} rounds", file=out)
+        print(f"unfinished: n={h.n} after {len(rec.rounds)} rounds", file=sys.stderr)
         return None
     x = res.extra
     collisions = x.get("collisions")
     epochs = x.get("epochs")
-    outcome = Outcome(
+    return Outcome(
         status=res.status,
         rounds=res.rounds,
         # the world writes the count; else the rounds' own collisions say it
@@ -335,8 +385,6 @@ def print_summary(record: str, out: Any) -> Outcome | None:
         moves=int(x.get("moves", 0)),
         total_distance=float(x.get("total_distance", 0.0)),
     )
-    print(summary(outcome), file=out)
-    return outcome
 
 
-__all__ = ["Children", "add_network_arguments", "run_networked"]
+__all__ = ["Children", "StopSignal", "add_network_arguments", "read_outcome", "run_networked"]

@@ -1,14 +1,20 @@
 """`fatswarm run`: run a swarm, networked (default, deploy.launcher) or in one process (--lockstep).
 
-Exit codes: 0 formed with no collision, 1 not formed (stalled or max_rounds, with or without
-collisions), 2 bad input (one line on stderr), 3 formed but with collisions, 130 interrupted.
+Exit codes (`ExitCode`): 0 formed with no collision, 1 not formed (stalled or max_rounds, with or
+without collisions), 2 bad input (one line on stderr), 3 formed but with collisions, 130
+interrupted (SIGINT), 141 standard output closed early (a broken pipe), 143 terminated (SIGTERM).
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import enum
 import importlib
 import importlib.util
+import json
+import math
+import os
 import secrets
 import sys
 import time
@@ -22,16 +28,33 @@ if TYPE_CHECKING:
     from fatswarm.coordinator.schedule import Scheduler
     from fatswarm.deploy.lockstep import RoundReport
 
-EXIT_FORMED: Final = 0  # formed, and no robot was ever stopped by contact
-EXIT_NOT_FORMED: Final = 1  # stalled or max_rounds, collisions or not
-EXIT_BAD_INPUT: Final = 2
-EXIT_FORMED_WITH_COLLISIONS: Final = 3  # formed, but not the collision-free formation
-EXIT_INTERRUPTED: Final = 130
+
+class ExitCode(enum.IntEnum):
+    """Every exit code of the `fatswarm` command, defined once."""
+
+    FORMED = 0  # formed, and no robot was ever stopped by contact
+    NOT_FORMED = 1  # stalled or max_rounds, collisions or not
+    BAD_INPUT = 2  # one line on stderr says what to fix
+    FORMED_WITH_COLLISIONS = 3  # formed, but not the collision-free formation
+    INTERRUPTED = 130  # 128 + SIGINT (Ctrl-C)
+    BROKEN_PIPE = 141  # 128 + SIGPIPE: standard output closed early (`| head -1`)
+    TERMINATED = 143  # 128 + SIGTERM
+
+
+EXIT_FORMED: Final = ExitCode.FORMED
+EXIT_NOT_FORMED: Final = ExitCode.NOT_FORMED
+EXIT_BAD_INPUT: Final = ExitCode.BAD_INPUT
+EXIT_FORMED_WITH_COLLISIONS: Final = ExitCode.FORMED_WITH_COLLISIONS
+EXIT_INTERRUPTED: Final = ExitCode.INTERRUPTED
+EXIT_BROKEN_PIPE: Final = ExitCode.BROKEN_PIPE
+EXIT_TERMINATED: Final = ExitCode.TERMINATED
 EXIT_CODES_HELP: Final = (
-    f"exit codes: {EXIT_FORMED} formed with no collision; {EXIT_NOT_FORMED} not formed (stalled "
-    f"or out of rounds); {EXIT_BAD_INPUT} bad input (one line on stderr says what to fix); "
-    f"{EXIT_FORMED_WITH_COLLISIONS} formed, but with collisions (robots stopped at contact: not "
-    f"the collision-free formation the paper guarantees); {EXIT_INTERRUPTED} interrupted."
+    f"exit codes: {EXIT_FORMED:d} formed with no collision; {EXIT_NOT_FORMED:d} not formed "
+    f"(stalled or out of rounds); {EXIT_BAD_INPUT:d} bad input (one line on stderr says what to "
+    f"fix); {EXIT_FORMED_WITH_COLLISIONS:d} formed, but with collisions (robots stopped at "
+    f"contact: not the collision-free formation the paper guarantees); {EXIT_INTERRUPTED:d} "
+    f"interrupted (Ctrl-C); {EXIT_BROKEN_PIPE:d} standard output closed early (e.g. | head); "
+    f"{EXIT_TERMINATED:d} terminated (SIGTERM)."
 )
 DEFAULT_N: Final = 8
 DEFAULT_A: Final = 4.0
@@ -64,7 +87,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--lockstep",
         action="store_true",
-        help="run every robot in this one process, in lock step (no Zenoh)",
+        help="run every robot in this one process, in lock step (no Zenoh; refuses the "
+        "networked-run flags)",
     )
     p.add_argument("-n", type=int, default=None, metavar="N",
                    help=f"number of robots (default {DEFAULT_N}; with --init, taken from the file)")
@@ -88,16 +112,22 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-rounds", type=int, default=None, metavar="R",
                    help="stop after R rounds (default: 10 (n + 10) for fsync, 40 (n + 10) for "
                    "ssync, 10 n (n + 10) otherwise)")
-    p.add_argument("--record", metavar="PATH", help="write the run record (JSON Lines) to PATH")
+    p.add_argument("--record", metavar="PATH",
+                   help="write the run record (JSON Lines) to PATH (a new file, unless --force)")
+    p.add_argument("--force", action="store_true",
+                   help="let --record overwrite an existing file")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="no progress lines while running (the summary is still printed)")
+    p.add_argument("--json", action="store_true",
+                   help="print the summary as one JSON object on stdout (progress stays on "
+                   "stderr; no live dashboard)")
     _optional_adder("fatswarm.deploy.launcher", "add_network_arguments")(p)
     # The dashboard's run flags (--no-dashboard, --svg): `add_run_arguments`, because the CLI
     # would hand an `add_dashboard_arguments` to `fatswarm dashboard` itself.
     _optional_adder("fatswarm.deploy.dashboard", "add_run_arguments")(p)
 
 
-def _fail(message: str) -> int:
+def _fail(message: str) -> ExitCode:
     print(f"fatswarm run: {message}", file=sys.stderr)
     return EXIT_BAD_INPUT
 
@@ -121,6 +151,59 @@ def _networked(args: argparse.Namespace) -> int:
         return _fail("the networked emulator is not available in this build; use --lockstep")
     code: int = run_networked(args)
     return code
+
+
+def networked_flags_given(args: argparse.Namespace) -> list[str]:
+    """The networked-only flags (deploy.launcher's) that differ from their defaults in `args`."""
+    flags: tuple[tuple[str, str, object], ...] = getattr(args, "_networked_flags", ())
+    return [flag for flag, dest, default in flags if getattr(args, dest, default) != default]
+
+
+def check_lockstep_flags(args: argparse.Namespace) -> None:
+    """Refuse networked-only flags in a lockstep run rather than ignore them (RunInputError)."""
+    given = networked_flags_given(args)
+    if given:
+        only = "is" if len(given) == 1 else "are"
+        raise RunInputError(f"{', '.join(given)} {only} for networked runs only: drop "
+                            f"{'it' if len(given) == 1 else 'them'} or --lockstep")
+
+
+def check_outputs(args: argparse.Namespace) -> None:
+    """Refuse a --record or --svg that cannot be written, before anything runs (RunInputError).
+
+    An existing record is overwritten only with --force (a networked --resume continues it).
+    """
+    record: str | None = args.record
+    resume = bool(getattr(args, "resume", False))
+    if record:
+        _check_writable("--record", record)
+        if resume and args.force:
+            raise RunInputError("--resume continues the --record file, --force overwrites it: "
+                                "pass one of them")
+        if os.path.exists(record) and not (args.force or resume):
+            raise RunInputError(f"--record {record} exists; pass --force to overwrite it")
+    svg: str | None = getattr(args, "svg", None)  # the dashboard's flag
+    if svg:
+        _check_writable("--svg", svg)
+
+
+def _check_writable(flag: str, path: str) -> None:
+    """Refuse `path` for `flag` if it is a directory or its directory is missing or read-only."""
+    if os.path.isdir(path):
+        raise RunInputError(f"{flag} {path} is a directory; name a file")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise RunInputError(f"{flag} {path}: the directory {folder} does not exist; create it "
+                            "first")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise RunInputError(f"{flag} {path}: cannot write in {folder}")
+
+
+def check_seconds(flag: str, value: float, *, zero_ok: bool) -> None:
+    """Refuse a duration flag that is not finite, or not > 0 (>= 0 if `zero_ok`)."""
+    if not math.isfinite(value) or value < 0 or (value == 0 and not zero_ok):
+        bound = ">= 0" if zero_ok else "> 0"
+        raise RunInputError(f"{flag} must be a finite number of seconds {bound}, got {value:g}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -184,6 +267,7 @@ def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
     from fatswarm.coordinator.schedule import make_scheduler
     from fatswarm.deploy.lockstep import default_max_rounds
 
+    check_outputs(args)
     params, initial = resolve_start(args.init, args.n, args.a, seed, args.start)
     if args.scheduler != "scripted" and args.schedule is not None:
         raise RunInputError("--schedule only goes with --scheduler scripted")
@@ -205,6 +289,7 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
     seed: int = args.seed if seed_given else secrets.randbelow(2**31)
     bad_input: tuple[type[Exception], ...] = (*input_errors(), RecordFormatError)
     try:
+        check_lockstep_flags(args)
         setup = resolve_run(args, seed)
         record = RecordWriter(args.record) if args.record else None
     except bad_input as exc:
@@ -213,9 +298,14 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
         setup.params, setup.initial, setup.scheduler, setup.max_rounds
     )
 
-    if not seed_given and not args.quiet:
-        print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
-    on_round = None if args.quiet else _progress_printer(max_rounds)
+    forecast = estimate_lockstep(params.n, scheduler.name, max_rounds)
+    if not args.quiet:
+        if not seed_given:
+            print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
+        if params.n >= ESTIMATE_FROM_N or forecast.seconds >= ESTIMATE_FROM_S:
+            print(estimate_text(forecast, params.n, record=bool(args.record)), file=sys.stderr,
+                  flush=True)
+    on_round = None if args.quiet else _progress_printer(max_rounds, forecast.rounds)
     try:
         result = run_lockstep(
             initial,
@@ -244,10 +334,8 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
         moves=result.moves,
         total_distance=result.total_distance,
     )
-    print(summary(outcome), file=out)
-    if args.record:
-        print(f"record: {args.record}", file=out)
-    svg = getattr(args, "svg", None)  # the dashboard's flag, when deploy.dashboard is there
+    code = exit_code(outcome)
+    svg: str | None = getattr(args, "svg", None)  # the dashboard's flag, when it is there
     if svg:
         from fatswarm.deploy.dashboard import Frame, save_svg
 
@@ -266,9 +354,32 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
         try:
             save_svg(final, svg)
         except OSError as exc:
-            return _fail(f"cannot write {svg}: {exc.strerror}")
+            code = _fail(f"cannot write {svg}: {exc.strerror}")
+            svg = None
+    print_outcome(outcome, code, out, as_json=args.json, record=args.record, svg=svg)
+    return code
+
+
+def print_outcome(
+    outcome: Outcome | None,
+    code: int,
+    out: TextIO,
+    *,
+    as_json: bool,
+    record: str | None,
+    svg: str | None,
+) -> None:
+    """Print the end of a run to `out`: the text summary and the files written, or (`as_json`)
+    one JSON object. `outcome` None: the run ended without a result in its record."""
+    if as_json:
+        print(summary_json(outcome, code, record=record, svg=svg), file=out)
+        return
+    if outcome is not None:
+        print(summary(outcome), file=out)
+    if record:
+        print(f"record: {record}", file=out)
+    if svg:
         print(f"svg: {svg}", file=out)
-    return exit_code(outcome)
 
 
 @dataclass(frozen=True, slots=True)
@@ -287,14 +398,14 @@ class Outcome:
     total_distance: float
 
 
-def exit_code_for(status: str, collisions: int) -> int:
+def exit_code_for(status: str, collisions: int) -> ExitCode:
     """0 only for a collision-free formation; formed through collisions is 3, not formed is 1."""
     if status != "formed":
         return EXIT_NOT_FORMED
     return EXIT_FORMED if collisions == 0 else EXIT_FORMED_WITH_COLLISIONS
 
 
-def exit_code(outcome: Outcome) -> int:
+def exit_code(outcome: Outcome) -> ExitCode:
     """The exit code of `fatswarm run` for this outcome (see EXIT_CODES_HELP)."""
     return exit_code_for(outcome.status, outcome.collisions)
 
@@ -329,9 +440,97 @@ def summary(outcome: Outcome) -> str:
     )
 
 
-def _progress_printer(max_rounds: int) -> Callable[[RoundReport], None]:
-    """A round callback printing a progress line to stderr at most once per PROGRESS_SECONDS."""
-    last = [time.monotonic()]
+def summary_json(
+    outcome: Outcome | None, code: int, *, record: str | None = None, svg: str | None = None
+) -> str:
+    """The summary as one JSON object (`--json`): the outcome's figures, verdict, exit code and
+    the files written; status "unfinished" (and no figures) when the run ended without a result."""
+    fields: dict[str, Any] = {"status": "unfinished"}
+    if outcome is not None:
+        fields = {**dataclasses.asdict(outcome), "verdict": verdict(outcome)}
+    fields.update(exit_code=int(code), record=record or None, svg=svg or None)
+    return json.dumps(fields, allow_nan=False)
+
+
+# --- how long a lockstep run takes: a rough model, measured on a 2-core machine ------------------
+
+SECONDS_PER_ROUND: Final = 3e-4  # a round's fixed cost (scheduler, progress, record line)
+SECONDS_PER_ROBOT_ROUND: Final = 8e-6  # canonical form, plan and physics grow about linearly
+RECORD_BYTES_PER_ROUND: Final = 200
+RECORD_BYTES_PER_ROBOT_ROUND: Final = 45  # one position per robot and round, plus its path
+# Rounds a correct run takes, per sequential step of the algorithm (about n + 2 steps: one mover
+# or one mirror pair each): 1 under fsync, about 2 under ssync, about n when one robot moves at
+# a time (centralized; scripted is anyone's guess). deploy/lockstep.py sets its caps 10x higher.
+EXPECTED_ROUNDS_PER_STEP: Final = {"fsync": 1, "ssync": 2}
+ESTIMATE_FROM_N: Final = 200  # a lockstep run this large says what it will cost before it starts
+ESTIMATE_FROM_S: Final = 5.0  # ... as does one expected to take this long
+
+
+@dataclass(frozen=True, slots=True)
+class Estimate:
+    """A rough forecast of a lockstep run: as a correct run goes, and if it runs to the cap."""
+
+    rounds: int
+    seconds: float
+    record_bytes: int
+    cap_rounds: int
+    cap_seconds: float
+    cap_record_bytes: int
+
+
+def estimate_lockstep(n: int, scheduler: str, max_rounds: int) -> Estimate:
+    """The forecast of an n-robot lockstep run under `scheduler`, capped at `max_rounds`."""
+    per_step = EXPECTED_ROUNDS_PER_STEP.get(scheduler, max(1, n))
+    rounds = min(max_rounds, per_step * (n + 2))
+    round_s = SECONDS_PER_ROUND + SECONDS_PER_ROBOT_ROUND * n
+    round_bytes = RECORD_BYTES_PER_ROUND + RECORD_BYTES_PER_ROBOT_ROUND * n
+    return Estimate(rounds, rounds * round_s, rounds * round_bytes,
+                    max_rounds, max_rounds * round_s, max_rounds * round_bytes)
+
+
+def estimate_text(forecast: Estimate, n: int, *, record: bool) -> str:
+    """The line a large lockstep run prints before it starts (to stderr)."""
+    f = forecast
+    size = "record" if record else "a --record would take"
+    line = (f"estimate for n={n} (a rough model, not a measurement): ~{f.rounds} rounds, "
+            f"{_duration(f.seconds)}, {size} ~{_size(f.record_bytes)}")
+    if f.cap_rounds == f.rounds:
+        return line
+    return (f"{line}; at the round cap of {f.cap_rounds}: {_duration(f.cap_seconds)}, "
+            f"~{_size(f.cap_record_bytes)}")
+
+
+def eta_text(done: int, rounds_per_s: float, expected: int, cap: int) -> str:
+    """How long is left after `done` rounds at `rounds_per_s`: to the expected end, at most to
+    the round cap."""
+    if rounds_per_s <= 0:
+        return "eta unknown"
+    to_cap = _duration((cap - done) / rounds_per_s)
+    if done < expected:
+        return f"eta {_duration((expected - done) / rounds_per_s)}, at most {to_cap} (round cap)"
+    return f"eta: longer than estimated, at most {to_cap} (round cap)"
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 90:
+        return f"~{max(1, round(seconds))} s"
+    if seconds < 90 * 60:
+        return f"~{seconds / 60:.1f} min"
+    return f"~{seconds / 3600:.1f} h"
+
+
+def _size(nbytes: float) -> str:
+    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if nbytes >= scale:
+            return f"{nbytes / scale:.1f} {unit}"
+    return f"{nbytes:.0f} B"
+
+
+def _progress_printer(max_rounds: int, expected_rounds: int) -> Callable[[RoundReport], None]:
+    """A round callback printing a progress line (with an ETA) to stderr at most once per
+    PROGRESS_SECONDS."""
+    start = time.monotonic()
+    last = [start]
 
     def show(report: RoundReport) -> None:
         now = time.monotonic()
@@ -339,9 +538,11 @@ def _progress_printer(max_rounds: int) -> Callable[[RoundReport], None]:
             return
         last[0] = now
         p = report.progress
+        rate = report.round / (now - start) if now > start else 0.0
         print(
             f"round {report.round}/{max_rounds}  epochs {p.epochs}  moves {p.moves}  "
-            f"distance {p.total_distance:.1f}  collisions {p.collisions}",
+            f"distance {p.total_distance:.1f}  collisions {p.collisions}  "
+            f"{eta_text(report.round, rate, expected_rounds, max_rounds)}",
             file=sys.stderr,
             flush=True,
         )
@@ -350,13 +551,27 @@ def _progress_printer(max_rounds: int) -> Callable[[RoundReport], None]:
 
 
 __all__ = [
+    "EXIT_BAD_INPUT",
+    "EXIT_BROKEN_PIPE",
+    "EXIT_FORMED",
+    "EXIT_FORMED_WITH_COLLISIONS",
+    "EXIT_INTERRUPTED",
+    "EXIT_NOT_FORMED",
+    "EXIT_TERMINATED",
+    "Estimate",
+    "ExitCode",
     "Outcome",
     "add_arguments",
+    "check_outputs",
+    "check_seconds",
+    "estimate_lockstep",
     "exit_code",
     "exit_code_for",
     "main",
+    "print_outcome",
     "resolve_start",
     "run_lockstep_command",
     "summary",
+    "summary_json",
     "verdict",
 ]

@@ -96,7 +96,9 @@ def bad_inputs(tmp_path: Path) -> list[tuple[list[str], str]]:
         (["--schedule", str(bad_schedule)], "only goes with --scheduler scripted"),
         (["--max-rounds", "0"], "--max-rounds must be at least 1"),
         (["--fairness", "0"], "fairness bound"),
-        (["--record", str(tmp_path / "no" / "dir" / "run.jsonl")], "cannot write run record"),
+        (["--record", str(tmp_path / "no" / "dir" / "run.jsonl")], "does not exist; create it"),
+        (["--record", str(tmp_path)], "is a directory; name a file"),
+        (["--svg", str(tmp_path / "no" / "final.svg")], "does not exist; create it"),
     ]
 
 
@@ -169,8 +171,16 @@ def test_exit_codes_are_listed_in_the_help() -> None:
     run.add_arguments(parser)
     text = " ".join(parser.format_help().split())
     for listed in ("0 formed with no collision", "1 not formed", "2 bad input",
-                   "3 formed, but with collisions"):
+                   "3 formed, but with collisions", "130 interrupted (Ctrl-C)",
+                   "141 standard output closed early", "143 terminated (SIGTERM)"):
         assert listed in text
+
+
+def test_exit_codes_are_one_enum_whose_old_names_still_import() -> None:
+    assert [int(c) for c in run.ExitCode] == [0, 1, 2, 3, 130, 141, 143]
+    assert (run.EXIT_FORMED, run.EXIT_NOT_FORMED, run.EXIT_BAD_INPUT,
+            run.EXIT_FORMED_WITH_COLLISIONS, run.EXIT_INTERRUPTED) == (0, 1, 2, 3, 130)
+    assert run.EXIT_TERMINATED is run.ExitCode.TERMINATED
 
 
 def bump(view: Points, params: Params) -> RobotPath:
