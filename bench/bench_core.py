@@ -265,11 +265,12 @@ def looks_per_second(
 
 
 BASELINE_SNIPPET = """
-import sys, time, contextlib
-from fatswarm.agent.params import Params
-from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy.lockstep import run_lockstep
-from fatswarm.world.starts import random_start
+import importlib, sys, time, contextlib
+pkg = sys.argv[3]  # "" for a checkout from before the fatswarm namespace, else "fatswarm."
+Params = importlib.import_module(pkg + "agent.params").Params
+make_scheduler = importlib.import_module(pkg + "coordinator.schedule").make_scheduler
+run_lockstep = importlib.import_module(pkg + "deploy.lockstep").run_lockstep
+random_start = importlib.import_module(pkg + "world.starts").random_start
 n, budget = int(sys.argv[1]), float(sys.argv[2])
 start = random_start(n, 0, "clustered"); looks = 0; t0 = time.perf_counter()
 class Stop(Exception): pass
@@ -279,7 +280,7 @@ def count(report):
     if time.perf_counter() - t0 > budget: raise Stop
 with contextlib.suppress(Stop):
     run_lockstep(start, Params(n), make_scheduler("fsync", n, 0), seed=0, on_round=count)
-print(looks, time.perf_counter() - t0)
+print(looks, time.perf_counter() - t0, importlib.import_module(pkg + "deploy.lockstep").__file__)
 """
 
 
@@ -288,13 +289,17 @@ def baseline_looks_per_second(checkout: str, n: int, budget: float) -> float | N
     import subprocess
 
     env = {**os.environ, "PYTHONPATH": checkout}
-    done = subprocess.run([sys.executable, "-c", BASELINE_SNIPPET, str(n), str(budget)],
+    pkg = "fatswarm." if os.path.isdir(os.path.join(checkout, "fatswarm")) else ""
+    done = subprocess.run([sys.executable, "-c", BASELINE_SNIPPET, str(n), str(budget), pkg],
                           cwd=checkout, env=env, capture_output=True, text=True, check=False)
     if done.returncode != 0:
         print(f"baseline at {checkout} failed: {done.stderr.strip().splitlines()[-1:]}",
               file=sys.stderr)
         return None
-    looks, secs = done.stdout.split()
+    looks, secs, where = done.stdout.split()
+    if not os.path.realpath(where).startswith(os.path.realpath(checkout)):
+        print(f"baseline: {where} is not from {checkout}", file=sys.stderr)
+        return None
     return int(looks) / float(secs)
 
 
