@@ -142,3 +142,23 @@ def test_robots_near_one_circle_fill_every_target(n: int, seed: int, a: float,
     result = run_lockstep(pts, Params(n, a), make_scheduler(scheduler, n, seed), seed=seed)
     assert (result.status, result.collisions) == ("formed", 0)
     assert result.moves <= n + 2
+
+
+# 1-2. Starts on which the old main's robots disagreed and collided (found by
+# bench/bench_adversarial.py on commit 6e5d3b6): an exact tie between a robot on L and a side
+# robot (formed, with 2 collisions, and exit 0), the same tie perturbed, a nudged hexagonal lattice
+# written to 3 decimals.
+OLD_COLLISIONS = [("exact-symmetric", 9, 1049947267, 4.0), ("near-symmetric", 9, 1949635111, 3.2),
+                  ("lattice", 6, 1165938632, 4.0)]
+
+
+@pytest.mark.parametrize("scheduler", ["fsync", "ssync", "centralized"])
+@pytest.mark.parametrize(("family", "n", "seed", "a"), OLD_COLLISIONS)
+def test_starts_where_robots_used_to_disagree_form_without_collision(
+    family: str, n: int, seed: int, a: float, scheduler: str
+) -> None:
+    pts = adversarial_start(family, n, seed)
+    assert_observers_agree(pts, Params(n, a))
+    result = run_lockstep(pts, Params(n, a), make_scheduler(scheduler, n, seed), seed=seed)
+    assert (result.status, result.collisions) == ("formed", 0)
+    assert result.moves <= n + 2
