@@ -23,6 +23,7 @@ from fatswarm.deploy.zconf import (
     check_endpoints,
     make_config,
     open_client,
+    token_held,
 )
 
 EXIT_BAD_INPUT = 2
@@ -64,6 +65,19 @@ def _logging(args: argparse.Namespace, default: str) -> None:
 def _fail(part: str, message: str) -> int:
     print(f"fatswarm {part}: {message}", file=sys.stderr)
     return EXIT_BAD_INPUT
+
+
+def _second_of_role(session: Any, part: str, swarm: str, key: str,
+                    stop: threading.Event) -> str | None:
+    """The line refusing a second `part` (world, coordinator) on `swarm`, or None if it is alone.
+
+    Asked before this one declares its own liveliness token `key` or does anything visible: two
+    worlds or coordinators on one swarm would mix their rounds silently and report false collisions.
+    """
+    if not token_held(session, key, stop):
+        return None
+    return (f"swarm {swarm!r} already has a {part} on this router network; stop it or pick "
+            "another --swarm")
 
 
 GIVES_UP = (f"; if no router answers within {CONNECT_DEADLINE_S:g} s, it says so and exits "
@@ -136,7 +150,8 @@ def main_world(args: argparse.Namespace) -> int:
     """Run the world until SIGTERM/SIGINT."""
     from fatswarm.deploy.lockstep import default_max_rounds
     from fatswarm.deploy.run import input_errors, resolve_start
-    from fatswarm.world.record import RecordFormatError
+    from fatswarm.world.protocol import alive_key
+    from fatswarm.world.record import RecordFormatError, read_record
     from fatswarm.world.service import WorldCore, WorldSetup, open_world, serve
 
     _logging(args, "info")
@@ -157,22 +172,28 @@ def main_world(args: argparse.Namespace) -> int:
     bad_input: tuple[type[Exception], ...] = (ValueError, RecordFormatError, *input_errors())
     try:
         conf = _client_config(args)
-        core: WorldCore | None = None
+        token = alive_key(args.swarm)  # a bad --swarm is said before any wait
+        fresh: WorldSetup | None = None
         if os.path.exists(args.state) and os.path.getsize(args.state) > 0:
-            core = open_core(make_setup)  # resume: a bad state file is said before any wait
+            # resume: a bad state file is said before any wait, read only (nothing is cut yet)
+            read_record(args.state, allow_torn_end=True)
         else:
-            setup = make_setup()  # a bad start is said before any wait
+            fresh = make_setup()  # a bad start is said before any wait
         session = open_client(conf, stop)
-        if session is not None and core is None:
-            try:
-                core = open_core(lambda: setup)  # a new state file only once a router answered
-            except bad_input:
-                session.close()
-                raise
     except bad_input as exc:
         return _fail("world", str(exc))
-    if session is None or core is None:
+    if session is None:
         return 0  # stopped before a router answered
+    # Nothing visible before this check: no state file created or cut, no token, no state.
+    refusal = _second_of_role(session, "world", args.swarm, token, stop)
+    if refusal is not None or stop.is_set():
+        session.close()
+        return 0 if refusal is None else _fail("world", refusal)
+    try:
+        core: WorldCore = open_core(make_setup if fresh is None else lambda: fresh)
+    except bad_input as exc:
+        session.close()
+        return _fail("world", str(exc))
     return serve(core, session, stop)
 
 
@@ -199,6 +220,7 @@ def add_coordinator_arguments(p: argparse.ArgumentParser) -> None:
 
 def main_coordinator(args: argparse.Namespace) -> int:
     """Run rounds until the run ends; exit 0 formed, 1 not formed."""
+    from fatswarm.coordinator.protocol import alive_key
     from fatswarm.coordinator.schedule import ScheduleError, Scheduler, make_scheduler
     from fatswarm.coordinator.service import Coordinator, CoordinatorConfig
 
@@ -213,9 +235,14 @@ def main_coordinator(args: argparse.Namespace) -> int:
         if args.move_timeout <= 0 or args.start_timeout < 0 or args.pace < 0:
             raise ValueError("--move-timeout must be > 0, --start-timeout and --pace >= 0")
         cfg = CoordinatorConfig(args.swarm, args.move_timeout, args.start_timeout, args.pace)
+        token = alive_key(args.swarm)  # a bad --swarm is said before any wait
         session = open_client(conf, stop)
         if session is None:
             return 1  # stopped before a router answered: not formed
+        refusal = _second_of_role(session, "coordinator", args.swarm, token, stop)
+        if refusal is not None or stop.is_set():
+            session.close()
+            return 1 if refusal is None else _fail("coordinator", refusal)
         return Coordinator(cfg, scheduler_for, stop).run(session)
     except (ValueError, ScheduleError) as exc:
         return _fail("coordinator", str(exc))

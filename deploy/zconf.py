@@ -30,6 +30,17 @@ ROUTER_ENDPOINT_HELP = "Zenoh endpoint, e.g. tcp/127.0.0.1:7447"
 # `fatswarm run --connect` retry this long (a router started a moment later is fine), then give up.
 CONNECT_DEADLINE_S = 5.0
 CONNECT_RETRY_S = 0.2
+# One world and one coordinator per swarm: each asks for its role's liveliness token before it
+# declares its own (`token_held`). The routers answer such a get at once (< 1 ms on loopback);
+# the timeout only bounds a router that went silent.
+TOKEN_QUERY_S = 1.0
+# A token can outlive its process for a moment: a killed process's token goes when its router sees
+# the link close (about 1 ms on loopback), then crosses the other routers. A world or coordinator
+# restarted right after the one it replaces must not be refused for it, so a token counts only if
+# every look over about 2 s still finds it. (One whose host vanished, or that hangs, holds its
+# token until its lease runs out, 10 s by default: it is refused meanwhile, as for a live one.)
+TOKEN_LOOKS = 4
+TOKEN_LOOK_EVERY_S = 0.6
 # The link protocols of the eclipse-zenoh 1.10 wheel; the first five take <host>:<port>.
 PROTOCOLS = ("tcp", "udp", "tls", "quic", "ws", "unixsock-stream")
 _HOST_PORT_PROTOCOLS = frozenset(PROTOCOLS[:5])
@@ -197,6 +208,27 @@ def open_client(
             raise ZenohSetupError(unreachable_message(connect_endpoints(conf), deadline_s))
         if stop.wait(CONNECT_RETRY_S):
             return None
+
+
+def token_held(session: Any, key: str, stop: threading.Event | None = None) -> bool:
+    """Whether a liveliness token on `key` is live on the router network and stays so.
+
+    True only if each of TOKEN_LOOKS liveliness gets, TOKEN_LOOK_EVERY_S apart, finds one (see
+    TOKEN_LOOKS for why); False at the first look that finds none, or if `stop` is set meanwhile.
+    """
+    import zenoh
+
+    stop = stop or threading.Event()
+    for look in range(TOKEN_LOOKS):
+        if look and stop.wait(TOKEN_LOOK_EVERY_S):
+            return False
+        try:
+            replies = session.liveliness().get(key, timeout=TOKEN_QUERY_S)
+            if not any(reply.ok is not None for reply in replies):
+                return False
+        except zenoh.ZError:  # the router went away: nobody to ask, start as before this check
+            return False
+    return True
 
 
 def unreachable_message(endpoints: Sequence[str], waited_s: float) -> str:

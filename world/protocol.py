@@ -65,6 +65,11 @@ def moves_held_key(swarm: str) -> str:
     return f"{prefix(swarm)}/world/moves"
 
 
+def alive_key(swarm: str) -> str:
+    """The world's liveliness token, declared once it serves (a second world is refused)."""
+    return f"{prefix(swarm)}/alive/world"
+
+
 def snapshot_key(swarm: str, robot: int) -> str:
     """Agent asks, world answers with a `Snapshot` (only while the robot is active)."""
     return f"{prefix(swarm)}/robot/{robot}/snapshot"

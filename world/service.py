@@ -35,10 +35,10 @@ from fatswarm.world.protocol import (
     ProtocolError,
     Snapshot,
     WorldState,
+    alive_key,
     control_key,
     decode_control,
     moves_held_key,
-    prefix,
     robot_of_key,
     snapshot_any_key,
     state_key,
@@ -405,7 +405,7 @@ def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) ->
         session.declare_queryable(control_key(swarm), lambda q: events.put(("control", q)))
         session.declare_subscriber(move_any_key(swarm), on_move)
         session.liveliness().declare_subscriber(alive_any_key(swarm), on_alive, history=True)
-        _token = session.liveliness().declare_token(f"{prefix(swarm)}/alive/world")
+        _token = session.liveliness().declare_token(alive_key(swarm))
         log.info("world of %d robots serving swarm %r", core.setup.n, swarm)
         state_pub.put(core.state().encode())
         dirty, published = False, time.monotonic()

@@ -13,8 +13,10 @@ from netharness import Swarm
 def make_swarm(tmp_path: Path) -> Iterator[Callable[..., Swarm]]:
     made: list[Swarm] = []
 
-    def make(n: int, seed: int, scheduler: str = "ssync") -> Swarm:
-        swarm = Swarm(tmp_path, n, seed, scheduler)
+    def make(n: int, seed: int, scheduler: str = "ssync", endpoint: str | None = None) -> Swarm:
+        tmp = tmp_path / f"swarm-{len(made)}" if made else tmp_path  # each its own state and logs
+        tmp.mkdir(exist_ok=True)
+        swarm = Swarm(tmp, n, seed, scheduler, endpoint)
         made.append(swarm)
         return swarm
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import secrets
+import subprocess
 import sys
 import threading
 import time
@@ -24,9 +25,10 @@ DEADLINE_S = 120.0  # generous: the machine is shared; tests wait on predicates,
 class Swarm:
     """Router, world, coordinator and agents as separate processes, plus an observer session."""
 
-    def __init__(self, tmp: Path, n: int, seed: int, scheduler: str = "ssync") -> None:
+    def __init__(self, tmp: Path, n: int, seed: int, scheduler: str = "ssync",
+                 endpoint: str | None = None) -> None:
         self.tmp, self.n, self.seed, self.scheduler = tmp, n, seed, scheduler
-        self.endpoint = loopback_endpoint()
+        self.endpoint = endpoint or loopback_endpoint()  # another swarm's: share its router
         self.swarm = f"it-{secrets.token_hex(3)}"
         self.state_path = tmp / "state.jsonl"
         self.children = Children()
@@ -48,21 +50,28 @@ class Swarm:
     def start_router(self, name: str = "router") -> None:
         self._start(name, "router", "--listen", self.endpoint, "--log-level", "warning")
 
+    def world_flags(self, state: Path | None = None) -> list[str]:
+        return [*self._net(), "--state", str(state or self.state_path), "-n", str(self.n),
+                "--seed", str(self.seed), "--scheduler", self.scheduler, "--log-level", "info"]
+
+    def coordinator_flags(self, pace: float) -> list[str]:
+        return [*self._net(), "--seed", str(self.seed), "--scheduler", self.scheduler,
+                "--pace", str(pace), "--log-level", "info"]
+
     def start_world(self, name: str = "world") -> None:
-        self._start(name, "world", *self._net(), "--state", str(self.state_path), "-n",
-                    str(self.n), "--seed", str(self.seed), "--scheduler", self.scheduler,
-                    "--log-level", "info")
+        self._start(name, "world", *self.world_flags())
 
     def start_coordinator(self, pace: float, name: str = "coordinator") -> None:
-        self._start(name, "coordinator", *self._net(), "--seed", str(self.seed),
-                    "--scheduler", self.scheduler, "--pace", str(pace), "--log-level", "info")
+        self._start(name, "coordinator", *self.coordinator_flags(pace))
 
     def start_agent(self, robot: int, name: str | None = None) -> None:
         self._start(name or f"agent {robot}", "agent", *self._net(), "--robot", str(robot),
                     "--seed", str(self.seed), "--log-level", "info")
 
-    def start_all(self, pace: float) -> None:
-        self.start_router()
+    def start_all(self, pace: float, router: bool = True) -> None:
+        """Every part (`router=False`: on another swarm's router, given as `endpoint`)."""
+        if router:
+            self.start_router()
         self.observe()
         self.start_world()
         self.start_coordinator(pace)
@@ -102,6 +111,11 @@ class Swarm:
         with self._lock:
             return self.latest
 
+    def live(self, key: str) -> bool:
+        """Whether a liveliness token on `key` is live now (asked from the observer session)."""
+        return any(reply.ok is not None
+                   for reply in self.session.liveliness().get(key, timeout=2.0))
+
     def log(self, name: str) -> str:
         path = self.tmp / f"{name.replace(' ', '-')}.log"
         return path.read_text(errors="replace") if path.exists() else ""
@@ -135,6 +149,36 @@ class Swarm:
         finally:
             if self.session is not None:
                 self.session.close()
+
+
+def part(name: str, *flags: str) -> list[str]:
+    """The argv of `fatswarm <name> <flags>` (one part alone, as the launcher starts it)."""
+    return [sys.executable, "-m", "fatswarm.deploy.parts", name, *flags]
+
+
+def run_all(*argvs: list[str],
+            deadline_s: float = DEADLINE_S) -> list[subprocess.CompletedProcess[str]]:
+    """Run the commands at once (each waits on its own deadline) and collect their outcomes."""
+    procs = [subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              start_new_session=True) for argv in argvs]
+    try:
+        done = []
+        for argv, proc in zip(argvs, procs, strict=True):
+            out, err = proc.communicate(timeout=deadline_s)
+            done.append(subprocess.CompletedProcess(argv, proc.returncode, out, err))
+        return done
+    finally:
+        for proc in procs:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+
+
+def assert_one_line(done: subprocess.CompletedProcess[str], start: str) -> None:
+    """Exit 2 with one line on stderr that starts with `start` (no traceback, no Rust path)."""
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith(start) and done.stderr.count("\n") == 1, done.stderr
+    assert "Traceback" not in done.stderr and ".rs:" not in done.stderr, done.stderr
 
 
 def lockstep_record(path: Path, n: int, seed: int, scheduler: str = "ssync") -> RunRecord:

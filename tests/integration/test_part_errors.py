@@ -5,12 +5,12 @@ from __future__ import annotations
 import re
 import socket
 import subprocess
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
+from netharness import assert_one_line, part, run_all
 
 from fatswarm.deploy.launcher import Children
 from fatswarm.deploy.zconf import CONNECT_DEADLINE_S, ZenohSetupError, check_network, free_port
@@ -18,33 +18,6 @@ from fatswarm.deploy.zconf import CONNECT_DEADLINE_S, ZenohSetupError, check_net
 pytestmark = pytest.mark.integration
 
 DEADLINE_S = 60.0  # generous: the machine is shared; waits are on predicates
-
-
-def part(name: str, *flags: str) -> list[str]:
-    return [sys.executable, "-m", "fatswarm.deploy.parts", name, *flags]
-
-
-def run_all(*argvs: list[str]) -> list[subprocess.CompletedProcess[str]]:
-    """Run the commands at once (each waits on its own deadline) and collect their outcomes."""
-    procs = [subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                              start_new_session=True) for argv in argvs]
-    try:
-        done = []
-        for argv, proc in zip(argvs, procs, strict=True):
-            out, err = proc.communicate(timeout=DEADLINE_S)
-            done.append(subprocess.CompletedProcess(argv, proc.returncode, out, err))
-        return done
-    finally:
-        for proc in procs:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
-
-
-def assert_one_line(done: subprocess.CompletedProcess[str], start: str) -> None:
-    assert done.returncode == 2, done.stderr
-    assert done.stderr.startswith(start) and done.stderr.count("\n") == 1, done.stderr
-    assert "Traceback" not in done.stderr and ".rs:" not in done.stderr, done.stderr
 
 
 @pytest.fixture
