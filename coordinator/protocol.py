@@ -13,7 +13,7 @@ def round_key(swarm: str) -> str:
 
 
 def alive_key(swarm: str) -> str:
-    """The coordinator's liveliness token."""
+    """The coordinator's liveliness token (a second coordinator on the swarm is refused)."""
     return f"{prefix(swarm)}/alive/coordinator"
 
 
