@@ -19,7 +19,7 @@ import threading
 import time
 from collections.abc import Sequence
 from types import TracebackType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from fatswarm.deploy.run import (
     EXIT_BAD_INPUT,
@@ -37,6 +37,9 @@ from fatswarm.deploy.zconf import (
     check_network,
     loopback_endpoint,
 )
+
+if TYPE_CHECKING:
+    from fatswarm.deploy.run import RunSetup
 
 log = logging.getLogger("fatswarm.launcher")
 
@@ -132,8 +135,6 @@ def add_network_arguments(p: argparse.ArgumentParser) -> None:
         g.add_argument("--spawn", choices=("fork", "exec"), default="fork",
                        help="agent processes forked from one preloaded host process before any "
                        "Zenoh session exists (fork, fast) or one fresh interpreter each (exec)"),
-        g.add_argument("--resume", action="store_true",
-                       help="continue the run of an existing --record instead of starting afresh"),
     ]
     # what `fatswarm run --lockstep` refuses when given (deploy.run.networked_flags_given)
     p.set_defaults(_networked_flags=tuple((a.option_strings[-1], a.dest, a.default)
@@ -152,11 +153,13 @@ def _child_endpoint(listen: str) -> str:
 
 def run_networked(args: argparse.Namespace) -> int:
     """Run the swarm over Zenoh as `fatswarm run` asks; returns the exit code (deploy.run's)."""
-    problem, seed = check_inputs(args)
+    problem, seed, setup = check_inputs(args)
     if problem is not None:
         print(f"fatswarm run: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    if args.seed is None and not args.quiet:
+    if setup is not None and setup.resumed is not None:
+        args = with_record_values(args, setup)
+    elif args.seed is None and not args.quiet:
         print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
     with tempfile.TemporaryDirectory(prefix="fatswarm-") as tmp:
         record = args.record or os.path.join(tmp, "record.jsonl")
@@ -165,24 +168,37 @@ def run_networked(args: argparse.Namespace) -> int:
         return _launch(args, seed, record)
 
 
-def check_inputs(args: argparse.Namespace) -> tuple[str | None, int]:
-    """(what to fix or None, the seed): the lockstep run's checks, before any process starts."""
+def check_inputs(args: argparse.Namespace) -> tuple[str | None, int, RunSetup | None]:
+    """(what to fix or None, the seed, the run): the lockstep run's checks, before any process
+    starts; with --resume, the seed and the run are the record's."""
     from fatswarm.deploy.run import check_seconds, input_errors, resolve_run
 
     seed: int = args.seed if args.seed is not None else secrets.randbelow(2**31)
     bad_input: tuple[type[Exception], ...] = (*input_errors(), ValueError)  # ValueError: swarm
+    setup = None
     try:
         check_seconds("--move-timeout", args.move_timeout, zero_ok=False)
         check_seconds("--pace", args.pace, zero_ok=True)
-        resolve_run(args, seed)
+        setup = resolve_run(args, seed)
+        seed = setup.seed
         if args.swarm is not None:
             from fatswarm.world.protocol import check_swarm
 
             check_swarm(args.swarm)
         check_network(args.connect, args.listen)  # a router answers; --listen well formed, free
     except bad_input as exc:
-        return str(exc), seed
-    return None, seed
+        return str(exc), seed, setup
+    return None, seed, setup
+
+
+def with_record_values(args: argparse.Namespace, setup: RunSetup) -> argparse.Namespace:
+    """`args` with a resumed record's run (n, a, seed, scheduler, round cap) in place of the
+    flags, for the parts: the world takes its run from the record anyway; the coordinator must
+    replay the record's schedule and the agents draw the record's private frames."""
+    return argparse.Namespace(**{
+        **vars(args), "n": setup.params.n, "a": setup.params.a, "seed": setup.seed,
+        "scheduler": setup.scheduler.name, "max_rounds": setup.max_rounds, "init": None,
+    })
 
 
 class StopSignal:

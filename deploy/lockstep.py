@@ -11,7 +11,7 @@ called once per robot and Look, on its own shuffled view.
 from __future__ import annotations
 
 from collections import OrderedDict
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Final
 
@@ -26,7 +26,7 @@ from fatswarm.agent.tolerance import check_supported
 from fatswarm.coordinator.schedule import Scheduler
 from fatswarm.world.physics import RoundOutcome, apply_round, validate_configuration
 from fatswarm.world.progress import Progress, ProgressTracker
-from fatswarm.world.record import RecordWriter
+from fatswarm.world.record import RecordWriter, RoundEntry
 
 LOOK_STREAM: Final = 0x100C  # orders the others in a robot's view (compute must ignore the order)
 
@@ -72,6 +72,10 @@ class SharedPlans:
         return canon.to_frame(made.moves.get(canon.observer, STAY))
 
 
+class HistoryMismatchError(ValueError):
+    """Committed rounds to resume from that this run would not have produced."""
+
+
 def default_max_rounds(n: int, scheduler: str) -> int:
     """A round cap far above what a correct run needs under `scheduler` (see ROUNDS_PER_STEP)."""
     per_step = ROUNDS_PER_STEP.get(scheduler, 10 * max(1, n))
@@ -115,13 +119,19 @@ def run_lockstep(
     record: RecordWriter | None = None,
     on_round: Callable[[RoundReport], None] | None = None,
     compute: ComputeFn | None = None,
+    history: Sequence[RoundEntry] | None = None,
 ) -> RunResult:
     """Run until formed, stalled or `max_rounds` (default `default_max_rounds`).
 
     `seed` fixes the robots' private frames and view orders; the scheduler carries its own seed.
     `compute` defaults to the reference algorithm, run for the whole round at once (`SharedPlans`).
+    `history`: resume a run from `initial` after these committed rounds (a record's, maybe none):
+    they are replayed into the scheduler, the view orders and the progress, as the networked
+    coordinator and world replay them after a restart, and not recorded again (nor the header);
+    the run then goes on exactly as it would have without the break.
     Raises InvalidConfigurationError for an invalid start, UnsupportedInputError outside the
-    supported range (agent/tolerance.py), ValueError if n disagrees with params.
+    supported range (agent/tolerance.py), ValueError if n disagrees with params,
+    HistoryMismatchError for a history this run would not have produced.
     """
     positions = validate_configuration(initial)  # a fresh float64 copy, on the grid
     shared = SharedPlans()
@@ -136,10 +146,16 @@ def run_lockstep(
     everyone = list(range(n))
     initial_copy = positions.copy()
     looks = 0
-    if record is not None:
+    if record is not None and history is None:
         record.header(n, params.a, seed, scheduler.name, positions, max_rounds=cap)
 
     round_no = 0
+    if history is not None:
+        positions, looks = _replay(history, positions, scheduler, tracker)
+        round_no = len(history)
+        if compute is not None:
+            for _ in range(looks):  # each Look drew one order of the others
+                look_rng.permutation(n - 1)
     while not tracker.done:
         round_no += 1
         active = scheduler.active(round_no, everyone)
@@ -200,8 +216,41 @@ def run_lockstep(
     )
 
 
+def _replay(
+    history: Sequence[RoundEntry], initial: Points, scheduler: Scheduler, tracker: ProgressTracker
+) -> tuple[Points, int]:
+    """Advance `scheduler` and `tracker` over the committed rounds `history` from `initial`, as
+    the uninterrupted run did (every robot live); the positions after them and the Looks taken.
+
+    Raises HistoryMismatchError where a round is not what this run would have done there.
+    """
+    everyone = list(range(len(initial)))
+    positions, looks = initial, 0
+    for round_no, entry in enumerate(history, start=1):
+        if entry.round != round_no:
+            raise HistoryMismatchError(f"round {entry.round} comes where round {round_no} should")
+        if tracker.done:
+            raise HistoryMismatchError(f"round {round_no} follows the end of the run "
+                                       f"({tracker.status} after round {round_no - 1})")
+        timed_out = entry.extra.get("timed_out")
+        if timed_out:
+            raise HistoryMismatchError(f"round {round_no}: robots {timed_out} timed out, which "
+                                       "never happens in lock step")
+        active = scheduler.active(round_no, everyone)
+        if list(entry.active) != active:
+            raise HistoryMismatchError(f"round {round_no} activated robots {list(entry.active)} "
+                                       f"where this {scheduler.name} schedule activates {active}")
+        after = np.asarray(entry.positions, dtype=np.float64)
+        traveled = {m.robot: m.traveled for m in entry.moves}  # by robot, as the round summed it
+        tracker.observe(active, traveled.keys(), positions, after, traveled,
+                        len(entry.collisions))
+        positions, looks = after, looks + len(active)
+    return positions, looks
+
+
 __all__ = [
     "ComputeFn",
+    "HistoryMismatchError",
     "RoundReport",
     "RunResult",
     "SharedPlans",

@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from fatswarm.agent.path import Points
     from fatswarm.coordinator.schedule import Scheduler
     from fatswarm.deploy.lockstep import RoundReport
+    from fatswarm.world.record import Header, Result, RunRecord
 
 
 class ExitCode(enum.IntEnum):
@@ -67,6 +68,33 @@ class RunInputError(ValueError):
     """A flag combination `fatswarm run` cannot use."""
 
 
+GIVEN: Final = "_given"  # the namespace attribute listing the flags given (`_StoreGiven`)
+TRACKED: Final = ("scheduler", "start")  # flags with a default other than None: `_StoreGiven`
+
+
+class _StoreGiven(argparse.Action):
+    """Store the value and note that the flag was given: --resume refuses a given flag that
+    contradicts the record, while a default one never does (its default may be the record's)."""
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        setattr(namespace, self.dest, values)
+        setattr(namespace, GIVEN, (*getattr(namespace, GIVEN, ()), self.dest))
+
+
+def flag_given(args: argparse.Namespace, dest: str) -> bool:
+    """Whether the user gave the flag of `dest`: listed by `_StoreGiven` for the TRACKED ones,
+    else not None (their default)."""
+    if dest in TRACKED:
+        return dest in getattr(args, GIVEN, ())
+    return getattr(args, dest, None) is not None
+
+
 def _optional_adder(module_name: str, function: str) -> Callable[[argparse.ArgumentParser], None]:
     """`module.function` if the module exists and defines it, else a no-op (parts land later)."""
     try:
@@ -99,10 +127,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="seed of the start, frames and scheduler (default: random, printed)")
     p.add_argument("--init", metavar="PATH",
                    help='start from a JSON file {"positions": [[x, y], ...], "a": 4.0}')
-    p.add_argument("--start", choices=KINDS, default=DEFAULT_START,
+    p.add_argument("--start", choices=KINDS, default=DEFAULT_START, action=_StoreGiven,
                    help=f"kind of random start without --init (default {DEFAULT_START}: "
                    "needs SEC expansion)")
-    p.add_argument("--scheduler", choices=NAMES, default=DEFAULT_SCHEDULER,
+    p.add_argument("--scheduler", choices=NAMES, default=DEFAULT_SCHEDULER, action=_StoreGiven,
                    help=f"who is active each round (default {DEFAULT_SCHEDULER})")
     p.add_argument("--schedule", metavar="PATH",
                    help='scripted scheduler: JSON {"rounds": [[0, 2], [1], ...]} or a run record')
@@ -116,6 +144,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="write the run record (JSON Lines) to PATH (a new file, unless --force)")
     p.add_argument("--force", action="store_true",
                    help="let --record overwrite an existing file")
+    p.add_argument("--resume", action="store_true",
+                   help="continue the unfinished run of the --record file after its last round, "
+                   "appending to it: n, a, seed, scheduler, start and round cap are the record's "
+                   "(a flag that contradicts them is refused)")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="no progress lines while running (the summary is still printed)")
     p.add_argument("--json", action="store_true",
@@ -171,10 +203,12 @@ def check_lockstep_flags(args: argparse.Namespace) -> None:
 def check_outputs(args: argparse.Namespace) -> None:
     """Refuse a --record or --svg that cannot be written, before anything runs (RunInputError).
 
-    An existing record is overwritten only with --force (a networked --resume continues it).
+    An existing record is overwritten only with --force (--resume continues it).
     """
     record: str | None = args.record
     resume = bool(getattr(args, "resume", False))
+    if resume and not record:
+        raise RunInputError("--resume continues a run record: name it with --record PATH")
     if record:
         _check_writable("--record", record)
         if resume and args.force:
@@ -215,6 +249,7 @@ class RunSetup:
     initial: Points
     scheduler: Scheduler
     max_rounds: int
+    resumed: RunRecord | None = None  # --resume: the record whose committed rounds go on
 
 
 def input_errors() -> tuple[type[Exception], ...]:
@@ -268,6 +303,8 @@ def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
     from fatswarm.deploy.lockstep import default_max_rounds
 
     check_outputs(args)
+    if getattr(args, "resume", False):
+        return resolve_resume(args)
     params, initial = resolve_start(args.init, args.n, args.a, seed, args.start)
     if args.scheduler != "scripted" and args.schedule is not None:
         raise RunInputError("--schedule only goes with --scheduler scripted")
@@ -278,9 +315,135 @@ def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
     return RunSetup(seed, params, initial, scheduler, max_rounds)
 
 
+def resolve_resume(args: argparse.Namespace) -> RunSetup:
+    """The run `--resume` continues: the --record file's header (n, a, seed, scheduler, start,
+    round cap) and committed rounds; raises one of `input_errors()` for a record that cannot be
+    continued or a flag given that contradicts it (flags that agree with it are fine)."""
+    from fatswarm.agent.params import Params
+    from fatswarm.agent.tolerance import check_supported
+    from fatswarm.coordinator.schedule import make_scheduler
+    from fatswarm.deploy.lockstep import default_max_rounds
+    from fatswarm.world.physics import validate_configuration
+
+    path: str = args.record
+    record = read_resumable(path, lockstep=bool(args.lockstep))
+    h = record.header
+    if h.seed is None:
+        raise RunInputError(f"--resume: {path} does not say its seed; its run cannot be continued")
+    saved = h.extra.get("max_rounds")
+    cap = saved if isinstance(saved, int) and not isinstance(saved, bool) and saved >= 1 else None
+    if args.max_rounds is not None and args.max_rounds < 1:
+        raise RunInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
+    check_against_header(args, h, cap, path)
+    if h.scheduler != "scripted" and args.schedule is not None:
+        raise RunInputError(f"--schedule only goes with --scheduler scripted; {path}'s run has "
+                            f"scheduler={h.scheduler}")
+    params = Params(h.n, h.a)
+    check_supported(h.initial, h.a)
+    initial = validate_configuration(h.initial)
+    scheduler = make_scheduler(h.scheduler, h.n, h.seed, args.schedule, args.fairness)
+    if cap is None:  # a header without its cap: as the run would have had it
+        cap = args.max_rounds or default_max_rounds(h.n, h.scheduler)
+    return RunSetup(h.seed, params, initial, scheduler, cap, record)
+
+
+def read_resumable(path: str, *, lockstep: bool) -> RunRecord:
+    """The run record at `path`, if it holds a run to continue; else RunInputError (one line).
+
+    A torn last line (a crash mid-write) is left for the networked world, which drops it; a
+    lockstep run never cuts a record, so it refuses one.
+    """
+    from fatswarm.world.record import RecordFormatError, read_record
+
+    if not os.path.exists(path):
+        raise RunInputError(f"--resume: {path} does not exist; nothing to resume (drop --resume "
+                            "to start a new run)")
+    if os.path.isfile(path) and os.path.getsize(path) == 0:
+        raise RunInputError(f"--resume: {path} is empty, not a run record; nothing to resume")
+    try:
+        record = read_record(path, allow_torn_end=True)
+    except RecordFormatError as exc:
+        raise RunInputError(f"--resume: not a run record: {exc}") from None
+    if record.result is not None:
+        raise RunInputError(f"--resume: {path} already finished ({ended(record.result)}); "
+                            "nothing to resume")
+    if lockstep and record.torn_line is not None:
+        raise RunInputError(f"--resume: {path} ends with a torn line (line {record.torn_line}, a "
+                            "crash mid-write) that --lockstep will not cut: delete that line, or "
+                            "resume without --lockstep (the world drops it)")
+    return record
+
+
+def ended(result: Result) -> str:
+    """How a finished record ended, in a few words: "formed in 31 rounds"."""
+    if result.status == "formed":
+        return f"formed in {result.rounds} rounds"
+    if result.status == "max_rounds":
+        return f"stopped at the round limit of {result.rounds} rounds"
+    return f"{result.status} after {result.rounds} rounds"
+
+
+def check_against_header(
+    args: argparse.Namespace, header: Header, cap: int | None, path: str
+) -> None:
+    """Refuse (RunInputError, one line) a flag given with --resume that contradicts the record's
+    header, naming the flag and both values; `cap`: the header's round cap, if it says one."""
+    from fatswarm.world.starts import random_start
+
+    h = header
+    checks: list[tuple[str, str, Any, Any, str]] = [
+        ("-n", "n", args.n, h.n, f"n={h.n}"),
+        ("-a", "a", args.a, h.a, f"a={_number(h.a)}"),
+        ("--seed", "seed", args.seed, h.seed, f"seed={h.seed}"),
+        ("--scheduler", "scheduler", args.scheduler, h.scheduler, f"scheduler={h.scheduler}"),
+        ("--max-rounds", "max_rounds", args.max_rounds, cap, f"max_rounds={cap}"),
+    ]
+    for flag, dest, value, recorded, says in checks:
+        if flag_given(args, dest) and recorded is not None and value != recorded:
+            shown = _number(value) if isinstance(value, float) else value
+            raise RunInputError(f"{flag} {shown} contradicts {path}, whose run has {says}; drop "
+                                f"{flag} to resume it")
+    if args.init is not None:
+        from fatswarm.world.physics import validate_configuration
+        from fatswarm.world.starts import load_init
+
+        positions, _ = load_init(args.init)
+        if len(positions) != h.n:
+            raise RunInputError(f"--init {args.init} contradicts {path}, whose run has n={h.n} "
+                                f"(the file {len(positions)} robots); drop --init to resume it")
+        where = _first_difference(validate_configuration(positions), h.initial)
+        if where is not None:
+            robot, mine, theirs = where
+            raise RunInputError(f"--init {args.init} contradicts {path}, whose run started "
+                                f"elsewhere (robot {robot} at {theirs}, not at {mine} as in the "
+                                "file); drop --init to resume it")
+    elif flag_given(args, "start") and h.seed is not None:
+        kind: str = args.start
+        where = _first_difference(random_start(h.n, h.seed, kind, h.a), h.initial)
+        if where is not None:
+            robot, mine, theirs = where
+            raise RunInputError(f"--start {kind} contradicts {path}, whose run did not start "
+                                f"from the {kind} start of seed {h.seed} (robot {robot} at "
+                                f"{theirs}, not at {mine}); drop --start to resume it")
+
+
+def _number(value: float) -> str:
+    """`value` as short as `:g` puts it, unless that would hide a difference."""
+    short = f"{value:g}"
+    return short if float(short) == value else repr(value)
+
+
+def _first_difference(mine: Points, theirs: Points) -> tuple[int, str, str] | None:
+    """The first robot placed differently in two (n, 2) starts, with both places; None if equal."""
+    for robot, (p, q) in enumerate(zip(mine, theirs, strict=True)):
+        if p[0] != q[0] or p[1] != q[1]:
+            return robot, f"({p[0]:.9g}, {p[1]:.9g})", f"({q[0]:.9g}, {q[1]:.9g})"
+    return None
+
+
 def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """`fatswarm run --lockstep`: build the run from the flags, run it, print the summary."""
-    from fatswarm.deploy.lockstep import run_lockstep
+    from fatswarm.deploy.lockstep import HistoryMismatchError, run_lockstep
     from fatswarm.world.physics import InvalidConfigurationError
     from fatswarm.world.record import RecordFormatError, RecordWriter
 
@@ -291,16 +454,18 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
     try:
         check_lockstep_flags(args)
         setup = resolve_run(args, seed)
-        record = RecordWriter(args.record) if args.record else None
+        resumed = setup.resumed
+        # --resume appends after the committed rounds: nothing there is ever cut or rewritten
+        record = RecordWriter(args.record, append=resumed is not None) if args.record else None
     except bad_input as exc:
         return _fail(str(exc))
-    params, initial, scheduler, max_rounds = (
-        setup.params, setup.initial, setup.scheduler, setup.max_rounds
+    params, initial, scheduler, max_rounds, seed = (
+        setup.params, setup.initial, setup.scheduler, setup.max_rounds, setup.seed
     )
 
     forecast = estimate_lockstep(params.n, scheduler.name, max_rounds)
     if not args.quiet:
-        if not seed_given:
+        if not seed_given and resumed is None:
             print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
         if params.n >= ESTIMATE_FROM_N or forecast.seconds >= ESTIMATE_FROM_S:
             print(estimate_text(forecast, params.n, record=bool(args.record)), file=sys.stderr,
@@ -315,9 +480,14 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
             max_rounds=max_rounds,
             record=record,
             on_round=on_round,
+            history=None if resumed is None else resumed.rounds,
         )
     except InvalidConfigurationError as exc:
         return _fail(f"invalid start: {exc}")
+    except HistoryMismatchError as exc:  # refused before anything was appended
+        return _fail(f"--resume: {args.record} cannot be continued exactly in lock step: {exc} "
+                     "(resume it with the run's own --fairness or --schedule, or networked if "
+                     "it ran so)")
     finally:
         if record is not None:
             record.close()
@@ -569,6 +739,8 @@ __all__ = [
     "exit_code_for",
     "main",
     "print_outcome",
+    "read_resumable",
+    "resolve_resume",
     "resolve_start",
     "run_lockstep_command",
     "summary",

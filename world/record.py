@@ -102,7 +102,8 @@ def collision_to_record(c: Collision) -> dict[str, Any]:
 class RecordWriter:
     """Writes record lines to a file, flushing each (and fsyncing it if `fsync`).
 
-    The file is truncated unless `append` (to continue a durable log after a restart).
+    The file is truncated unless `append` (to continue a durable log after a restart); appending
+    to a file whose last line has no newline starts with one, so that no line runs into another.
     """
 
     def __init__(
@@ -110,6 +111,7 @@ class RecordWriter:
     ) -> None:
         self.path = os.fspath(path)
         self.fsync = fsync
+        self._newline_first = append and _ends_without_newline(self.path)
         try:
             self._fh: IO[str] | None = open(  # noqa: SIM115
                 self.path, "a" if append else "w", encoding="utf-8"
@@ -134,7 +136,10 @@ class RecordWriter:
         """Append one JSON object as one line."""
         if self._fh is None:
             raise RuntimeError(f"run record {self.path} is closed")
-        self._fh.write(json.dumps(entry, separators=(",", ":"), allow_nan=False) + "\n")
+        line = json.dumps(entry, separators=(",", ":"), allow_nan=False) + "\n"
+        if self._newline_first:
+            line, self._newline_first = "\n" + line, False
+        self._fh.write(line)
         self._fh.flush()
         if self.fsync:
             os.fsync(self._fh.fileno())
@@ -201,6 +206,19 @@ class RecordWriter:
         if self._fh is not None:
             self._fh.close()
             self._fh = None
+
+
+def _ends_without_newline(path: str) -> bool:
+    """True if `path` is a non-empty file whose last byte is not a newline."""
+    try:
+        with open(path, "rb") as fh:
+            fh.seek(0, os.SEEK_END)
+            if fh.tell() == 0:
+                return False
+            fh.seek(-1, os.SEEK_END)
+            return fh.read(1) != b"\n"
+    except OSError:
+        return False  # missing: opening it for appending says what is wrong
 
 
 # ---------------------------------------------------------------------------------------------

@@ -302,3 +302,28 @@ def _running(pid: int) -> bool:
     except OSError:
         return False
     return state != "Z"
+
+
+def test_run_resume_continues_a_cut_record_as_its_own_run(tmp_path: Path) -> None:
+    # Only --record and --resume: n, seed and scheduler come from the record's header, so the
+    # coordinator replays the record's schedule and the agents draw the record's frames.
+    lock = lockstep_record(tmp_path / "lock.jsonl", 8, SEED)
+    lines = (tmp_path / "lock.jsonl").read_text().splitlines(keepends=True)
+    record = tmp_path / "net.jsonl"
+    record.write_text("".join(lines[:6]))  # the header and 5 rounds, no result: a crash
+    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", "--record", str(record),
+            "--resume", "-q"]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            start_new_session=True)
+    try:
+        out, _ = proc.communicate(timeout=240)
+    finally:
+        if proc.poll() is None:
+            import os
+
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 0, out.decode(errors="replace")
+    net = read_record(record)
+    assert record.read_text().startswith("".join(lines[:6]))  # appended to, nothing rewritten
+    assert_same_run(net, lock)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path as FsPath
 
 import numpy as np
@@ -14,9 +15,15 @@ from fatswarm.agent.params import Params
 from fatswarm.agent.path import STAY, Line, Path, Points
 from fatswarm.agent.tolerance import GRID, UnsupportedInputError
 from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy.lockstep import RoundReport, default_max_rounds, run_lockstep
+from fatswarm.deploy.lockstep import (
+    HistoryMismatchError,
+    RoundReport,
+    RunResult,
+    default_max_rounds,
+    run_lockstep,
+)
 from fatswarm.world.physics import InvalidConfigurationError
-from fatswarm.world.record import RecordWriter, read_record
+from fatswarm.world.record import RecordWriter, RoundEntry, read_record
 from fatswarm.world.starts import degenerate_starts, random_start
 
 
@@ -191,3 +198,53 @@ def test_inputs_outside_the_supported_range_are_refused_before_any_round(
     start = polygon(4, 4.0) + offset
     with pytest.raises((UnsupportedInputError, InvalidConfigurationError), match="must"):
         run_lockstep(start, Params(4, a), make_scheduler("fsync", 4, 0), seed=0)
+
+
+# --- resuming after committed rounds (fatswarm run --lockstep --resume) -----------------------
+
+
+def nudge(view: Points, params: Params) -> Path:
+    """Step 0.01 away from whoever comes first in the view: the view order decides the run."""
+    x, y = view[0]
+    d = float(np.hypot(x, y))
+    return Path((Line((-0.01 * x / d, -0.01 * y / d)),))
+
+
+@pytest.mark.parametrize("compute", [None, nudge], ids=["shared-plans", "order-sensitive"])
+@pytest.mark.parametrize("scheduler", ["fsync", "ssync", "centralized"])
+def test_a_run_resumed_after_its_committed_rounds_goes_on_as_it_would_have(
+    tmp_path: FsPath, scheduler: str, compute: Callable[[Points, Params], Path] | None
+) -> None:
+    n, seed = 6, 5
+    start = random_start(n, 3, "clustered")
+
+    def run(path: FsPath, history: tuple[RoundEntry, ...] | None = None) -> RunResult:
+        with RecordWriter(path, append=history is not None) as rec:
+            return run_lockstep(start, Params(n), make_scheduler(scheduler, n, seed), seed=seed,
+                                max_rounds=40, record=rec, compute=compute, history=history)
+
+    whole = run(tmp_path / "whole.jsonl")
+    lines = (tmp_path / "whole.jsonl").read_text().splitlines(keepends=True)
+    k = len(lines[1:-1]) // 2
+    assert k >= 2
+    cut = tmp_path / "cut.jsonl"
+    cut.write_text("".join(lines[: 1 + k]))  # the header and k rounds: no result line
+    resumed = run(cut, read_record(cut).rounds)
+    assert cut.read_text() == "".join(lines)
+    for field in ("status", "rounds", "epochs", "moves", "total_distance", "collisions", "looks",
+                  "moves_by_robot"):
+        assert getattr(resumed, field) == getattr(whole, field), field
+    np.testing.assert_array_equal(resumed.positions, whole.positions)
+
+
+def test_a_history_this_run_would_not_have_produced_is_refused(tmp_path: FsPath) -> None:
+    n = 6
+    start = random_start(n, 3, "clustered")
+    target = tmp_path / "run.jsonl"
+    with RecordWriter(target) as rec:
+        run_lockstep(start, Params(n), make_scheduler("ssync", n, 5), seed=5, max_rounds=4,
+                     record=rec)
+    history = read_record(target).rounds
+    other = make_scheduler("ssync", n, 6)  # another seed: another schedule
+    with pytest.raises(HistoryMismatchError, match=r"round \d+ activated robots"):
+        run_lockstep(start, Params(n), other, seed=5, history=history)

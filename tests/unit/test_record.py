@@ -74,6 +74,16 @@ def test_writer_truncates_unless_appending(tmp_path: FsPath) -> None:
     assert target.read_text().splitlines()[-1] == '{"type":"noise"}'
 
 
+def test_appending_after_a_last_line_without_newline_starts_a_new_line(tmp_path: FsPath) -> None:
+    target = tmp_path / "run.jsonl"
+    write_sample(target, finish=False)
+    target.write_text(target.read_text().rstrip("\n"))  # e.g. cut by hand
+    with RecordWriter(target, append=True) as w:
+        assert target.read_text().endswith("}")  # nothing is written before the first line
+        w.round(3, [0], {}, AFTER)
+    assert [r.round for r in read_record(target).rounds] == [1, 2, 3]
+
+
 def test_unfinished_record_has_no_result(tmp_path: FsPath) -> None:
     target = tmp_path / "run.jsonl"
     write_sample(target, finish=False)
