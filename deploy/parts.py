@@ -16,6 +16,7 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from fatswarm.deploy.run import ExitCode
 from fatswarm.deploy.zconf import (
     AGENT_LEASE_MS,
     CONNECT_DEADLINE_S,
@@ -26,7 +27,7 @@ from fatswarm.deploy.zconf import (
     token_held,
 )
 
-EXIT_BAD_INPUT = 2
+EXIT_BAD_INPUT = ExitCode.BAD_INPUT
 DEFAULT_ROUTER_LISTEN = "tcp/127.0.0.1:7447"
 PARENT_POLL_S = 0.5
 

@@ -13,9 +13,10 @@ import sys
 import numpy as np
 
 from fatswarm.agent.path import Points, sample, truncate
+from fatswarm.deploy.run import ExitCode
 from fatswarm.world.record import RecordFormatError, RunRecord, read_record, torn_end_note
 
-EXIT_OK, EXIT_BAD_INPUT = 0, 2
+EXIT_OK, EXIT_BAD_INPUT = ExitCode.OK, ExitCode.BAD_INPUT
 FORMATS = (".svg", ".png")
 TRAIL_STEP = 0.1  # world units between samples of a drawn path
 MISSING_MATPLOTLIB = (

@@ -18,9 +18,10 @@ from typing import Any
 
 from fatswarm.agent.path import sample, truncate
 from fatswarm.deploy.dashboard import Frame, print_frame, render_frame, save_svg
+from fatswarm.deploy.run import ExitCode
 from fatswarm.world.record import RecordFormatError, RunRecord, read_record, torn_end_note
 
-EXIT_OK, EXIT_BAD_INPUT = 0, 2
+EXIT_OK, EXIT_BAD_INPUT = ExitCode.OK, ExitCode.BAD_INPUT
 TRAIL_STEP = 0.25  # world units between samples of a drawn path (a quarter of a robot radius)
 
 

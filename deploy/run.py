@@ -34,6 +34,7 @@ class ExitCode(enum.IntEnum):
     """Every exit code of the `fatswarm` command, defined once."""
 
     FORMED = 0  # formed, and no robot was ever stopped by contact
+    OK = 0  # (the same code) a command that is not a run, such as replay or plot, did its job
     NOT_FORMED = 1  # stalled or max_rounds, collisions or not
     BAD_INPUT = 2  # one line on stderr says what to fix
     FORMED_WITH_COLLISIONS = 3  # formed, but not the collision-free formation
