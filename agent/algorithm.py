@@ -2,9 +2,10 @@
 
 `compute(view, params)` is what an agent runs in its Compute phase. It builds the *plan* of the
 whole configuration (one mover, or one mirror pair: docs/algorithm.md, G11) and returns the
-observer's own part of it. The plan depends on the configuration only up to the observer's
-translation and X mirroring, so every robot that looks at the same configuration agrees on it.
-No state survives a call: there is no module or instance state here.
+observer's own part of it. The plan is made on the canonical form of the view (agent/canonical.py),
+the same bits in every robot whatever its position, flip or view order, so every robot that looks
+at the same configuration makes the very same plan. No state survives a call: there is no module
+or instance state here.
 """
 
 from __future__ import annotations
