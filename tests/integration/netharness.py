@@ -207,3 +207,19 @@ def assert_same_run(net: RunRecord, lock: RunRecord) -> None:
         assert np.allclose(a.positions, b.positions, rtol=0, atol=1e-9), f"round {a.round}"
     assert net.result is not None and lock.result is not None
     assert net.result.status == lock.result.status
+
+
+def descendants_of(pid: int) -> list[int]:
+    """Every process below `pid` (children, grandchildren, ...), read from /proc."""
+    parent: dict[int, int] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            parent[int(stat.parent.name)] = int(stat.read_text().rsplit(")", 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
+            continue
+    out, frontier = [], [pid]
+    while frontier:
+        kids = [p for p, pp in parent.items() if pp in frontier]
+        out += kids
+        frontier = kids
+    return out

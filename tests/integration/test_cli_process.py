@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import IO
 
 import pytest
+from netharness import descendants_of
 
 from fatswarm.world.record import read_record
 
@@ -116,21 +117,6 @@ def test_a_signalled_lockstep_run_exits_128_plus_the_signal_with_its_record_clos
     assert record.header.n == 200 and record.result is None
 
 
-def _descendants_of(pid: int) -> list[int]:
-    parent: dict[int, int] = {}
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            parent[int(stat.parent.name)] = int(stat.read_text().rsplit(")", 1)[1].split()[1])
-        except (OSError, ValueError, IndexError):
-            continue
-    out, frontier = [], [pid]
-    while frontier:
-        kids = [p for p, pp in parent.items() if pp in frontier]
-        out += kids
-        frontier = kids
-    return out
-
-
 def _running(pid: int) -> bool:
     try:
         state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
@@ -150,7 +136,7 @@ def test_ctrl_c_to_a_networked_run_exits_130_and_stops_every_process(
     end = time.monotonic() + DEADLINE_S
     while len(children) < n + 3:  # world, coordinator, agents host and its n agents
         assert time.monotonic() < end and proc.poll() is None, err.text()
-        children = _descendants_of(proc.pid)
+        children = descendants_of(proc.pid)
         time.sleep(0.05)
     proc.send_signal(signal.SIGINT)
     assert proc.wait(timeout=DEADLINE_S) == 130, err.text()

@@ -11,7 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from netharness import Swarm, assert_same_run, lockstep_record
+from netharness import Swarm, assert_same_run, descendants_of, lockstep_record
 
 from fatswarm.agent.path import Line
 from fatswarm.agent.path import Path as RobotPath
@@ -189,27 +189,12 @@ def test_agents_and_world_outlive_a_router_restart(make_swarm: Callable[..., Swa
     assert all(p.poll() is None for name, p in sw.children.procs.items() if name != "router")
 
 
-def _descendants_of(pid: int) -> list[int]:
-    parent: dict[int, int] = {}
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            parent[int(stat.parent.name)] = int(stat.read_text().rsplit(")", 1)[1].split()[1])
-        except (OSError, ValueError, IndexError):
-            continue
-    out, frontier = [], [pid]
-    while frontier:
-        kids = [p for p, pp in parent.items() if pp in frontier]
-        out += kids
-        frontier = kids
-    return out
-
-
 def _wait_for_parts(proc: subprocess.Popen[bytes], n: int) -> list[int]:
     """The launcher's descendants once all n + 3 are up (world, coordinator, agents host, n)."""
     children: list[int] = []
     deadline = time.monotonic() + 60
     while len(children) < n + 3 and time.monotonic() < deadline:
-        children = _descendants_of(proc.pid)
+        children = descendants_of(proc.pid)
         time.sleep(0.05)
     assert len(children) == n + 3, children
     return children

@@ -7,25 +7,17 @@ import argparse
 import io
 import json
 from pathlib import Path
-from typing import Any
 
 import pytest
 
 from fatswarm import __version__
-from fatswarm.deploy import cli, launcher, run
+from fatswarm.deploy import cli, run
 from fatswarm.world.record import read_record
 
 MODES = pytest.mark.parametrize("mode", [["--lockstep"], []], ids=["lockstep", "networked"])
 
 
-@pytest.fixture(autouse=True)
-def no_launch(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A networked run here must be refused before it starts anything."""
-
-    def launch(*args: Any) -> int:
-        raise AssertionError("the networked run started processes for refused input")
-
-    monkeypatch.setattr(launcher, "_launch", launch)
+pytestmark = pytest.mark.usefixtures("no_launch")  # tests/unit/conftest.py
 
 
 def fatswarm(argv: list[str]) -> int:
