@@ -137,6 +137,10 @@ class SharedForm:
     def points(self) -> Points:
         return self.form.points
 
+    def key(self) -> bytes:
+        """Bytes equal for exactly the configurations with equal canonical points."""
+        return self.form.points.tobytes()
+
     def for_robot(self, robot: int, flip: bool) -> Canonical:
         """What `canonical` gives robot `robot` on its own view in its own frame."""
         f = -1.0 if flip else 1.0

@@ -56,7 +56,7 @@ class SharedPlans:
 
     def plan_of(self, form: SharedForm, params: Params) -> Plan:
         """The plan of the configuration `form` (made at most once while remembered)."""
-        key = (form.points.tobytes(), params)
+        key = (form.key(), params)
         made = self._plans.get(key)
         if made is None:
             made = plan(form.points, params)

@@ -223,3 +223,12 @@ def descendants_of(pid: int) -> list[int]:
         out += kids
         frontier = kids
     return out
+
+
+def running(pid: int) -> bool:
+    """Whether process `pid` exists and is not a zombie (read from /proc)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"

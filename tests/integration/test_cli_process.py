@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import IO
 
 import pytest
-from netharness import descendants_of
+from netharness import descendants_of, running
 
 from fatswarm.world.record import read_record
 
@@ -117,14 +117,6 @@ def test_a_signalled_lockstep_run_exits_128_plus_the_signal_with_its_record_clos
     assert record.header.n == 200 and record.result is None
 
 
-def _running(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except OSError:
-        return False
-    return state != "Z"
-
-
 def test_ctrl_c_to_a_networked_run_exits_130_and_stops_every_process(
     started: list[subprocess.Popen[bytes]],
 ) -> None:
@@ -142,7 +134,7 @@ def test_ctrl_c_to_a_networked_run_exits_130_and_stops_every_process(
     assert proc.wait(timeout=DEADLINE_S) == 130, err.text()
     text = err.text()
     assert "interrupted: stopping every process started" in text and "Traceback" not in text
-    assert not [pid for pid in children if _running(pid)]
+    assert not [pid for pid in children if running(pid)]
 
 
 # --- a closed standard output ----------------------------------------------------------------

@@ -11,7 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from netharness import Swarm, assert_same_run, descendants_of, lockstep_record
+from netharness import Swarm, assert_same_run, descendants_of, lockstep_record, running
 
 from fatswarm.agent.path import Line
 from fatswarm.agent.path import Path as RobotPath
@@ -29,8 +29,14 @@ def _run_cli(
     tmp_path: Path, n: int, seed: int, cwd: Path | None = None
 ) -> tuple[int, str, Path]:
     record = tmp_path / "net.jsonl"
-    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", "-n", str(n), "--seed", str(seed),
-            "--scheduler", "ssync", "--record", str(record), "-q"]
+    code, out = _fatswarm_run(["-n", str(n), "--seed", str(seed), "--scheduler", "ssync",
+                               "--record", str(record), "-q"], cwd)
+    return code, out, record
+
+
+def _fatswarm_run(flags: list[str], cwd: Path | None = None) -> tuple[int, str]:
+    """`fatswarm run FLAGS` in its own process group: exit code and output (killed after 240 s)."""
+    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", *flags]
     proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                             start_new_session=True, cwd=cwd)
     try:
@@ -41,7 +47,7 @@ def _run_cli(
 
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
-    return proc.returncode, out.decode(errors="replace"), record
+    return proc.returncode, out.decode(errors="replace")
 
 
 def test_files_named_like_the_parts_in_the_working_directory_change_nothing(
@@ -270,23 +276,15 @@ def test_a_killed_launcher_leaves_nothing_behind(tmp_path: Path) -> None:
         proc.kill()  # no chance to clean up: the parts notice their parent is gone
         proc.wait()
         deadline = time.monotonic() + 30
-        while time.monotonic() < deadline and any(_running(pid) for pid in children):
+        while time.monotonic() < deadline and any(running(pid) for pid in children):
             time.sleep(0.1)
-        assert not [pid for pid in children if _running(pid)]
+        assert not [pid for pid in children if running(pid)]
     finally:
         import os
 
         for pid in [proc.pid, *children]:
-            if _running(pid):
+            if running(pid):
                 os.kill(pid, signal.SIGKILL)
-
-
-def _running(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except OSError:
-        return False
-    return state != "Z"
 
 
 def test_run_resume_continues_a_cut_record_as_its_own_run(tmp_path: Path) -> None:
@@ -296,19 +294,8 @@ def test_run_resume_continues_a_cut_record_as_its_own_run(tmp_path: Path) -> Non
     lines = (tmp_path / "lock.jsonl").read_text().splitlines(keepends=True)
     record = tmp_path / "net.jsonl"
     record.write_text("".join(lines[:6]))  # the header and 5 rounds, no result: a crash
-    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", "--record", str(record),
-            "--resume", "-q"]
-    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            start_new_session=True)
-    try:
-        out, _ = proc.communicate(timeout=240)
-    finally:
-        if proc.poll() is None:
-            import os
-
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-    assert proc.returncode == 0, out.decode(errors="replace")
+    code, out = _fatswarm_run(["--record", str(record), "--resume", "-q"])
+    assert code == 0, out
     net = read_record(record)
     assert record.read_text().startswith("".join(lines[:6]))  # appended to, nothing rewritten
     assert_same_run(net, lock)

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import re
-import socket
 import subprocess
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -20,13 +19,6 @@ pytestmark = pytest.mark.integration
 DEADLINE_S = 60.0  # generous: the machine is shared; waits are on predicates
 
 
-@pytest.fixture
-def busy_port() -> Iterator[int]:
-    """A loopback TCP port something listens on."""
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        s.listen()
-        yield s.getsockname()[1]
 
 
 def test_world_and_coordinator_give_up_on_a_dead_router_in_one_line(tmp_path: Path) -> None:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import socket
 import threading
-from collections.abc import Iterator
 
 import pytest
 import zenoh
@@ -53,13 +52,6 @@ def test_zenoh_messages_become_one_sentence_without_rust_source_paths(
     assert explain_zenoh_error(zenoh.ZError(message)) == shown
 
 
-@pytest.fixture
-def busy_port() -> Iterator[int]:
-    """A loopback TCP port something listens on."""
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        s.listen()
-        yield s.getsockname()[1]
 
 
 def _raised_by(action: object) -> zenoh.ZError:
