@@ -5,10 +5,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from fatswarm.agent.seam import AlgorithmParamsError
+
 MIN_SIDE = 3.0  # the paper requires a > 3 (robots are unit discs, so centres 2 apart touch)
 
 
-class ParamsError(ValueError):
+class ParamsError(AlgorithmParamsError):
     """n or a is outside what the algorithm accepts."""
 
 

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import enum
 import importlib
 import importlib.util
 import json
@@ -22,25 +21,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Final, TextIO
 
+from fatswarm.world.outcome import ExitCode, exit_code_for
+
 if TYPE_CHECKING:
     from fatswarm.agent.params import Params
     from fatswarm.agent.path import Points
     from fatswarm.coordinator.schedule import Scheduler
     from fatswarm.deploy.lockstep import RoundReport
     from fatswarm.world.record import Header, Result, RunRecord
-
-
-class ExitCode(enum.IntEnum):
-    """Every exit code of the `fatswarm` command, defined once."""
-
-    FORMED = 0  # formed, and no robot was ever stopped by contact
-    OK = 0  # (the same code) a command that is not a run, such as replay or plot, did its job
-    NOT_FORMED = 1  # stalled or max_rounds, collisions or not
-    BAD_INPUT = 2  # one line on stderr says what to fix
-    FORMED_WITH_COLLISIONS = 3  # formed, but not the collision-free formation
-    INTERRUPTED = 130  # 128 + SIGINT (Ctrl-C)
-    BROKEN_PIPE = 141  # 128 + SIGPIPE: standard output closed early (`| head -1`)
-    TERMINATED = 143  # 128 + SIGTERM
 
 
 EXIT_FORMED: Final = ExitCode.FORMED
@@ -567,13 +555,6 @@ class Outcome:
     epochs: int | None  # None when the record does not say
     moves: int
     total_distance: float
-
-
-def exit_code_for(status: str, collisions: int) -> ExitCode:
-    """0 only for a collision-free formation; formed through collisions is 3, not formed is 1."""
-    if status != "formed":
-        return EXIT_NOT_FORMED
-    return EXIT_FORMED if collisions == 0 else EXIT_FORMED_WITH_COLLISIONS
 
 
 def exit_code(outcome: Outcome) -> ExitCode:

@@ -14,11 +14,12 @@ import numpy as np
 
 from fatswarm.agent.geometry import is_formed
 from fatswarm.agent.path import Points
+from fatswarm.world.outcome import ENDED, Status
 
-FORMED: Final = "formed"
-STALLED: Final = "stalled"
-MAX_ROUNDS: Final = "max_rounds"
-STATUSES: Final = (FORMED, STALLED, MAX_ROUNDS)
+FORMED: Final = Status.FORMED
+STALLED: Final = Status.STALLED
+MAX_ROUNDS: Final = Status.MAX_ROUNDS
+STATUSES: Final = ENDED
 
 # A robot "moved" (the configuration changed) when its centre shifted by more than this. Far above
 # float noise at coordinates ~1e3 (~1e-13), far below any planned move (>= ~1e-6, the algorithm's

@@ -18,12 +18,14 @@ import msgpack
 import numpy as np
 from numpy.typing import NDArray
 
+from fatswarm.world.outcome import Status
+
 PROTOCOL_VERSION = 1
 ROOT = "fatswarm"
 MAX_ROBOTS = 4096  # bounds every list and array a peer can make us allocate
 MAX_MESSAGE_BYTES = 1 << 20  # 1 MiB: a 4096-robot state is ~130 KB
 MAX_COORD = 1e9  # coordinates beyond this are nonsense for unit discs and risk overflow
-STATUSES = ("running", "formed", "stalled", "max_rounds")
+STATUSES = tuple(Status)
 _SWARM_NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
 
 Points = NDArray[np.float64]  # (n, 2)

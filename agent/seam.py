@@ -1,0 +1,217 @@
+"""The algorithm seam: what fatswarm asks of an algorithm, and the parameters that configure it.
+
+An algorithm is any object with the attributes and methods of `Algorithm`. fatswarm finds it by
+name (entry point group `fatswarm.algorithms`) or by `module:attribute` (agent/registry.py); the
+world asks it whether the goal is reached, every robot asks it where to go. Nothing else in
+fatswarm knows which algorithm runs. docs/algorithms.md shows how to write one.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, Protocol, TypeVar, runtime_checkable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fatswarm.agent.path import Path
+
+Points = NDArray[np.float64]  # (k, 2)
+ParamValue = bool | int | float | str  # what a parameter can hold: it travels on the wire
+MAX_PARAMS = 32  # parameters an algorithm may declare (bounds what a peer can make us parse)
+MAX_TEXT = 200  # characters of a text parameter or an algorithm name
+
+P = TypeVar("P")
+
+
+class AlgorithmError(ValueError):
+    """An algorithm that cannot be found or loaded, or an object that is not an algorithm."""
+
+
+class AlgorithmParamsError(ValueError):
+    """A parameter the algorithm does not have, or a value it refuses (the message says which)."""
+
+
+@dataclass(frozen=True, slots=True)
+class ParamSpec:
+    """One parameter: its name, its default (whose type is the parameter's type) and a line of
+    help for `--help` and docs."""
+
+    name: str
+    default: ParamValue
+    help: str
+
+    @property
+    def kind(self) -> type:
+        """bool, int, float or str: the type of the default."""
+        return type(self.default)
+
+    def parse(self, text: str) -> ParamValue:
+        """The value that `--param NAME=TEXT` gives; raises AlgorithmParamsError."""
+        kind = self.kind
+        try:
+            if kind is bool:
+                lowered = text.strip().lower()
+                if lowered not in ("true", "false", "1", "0", "yes", "no"):
+                    raise ValueError(text)
+                return lowered in ("true", "1", "yes")
+            if kind is int:
+                return int(text)
+            if kind is float:
+                return self.coerce(float(text))
+        except ValueError:
+            raise AlgorithmParamsError(
+                f"parameter {self.name} takes a {kind.__name__}, got {text!r}"
+            ) from None
+        return self.coerce(text)
+
+    def coerce(self, value: object) -> ParamValue:
+        """`value` as this parameter's type (an int is a fine float); raises AlgorithmParamsError.
+
+        Used on values from flags, records and the wire: a float must be finite, a text short.
+        """
+        kind = self.kind
+        if kind is float and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        if type(value) is not kind:
+            raise AlgorithmParamsError(
+                f"parameter {self.name} takes a {kind.__name__}, got {value!r}"
+            )
+        if isinstance(value, float) and not math.isfinite(value):
+            raise AlgorithmParamsError(f"parameter {self.name} must be finite, got {value!r}")
+        if isinstance(value, str) and len(value) > MAX_TEXT:
+            raise AlgorithmParamsError(
+                f"parameter {self.name} is longer than {MAX_TEXT} characters"
+            )
+        assert isinstance(value, (bool, int, float, str))
+        return value
+
+
+@runtime_checkable
+class Algorithm(Protocol[P]):
+    """What fatswarm needs of an algorithm. `P` is the algorithm's own parameter object.
+
+    - `name`: the name a run is recorded under (letters, digits, '-', '_', '.').
+    - `summary`: one line for `fatswarm algorithms` and `--help`.
+    - `parameters`: what `--param NAME=VALUE` may set, with defaults.
+    - `make_params(n, values)`: the parameter object for n robots and the complete, typed values
+      (defaults filled in); raises AlgorithmParamsError for a value it refuses.
+    - `compute(view, params)`: the path of the robot that sees `view`, (n-1, 2) positions of the
+      others relative to itself in its private frame (X possibly flipped, order arbitrary). Pure:
+      no state survives a call. Must not depend on the order of `view`.
+    - `goal(positions, params)`: the world's test, on (n, 2) world positions, that the run's goal
+      holds. A run is `formed` when the goal holds and every robot, activated since the last
+      change, asked to stay; `stalled` when all stay but the goal does not hold.
+
+    Optional hooks, looked up by name: `check_start(positions, params)` refuses a start the
+    algorithm does not support (raise AlgorithmParamsError or a ValueError subclass);
+    `figures(positions, params) -> Mapping[str, float]` for the dashboard;
+    `round_planner(params)`, an object whose `paths(positions, robots, flips)` gives the very
+    paths `compute` would give each of `robots` in its own frame, made at once (a fast lock step).
+    """
+
+    name: str
+    summary: str
+    parameters: tuple[ParamSpec, ...]
+
+    def make_params(self, n: int, values: Mapping[str, ParamValue]) -> P: ...
+
+    def compute(self, view: Points, params: P) -> Path: ...
+
+    def goal(self, positions: Points, params: P) -> bool: ...
+
+
+def resolve_values(
+    algorithm: Algorithm[Any], given: Mapping[str, object] | None = None
+) -> dict[str, ParamValue]:
+    """Every parameter of `algorithm`: `given` (typed or as text from a flag) over the defaults.
+
+    Raises AlgorithmParamsError naming an unknown parameter and the ones there are.
+    """
+    specs = {spec.name: spec for spec in algorithm.parameters}
+    values: dict[str, ParamValue] = {name: spec.default for name, spec in specs.items()}
+    for name, value in (given or {}).items():
+        spec = specs.get(name)
+        if spec is None:
+            known = ", ".join(specs) or "none"
+            raise AlgorithmParamsError(
+                f"algorithm {algorithm.name} has no parameter {name!r} (it has: {known})"
+            )
+        values[name] = spec.parse(value) if isinstance(value, str) else spec.coerce(value)
+    return values
+
+
+def parse_assignments(texts: list[str] | tuple[str, ...]) -> dict[str, str]:
+    """`["a=5", "tol=1e-3"]` as a mapping; raises AlgorithmParamsError for a text without '='."""
+    out: dict[str, str] = {}
+    for text in texts:
+        name, sep, value = text.partition("=")
+        if not sep or not name.strip():
+            raise AlgorithmParamsError(f"--param takes NAME=VALUE, got {text!r}")
+        out[name.strip()] = value.strip()
+    return out
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Configured:
+    """An algorithm with its parameters for a run of n robots: what the world and agents hold."""
+
+    algorithm: Algorithm[Any]
+    n: int
+    values: Mapping[str, ParamValue]
+    params: Any  # the algorithm's own parameter object
+
+    @staticmethod
+    def of(
+        algorithm: Algorithm[Any], n: int, given: Mapping[str, object] | None = None
+    ) -> Configured:
+        """Resolve, check and build the parameters; raises AlgorithmParamsError."""
+        values = resolve_values(algorithm, given)
+        return Configured(algorithm, n, values, algorithm.make_params(n, values))
+
+    @property
+    def name(self) -> str:
+        return self.algorithm.name
+
+    def compute(self, view: Points) -> Path:
+        """The algorithm's path for one robot's view (its private frame)."""
+        return self.algorithm.compute(view, self.params)
+
+    def goal(self, positions: Points) -> bool:
+        """Whether the goal holds for (n, 2) world positions."""
+        return bool(self.algorithm.goal(positions, self.params))
+
+    def check_start(self, positions: Points) -> None:
+        """The algorithm's own refusal of a start it does not support, if it has one."""
+        hook = getattr(self.algorithm, "check_start", None)
+        if hook is not None:
+            hook(positions, self.params)
+
+    def figures(self, positions: Points) -> dict[str, float]:
+        """The algorithm's figures for the dashboard (none if it has no hook)."""
+        hook = getattr(self.algorithm, "figures", None)
+        if hook is None:
+            return {}
+        return {str(k): float(v) for k, v in hook(positions, self.params).items()}
+
+    def describe(self) -> str:
+        """`name a=4 ...`: the algorithm and its parameters, for summaries."""
+        shown = " ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
+                         for k, v in self.values.items())
+        return f"{self.name} {shown}".strip()
+
+
+__all__ = [
+    "MAX_PARAMS",
+    "Algorithm",
+    "AlgorithmError",
+    "AlgorithmParamsError",
+    "Configured",
+    "ParamSpec",
+    "ParamValue",
+    "Points",
+    "parse_assignments",
+    "resolve_values",
+]
