@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from fatswarm.agent.path import Path, Point, Points, transform
@@ -26,3 +28,14 @@ def to_local(others_world: Points, me_world: Point, flip_x: bool) -> Points:
 def path_to_world(path_local: Path, me_world: Point, flip_x: bool) -> Path:
     """A path computed in the robot's frame, expressed in the world frame."""
     return transform(path_local, me_world, flip_x)
+
+
+def compute_in_frame(view: Points, flip_x: bool, compute: Callable[[Points], Path]) -> Path:
+    """One robot's Compute: `view` (others relative to it, world axes) mirrored into its private
+    frame, the path computed there and mirrored back: relative to the robot, world axes.
+
+    The agent process and the lock step both call this, so both hand the world the same path."""
+    local = view.copy()
+    if flip_x:
+        local[:, 0] = -local[:, 0]
+    return path_to_world(compute(local), (0.0, 0.0), flip_x)

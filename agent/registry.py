@@ -103,6 +103,7 @@ def _module_from_file(path: str) -> Any:
 
 def check_algorithm(obj: object, ref: str) -> Algorithm[Any]:
     """`obj` if it has what `Algorithm` asks for; raises AlgorithmError naming what is missing."""
+    candidate: Any = obj
     missing = [
         attr for attr in ("name", "summary", "parameters", "make_params", "compute", "goal")
         if not hasattr(obj, attr)
@@ -110,11 +111,11 @@ def check_algorithm(obj: object, ref: str) -> Algorithm[Any]:
     if missing:
         raise AlgorithmError(f"--algorithm {ref}: not an algorithm (missing {', '.join(missing)}; "
                              "see docs/algorithms.md)")
-    name = obj.name
+    name = candidate.name
     if not isinstance(name, str) or not _NAME.fullmatch(name):
         raise AlgorithmError(f"--algorithm {ref}: its name must be 1-64 letters, digits, '-', "
                              f"'_' or '.', got {name!r}")
-    params = obj.parameters
+    params = candidate.parameters
     if not isinstance(params, tuple) or len(params) > MAX_PARAMS or not all(
         isinstance(p, ParamSpec) and _NAME.fullmatch(p.name) for p in params
     ):

@@ -51,21 +51,22 @@ class ParamSpec:
     def parse(self, text: str) -> ParamValue:
         """The value that `--param NAME=TEXT` gives; raises AlgorithmParamsError."""
         kind = self.kind
+        value: ParamValue = text
         try:
             if kind is bool:
                 lowered = text.strip().lower()
                 if lowered not in ("true", "false", "1", "0", "yes", "no"):
                     raise ValueError(text)
-                return lowered in ("true", "1", "yes")
-            if kind is int:
-                return int(text)
-            if kind is float:
-                return self.coerce(float(text))
+                value = lowered in ("true", "1", "yes")
+            elif kind is int:
+                value = int(text)
+            elif kind is float:
+                value = float(text)
         except ValueError:
             raise AlgorithmParamsError(
                 f"parameter {self.name} takes a {kind.__name__}, got {text!r}"
             ) from None
-        return self.coerce(text)
+        return self.coerce(value)
 
     def coerce(self, value: object) -> ParamValue:
         """`value` as this parameter's type (an int is a fine float); raises AlgorithmParamsError.

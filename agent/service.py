@@ -16,11 +16,11 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from fatswarm.agent.algorithm import compute
-from fatswarm.agent.frames import draw_flip, path_to_world
-from fatswarm.agent.params import Params, ParamsError
+from fatswarm.agent.frames import compute_in_frame, draw_flip
 from fatswarm.agent.path import Path
 from fatswarm.agent.protocol import MoveSubmitted, alive_key, move_key
+from fatswarm.agent.registry import DEFAULT
+from fatswarm.agent.seam import Algorithm, AlgorithmParamsError, Configured
 from fatswarm.coordinator.protocol import RoundStart, round_key
 from fatswarm.world.protocol import ProtocolError, Snapshot, snapshot_key
 
@@ -38,15 +38,32 @@ class AgentConfig:
     swarm: str
     robot: int
     seed: int
+    algorithm: str = DEFAULT  # a registered name or module:attribute (agent/registry.py)
 
 
-def look_compute(snapshot: Snapshot, flip_x: bool) -> Path:
-    """Compute in the private frame and return the path relative to the robot, world axes."""
-    view = snapshot.view.copy()
-    if flip_x:
-        view[:, 0] = -view[:, 0]
-    path_local = compute(view, Params(snapshot.n, snapshot.a))
-    return path_to_world(path_local, (0.0, 0.0), flip_x)  # undo the mirroring only
+class WrongAlgorithmError(ValueError):
+    """The world runs another algorithm than this agent: it stays put rather than guess."""
+
+
+class Robot:
+    """One robot's Compute: the algorithm, configured by what each snapshot says (n and the
+    parameters), kept while they do not change."""
+
+    def __init__(self, algorithm: Algorithm[Any], flip_x: bool) -> None:
+        self.algorithm = algorithm
+        self.flip_x = flip_x
+        self._setting: Configured | None = None
+
+    def look_compute(self, snapshot: Snapshot) -> Path:
+        """The path relative to the robot, world axes; raises WrongAlgorithmError or
+        AlgorithmParamsError for a snapshot it cannot act on."""
+        if snapshot.algorithm != self.algorithm.name:
+            raise WrongAlgorithmError(f"the world runs algorithm {snapshot.algorithm!r}, this "
+                                      f"agent {self.algorithm.name!r}")
+        setting = self._setting
+        if setting is None or setting.n != snapshot.n or dict(setting.values) != snapshot.params:
+            setting = self._setting = Configured.of(self.algorithm, snapshot.n, snapshot.params)
+        return compute_in_frame(snapshot.view, self.flip_x, setting.compute)
 
 
 def open_session(conf: Any, stop: threading.Event, waiting: str | None = None) -> Any:
@@ -84,13 +101,21 @@ def _endpoints(conf: Any) -> str:
 
 
 def serve(
-    cfg: AgentConfig, conf: Any, stop: threading.Event | None = None, waiting: str | None = None
+    cfg: AgentConfig,
+    conf: Any,
+    stop: threading.Event | None = None,
+    waiting: str | None = None,
+    algorithm: Algorithm[Any] | None = None,
 ) -> int:
-    """Run one robot until `stop` is set; returns an exit code (`waiting`: see open_session)."""
+    """Run one robot until `stop` is set; returns an exit code (`waiting`: see open_session).
+
+    `algorithm`: loaded from `cfg.algorithm` if None (raises AlgorithmError if it cannot be)."""
     import zenoh
 
+    from fatswarm.agent.registry import load_algorithm
+
     stop = stop or threading.Event()
-    flip_x = draw_flip(cfg.seed, cfg.robot)
+    robot = Robot(algorithm or load_algorithm(cfg.algorithm), draw_flip(cfg.seed, cfg.robot))
     starts: queue.Queue[bytes] = queue.Queue()
     session = open_session(conf, stop, waiting)
     if session is None:
@@ -124,13 +149,13 @@ def serve(
                 continue
             if cfg.robot in start.active and starts.empty():  # a newer start supersedes this one
                 try:
-                    _cycle(cfg, start.round, flip_x, querier, mover)
+                    _cycle(cfg, start.round, robot, querier, mover)
                 except zenoh.ZError as exc:  # the router is away: this round goes without us
                     log.warning("round %d: %s", start.round, exc)
     return 0
 
 
-def _cycle(cfg: AgentConfig, round_no: int, flip_x: bool, querier: Any, mover: Any) -> None:
+def _cycle(cfg: AgentConfig, round_no: int, robot: Robot, querier: Any, mover: Any) -> None:
     """One Look-Compute-Move cycle for round `round_no`."""
     snapshot = None
     t_look = time.perf_counter()
@@ -146,9 +171,9 @@ def _cycle(cfg: AgentConfig, round_no: int, flip_x: bool, querier: Any, mover: A
         return
     t0, cpu0 = time.perf_counter(), time.thread_time()
     try:
-        path = look_compute(snapshot, flip_x)
-    except ParamsError as exc:
-        log.error("round %d: the world sent unusable parameters: %s", round_no, exc)
+        path = robot.look_compute(snapshot)
+    except (WrongAlgorithmError, AlgorithmParamsError) as exc:
+        log.error("round %d: staying put: %s", round_no, exc)
         return
     except Exception:  # a bug in compute must not kill the robot: it stays put this round
         log.exception("round %d: compute failed, staying put", round_no)

@@ -68,7 +68,7 @@ class UniformCircle:
 
     name = "uniform-circle"
     summary = "the paper's uniform circle formation by transparent fat robots (side >= a)"
-    parameters = (
+    parameters: tuple[ParamSpec, ...] = (
         ParamSpec("a", DEFAULT_A, "least side of the polygon the robots form (the paper: a > 3)"),
     )
 

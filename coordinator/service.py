@@ -1,8 +1,7 @@
-"""The coordinator process: runs semi-synchronous rounds over the live agents until the run ends.
+"""The coordinator process: a Zenoh shell around the round state machine of `rounds.py`.
 
-Each round: ask the scheduler for the active set among live agents, open the round at the world,
-announce it to the agents, wait until the world holds every live active robot's move (or a timeout),
-then tell the world to commit. The world's reply says whether the run has ended.
+Callbacks only enqueue. One loop feeds the queued events to the core, calls it at its deadlines,
+and performs what it asks: control requests to the world, round announcements to the agents.
 """
 
 from __future__ import annotations
@@ -11,18 +10,27 @@ import logging
 import queue
 import threading
 import time
+from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from fatswarm.agent.protocol import alive_any_key, robot_of_alive_key
 from fatswarm.coordinator.protocol import RoundStart, alive_key, round_key
+from fatswarm.coordinator.rounds import (
+    Action,
+    Announce,
+    CoordinatorCore,
+    Finished,
+    RoundTimes,
+)
 from fatswarm.coordinator.schedule import Scheduler
+from fatswarm.world.outcome import ExitCode, Status, exit_code_for
 from fatswarm.world.protocol import (
     Begin,
     Commit,
     ControlReply,
-    Hello,
+    ControlRequest,
     MoveHeld,
     ProtocolError,
     control_key,
@@ -31,10 +39,11 @@ from fatswarm.world.protocol import (
 
 log = logging.getLogger("fatswarm.coordinator")
 
-EXIT_FORMED = 0
-EXIT_NOT_FORMED = 1
-RESUME_GRACE_S = 2.0  # a restarted coordinator waits this long for every agent's token
+EXIT_FORMED = ExitCode.FORMED
+EXIT_NOT_FORMED = ExitCode.NOT_FORMED
 CONTROL_TIMEOUT_S = 10.0  # the world answers in milliseconds; a commit includes one fsync
+STOP_POLL_S = 0.1  # the loop looks at the stop flag at least this often while it waits
+_TIMES = RoundTimes()  # the defaults
 
 
 @dataclass(frozen=True, slots=True)
@@ -42,14 +51,27 @@ class CoordinatorConfig:
     """How the coordinator runs rounds."""
 
     swarm: str
-    move_timeout_s: float = 5.0  # an active robot that has not moved by then stays put
-    start_timeout_s: float = 120.0  # wait this long for all n agents before round 1
-    pace_s: float = 0.0  # least time per round: lets people (and tests) watch a run unfold
+    move_timeout_s: float = _TIMES.move_timeout_s  # an active robot silent by then stays put
+    start_timeout_s: float = _TIMES.start_timeout_s  # wait this long for all n agents at first
+    pace_s: float = _TIMES.pace_s  # least time per round: lets people (and tests) watch a run
     resume_live: Sequence[int] | None = None  # live set assumed when replaying the scheduler
+    resume_grace_s: float = _TIMES.resume_grace_s  # a restarted coordinator waits this long
+    retry_s: float = _TIMES.retry_s  # before asking a silent world again
+
+    @property
+    def times(self) -> RoundTimes:
+        """The timing part, as the core takes it."""
+        return RoundTimes(
+            move_timeout_s=self.move_timeout_s,
+            start_timeout_s=self.start_timeout_s,
+            resume_grace_s=self.resume_grace_s,
+            pace_s=self.pace_s,
+            retry_s=self.retry_s,
+        )
 
 
 class Coordinator:
-    """The coordinator's Zenoh shell; `run` returns 0 when formed, 1 otherwise."""
+    """The coordinator's Zenoh shell; `run` returns the exit code (0 formed, see world.outcome)."""
 
     def __init__(
         self,
@@ -58,16 +80,11 @@ class Coordinator:
         stop: threading.Event,
     ) -> None:
         self.cfg = cfg
-        self.make_scheduler = make_scheduler
-        self.scheduler: Scheduler | None = None
-        self.n = 0
         self.stop = stop
+        self.core = CoordinatorCore(make_scheduler, cfg.times, cfg.resume_live)
         self.events: queue.Queue[tuple[str, Any]] = queue.Queue()
-        self.live: set[int] = set()
-        self.held: set[int] = set()
-        self.round = 0
-        self.planned: dict[int, tuple[int, ...]] = {}  # round -> active set (kept for retries)
         self.rejected = 0
+        self._began = self._announced = 0.0  # perf_counter marks of the round (debug timings)
 
     # -- event intake (callbacks only enqueue) --------------------------------------------------
 
@@ -79,68 +96,7 @@ class Coordinator:
     def _on_held(self, sample: Any) -> None:
         self.events.put(("held", sample.payload.to_bytes()))
 
-    def _drain(self, timeout: float) -> None:
-        """Apply queued events, waiting up to `timeout` for the first one."""
-        try:
-            kind, item = self.events.get(timeout=max(0.0, timeout))
-        except queue.Empty:
-            return
-        while True:
-            if kind == "alive":
-                key, alive = item
-                robot = robot_of_alive_key(key)
-                if robot is not None and (robot < self.n or not self.n):
-                    if alive:
-                        self.live.add(robot)
-                    elif robot in self.live:
-                        self.live.discard(robot)
-                        log.info("agent %d is gone", robot)
-            elif kind == "held":
-                try:
-                    notice = MoveHeld.decode(item)
-                except ProtocolError as exc:
-                    self.rejected += 1
-                    log.warning("rejected move notice: %s [total %d]", exc, self.rejected)
-                else:
-                    if notice.round == self.round:
-                        self.held.add(notice.robot)
-            try:
-                kind, item = self.events.get_nowait()
-            except queue.Empty:
-                return
-
-    # -- requests to the world ------------------------------------------------------------------
-
-    def _ask(self, session: Any, request: bytes) -> ControlReply | None:
-        """One control request; None if the world did not answer (down or restarting)."""
-        import zenoh
-
-        try:
-            replies = list(
-                session.get(control_key(self.cfg.swarm), payload=request, timeout=CONTROL_TIMEOUT_S)
-            )
-        except zenoh.ZError as exc:  # the session is reconnecting to its router
-            log.warning("control request failed: %s", exc)
-            return None
-        for reply in replies:
-            if reply.ok is None:
-                continue
-            try:
-                return ControlReply.decode(reply.ok.payload.to_bytes())
-            except ProtocolError as exc:
-                log.warning("world sent a bad control reply: %s", exc)
-        return None
-
-    def _hello(self, session: Any) -> ControlReply | None:
-        """Wait until the world answers; None if stopped first."""
-        while not self.stop.is_set():
-            reply = self._ask(session, Hello().encode())
-            if reply is not None:
-                return reply
-            self._drain(0.25)
-        return None
-
-    # -- the round loop -------------------------------------------------------------------------
+    # -- the loop -------------------------------------------------------------------------------
 
     def run(self, session: Any) -> int:
         """Run rounds on an open Zenoh session until the run ends, then close it."""
@@ -160,91 +116,104 @@ class Coordinator:
             return self._loop(session, announce)
 
     def _loop(self, session: Any, announce: Any) -> int:
-        first = self._hello(session)
-        if first is None:
-            return EXIT_NOT_FORMED
-        self.n = first.n  # the world owns the run's parameters
-        self.live = {r for r in self.live if r < self.n}
-        self.scheduler = self.make_scheduler(self.n)
-        if first.committed:
-            self._replay_scheduler(first.committed)
-        self._wait_for_agents(first.committed)
-        reply: ControlReply | None = first
-        while reply is not None and reply.status == "running" and not self.stop.is_set():
-            started = time.monotonic()
-            done = self._one_round(session, announce, reply.committed + 1)
-            if self.cfg.pace_s > 0:
-                self.stop.wait(max(0.0, started + self.cfg.pace_s - time.monotonic()))
-            # a commit's reply says where the run stands; after a refusal or a failure, ask
-            reply = done if done is not None and done.ok else self._hello(session)
-        status = reply.status if reply is not None else "running"
-        if status == "running":
-            return EXIT_NOT_FORMED
-        log.info("run ended: %s after round %d", status, self.round)
-        return EXIT_FORMED if status == "formed" else EXIT_NOT_FORMED
+        todo: deque[Action] = deque(self.core.start(time.monotonic()))
+        while not self.stop.is_set():
+            self._log_notes()
+            if not todo:
+                todo.extend(self._wait())
+                continue
+            action = todo.popleft()
+            if isinstance(action, Finished):
+                return self._end(action)
+            if isinstance(action, Announce):
+                self._announce(announce, action.start)
+            else:
+                reply = self._ask(session, action.request)
+                todo.extend(self.core.on_reply(reply, time.monotonic()))
+        return self._end(self.core.stop())
 
-    def _replay_scheduler(self, committed: int) -> None:
-        """A restarted coordinator advances a seeded scheduler past the rounds already run."""
-        live = sorted(self.cfg.resume_live or range(self.n))
-        assert self.scheduler is not None
-        for r in range(1, committed + 1):
-            self.scheduler.active(r, live)
-        log.info("resuming after round %d", committed)
+    def _end(self, finished: Finished) -> int:
+        self._log_notes()
+        if finished.status != Status.RUNNING:
+            log.info("run ended: %s after round %d", finished.status, self.core.round)
+        return exit_code_for(finished.status, finished.collisions)
 
-    def _wait_for_agents(self, committed: int) -> None:
-        """Wait for all n agents: up to the start timeout before round 1, briefly on resuming."""
-        wait_s = self.cfg.start_timeout_s if committed == 0 else RESUME_GRACE_S
-        deadline = time.monotonic() + wait_s
-        while len(self.live) < self.n and not self.stop.is_set():
-            if time.monotonic() > deadline:
-                log.warning("only %d of %d agents after %.1f s; going on with them",
-                            len(self.live), self.n, wait_s)
-                break
-            self._drain(0.1)
-        while not self.live and not self.stop.is_set():
-            self._drain(0.1)
+    def _log_notes(self) -> None:
+        for note in self.core.pop_notes():
+            log.log(logging.WARNING if note.warning else logging.INFO, "%s", note.text)
 
-    def _one_round(self, session: Any, announce: Any, round_no: int) -> ControlReply | None:
-        """Run round `round_no` to its commit; the world's last reply (None: no answer)."""
+    def _wait(self) -> list[Action]:
+        """Feed the core the events that come before its next deadline, then tick it."""
+        deadline = self.core.next_deadline()
+        wait_s = STOP_POLL_S
+        if deadline is not None:
+            wait_s = min(wait_s, max(0.0, deadline - time.monotonic()))
+        actions: list[Action] = []
+        try:
+            event = self.events.get(timeout=wait_s)
+        except queue.Empty:
+            pass
+        else:
+            while True:
+                actions += self._feed(*event)
+                try:
+                    event = self.events.get_nowait()
+                except queue.Empty:
+                    break
+        return actions + self.core.on_tick(time.monotonic())
+
+    def _feed(self, kind: str, item: Any) -> list[Action]:
+        now = time.monotonic()
+        if kind == "alive":
+            key, alive = item
+            robot = robot_of_alive_key(key)
+            return [] if robot is None else self.core.on_alive(robot, alive, now)
+        try:
+            notice = MoveHeld.decode(item)
+        except ProtocolError as exc:
+            self.rejected += 1
+            log.warning("rejected move notice: %s [total %d]", exc, self.rejected)
+            return []
+        return self.core.on_held(notice, now)
+
+    # -- actions --------------------------------------------------------------------------------
+
+    def _announce(self, announce: Any, start: RoundStart) -> None:
         import zenoh
 
-        self._drain(0.0)
-        while not self.live and not self.stop.is_set():
-            self._drain(0.1)
-        if self.stop.is_set():
-            return None
-        if round_no not in self.planned:
-            assert self.scheduler is not None
-            self.planned = {round_no: tuple(self.scheduler.active(round_no, sorted(self.live)))}
-        active = self.planned[round_no]
-        self.round, self.held = round_no, set()
-        t0 = time.perf_counter()
-        begun = self._ask(session, Begin(round=round_no, active=active).encode())
-        if begun is None or not begun.ok:
-            log.warning("world refused round %d: %s", round_no, begun and begun.reason)
-            self._drain(0.2)
-            return begun
-        timeout_ms = int(self.cfg.move_timeout_s * 1000)
         try:
-            announce.put(RoundStart(round=round_no, active=active, timeout_ms=timeout_ms).encode())
+            announce.put(start.encode())
         except zenoh.ZError as exc:  # nobody hears it: the robots stay put this round
-            log.warning("round %d announcement failed: %s", round_no, exc)
-        t1 = time.perf_counter()
-        deadline = time.monotonic() + self.cfg.move_timeout_s
-        while not self.stop.is_set():
-            waiting = [r for r in active if r in self.live and r not in self.held]
-            if not waiting or time.monotonic() >= deadline:
-                break
-            self._drain(deadline - time.monotonic())
-        timed_out = tuple(r for r in active if r not in self.held)
-        if timed_out:
-            log.info("round %d: no move from %s", round_no, list(timed_out))
-        t2 = time.perf_counter()
-        done = self._ask(session, Commit(round=round_no, timed_out=timed_out).encode())
-        t3 = time.perf_counter()
-        log.debug("round %d: begin %.2f ms, moves %.2f ms, commit %.2f ms", round_no,
-                  1e3 * (t1 - t0), 1e3 * (t2 - t1), 1e3 * (t3 - t2))
-        if done is None or not done.ok:
-            # The world restarted and lost the open round: the loop opens it again.
-            log.warning("commit of round %d failed: %s", round_no, done and done.reason)
-        return done
+            log.warning("round %d announcement failed: %s", start.round, exc)
+        self._announced = time.perf_counter()
+
+    def _ask(self, session: Any, request: ControlRequest) -> ControlReply | None:
+        """One control request; None if the world did not answer (down or restarting)."""
+        asked = time.perf_counter()
+        if isinstance(request, Begin):
+            self._began = asked
+        reply = self._get(session, request.encode())
+        if isinstance(request, Commit) and log.isEnabledFor(logging.DEBUG):
+            log.debug("round %d: begin %.2f ms, moves %.2f ms, commit %.2f ms", request.round,
+                      1e3 * (self._announced - self._began), 1e3 * (asked - self._announced),
+                      1e3 * (time.perf_counter() - asked))
+        return reply
+
+    def _get(self, session: Any, payload: bytes) -> ControlReply | None:
+        import zenoh
+
+        try:
+            replies = list(
+                session.get(control_key(self.cfg.swarm), payload=payload, timeout=CONTROL_TIMEOUT_S)
+            )
+        except zenoh.ZError as exc:  # the session is reconnecting to its router
+            log.warning("control request failed: %s", exc)
+            return None
+        for reply in replies:
+            if reply.ok is None:
+                continue
+            try:
+                return ControlReply.decode(reply.ok.payload.to_bytes())
+            except ProtocolError as exc:
+                log.warning("world sent a bad control reply: %s", exc)
+        return None

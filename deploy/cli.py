@@ -28,6 +28,8 @@ if TYPE_CHECKING:
 # name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "run": ("fatswarm.deploy.run", "run a swarm (networked by default, --lockstep: one process)"),
+    "algorithms": ("fatswarm.deploy.catalog", "list the algorithms a run can use, or one's "
+                   "parameters"),
     "router": ("fatswarm.deploy.parts", "run a Zenoh router alone (for several hosts)"),
     "world": ("fatswarm.deploy.parts", "run the world process alone"),
     "coordinator": ("fatswarm.deploy.parts", "run the coordinator process alone"),
@@ -103,6 +105,7 @@ def _main(argv: Sequence[str] | None) -> int:
             args = parser.parse_args(argv)
         except SystemExit as exc:  # --help, --version or a usage error: argparse printed it
             return exc.code if isinstance(exc.code, int) else int(exc.code is not None)
+        args._argv = ["fatswarm", *(sys.argv[1:] if argv is None else argv)]  # for records
         module = importlib.import_module(args._module)
         run = getattr(module, f"main_{args._name}", None) or module.main
         code: int = run(args)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import logging
 import os
 import secrets
@@ -39,7 +40,7 @@ from fatswarm.deploy.zconf import (
 )
 
 if TYPE_CHECKING:
-    from fatswarm.deploy.run import RunSetup
+    from fatswarm.deploy.config import RunConfig, RunSetup
 
 log = logging.getLogger("fatswarm.launcher")
 
@@ -165,13 +166,14 @@ def run_networked(args: argparse.Namespace) -> int:
         record = args.record or os.path.join(tmp, "record.jsonl")
         if args.record and not args.resume and os.path.exists(record):
             os.unlink(record)  # --force (checked): a new run, as in lockstep (which truncates)
-        return _launch(args, seed, record)
+        return _launch(args, seed, record, None if setup is None else setup.config)
 
 
 def check_inputs(args: argparse.Namespace) -> tuple[str | None, int, RunSetup | None]:
     """(what to fix or None, the seed, the run): the lockstep run's checks, before any process
     starts; with --resume, the seed and the run are the record's."""
-    from fatswarm.deploy.run import check_seconds, input_errors, resolve_run
+    from fatswarm.deploy.config import input_errors
+    from fatswarm.deploy.run import check_seconds, resolve_run
 
     seed: int = args.seed if args.seed is not None else secrets.randbelow(2**31)
     bad_input: tuple[type[Exception], ...] = (*input_errors(), ValueError)  # ValueError: swarm
@@ -196,8 +198,12 @@ def with_record_values(args: argparse.Namespace, setup: RunSetup) -> argparse.Na
     flags, for the parts: the world takes its run from the record anyway; the coordinator must
     replay the record's schedule and the agents draw the record's private frames."""
     return argparse.Namespace(**{
-        **vars(args), "n": setup.params.n, "a": setup.params.a, "seed": setup.seed,
+        **vars(args), "n": setup.params.n, "a": None, "seed": setup.seed,
         "scheduler": setup.scheduler.name, "max_rounds": setup.max_rounds, "init": None,
+        "algorithm": setup.algorithm_ref,
+        "fairness": getattr(setup.scheduler, "fairness", args.fairness),
+        "param": [f"{k}={v!r}" if isinstance(v, float) else f"{k}={v}"
+                  for k, v in setup.params.values.items()],
     })
 
 
@@ -218,7 +224,7 @@ class StopSignal:
         return ExitCode.TERMINATED if self.signum == signal.SIGTERM else ExitCode.INTERRUPTED
 
 
-def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
+def _launch(args: argparse.Namespace, seed: int, record: str, config: RunConfig | None) -> int:
     stop = StopSignal()
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)}
     # Our own router holds one swarm: the default name lets `fatswarm dashboard` attach as is. On
@@ -245,7 +251,8 @@ def _launch(args: argparse.Namespace, seed: int, record: str) -> int:
         try:
             # the agents host needs its own grace first, to stop its agents one by one
             with Children(stop_grace_s(_robot_count(args)) + STOP_GRACE_S) as children:
-                code = _run_children(args, seed, record, swarm, endpoints, children, stop)
+                code = _run_children(args, seed, record, swarm, endpoints, children, stop,
+                                     config)
                 if watcher is not None and code in (EXIT_FORMED, EXIT_NOT_FORMED):
                     _await_final_state(watcher, FINAL_STATE_WAIT_S)
         finally:
@@ -308,6 +315,7 @@ def _run_children(
     endpoints: Sequence[str],
     children: Children,
     stop: StopSignal,
+    config: RunConfig | None = None,
 ) -> int:
     from fatswarm.deploy.parts import agents_command
 
@@ -323,6 +331,11 @@ def _run_children(
         world += ["-n", str(args.n)]
     if args.a is not None:
         world += ["-a", repr(args.a)]
+    world += ["--algorithm", args.algorithm]
+    if config is not None:
+        world += ["--header", json.dumps(config.header_extra(networked=True, n=_robot_count(args)))]
+    for assignment in args.param:
+        world += ["--param", assignment]
     if args.max_rounds is not None:
         world += ["--max-rounds", str(args.max_rounds)]
     coord = ["--seed", str(seed), "--scheduler", args.scheduler,
@@ -335,13 +348,15 @@ def _run_children(
     children.start("world", _part("world", *net, *quiet, *world), stdout=STDERR_FD)
     children.start("coordinator", _part("coordinator", *net, *quiet, *coord), stdout=STDERR_FD)
     n = _robot_count(args)
-    children.start("agents", [*agents_command(n, seed, swarm, endpoints, "warning", args.spawn),
+    children.start("agents", [*agents_command(n, seed, swarm, endpoints, "warning", args.spawn,
+                                              algorithm=args.algorithm),
                               "--exit-with-parent", str(os.getpid())], stdout=STDERR_FD)
     while not stop.event.wait(0.1):
         gone = children.exited()
         if "coordinator" in gone:
-            ended = gone["coordinator"]  # the coordinator exits 0 formed, 1 not formed
-            return ExitCode(ended) if ended in (EXIT_FORMED, EXIT_NOT_FORMED) else EXIT_NOT_FORMED
+            ended = gone["coordinator"]  # 0 formed, 1 not formed, 2 bad input, 3 collisions
+            known = (EXIT_FORMED, EXIT_NOT_FORMED, EXIT_BAD_INPUT, ExitCode.FORMED_WITH_COLLISIONS)
+            return ExitCode(ended) if ended in known else EXIT_NOT_FORMED
         if "world" in gone:
             print(f"fatswarm run: the world process exited with code {gone['world']}",
                   file=sys.stderr)
@@ -357,7 +372,7 @@ def _robot_count(args: argparse.Namespace) -> int:
         from fatswarm.world.starts import load_init
 
         return len(load_init(args.init)[0])
-    from fatswarm.deploy.run import DEFAULT_N
+    from fatswarm.deploy.config import DEFAULT_N
 
     return int(args.n if args.n is not None else DEFAULT_N)
 
@@ -394,12 +409,14 @@ def read_outcome(record: str) -> Outcome | None:
         collisions=(collisions if isinstance(collisions, int)
                     else sum(len(r.collisions) for r in rec.rounds)),
         n=h.n,
-        a=h.a,
+        a=float(h.params["a"]) if isinstance(h.params.get("a"), (int, float)) else 0.0,
         seed=h.seed,
         scheduler=h.scheduler,
         epochs=epochs if isinstance(epochs, int) else None,
         moves=int(x.get("moves", 0)),
         total_distance=float(x.get("total_distance", 0.0)),
+        algorithm=h.algorithm,
+        params=dict(h.params),
     )
 
 

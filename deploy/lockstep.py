@@ -1,75 +1,46 @@
-"""The whole run in one process: the very compute, scheduler, physics and progress of the swarm.
+"""The whole run in one process: the world's and the coordinator's very cores on an in-process
+bus, with every robot's Look-Compute-Move done in turn.
 
-Each active robot Looks at the same snapshot in its own private frame (seeded X flip, as a
-networked agent), the paths are mapped back to the world frame and applied at once by the physics.
-By default the reference algorithm runs for a whole round at once (`SharedPlans`): the canonical
-form of the configuration is made once, the plan once, and each robot gets exactly the path its
-own `compute` returns (every robot would have computed those very bits). A `compute` passed in is
-called once per robot and Look, on its own shuffled view.
+Nothing of the round is written here: `world.core.WorldCore` serves the looks, holds the moves,
+commits through physics and keeps the record; `coordinator.rounds.CoordinatorCore` picks the
+active sets and opens and closes the rounds, exactly as in a networked run. Each active robot
+Looks (its snapshot, in its private frame with the seeded X flip, as an agent) and Moves. An
+algorithm with a `round_planner` (the paper's: `SharedPlans`) makes the round's paths at once,
+the very paths each robot's own `compute` returns; a `compute` passed in is called per robot.
 """
 
 from __future__ import annotations
 
-from collections import OrderedDict
+from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Final
+from typing import Any, Final
 
 import numpy as np
 
-from fatswarm.agent.algorithm import Plan, plan
-from fatswarm.agent.canonical import SharedForm
-from fatswarm.agent.frames import draw_flip, path_to_world, to_local
+from fatswarm.agent.frames import compute_in_frame, draw_flip, path_to_world
 from fatswarm.agent.params import Params
-from fatswarm.agent.path import STAY, Path, Points
-from fatswarm.agent.tolerance import check_supported
+from fatswarm.agent.path import Path, Points
+from fatswarm.agent.protocol import MoveSubmitted
+from fatswarm.agent.seam import Configured
+from fatswarm.agent.uniform_circle import ALGORITHM as UNIFORM_CIRCLE
+from fatswarm.coordinator.rounds import Announce, Ask, CoordinatorCore, Finished, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
-from fatswarm.world.physics import RoundOutcome, apply_round, validate_configuration
-from fatswarm.world.progress import Progress, ProgressTracker
-from fatswarm.world.record import RecordWriter, RoundEntry
-
-LOOK_STREAM: Final = 0x100C  # orders the others in a robot's view (compute must ignore the order)
+from fatswarm.world.core import Journal, WorldCore, WorldSetup
+from fatswarm.world.outcome import Status
+from fatswarm.world.physics import RoundOutcome, validate_configuration
+from fatswarm.world.progress import Progress
+from fatswarm.world.protocol import Commit
+from fatswarm.world.record import Header, RoundEntry, RunRecord
 
 # Default round cap = ROUNDS_PER_STEP[scheduler] * (n + STEP_SLACK). The algorithm needs about
 # n + 2 sequential steps (one mover or one mirror pair each); a step costs 1 round under fsync,
 # about 2 under ssync (p = 1/2), about n under centralized; the caps leave a factor 10 or more.
 STEP_SLACK: Final = 10
 ROUNDS_PER_STEP: Final = {"fsync": 10, "ssync": 40}  # others (centralized, scripted): 10 n
+LOCKSTEP_SWARM: Final = "lockstep"
 
-ComputeFn = Callable[[Points, Params], Path]
-SHARED_PLANS: Final = 8  # canonical forms remembered: a round has one; ssync revisits a few
-
-
-class SharedPlans:
-    """The reference algorithm for all the robots of a round at once, exactly as each computes it.
-
-    Every robot's own `algorithm.compute` puts its view in canonical form (the same bits for all,
-    agent/canonical.py) and plans there. This makes the canonical form once a round
-    (`SharedForm`), the plan once per distinct canonical form, and hands each robot its part in
-    its own frame: the very paths the robots' own computations return, without n of them.
-    """
-
-    def __init__(self, size: int = SHARED_PLANS) -> None:
-        self._plans: OrderedDict[tuple[bytes, Params], Plan] = OrderedDict()
-        self._size = size
-        self.planned = 0  # how many plans were actually made (the rest were shared)
-
-    def plan_of(self, form: SharedForm, params: Params) -> Plan:
-        """The plan of the configuration `form` (made at most once while remembered)."""
-        key = (form.key(), params)
-        made = self._plans.get(key)
-        if made is None:
-            made = plan(form.points, params)
-            self.planned += 1
-            self._plans[key] = made
-            if len(self._plans) > self._size:
-                self._plans.popitem(last=False)
-        return made
-
-    def path(self, form: SharedForm, made: Plan, robot: int, flip: bool) -> Path:
-        """Robot `robot`'s path in its own frame: what `algorithm.compute` returns it."""
-        canon = form.for_robot(robot, flip)
-        return canon.to_frame(made.moves.get(canon.observer, STAY))
+ComputeFn = Callable[[Points, Any], Path]
 
 
 class HistoryMismatchError(ValueError):
@@ -109,99 +80,74 @@ class RunResult:
     moves_by_robot: tuple[int, ...]
 
 
+def configured(params: Params | Configured) -> Configured:
+    """The run's algorithm: a `Configured` as given, or the paper's algorithm for `Params`."""
+    if isinstance(params, Configured):
+        return params
+    return Configured(UNIFORM_CIRCLE, params.n, {"a": float(params.a)}, params)
+
+
 def run_lockstep(
     initial: Points,
-    params: Params,
+    params: Params | Configured,
     scheduler: Scheduler,
     *,
     seed: int,
     max_rounds: int | None = None,
-    record: RecordWriter | None = None,
+    record: Journal | None = None,
     on_round: Callable[[RoundReport], None] | None = None,
     compute: ComputeFn | None = None,
     history: Sequence[RoundEntry] | None = None,
+    algorithm_ref: str | None = None,
+    header_extra: dict[str, Any] | None = None,
 ) -> RunResult:
     """Run until formed, stalled or `max_rounds` (default `default_max_rounds`).
 
+    `params`: the paper's `Params`, or any algorithm `Configured` for n robots.
     `seed` fixes the robots' private frames and view orders; the scheduler carries its own seed.
-    `compute` defaults to the reference algorithm, run for the whole round at once (`SharedPlans`).
+    `compute(view, params)` replaces the algorithm's compute (called per robot and Look).
     `history`: resume a run from `initial` after these committed rounds (a record's, maybe none):
-    they are replayed into the scheduler, the view orders and the progress, as the networked
-    coordinator and world replay them after a restart, and not recorded again (nor the header);
-    the run then goes on exactly as it would have without the break.
-    Raises InvalidConfigurationError for an invalid start, UnsupportedInputError outside the
-    supported range (agent/tolerance.py), ValueError if n disagrees with params,
-    HistoryMismatchError for a history this run would not have produced.
+    the world and the coordinator replay them as they do after a restart, and they are not
+    recorded again (nor the header); the run then goes on exactly as it would have without the
+    break. `algorithm_ref` (how to load the algorithm again; default its name) and
+    `header_extra` go into the record's header.
+    Raises InvalidConfigurationError for an invalid start, the algorithm's refusal of the start
+    (UnsupportedInputError for the paper's, outside the supported range), ValueError if n
+    disagrees with params, HistoryMismatchError for a history this run would not have produced.
     """
+    setting = configured(params)
     positions = validate_configuration(initial)  # a fresh float64 copy, on the grid
-    shared = SharedPlans()
     n = len(positions)
-    if n != params.n:
-        raise ValueError(f"the start has {n} robots but params say n={params.n}")
-    check_supported(positions, params.a)
+    if n != setting.n:
+        raise ValueError(f"the start has {n} robots but params say n={setting.n}")
     cap = default_max_rounds(n, scheduler.name) if max_rounds is None else max_rounds
-    tracker = ProgressTracker(n, params.a, cap)
-    flips = [draw_flip(seed, robot) for robot in range(n)]
-    look_rng = np.random.default_rng([LOOK_STREAM, seed & 0xFFFFFFFF])
-    everyone = list(range(n))
-    initial_copy = positions.copy()
-    looks = 0
-    if record is not None and history is None:
-        record.header(n, params.a, seed, scheduler.name, positions, max_rounds=cap)
-
-    round_no = 0
-    if history is not None:
-        positions, looks = _replay(history, positions, scheduler, tracker)
-        round_no = len(history)
-        if compute is not None:
-            for _ in range(looks):  # each Look drew one order of the others
-                look_rng.permutation(n - 1)
-    while not tracker.done:
-        round_no += 1
-        active = scheduler.active(round_no, everyone)
-        paths: dict[int, Path] = {}
-        if compute is None and active:
-            form = SharedForm.of(positions)
-            made = shared.plan_of(form, params)
-        for robot in active:
-            me = positions[robot]
-            if compute is None:
-                path_local = shared.path(form, made, robot, flips[robot])
-            else:
-                order = look_rng.permutation(n - 1)
-                order[order >= robot] += 1  # a shuffled order of everyone but `robot`
-                path_local = compute(to_local(positions[order], me, flips[robot]), params)
-            looks += 1
-            if path_local:
-                paths[robot] = path_to_world(path_local, (float(me[0]), float(me[1])), flips[robot])
-        outcome = apply_round(positions, paths) if paths else RoundOutcome(positions.copy())
-        tracker.observe(
-            active,
-            paths.keys(),
-            positions,
-            outcome.positions,
-            outcome.traveled,
-            len(outcome.collisions),
-        )
-        if record is not None:
-            moves = {r: (p, outcome.traveled.get(r, 0.0)) for r, p in paths.items()}
-            record.round(round_no, active, moves, outcome.positions, outcome.collisions)
-        positions = np.asarray(outcome.positions, dtype=np.float64)
-        if on_round is not None:
-            on_round(RoundReport(round_no, tuple(active), paths, outcome, tracker.snapshot()))
-
-    progress = tracker.snapshot()
-    assert progress.status is not None
-    if record is not None:
-        record.result(
-            progress.status,
-            progress.rounds,
-            positions,
-            epochs=progress.epochs,
-            moves=progress.moves,
-            total_distance=progress.total_distance,
-            collisions=progress.collisions,
-        )
+    setup = WorldSetup(
+        swarm=LOCKSTEP_SWARM, n=n, seed=seed, scheduler=scheduler.name, initial=positions,
+        max_rounds=cap, algorithm=algorithm_ref or setting.name, params=dict(setting.values),
+        extra=dict(header_extra or {}),
+    )
+    if history is None:
+        setting.check_start(positions)
+        world = WorldCore(setup, record, algorithm=setting)
+        checked = scheduler
+    else:
+        _check_history(history)
+        past = RunRecord(Header(n, seed, scheduler.name, positions), tuple(history), None)
+        try:
+            world = WorldCore(setup, record, past, algorithm=setting)
+        except RuntimeError as exc:  # the tracker saw a round after the run had ended
+            raise HistoryMismatchError(str(exc)) from None
+        if world.status != Status.RUNNING:
+            raise HistoryMismatchError(f"the run already ended ({world.status}) after round "
+                                       f"{len(history)}")
+        checked = _CheckedScheduler(scheduler, history)
+    bus = _Bus(world, setting, compute, [draw_flip(seed, robot) for robot in range(n)], on_round)
+    coordinator = CoordinatorCore(lambda _n: checked, RoundTimes(), resume_live=range(n))
+    for robot in range(n):
+        coordinator.on_alive(robot, True, 0.0)
+    finished = bus.run(coordinator)
+    progress = world.tracker.snapshot()
+    assert progress.status is not None and finished.status == progress.status
     return RunResult(
         status=progress.status,
         rounds=progress.rounds,
@@ -209,43 +155,124 @@ def run_lockstep(
         moves=progress.moves,
         total_distance=progress.total_distance,
         collisions=progress.collisions,
-        looks=looks,
-        initial=initial_copy,
-        positions=positions,
+        looks=bus.looks + sum(len(entry.active) for entry in history or ()),
+        initial=np.array(positions),
+        positions=world.positions,
         moves_by_robot=progress.moves_by_robot,
     )
 
 
-def _replay(
-    history: Sequence[RoundEntry], initial: Points, scheduler: Scheduler, tracker: ProgressTracker
-) -> tuple[Points, int]:
-    """Advance `scheduler` and `tracker` over the committed rounds `history` from `initial`, as
-    the uninterrupted run did (every robot live); the positions after them and the Looks taken.
+class _Bus:
+    """The in-process bus: carries the coordinator's actions to the world and the agents, and
+    their answers back, until the coordinator finishes."""
 
-    Raises HistoryMismatchError where a round is not what this run would have done there.
-    """
-    everyone = list(range(len(initial)))
-    positions, looks = initial, 0
+    def __init__(
+        self,
+        world: WorldCore,
+        setting: Configured,
+        compute: ComputeFn | None,
+        flips: list[bool],
+        on_round: Callable[[RoundReport], None] | None,
+    ) -> None:
+        self.world = world
+        self.setting = setting
+        self.flips = flips
+        self.on_round = on_round
+        self.looks = 0
+        self.compute: Callable[[Points], Path]
+        if compute is not None:
+            user, own = compute, setting.params
+            self.compute = lambda view: user(view, own)
+        else:
+            self.compute = setting.compute
+        make_planner = getattr(setting.algorithm, "round_planner", None)
+        self.planner = (make_planner(setting.params)
+                        if compute is None and make_planner is not None else None)
+
+    def run(self, coordinator: CoordinatorCore) -> Finished:
+        """Deliver actions until the coordinator says the run is over."""
+        now = 0.0  # virtual time: it moves only to a deadline nothing else can meet first
+        pending = deque(coordinator.start(now))
+        while True:
+            if not pending:
+                deadline = coordinator.next_deadline()
+                if deadline is None:
+                    break
+                now = max(now, deadline)
+                pending.extend(coordinator.on_tick(now))
+                continue
+            action = pending.popleft()
+            if isinstance(action, Finished):
+                return action
+            if isinstance(action, Ask):
+                reply, _ = self.world.control(action.request)
+                if isinstance(action.request, Commit) and reply.ok:
+                    self._report()
+                pending.extend(coordinator.on_reply(reply, now))
+            elif isinstance(action, Announce):
+                for notice in self._act(action.start.round, action.start.active):
+                    pending.extend(coordinator.on_held(notice, now))
+        raise RuntimeError("the coordinator stopped without finishing the run")  # a bug
+
+    def _act(self, round_no: int, active: Sequence[int]) -> list[Any]:
+        """Every active robot's Look, Compute and Move; the world's notices of held moves."""
+        world, notices = self.world, []
+        planned = None
+        if self.planner is not None:
+            planned = self.planner.paths(world.positions, active, self.flips)
+        for robot in active:
+            if planned is not None:
+                if not world.admit_look(robot):
+                    continue
+                path = path_to_world(planned[robot], (0.0, 0.0), self.flips[robot])
+            else:
+                snapshot = world.look(robot)
+                if snapshot is None:
+                    continue
+                path = compute_in_frame(snapshot.view, self.flips[robot], self.compute)
+            self.looks += 1
+            notice = world.move(robot, MoveSubmitted(robot=robot, round=round_no, path=path))
+            if notice is not None:
+                notices.append(notice)
+        return notices
+
+    def _report(self) -> None:
+        done = self.world.last_commit
+        if self.on_round is None or done is None:
+            return
+        self.on_round(RoundReport(done.round, done.active, done.paths, done.outcome,
+                                  self.world.tracker.snapshot()))
+
+
+class _CheckedScheduler:
+    """The run's scheduler, checked against the recorded active sets while the coordinator
+    replays the committed rounds into it."""
+
+    def __init__(self, scheduler: Scheduler, history: Sequence[RoundEntry]) -> None:
+        self.scheduler = scheduler
+        self.name = scheduler.name
+        self.history = history
+
+    def active(self, round_no: int, live: Sequence[int]) -> list[int]:
+        active = self.scheduler.active(round_no, live)
+        if round_no <= len(self.history):
+            recorded = list(self.history[round_no - 1].active)
+            if recorded != active:
+                raise HistoryMismatchError(
+                    f"round {round_no} activated robots {recorded} where this "
+                    f"{self.scheduler.name} schedule activates {active}")
+        return active
+
+
+def _check_history(history: Sequence[RoundEntry]) -> None:
+    """Refuse rounds out of order, or with robots timed out (never so in lock step)."""
     for round_no, entry in enumerate(history, start=1):
         if entry.round != round_no:
             raise HistoryMismatchError(f"round {entry.round} comes where round {round_no} should")
-        if tracker.done:
-            raise HistoryMismatchError(f"round {round_no} follows the end of the run "
-                                       f"({tracker.status} after round {round_no - 1})")
         timed_out = entry.extra.get("timed_out")
         if timed_out:
             raise HistoryMismatchError(f"round {round_no}: robots {timed_out} timed out, which "
                                        "never happens in lock step")
-        active = scheduler.active(round_no, everyone)
-        if list(entry.active) != active:
-            raise HistoryMismatchError(f"round {round_no} activated robots {list(entry.active)} "
-                                       f"where this {scheduler.name} schedule activates {active}")
-        after = np.asarray(entry.positions, dtype=np.float64)
-        traveled = {m.robot: m.traveled for m in entry.moves}  # by robot, as the round summed it
-        tracker.observe(active, traveled.keys(), positions, after, traveled,
-                        len(entry.collisions))
-        positions, looks = after, looks + len(active)
-    return positions, looks
 
 
 __all__ = [
@@ -253,7 +280,7 @@ __all__ = [
     "HistoryMismatchError",
     "RoundReport",
     "RunResult",
-    "SharedPlans",
+    "configured",
     "default_max_rounds",
     "run_lockstep",
 ]

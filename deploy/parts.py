@@ -7,6 +7,7 @@ part's own flags, so starting 128 agents does not import every subcommand of the
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import os
 import signal
@@ -16,7 +17,8 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from fatswarm.deploy.run import ExitCode
+from fatswarm.agent.registry import DEFAULT as DEFAULT_ALGORITHM
+from fatswarm.deploy.run import ExitCode, add_algorithm_arguments
 from fatswarm.deploy.zconf import (
     AGENT_LEASE_MS,
     CONNECT_DEADLINE_S,
@@ -135,7 +137,9 @@ def add_world_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--state", required=True, metavar="PATH",
                    help="run record = durable log; an existing one is resumed after its last round")
     p.add_argument("-n", type=int, default=8, metavar="N", help="number of robots (default 8)")
-    p.add_argument("-a", type=float, default=None, metavar="A", help="least polygon side (> 3)")
+    p.add_argument("-a", type=float, default=None, metavar="A",
+                   help="the paper's least polygon side (> 3): --param a=A")
+    add_algorithm_arguments(p)
     p.add_argument("--seed", type=int, default=0, metavar="S", help="seed of the random start")
     p.add_argument("--init", metavar="PATH", help='JSON {"positions": [[x, y], ...], "a": 4.0}')
     p.add_argument("--start", choices=KINDS, default="clustered", help="kind of random start")
@@ -143,14 +147,16 @@ def add_world_arguments(p: argparse.ArgumentParser) -> None:
                    help="scheduler name written to the record (the coordinator runs it)")
     p.add_argument("--max-rounds", type=int, default=None, metavar="R",
                    help="end as max_rounds after R rounds (default: as lockstep)")
+    p.add_argument("--header", default=None, metavar="JSON",
+                   help=argparse.SUPPRESS)  # the launcher's extra header fields (a JSON object)
     p.add_argument("--no-fsync", action="store_true",
                    help="do not fsync each round (faster; a crash may lose announced rounds)")
 
 
 def main_world(args: argparse.Namespace) -> int:
     """Run the world until SIGTERM/SIGINT."""
+    from fatswarm.deploy.config import input_errors, resolve_start
     from fatswarm.deploy.lockstep import default_max_rounds
-    from fatswarm.deploy.run import input_errors, resolve_start
     from fatswarm.world.protocol import alive_key
     from fatswarm.world.record import RecordFormatError, read_record
     from fatswarm.world.service import WorldCore, WorldSetup, open_world, serve
@@ -160,12 +166,14 @@ def main_world(args: argparse.Namespace) -> int:
 
     def make_setup() -> WorldSetup:
         # the same checks and supported range as `fatswarm run`; -n only without --init
-        params, initial = resolve_start(
-            args.init, None if args.init is not None else args.n, args.a, args.seed, args.start
+        setting, initial = resolve_start(
+            args.init, None if args.init is not None else args.n, args.a, args.seed, args.start,
+            args.algorithm, args.param,
         )
-        max_rounds = args.max_rounds or default_max_rounds(params.n, args.scheduler)
-        return WorldSetup(args.swarm, params.n, params.a, args.seed, args.scheduler, initial,
-                          max_rounds)
+        max_rounds = args.max_rounds or default_max_rounds(setting.n, args.scheduler)
+        return WorldSetup(args.swarm, setting.n, args.seed, args.scheduler, initial, max_rounds,
+                          algorithm=args.algorithm, params=dict(setting.values),
+                          extra=_header_fields(args.header))
 
     def open_core(setup: Callable[[], WorldSetup]) -> WorldCore:
         return open_world(args.state, setup, args.swarm, args.max_rounds, fsync=not args.no_fsync)
@@ -198,6 +206,16 @@ def main_world(args: argparse.Namespace) -> int:
     return serve(core, session, stop)
 
 
+def _header_fields(text: str | None) -> dict[str, Any]:
+    """The extra header fields the launcher passes (`--header`), as a mapping."""
+    if not text:
+        return {}
+    fields = json.loads(text)
+    if not isinstance(fields, dict):
+        raise ValueError("--header must be a JSON object")
+    return fields
+
+
 # --- coordinator -------------------------------------------------------------------------------
 
 
@@ -220,7 +238,7 @@ def add_coordinator_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def main_coordinator(args: argparse.Namespace) -> int:
-    """Run rounds until the run ends; exit 0 formed, 1 not formed."""
+    """Run rounds until the run ends; exit 0 formed, 1 not formed, 3 formed with collisions."""
     from fatswarm.coordinator.protocol import alive_key
     from fatswarm.coordinator.schedule import ScheduleError, Scheduler, make_scheduler
     from fatswarm.coordinator.service import Coordinator, CoordinatorConfig
@@ -258,6 +276,7 @@ def add_agent_arguments(p: argparse.ArgumentParser) -> None:
 
     _add_common(p, KEEPS_WAITING.format(WAIT_NOTICE_S))
     p.add_argument("--robot", type=int, required=True, metavar="I", help="robot id, 0..n-1")
+    add_algorithm_arguments(p, params=False)
     p.add_argument("--seed", type=int, default=0, metavar="S",
                    help="seed the private frame is drawn from (the run's seed)")
     p.add_argument("--waiting-as", default=None, metavar="WHO",
@@ -266,6 +285,8 @@ def add_agent_arguments(p: argparse.ArgumentParser) -> None:
 
 def main_agent(args: argparse.Namespace) -> int:
     """Run one robot until SIGTERM/SIGINT."""
+    from fatswarm.agent.registry import load_algorithm
+    from fatswarm.agent.seam import AlgorithmError
     from fatswarm.agent.service import AgentConfig, serve
 
     _logging(args, "warning")
@@ -276,8 +297,13 @@ def main_agent(args: argparse.Namespace) -> int:
         conf = _client_config(args, lease_ms=AGENT_LEASE_MS, shared_memory=False)
     except ValueError as exc:
         return _fail("agent", str(exc))
+    try:
+        algorithm = load_algorithm(args.algorithm)
+    except AlgorithmError as exc:
+        return _fail("agent", str(exc))
     waiting = f"robot {args.robot}" if args.waiting_as is None else args.waiting_as
-    return serve(AgentConfig(args.swarm, args.robot, args.seed), conf, stop, waiting or None)
+    return serve(AgentConfig(args.swarm, args.robot, args.seed, args.algorithm), conf, stop,
+                 waiting or None, algorithm)
 
 
 def add_agents_arguments(p: argparse.ArgumentParser) -> None:
@@ -286,6 +312,7 @@ def add_agents_arguments(p: argparse.ArgumentParser) -> None:
 
     _add_common(p, KEEPS_WAITING.format(WAIT_NOTICE_S))
     p.add_argument("-n", type=int, required=True, metavar="K", help="number of agent processes")
+    add_algorithm_arguments(p, params=False)
     p.add_argument("--first", type=int, default=0, metavar="I",
                    help="id of the first robot (robots I..I+K-1; default 0)")
     p.add_argument("--seed", type=int, default=0, metavar="S", help="the run's seed")
@@ -299,10 +326,11 @@ SPAWN_MODES = ("fork", "exec")
 
 
 def agent_command(robot: int, seed: int, swarm: str, connect: Sequence[str],
-                  log_level: str | None = None, waiting_as: str | None = None) -> list[str]:
+                  log_level: str | None = None, waiting_as: str | None = None,
+                  algorithm: str = DEFAULT_ALGORITHM) -> list[str]:
     """The argv that starts one agent process (`waiting_as`: who its waiting notice names)."""
     argv = [sys.executable, "-m", "fatswarm.deploy.parts", "agent", "--robot", str(robot),
-            "--seed", str(seed), "--swarm", swarm]
+            "--seed", str(seed), "--swarm", swarm, "--algorithm", algorithm]
     for endpoint in connect:
         argv += ["--connect", endpoint]
     if log_level:
@@ -313,10 +341,12 @@ def agent_command(robot: int, seed: int, swarm: str, connect: Sequence[str],
 
 
 def agents_command(count: int, seed: int, swarm: str, connect: Sequence[str],
-                   log_level: str | None = None, spawn: str = "fork", first: int = 0) -> list[str]:
+                   log_level: str | None = None, spawn: str = "fork", first: int = 0,
+                   algorithm: str = DEFAULT_ALGORITHM) -> list[str]:
     """The argv of one `agents` host process starting `count` agent processes."""
     argv = [sys.executable, "-m", "fatswarm.deploy.parts", "agents", "-n", str(count), "--first",
-            str(first), "--seed", str(seed), "--swarm", swarm, "--spawn", spawn]
+            str(first), "--seed", str(seed), "--swarm", swarm, "--spawn", spawn,
+            "--algorithm", algorithm]
     for endpoint in connect:
         argv += ["--connect", endpoint]
     if log_level:
@@ -336,6 +366,13 @@ def main_agents(args: argparse.Namespace) -> int:
         check_endpoints(args.listen, "--listen")
     except ValueError as exc:
         return _fail("agents", str(exc))
+    from fatswarm.agent.registry import load_algorithm
+    from fatswarm.agent.seam import AlgorithmError
+
+    try:  # once here, so that a bad --algorithm is one line, not one per agent
+        load_algorithm(args.algorithm)
+    except AlgorithmError as exc:
+        return _fail("agents", str(exc))
     robots = range(args.first, args.first + args.n)
     if args.spawn == "exec":
         return _exec_agents(args, robots)
@@ -351,7 +388,7 @@ def _exec_agents(args: argparse.Namespace, robots: range) -> int:
             waiting_as = _waiting_as(robots) if robot == robots[0] else ""
             children.start(f"agent {robot}",
                            agent_command(robot, args.seed, args.swarm, args.connect,
-                                         args.log_level, waiting_as))
+                                         args.log_level, waiting_as, args.algorithm))
         while not stop.wait(0.5):
             if len(children.exited()) == len(robots):
                 return 1
@@ -366,8 +403,10 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
     """
     import zenoh  # noqa: F401  (the module only: no session, no runtime thread in this process)
 
+    from fatswarm.agent.registry import load_algorithm
     from fatswarm.agent.service import AgentConfig, serve
 
+    algorithm = load_algorithm(args.algorithm)  # loaded once, before the forks share it
     log = logging.getLogger("fatswarm.agents")
     children: dict[int, int] = {}
     for robot in robots:
@@ -379,7 +418,8 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
                 conf = _client_config(args, lease_ms=AGENT_LEASE_MS, shared_memory=False)
                 # the first one says for all that they wait for a router
                 waiting = _waiting_as(robots) if robot == robots[0] else None
-                code = serve(AgentConfig(args.swarm, robot, args.seed), conf, stop, waiting)
+                code = serve(AgentConfig(args.swarm, robot, args.seed, args.algorithm), conf, stop,
+                             waiting, algorithm)
             except BaseException:  # report, then leave without running the parent's cleanup
                 log.exception("agent %d failed", robot)
             finally:

@@ -21,12 +21,21 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Final, TextIO
 
+from fatswarm.deploy.config import (
+    DEFAULT_A,
+    DEFAULT_N,
+    DEFAULT_SCHEDULER,
+    DEFAULT_START,
+    RunConfig,
+    RunInputError,
+    RunSetup,
+    input_errors,
+    resolve_start,
+)
 from fatswarm.world.outcome import ExitCode, exit_code_for
 
 if TYPE_CHECKING:
-    from fatswarm.agent.params import Params
     from fatswarm.agent.path import Points
-    from fatswarm.coordinator.schedule import Scheduler
     from fatswarm.deploy.lockstep import RoundReport
     from fatswarm.world.record import Header, Result, RunRecord
 
@@ -46,15 +55,7 @@ EXIT_CODES_HELP: Final = (
     f"interrupted (Ctrl-C); {EXIT_BROKEN_PIPE:d} standard output closed early (e.g. | head); "
     f"{EXIT_TERMINATED:d} terminated (SIGTERM)."
 )
-DEFAULT_N: Final = 8
-DEFAULT_A: Final = 4.0
-DEFAULT_SCHEDULER: Final = "ssync"  # the paper's model
-DEFAULT_START: Final = "clustered"  # needs SEC expansion, so every phase of the algorithm runs
 PROGRESS_SECONDS: Final = 1.0  # at most one progress line per this many seconds
-
-
-class RunInputError(ValueError):
-    """A flag combination `fatswarm run` cannot use."""
 
 
 GIVEN: Final = "_given"  # the namespace attribute listing the flags given (`_StoreGiven`)
@@ -110,8 +111,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-n", type=int, default=None, metavar="N",
                    help=f"number of robots (default {DEFAULT_N}; with --init, taken from the file)")
     p.add_argument("-a", type=float, default=None, metavar="A",
-                   help=f"least side of the polygon, > 3 (default {DEFAULT_A:g}, or the --init "
-                   "file's 'a')")
+                   help=f"the paper's least side of the polygon, > 3: --param a=A (default "
+                   f"{DEFAULT_A:g}, or the --init file's 'a'); random starts are drawn at this "
+                   "scale")
+    add_algorithm_arguments(p)
     p.add_argument("--seed", type=int, default=None, metavar="S",
                    help="seed of the start, frames and scheduler (default: random, printed)")
     p.add_argument("--init", metavar="PATH",
@@ -146,6 +149,20 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     # The dashboard's run flags (--no-dashboard, --svg): `add_run_arguments`, because the CLI
     # would hand an `add_dashboard_arguments` to `fatswarm dashboard` itself.
     _optional_adder("fatswarm.deploy.dashboard", "add_run_arguments")(p)
+
+
+def add_algorithm_arguments(p: argparse.ArgumentParser, *, params: bool = True) -> None:
+    """`--algorithm` (and `--param`): which algorithm the robots run, with what parameters."""
+    from fatswarm.agent.registry import DEFAULT
+
+    p.add_argument("--algorithm", default=DEFAULT, metavar="NAME", action=_StoreGiven,
+                   help=f"the algorithm every robot runs: a registered name (`fatswarm "
+                   f"algorithms` lists them; default {DEFAULT}) or module:attribute or "
+                   "path/to/file.py:attribute of your own (docs/algorithms.md)")
+    if params:
+        p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                       help="set one of the algorithm's parameters (repeat for more; "
+                       "`fatswarm algorithms` lists them)")
 
 
 def _fail(message: str) -> ExitCode:
@@ -229,87 +246,21 @@ def check_seconds(flag: str, value: float, *, zero_ok: bool) -> None:
         raise RunInputError(f"{flag} must be a finite number of seconds {bound}, got {value:g}")
 
 
-@dataclass(frozen=True, slots=True)
-class RunSetup:
-    """What the flags of `fatswarm run` ask for, checked: the start, parameters and scheduler."""
-
-    seed: int
-    params: Params
-    initial: Points
-    scheduler: Scheduler
-    max_rounds: int
-    resumed: RunRecord | None = None  # --resume: the record whose committed rounds go on
-
-
-def input_errors() -> tuple[type[Exception], ...]:
-    """The exceptions `resolve_run` raises for bad input (each message says what to fix)."""
-    from fatswarm.agent.params import ParamsError
-    from fatswarm.agent.tolerance import UnsupportedInputError
-    from fatswarm.coordinator.schedule import ScheduleError
-    from fatswarm.world.physics import InvalidConfigurationError
-    from fatswarm.world.starts import InitFileError
-
-    return (ParamsError, InitFileError, ScheduleError, InvalidConfigurationError,
-            UnsupportedInputError, RunInputError)
-
-
-def resolve_start(
-    init: str | None, n: int | None, a: float | None, seed: int, kind: str
-) -> tuple[Params, Points]:
-    """The parameters and (n, 2) start that `--init` or `-n`/`-a`/`--seed`/`--start` ask for,
-    valid and inside the supported range (agent/tolerance.py); raises one of `input_errors()`.
-
-    Shared by `fatswarm run` and `fatswarm world`, so both refuse the same start the same way.
-    """
-    import numpy as np
-
-    from fatswarm.agent.params import Params
-    from fatswarm.agent.tolerance import check_supported
-    from fatswarm.world.physics import validate_configuration
-    from fatswarm.world.starts import load_init, random_start
-
-    if init is not None:
-        initial, file_a = load_init(init)  # finite numbers, as check_supported needs
-        if n is not None and n != len(initial):
-            raise RunInputError(
-                f"-n {n} disagrees with the {len(initial)} robots of {init}; drop -n"
-            )
-        side = a if a is not None else (file_a if file_a is not None else DEFAULT_A)
-        params = Params(len(initial), side)
-    else:
-        params = Params(DEFAULT_N if n is None else n, DEFAULT_A if a is None else a)
-        # the side first: a random start is drawn at its scale (a = 1e308 would overflow it)
-        check_supported(np.zeros((params.n, 2)), params.a)
-        initial = random_start(params.n, seed, kind, params.a)
-    check_supported(initial, params.a)
-    return params, validate_configuration(initial)
-
-
 def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
     """Build the run the flags describe (shared by lockstep and networked runs, so both refuse
     the same input with the same message); raises one of `input_errors()`."""
-    from fatswarm.coordinator.schedule import make_scheduler
-    from fatswarm.deploy.lockstep import default_max_rounds
-
     check_outputs(args)
     if getattr(args, "resume", False):
         return resolve_resume(args)
-    params, initial = resolve_start(args.init, args.n, args.a, seed, args.start)
-    if args.scheduler != "scripted" and args.schedule is not None:
-        raise RunInputError("--schedule only goes with --scheduler scripted")
-    if args.max_rounds is not None and args.max_rounds < 1:
-        raise RunInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
-    scheduler = make_scheduler(args.scheduler, params.n, seed, args.schedule, args.fairness)
-    max_rounds = args.max_rounds or default_max_rounds(params.n, args.scheduler)
-    return RunSetup(seed, params, initial, scheduler, max_rounds)
+    return RunConfig.from_args(args, seed).resolve()
 
 
 def resolve_resume(args: argparse.Namespace) -> RunSetup:
     """The run `--resume` continues: the --record file's header (n, a, seed, scheduler, start,
     round cap) and committed rounds; raises one of `input_errors()` for a record that cannot be
     continued or a flag given that contradicts it (flags that agree with it are fine)."""
-    from fatswarm.agent.params import Params
-    from fatswarm.agent.tolerance import check_supported
+    from fatswarm.agent.registry import load_algorithm
+    from fatswarm.agent.seam import Configured
     from fatswarm.coordinator.schedule import make_scheduler
     from fatswarm.deploy.lockstep import default_max_rounds
     from fatswarm.world.physics import validate_configuration
@@ -327,13 +278,22 @@ def resolve_resume(args: argparse.Namespace) -> RunSetup:
     if h.scheduler != "scripted" and args.schedule is not None:
         raise RunInputError(f"--schedule only goes with --scheduler scripted; {path}'s run has "
                             f"scheduler={h.scheduler}")
-    params = Params(h.n, h.a)
-    check_supported(h.initial, h.a)
+    params = Configured.of(load_algorithm(h.algorithm_ref), h.n, h.params)
+    params.check_start(h.initial)
     initial = validate_configuration(h.initial)
-    scheduler = make_scheduler(h.scheduler, h.n, h.seed, args.schedule, args.fairness)
+    recorded_k = h.extra.get("fairness")
+    if isinstance(recorded_k, int) and args.fairness is not None and args.fairness != recorded_k:
+        raise RunInputError(f"--fairness {args.fairness} contradicts {path}, whose run has "
+                            f"fairness={recorded_k}; drop --fairness to resume it")
+    fairness = args.fairness if args.fairness is not None else (
+        recorded_k if isinstance(recorded_k, int) else None)
+    schedule = args.schedule
+    if schedule is None and isinstance(h.extra.get("schedule"), str):
+        schedule = h.extra["schedule"]  # the script the run was made with, where it was
+    scheduler = make_scheduler(h.scheduler, h.n, h.seed, schedule, fairness)
     if cap is None:  # a header without its cap: as the run would have had it
         cap = args.max_rounds or default_max_rounds(h.n, h.scheduler)
-    return RunSetup(h.seed, params, initial, scheduler, cap, record)
+    return RunSetup(h.seed, params, initial, scheduler, cap, record, h.algorithm_ref)
 
 
 def read_resumable(path: str, *, lockstep: bool) -> RunRecord:
@@ -387,6 +347,16 @@ def check_against_header(
         ("--scheduler", "scheduler", args.scheduler, h.scheduler, f"scheduler={h.scheduler}"),
         ("--max-rounds", "max_rounds", args.max_rounds, cap, f"max_rounds={cap}"),
     ]
+    if flag_given(args, "algorithm") and args.algorithm != header.algorithm_ref:
+        raise RunInputError(f"--algorithm {args.algorithm} contradicts {path}, whose run has "
+                            f"algorithm {header.algorithm_ref}; drop --algorithm to resume it")
+    from fatswarm.agent.seam import parse_assignments
+
+    for name, text in parse_assignments(list(getattr(args, "param", []) or [])).items():
+        recorded = header.params.get(name)
+        if recorded is None or (str(recorded) != text and _as_number(text) != recorded):
+            raise RunInputError(f"--param {name}={text} contradicts {path}, whose run has "
+                                f"{name}={recorded}; drop --param to resume it")
     for flag, dest, value, recorded, says in checks:
         if flag_given(args, dest) and recorded is not None and value != recorded:
             shown = _number(value) if isinstance(value, float) else value
@@ -414,6 +384,13 @@ def check_against_header(
             raise RunInputError(f"--start {kind} contradicts {path}, whose run did not start "
                                 f"from the {kind} start of seed {h.seed} (robot {robot} at "
                                 f"{theirs}, not at {mine}); drop --start to resume it")
+
+
+def _as_number(text: str) -> float | None:
+    try:
+        return float(text)
+    except ValueError:
+        return None
 
 
 def _number(value: float) -> str:
@@ -470,6 +447,10 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
             record=record,
             on_round=on_round,
             history=None if resumed is None else resumed.rounds,
+            algorithm_ref=setup.algorithm_ref,
+            header_extra=({} if setup.config is None
+                          else setup.config.header_extra(networked=False,
+                                                       n=setup.params.n)),
         )
     except InvalidConfigurationError as exc:
         return _fail(f"invalid start: {exc}")
@@ -486,12 +467,14 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
         rounds=result.rounds,
         collisions=result.collisions,
         n=params.n,
-        a=params.a,
+        a=_side(params.values),
         seed=seed,
         scheduler=scheduler.name,
         epochs=result.epochs,
         moves=result.moves,
         total_distance=result.total_distance,
+        algorithm=params.name,
+        params=dict(params.values),
     )
     code = exit_code(outcome)
     svg: str | None = getattr(args, "svg", None)  # the dashboard's flag, when it is there
@@ -501,7 +484,7 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
         final = Frame(
             round=result.rounds,
             n=params.n,
-            a=params.a,
+            a=_side(params.values),
             scheduler=scheduler.name,
             positions=result.positions,
             collisions_total=result.collisions,
@@ -555,6 +538,14 @@ class Outcome:
     epochs: int | None  # None when the record does not say
     moves: int
     total_distance: float
+    algorithm: str = "uniform-circle"
+    params: dict[str, Any] = dataclasses.field(default_factory=dict)
+
+
+def _side(values: Any) -> float:
+    """The parameter `a` (the paper's side), 0 for an algorithm without one."""
+    a = values.get("a", 0.0)
+    return float(a) if isinstance(a, (int, float)) and not isinstance(a, bool) else 0.0
 
 
 def exit_code(outcome: Outcome) -> ExitCode:
@@ -584,9 +575,14 @@ def summary(outcome: Outcome) -> str:
     """The summary both kinds of run print at the end: the verdict, the run, its figures."""
     o = outcome
     epochs = "?" if o.epochs is None else str(o.epochs)
+    values = o.params or ({"a": o.a} if o.algorithm == "uniform-circle" else {})
+    shown = "".join(f" {k}={v:g}" if isinstance(v, float) else f" {k}={v}"
+                    for k, v in values.items())
+    named = "" if o.algorithm == "uniform-circle" else f" algorithm={o.algorithm}"
     return (
         f"{verdict(o)}\n"
-        f"n={o.n} a={o.a:g} seed={'?' if o.seed is None else o.seed} scheduler={o.scheduler}\n"
+        f"n={o.n}{named}{shown} seed={'?' if o.seed is None else o.seed} "
+        f"scheduler={o.scheduler}\n"
         f"rounds {o.rounds}  epochs {epochs}  moves {o.moves} ({o.moves / o.n:.2f} per robot)  "
         f"total distance {o.total_distance:.3f}  collisions {o.collisions}"
     )

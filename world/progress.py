@@ -6,13 +6,12 @@ world so both decide `formed`, `stalled` and `max_rounds` the same way.
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterable, Mapping
+from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
 
-from fatswarm.agent.geometry import is_formed
 from fatswarm.agent.path import Points
 from fatswarm.world.outcome import ENDED, Status
 
@@ -47,20 +46,22 @@ class Progress:
 class ProgressTracker:
     """Observes committed rounds of an n-robot run and decides when it ends.
 
-    formed:  the configuration is a uniform circle (side >= a) and every robot has been active
+    formed:  the algorithm's goal holds for the configuration and every robot has been active
              since the configuration last changed, each time asking for an empty path;
     stalled: every robot has been active since the last change, the configuration is unchanged
              and it is not formed (someone wants to move but cannot, or nobody wants to move);
     max_rounds: `max_rounds` rounds were committed without either of the above.
     """
 
-    def __init__(self, n: int, a: float, max_rounds: int | None = None) -> None:
+    def __init__(
+        self, n: int, goal: Callable[[Points], bool], max_rounds: int | None = None
+    ) -> None:
         if n < 1:
             raise ValueError(f"a run needs at least one robot, got n={n}")
         if max_rounds is not None and max_rounds < 1:
             raise ValueError(f"max_rounds must be >= 1, got {max_rounds}")
         self.n = n
-        self.a = a
+        self.goal = goal
         self.max_rounds = max_rounds
         self._rounds = 0
         self._epochs = 0
@@ -123,7 +124,7 @@ class ProgressTracker:
             self._seen_since_change |= active_set
             self._wanting_since_change |= set(movers)
             if len(self._seen_since_change) == self.n:
-                formed = not self._wanting_since_change and is_formed(after_arr, self.a)
+                formed = not self._wanting_since_change and bool(self.goal(after_arr))
                 self._status = FORMED if formed else STALLED
         if self._status is None and self.max_rounds is not None and self._rounds >= self.max_rounds:
             self._status = MAX_ROUNDS

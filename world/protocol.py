@@ -18,9 +18,10 @@ import msgpack
 import numpy as np
 from numpy.typing import NDArray
 
+from fatswarm.agent.seam import MAX_PARAMS, MAX_TEXT, ParamValue
 from fatswarm.world.outcome import Status
 
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2  # 2: the algorithm and its parameters replace the paper's `a`
 ROOT = "fatswarm"
 MAX_ROBOTS = 4096  # bounds every list and array a peer can make us allocate
 MAX_MESSAGE_BYTES = 1 << 20  # 1 MiB: a 4096-robot state is ~130 KB
@@ -178,6 +179,38 @@ def get_robots(obj: dict[str, Any], key: str, n: int = MAX_ROBOTS) -> tuple[int,
     return tuple(sorted(v))
 
 
+def get_params(obj: dict[str, Any], key: str) -> dict[str, ParamValue]:
+    """An algorithm's parameters: a short map of plain names to finite scalars or short texts."""
+    v = obj.get(key)
+    if not isinstance(v, dict) or len(v) > MAX_PARAMS:
+        raise ProtocolError(f"{key!r} must be a map of at most {MAX_PARAMS} parameters")
+    out: dict[str, ParamValue] = {}
+    for name, value in v.items():
+        if not isinstance(name, str) or not _SWARM_NAME.fullmatch(name):
+            raise ProtocolError(f"{key!r} holds a parameter name that is not plain: {name!r}")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise ProtocolError(f"{key!r}: parameter {name} is not finite")
+        if isinstance(value, str) and len(value) > MAX_TEXT:
+            raise ProtocolError(f"{key!r}: parameter {name} is longer than {MAX_TEXT} characters")
+        if not isinstance(value, (bool, int, float, str)):
+            raise ProtocolError(f"{key!r}: parameter {name} must be a number, bool or text")
+        out[name] = value
+    return out
+
+
+def get_figures(obj: dict[str, Any], key: str) -> dict[str, float]:
+    """A short map of labels to finite numbers (an algorithm's figures for the dashboard)."""
+    v = obj.get(key)
+    if not isinstance(v, dict) or len(v) > MAX_PARAMS:
+        raise ProtocolError(f"{key!r} must be a map of at most {MAX_PARAMS} figures")
+    out: dict[str, float] = {}
+    for label, value in v.items():
+        if not isinstance(label, str) or len(label) > 64:
+            raise ProtocolError(f"{key!r} holds a label that is not a short text")
+        out[label] = get_float({"x": value}, "x", -MAX_COORD, MAX_COORD)
+    return out
+
+
 def points_to_bytes(points: Points) -> bytes:
     """(k, 2) float64 positions as little-endian bytes."""
     return np.ascontiguousarray(points, dtype="<f8").tobytes()
@@ -217,7 +250,9 @@ class WorldState:
 
     round: int  # last committed round (0 before the first)
     n: int
-    a: float
+    algorithm: str  # its registered name
+    params: dict[str, ParamValue]  # its parameters, every one
+    figures: dict[str, float]  # the algorithm's figures for the configuration (may be empty)
     seed: int
     scheduler: str
     swarm: str
@@ -229,6 +264,12 @@ class WorldState:
     status: str  # "running" | "formed" | "stalled" | "max_rounds"
     agents: tuple[AgentInfo, ...]  # one per robot
 
+    @property
+    def a(self) -> float:
+        """The side `a` of the paper's algorithm (0 for an algorithm without one)."""
+        value = self.params.get("a", 0.0)
+        return float(value) if isinstance(value, (int, float)) else 0.0
+
     def encode(self) -> bytes:
         """msgpack bytes of this state."""
         return pack(
@@ -236,7 +277,9 @@ class WorldState:
             {
                 "round": int(self.round),
                 "n": int(self.n),
-                "a": float(self.a),
+                "algorithm": self.algorithm,
+                "params": dict(self.params),
+                "figures": {k: float(v) for k, v in self.figures.items()},
                 "seed": int(self.seed),
                 "scheduler": self.scheduler,
                 "swarm": self.swarm,
@@ -283,7 +326,9 @@ class WorldState:
         return WorldState(
             round=get_int(obj, "round", 0, 2**62),
             n=n,
-            a=get_float(obj, "a", 0.0, MAX_COORD),
+            algorithm=get_str(obj, "algorithm"),
+            params=get_params(obj, "params"),
+            figures=get_figures(obj, "figures"),
             seed=get_int(obj, "seed", -(2**63), 2**64 - 1),
             scheduler=get_str(obj, "scheduler"),
             swarm=get_str(obj, "swarm"),
@@ -302,14 +347,16 @@ class WorldState:
 
 @dataclass(frozen=True, slots=True, eq=False)  # holds arrays: compare fields
 class Snapshot:
-    """The others' positions relative to the asker (translation only, shuffled, no ids), n and a.
+    """The others' positions relative to the asker (translation only, shuffled, no ids), n and
+    the algorithm's name and parameters.
 
     Never holds global coordinates: the asker learns where others are from itself, not where it is.
     """
 
     round: int
     n: int
-    a: float
+    algorithm: str  # the name of the algorithm the run is for: an agent running another stays
+    params: dict[str, ParamValue]
     view: Points  # (n-1, 2): other centre minus asker's centre, world axes
 
     def encode(self) -> bytes:
@@ -319,7 +366,8 @@ class Snapshot:
             {
                 "round": int(self.round),
                 "n": int(self.n),
-                "a": float(self.a),
+                "algorithm": self.algorithm,
+                "params": dict(self.params),
                 "view": points_to_bytes(self.view),
             },
         )
@@ -332,7 +380,8 @@ class Snapshot:
         return Snapshot(
             round=get_int(obj, "round", 1, 2**62),
             n=n,
-            a=get_float(obj, "a", 0.0, MAX_COORD),
+            algorithm=get_str(obj, "algorithm"),
+            params=get_params(obj, "params"),
             view=get_points(obj, "view", n - 1),
         )
 
@@ -396,6 +445,7 @@ class ControlReply:
     committed: int  # last committed (durable) round, 0 before the first
     open_round: int  # the round open for moves, 0 if none
     status: str  # "running" | "formed" | "stalled" | "max_rounds"
+    collisions: int = 0  # robots stopped at contact so far (a formation with any is not clean)
 
     def encode(self) -> bytes:
         """msgpack bytes."""
@@ -408,6 +458,7 @@ class ControlReply:
                 "committed": int(self.committed),
                 "open_round": int(self.open_round),
                 "status": self.status,
+                "collisions": int(self.collisions),
             },
         )
 
@@ -425,6 +476,7 @@ class ControlReply:
             committed=get_int(obj, "committed", 0, 2**62),
             open_round=get_int(obj, "open_round", 0, 2**62),
             status=status,
+            collisions=get_int(obj, "collisions", 0, 2**62),
         )
 
 

@@ -18,10 +18,13 @@ from typing import IO, Any, Final
 import numpy as np
 
 from fatswarm.agent.path import Path, PathFormatError, Points, from_record, to_record
+from fatswarm.agent.seam import ParamValue
 from fatswarm.world.physics import Collision
 from fatswarm.world.progress import STATUSES
 
 VERSION: Final = 1
+DEFAULT_ALGORITHM: Final = "uniform-circle"  # what a record without an algorithm ran
+DEFAULT_SCALE: Final = 4.0
 
 
 class RecordFormatError(ValueError):
@@ -30,14 +33,24 @@ class RecordFormatError(ValueError):
 
 @dataclass(frozen=True, slots=True)
 class Header:
-    """First line: the run's parameters and start positions (n, 2)."""
+    """First line: the run's algorithm and parameters, scheduler, seed and start positions (n, 2);
+    `extra` holds the rest (round cap, fairness, move timeout, start kind, version, command)."""
 
     n: int
-    a: float
     seed: int | None
     scheduler: str
     initial: Points
+    algorithm: str = DEFAULT_ALGORITHM  # its registered name
+    params: dict[str, ParamValue] = field(default_factory=dict)
+    algorithm_ref: str = DEFAULT_ALGORITHM  # how to load it again: a name or module:attribute
     extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def a(self) -> float:
+        """The paper's side `a`, if the algorithm has it (random starts are drawn at its scale);
+        4, the default, otherwise."""
+        value = self.params.get("a", DEFAULT_SCALE)
+        return float(value) if isinstance(value, (int, float)) else DEFAULT_SCALE
 
 
 @dataclass(frozen=True, slots=True)
@@ -147,21 +160,28 @@ class RecordWriter:
     def header(
         self,
         n: int,
-        a: float,
         seed: int | None,
         scheduler: str,
         initial: Points,
+        *,
+        algorithm: str,
+        params: Mapping[str, ParamValue],
         **extra: Any,
     ) -> None:
+        """The first line. `params`: every parameter of the algorithm (an `a` among them is also
+        written at the top level, where records before the algorithm seam had it)."""
+        top = {"a": float(params["a"])} if isinstance(params.get("a"), (int, float)) else {}
         self.write(
             {
                 "type": "header",
                 "version": VERSION,
                 "n": int(n),
-                "a": float(a),
+                **top,
                 "seed": seed,
                 "scheduler": scheduler,
                 "initial": _positions_list(initial),
+                "algorithm": algorithm,
+                "params": dict(params),
                 **extra,
             }
         )
@@ -270,7 +290,20 @@ def _header(entry: Mapping[str, Any]) -> Header:
     if entry.get("version") != VERSION:
         raise _LineError(f"unsupported record version {entry.get('version')!r} (expected 1)")
     n = _int(entry, "n", 1)
-    a = _number(entry.get("a"), "'a'")
+    algorithm = entry.get("algorithm", DEFAULT_ALGORITHM)
+    if not isinstance(algorithm, str) or not algorithm:
+        raise _LineError(f"'algorithm' must be a name, got {algorithm!r}")
+    ref = entry.get("algorithm_ref", algorithm)
+    if not isinstance(ref, str) or not ref:
+        raise _LineError(f"'algorithm_ref' must be a name or module:attribute, got {ref!r}")
+    if "params" in entry:
+        params = entry["params"]
+        if not isinstance(params, dict) or not all(
+            isinstance(k, str) and isinstance(v, (bool, int, float, str)) for k, v in params.items()
+        ):
+            raise _LineError(f"'params' must map names to numbers or texts, got {params!r}")
+    else:  # a record from before the algorithm seam: the paper's algorithm and its side a
+        params = {"a": _number(entry.get("a"), "'a'")}
     seed = entry.get("seed")
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int)):
         raise _LineError(f"'seed' must be a whole number or null, got {seed!r}")
@@ -278,8 +311,10 @@ def _header(entry: Mapping[str, Any]) -> Header:
     if not isinstance(scheduler, str):
         raise _LineError(f"'scheduler' must be a string, got {scheduler!r}")
     initial = _points(entry.get("initial"), n, "initial")
-    known = {"type", "version", "n", "a", "seed", "scheduler", "initial"}
-    return Header(n, a, seed, scheduler, initial, _extra(entry, known))
+    known = {"type", "version", "n", "a", "seed", "scheduler", "initial", "algorithm",
+             "algorithm_ref", "params"}
+    return Header(n, seed, scheduler, initial, algorithm, dict(params), ref,
+                  _extra(entry, known))
 
 
 def _collision(value: Any, n: int) -> Collision:

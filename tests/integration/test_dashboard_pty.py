@@ -160,7 +160,9 @@ def world_state(round_no: int, n: int, status: str, swarm: str) -> WorldState:
         for _ in range(n)
     )
     return WorldState(
-        round=round_no, n=n, a=4.0, seed=3, scheduler="fsync", swarm=swarm, positions=positions,
+        round=round_no, n=n,
+        algorithm="uniform-circle", params={"a": 4.0}, figures={},
+        seed=3, scheduler="fsync", swarm=swarm, positions=positions,
         active=tuple(range(n)), moved=(), stopped=(), collisions_total=0, status=status,
         agents=agents,
     )  # fmt: skip

@@ -111,7 +111,10 @@ def test_no_overlap_and_every_robot_stays_on_its_own_path(r: Round) -> None:
     for i, path in r.paths.items():
         here = (float(r.start[i, 0]), float(r.start[i, 1]))
         if i not in stopped:
-            assert out.traveled[i] == path_length(here, path)
+            # A path shorter than the rounding of the round's frame (an arc of radius 1e-16) is
+            # no move there: it travels 0. Any other travels its whole length, exactly.
+            length = path_length(here, path)
+            assert out.traveled[i] == length or (out.traveled[i] == 0.0 and length < 1e-12)
     for c in out.collisions:
         assert c.t == out.traveled[c.robot]
         assert np.hypot(*(np.array(c.point) - out.positions[c.robot])) == 0.0

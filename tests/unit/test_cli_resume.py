@@ -220,14 +220,15 @@ def test_networked_resume_runs_the_records_seed_scheduler_and_robots(
 ) -> None:
     launched: list[tuple[argparse.Namespace, int, str]] = []
 
-    def launch(args: argparse.Namespace, seed: int, record: str) -> int:
+    def launch(args: argparse.Namespace, seed: int, record: str, config: object) -> int:
         launched.append((args, seed, record))
         return run.ExitCode.NOT_FORMED
 
     monkeypatch.setattr(launcher, "_launch", launch)
     assert fatswarm(["--record", str(ssync_cut), "--resume", "-q"]) == run.ExitCode.NOT_FORMED
     ((args, seed, record),) = launched
-    assert (seed, args.seed, args.n, args.a, args.scheduler, args.max_rounds, args.init) == (
-        3, 3, 8, 4.0, "ssync", 720, None)
+    assert (seed, args.seed, args.n, args.param, args.scheduler, args.max_rounds, args.init) == (
+        3, 3, 8, ["a=4.0"], "ssync", 720, None)
+    assert args.algorithm == "uniform-circle" and args.a is None
     assert record == str(ssync_cut)
     assert "pass --seed" not in capsys.readouterr().err

@@ -213,7 +213,9 @@ def test_frame_from_world_state_carries_every_field() -> None:
         for i in range(3)
     )
     state = WorldState(
-        round=5, n=3, a=4.5, seed=11, scheduler="centralized", swarm="s",
+        round=5, n=3,
+        algorithm="uniform-circle", params={"a": 4.5}, figures={},
+        seed=11, scheduler="centralized", swarm="s",
         positions=np.array([[0.0, 0.0], [3.0, 0.0], [0.0, 3.0]]), active=(2,), moved=(2,),
         stopped=(), collisions_total=0, status="running", agents=agents,
     )  # fmt: skip
@@ -298,7 +300,9 @@ class FakeSession:
 def state(round_no: int, status: str = "running") -> WorldState:
     agents = tuple(AgentInfo(True, round_no, 1.0, 0) for _ in range(3))
     return WorldState(
-        round=round_no, n=3, a=4.0, seed=1, scheduler="fsync", swarm="w",
+        round=round_no, n=3,
+        algorithm="uniform-circle", params={"a": 4.0}, figures={},
+        seed=1, scheduler="fsync", swarm="w",
         positions=np.array([[0.0, 0.0], [5.0, 0.0], [0.0, 5.0]]), active=(0, 1, 2), moved=(),
         stopped=(), collisions_total=0, status=status, agents=agents,
     )  # fmt: skip

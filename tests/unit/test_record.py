@@ -27,7 +27,7 @@ PATH = Path((Line((0.0, 1.0)), Arc((3.0, 0.0), 0.5)))
 
 def write_sample(path: FsPath, *, fsync: bool = False, finish: bool = True) -> None:
     with RecordWriter(path, fsync=fsync) as w:
-        w.header(2, 4.0, 7, "ssync", INITIAL, fairness=4)
+        w.header(2, 7, "ssync", INITIAL, algorithm="uniform-circle", params={"a": 4.0}, fairness=4)
         w.round(1, [0, 1], {0: (PATH, 1.25)}, AFTER, [Collision(0, 1, 0.5, (0.0, 0.5))])
         w.round(2, [1], {}, AFTER)
         if finish:
@@ -99,7 +99,8 @@ def test_iter_record_streams_entries_in_order(tmp_path: FsPath) -> None:
 
 def test_writer_refuses_non_finite_numbers(tmp_path: FsPath) -> None:
     with RecordWriter(tmp_path / "run.jsonl") as w, pytest.raises(ValueError):
-        w.header(1, 4.0, 0, "fsync", np.array([[np.nan, 0.0]]))
+        w.header(1, 0, "fsync", np.array([[np.nan, 0.0]]), algorithm="uniform-circle",
+                 params={"a": 4.0})
 
 
 def mutate(tmp_path: FsPath, line: int, change: dict[str, object] | str) -> FsPath:

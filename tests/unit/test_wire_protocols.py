@@ -36,7 +36,7 @@ def _state(n: int = 3) -> WorldState:
     return WorldState(
         round=4,
         n=n,
-        a=4.0,
+        algorithm="uniform-circle", params={"a": 4.0}, figures={},
         seed=7,
         scheduler="ssync",
         swarm="s1",
@@ -102,9 +102,10 @@ def test_control_messages_round_trip() -> None:
 
 def test_snapshot_round_trips_and_checks_its_size() -> None:
     view = np.array([[1.0, -2.0], [3.5, 0.25]])
-    d = Snapshot.decode(Snapshot(2, 3, 4.0, view).encode())
-    assert np.array_equal(d.view, view) and (d.round, d.n, d.a) == (2, 3, 4.0)
-    wrong = Snapshot(2, 4, 4.0, view).encode()  # n = 4 needs 3 rows
+    d = Snapshot.decode(Snapshot(2, 3, "uniform-circle", {"a": 4.0}, view).encode())
+    assert np.array_equal(d.view, view)
+    assert (d.round, d.n, d.algorithm, d.params) == (2, 3, "uniform-circle", {"a": 4.0})
+    wrong = Snapshot(2, 4, "uniform-circle", {"a": 4.0}, view).encode()  # n = 4 needs 3 rows
     with pytest.raises(ProtocolError, match="bytes"):
         Snapshot.decode(wrong)
 

@@ -20,14 +20,21 @@ from fatswarm.world.protocol import (
     snapshot_key,
 )
 from fatswarm.world.record import read_record
-from fatswarm.world.service import WorldCore, WorldSetup, open_world
+from fatswarm.world.service import (
+    WorldCore,
+    WorldSetup,
+    control_bytes,
+    look_bytes,
+    move_bytes,
+    open_world,
+)
 
 SWARM = "t"
 START = np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]])
 
 
 def _setup(max_rounds: int | None = 50) -> WorldSetup:
-    return WorldSetup(SWARM, 3, 4.0, 1, "ssync", START, max_rounds)
+    return WorldSetup(SWARM, 3, 1, "ssync", START, max_rounds, params={"a": 4.0})
 
 
 OPENED: list[WorldCore] = []
@@ -47,19 +54,20 @@ def _close_journals() -> Iterator[None]:
 
 
 def _ctl(world: WorldCore, data: bytes) -> ControlReply:
-    return world.control(data)[0]
+    return control_bytes(world, data)[0]
 
 
 def _move(world: WorldCore, key_robot: int, robot: int, round_no: int, path: Path) -> object:
-    return world.move(move_key(SWARM, key_robot), MoveSubmitted(robot, round_no, path).encode())
+    return move_bytes(world, move_key(SWARM, key_robot),
+                      MoveSubmitted(robot, round_no, path).encode())
 
 
 def test_snapshot_only_for_active_robots_relative_and_without_ids(tmp_path: FsPath) -> None:
     w = _world(tmp_path)
-    assert w.look(snapshot_key(SWARM, 0)) is None  # no round open
+    assert look_bytes(w, snapshot_key(SWARM, 0)) is None  # no round open
     assert _ctl(w, Begin(1, (1,)).encode()).ok
-    assert w.look(snapshot_key(SWARM, 0)) is None  # not active
-    data = w.look(snapshot_key(SWARM, 1))
+    assert look_bytes(w, snapshot_key(SWARM, 0)) is None  # not active
+    data = look_bytes(w, snapshot_key(SWARM, 1))
     assert data is not None
     snap = Snapshot.decode(data)
     assert snap.round == 1 and snap.n == 3
@@ -72,12 +80,12 @@ def test_moves_are_taken_once_from_active_robots_that_looked(tmp_path: FsPath) -
     _ctl(w, Begin(1, (0, 1)).encode())
     step = Path((Line((1.0, 0.0)),))
     assert _move(w, 0, 0, 1, step) is None  # has not looked yet
-    w.look(snapshot_key(SWARM, 0))
-    w.look(snapshot_key(SWARM, 1))
+    look_bytes(w, snapshot_key(SWARM, 0))
+    look_bytes(w, snapshot_key(SWARM, 1))
     assert _move(w, 0, 1, 1, step) is None  # names someone else
     assert _move(w, 2, 2, 1, step) is None  # not active
     assert _move(w, 0, 0, 2, step) is None  # not the open round
-    assert w.move(move_key(SWARM, 0), b"\x00garbage") is None
+    assert move_bytes(w, move_key(SWARM, 0), b"\x00garbage") is None
     assert _move(w, 0, 0, 1, step) == MoveHeld(1, 0)
     assert _move(w, 0, 0, 1, STAY) is None  # a second move for the round
     assert set(w.rejected) == {
@@ -110,7 +118,7 @@ def test_committed_rounds_survive_a_restart_and_a_torn_line(tmp_path: FsPath) ->
     w = _world(tmp_path)
     for r in (1, 2):
         _ctl(w, Begin(r, (0,)).encode())
-        w.look(snapshot_key(SWARM, 0))
+        look_bytes(w, snapshot_key(SWARM, 0))
         _move(w, 0, 0, r, Path((Line((1.0, 0.0)),)))
         _ctl(w, Commit(r).encode())
     _ctl(w, Begin(3, (0,)).encode())  # open but never committed: not durable, not announced

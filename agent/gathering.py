@@ -1,0 +1,140 @@
+"""Gathering by the centre of gravity: the baseline other LCM simulators ship, behind the seam.
+
+Each robot moves straight toward the centre of gravity of all n centres by at most half the gap to
+its nearest neighbour; it stays once that step is within `tolerance`, and the run ends.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Final
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fatswarm.agent.path import STAY, Line, Path
+from fatswarm.agent.seam import AlgorithmParamsError, ParamSpec, ParamValue, Points
+from fatswarm.agent.tolerance import CONTACT
+
+Values = NDArray[np.float64]  # (k,)
+DEFAULT_TOLERANCE: Final = 1e-3
+GOAL_BLOCK: Final = 512  # rows of the pairwise distance matrix `goal` holds at once (memory bound)
+ROUNDING_REL: Final = 1e-12  # G from world positions vs a robot's view: a few ulps of the span
+
+
+@dataclass(frozen=True, slots=True)
+class GatheringParams:
+    """n robots; a robot stays when its step would be at most `tolerance` (> 0, finite)."""
+
+    n: int
+    tolerance: float = DEFAULT_TOLERANCE
+
+    def __post_init__(self) -> None:
+        if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
+            raise AlgorithmParamsError(f"n must be a whole number >= 1, got {self.n!r}")
+        tol = self.tolerance
+        if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not (
+            math.isfinite(tol) and tol > 0.0
+        ):
+            raise AlgorithmParamsError(f"tolerance must be finite and > 0, got {tol!r}")
+
+
+def _steps(to_centre: Points, nearest: Values) -> Values:
+    """Each robot's step: min(|G|, (d_min - 2) / 2), from (k, 2) vectors to G and (k,) d_min."""
+    return np.asarray(
+        np.minimum(np.hypot(to_centre[:, 0], to_centre[:, 1]), (nearest - CONTACT) / 2.0)
+    )
+
+
+def _nearest(positions: Points) -> Values:
+    """(n,) distance from each centre to its nearest other one, `GOAL_BLOCK` rows at a time."""
+    n = len(positions)
+    out = np.empty(n, dtype=np.float64)
+    for lo in range(0, n, GOAL_BLOCK):
+        rows = positions[lo:lo + GOAL_BLOCK]
+        diff = positions[np.newaxis, :, :] - rows[:, np.newaxis, :]
+        dist = np.hypot(diff[:, :, 0], diff[:, :, 1])
+        dist[np.arange(len(rows)), np.arange(lo, lo + len(rows))] = np.inf
+        out[lo:lo + len(rows)] = dist.min(axis=1)
+    return out
+
+
+def centre_of_gravity(positions: Points) -> tuple[float, float]:
+    """The mean of (k, 2) centres, each coordinate summed exactly (`math.fsum`) then divided."""
+    k = len(positions)
+    return (math.fsum(positions[:, 0].tolist()) / k, math.fsum(positions[:, 1].tolist()) / k)
+
+
+class Gathering:
+    """Go to the centre of gravity, never further than half the gap to the nearest neighbour.
+
+    No collision under any scheduler: robot k stays within step_k <= (d_kj - 2) / 2 of its start for
+    every j, so at every instant |p_i - p_j| >= d_ij - step_i - step_j >= d_ij - (d_ij - 2) = 2.
+    The cap also means a robot touching a neighbour never moves again: the swarm can end as
+    touching clumps rather than one (the goal is "nobody would move", not "one cluster").
+    """
+
+    name: str = "gathering"
+    summary: str = "move toward the centre of gravity by at most half the gap to the nearest robot"
+    parameters: tuple[ParamSpec, ...] = (
+        ParamSpec("tolerance", DEFAULT_TOLERANCE,
+                  "a robot stays when its step would be at most this (> 0)"),
+    )
+
+    def make_params(self, n: int, values: Mapping[str, ParamValue]) -> GatheringParams:
+        tol = values.get("tolerance", DEFAULT_TOLERANCE)
+        if isinstance(tol, bool) or not isinstance(tol, (int, float)):
+            raise AlgorithmParamsError(f"tolerance must be a number, got {tol!r}")
+        return GatheringParams(n, float(tol))
+
+    def compute(self, view: Points, params: GatheringParams) -> Path:
+        """A Line toward G by the capped step, or STAY; `view` is (n-1, 2), the robot at the origin.
+
+        fsum, hypot and min give the same bits for any order of the rows and, up to sign, under
+        x -> -x, so the path depends on neither.
+        """
+        if len(view) == 0:
+            return STAY
+        n = len(view) + 1  # the robot itself, at the origin, adds nothing to the sums
+        gx = math.fsum(view[:, 0].tolist()) / n
+        gy = math.fsum(view[:, 1].tolist()) / n
+        to_g = math.hypot(gx, gy)
+        d_min = float(np.hypot(view[:, 0], view[:, 1]).min())
+        step = min(to_g, (d_min - CONTACT) / 2.0)
+        if not step > params.tolerance:  # also a touching or overlapping neighbour (step <= 0)
+            return STAY
+        if step >= to_g:
+            return Path((Line((gx, gy)),))
+        f = step / to_g
+        return Path((Line((gx * f, gy * f)),))
+
+    def goal(self, positions: Points, params: GatheringParams) -> bool:
+        """No robot would move: every robot's step, from world positions, is <= tolerance.
+
+        Up to rounding (ROUNDING_REL of the swarm's span): a robot sums its own view, this sums
+        positions relative to robot 0 (exact on the grid). Lenient is safe: `formed` also needs
+        every robot to have stayed.
+        """
+        pts = np.asarray(positions, dtype=np.float64)
+        if len(pts) <= 1:
+            return True
+        pts = pts - pts[0]
+        gx, gy = centre_of_gravity(pts)
+        to_g = np.array([gx, gy]) - pts
+        slack = ROUNDING_REL * max(1.0, float(np.abs(pts).max()))
+        return bool((_steps(to_g, _nearest(pts)) <= params.tolerance + slack).all())
+
+    def figures(self, positions: Points, params: GatheringParams) -> dict[str, float]:
+        """`spread`: the largest distance of a centre from the centre of gravity."""
+        pts = np.asarray(positions, dtype=np.float64)
+        if len(pts) == 0:
+            return {"spread": 0.0}
+        gx, gy = centre_of_gravity(pts)
+        return {"spread": float(np.hypot(pts[:, 0] - gx, pts[:, 1] - gy).max())}
+
+
+ALGORITHM: Final = Gathering()
+
+__all__ = ["ALGORITHM", "DEFAULT_TOLERANCE", "Gathering", "GatheringParams", "centre_of_gravity"]

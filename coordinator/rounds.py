@@ -1,0 +1,377 @@
+"""The coordinator's round protocol as a sans-IO state machine: events and `now` in, actions out.
+
+No Zenoh, no clock, no threads: a shell (`service.py`) or an in-process driver performs the
+actions, feeds back the world's replies and calls `on_tick` at `next_deadline()`.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from fatswarm.coordinator.protocol import RoundStart
+from fatswarm.coordinator.schedule import Scheduler
+from fatswarm.world.outcome import Status
+from fatswarm.world.protocol import Begin, Commit, ControlReply, Hello, MoveHeld
+
+MAX_NOTES = 256  # notes nobody takes are dropped oldest first (a driver may ignore them)
+
+
+@dataclass(frozen=True, slots=True)
+class Ask:
+    """Send this control request to the world; feed its reply (or None) to `on_reply`."""
+
+    request: Hello | Begin | Commit
+
+
+@dataclass(frozen=True, slots=True)
+class Announce:
+    """Publish this round start to the agents."""
+
+    start: RoundStart
+
+
+@dataclass(frozen=True, slots=True)
+class Finished:
+    """The run is over: `status` as the world said (RUNNING if the core was stopped first)."""
+
+    status: Status
+    collisions: int  # robots stopped at contact so far, from the world's last reply (else 0)
+
+
+Action = Ask | Announce | Finished
+
+
+@dataclass(frozen=True, slots=True)
+class Note:
+    """Something worth a log line; the shell logs it, a driver may drop it."""
+
+    text: str
+    warning: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class RoundTimes:
+    """The coordinator's timing, in seconds."""
+
+    move_timeout_s: float = 5.0  # an active robot that has not moved by then stays put
+    start_timeout_s: float = 120.0  # wait this long for all n agents before round 1
+    resume_grace_s: float = 2.0  # a restarted coordinator waits this long for all n agents
+    pace_s: float = 0.0  # least time from one Begin to the next (0: full speed)
+    retry_s: float = 0.25  # wait before asking the world again when it did not answer
+
+
+class Phase(enum.Enum):
+    """Where the core stands. A request is out (awaiting `on_reply`) in HELLO, BEGIN and COMMIT."""
+
+    IDLE = "idle"  # not started
+    HELLO = "hello"  # Hello is out: where does the run stand?
+    RETRY = "retry"  # no usable answer: Hello again at the deadline
+    GATHER = "gather"  # waiting for agents: all n until the deadline, then (no deadline) anyone
+    BEGIN = "begin"  # Begin is out
+    COLLECT = "collect"  # the round is open: waiting for the live active robots' moves
+    COMMIT = "commit"  # Commit is out
+    PACE = "pace"  # the next round begins at the deadline (pace_s after the last Begin)
+    DONE = "done"  # finished
+
+
+class CoreMisuse(RuntimeError):
+    """The caller broke the core's contract (a bug of the shell or driver, not of a peer)."""
+
+
+_WAITING = (Phase.RETRY, Phase.GATHER, Phase.COLLECT, Phase.PACE)  # phases with a deadline
+
+
+class CoordinatorCore:
+    """Runs semi-synchronous rounds: Hello, gather agents, then Begin, collect moves, Commit.
+
+    At most one request is out at a time, and an `Ask` is always the last action of a list.
+    """
+
+    def __init__(
+        self,
+        make_scheduler: Callable[[int], Scheduler],
+        times: RoundTimes,
+        resume_live: Sequence[int] | None = None,
+    ) -> None:
+        self.times = times
+        self._make_scheduler = make_scheduler
+        self._resume_live = tuple(resume_live) if resume_live is not None else None
+        self._scheduler: Scheduler | None = None
+        self._n: int | None = None
+        self._phase = Phase.IDLE
+        self._deadline: float | None = None  # of the phases in _WAITING; None in GATHER: anyone
+        self._gather_s = 0.0
+        self._live: set[int] = set()
+        self._held: set[int] = set()
+        self._round = 0  # the round being opened, open or next (0 before the first Hello reply)
+        self._planned: tuple[int, tuple[int, ...]] | None = None  # round, active: kept for retries
+        self._active_set: frozenset[int] = frozenset()  # of the planned round
+        self._waiting: set[int] = set()  # COLLECT: live active robots without a held move
+        self._began_at: float | None = None  # when the last Begin was asked (pace)
+        self._collisions = 0
+        self._finished: Finished | None = None
+        self._notes: deque[Note] = deque(maxlen=MAX_NOTES)
+
+    # -- read-only views ------------------------------------------------------------------------
+
+    @property
+    def phase(self) -> Phase:
+        return self._phase
+
+    @property
+    def finished(self) -> Finished | None:
+        return self._finished
+
+    @property
+    def n(self) -> int | None:
+        """The run's number of robots, once the world said it."""
+        return self._n
+
+    @property
+    def round(self) -> int:
+        return self._round
+
+    @property
+    def active(self) -> tuple[int, ...]:
+        """The active set of `round` once planned, else ()."""
+        if self._planned is not None and self._planned[0] == self._round:
+            return self._planned[1]
+        return ()
+
+    @property
+    def active_set(self) -> frozenset[int]:
+        """`active` as a set (() -> empty)."""
+        return self._active_set if self.active else frozenset()
+
+    @property
+    def live(self) -> frozenset[int]:
+        return frozenset(self._live)
+
+    @property
+    def held(self) -> frozenset[int]:
+        """Active robots of `round` whose move the world said it holds.
+
+        Kept when the round is opened again at a world that still has it open (a Begin with the
+        same set keeps what the world holds); cleared when the world says it lost the round.
+        """
+        return frozenset(self._held)
+
+    def next_deadline(self) -> float | None:
+        """When `on_tick` must be called next; None while only events (or a reply) move it on."""
+        return self._deadline if self._phase in _WAITING else None
+
+    def pop_notes(self) -> list[Note]:
+        """The notes since the last call, oldest first."""
+        notes = list(self._notes)
+        self._notes.clear()
+        return notes
+
+    # -- events in, actions out -----------------------------------------------------------------
+
+    def start(self, now: float) -> list[Action]:
+        """Ask the world where the run stands."""
+        del now
+        if self._phase is not Phase.IDLE:
+            raise CoreMisuse("start() called twice")
+        return self._ask_hello()
+
+    def stop(self) -> Finished:
+        """End now (the shell was told to stop): RUNNING unless the run had already ended."""
+        if self._finished is None:
+            self._finish(Status.RUNNING)
+        assert self._finished is not None
+        return self._finished
+
+    def on_reply(self, reply: ControlReply | None, now: float) -> list[Action]:
+        """The world's reply to the request out; None: no answer or a bad one (down, restarting)."""
+        if self._phase is Phase.DONE:
+            return []
+        if reply is not None:
+            self._collisions = reply.collisions
+        if self._phase is Phase.HELLO:
+            return self._on_hello(reply, now)
+        if self._phase is Phase.BEGIN:
+            return self._on_begun(reply, now)
+        if self._phase is Phase.COMMIT:
+            return self._on_committed(reply, now)
+        raise CoreMisuse(f"a reply with no request out (phase {self._phase.value})")
+
+    def on_alive(self, robot: int, alive: bool, now: float) -> list[Action]:
+        """An agent's liveliness token appeared (alive) or went away."""
+        if robot < 0 or (self._n is not None and robot >= self._n):
+            return []
+        if alive:
+            self._live.add(robot)
+            if robot in self._active_set and robot not in self._held:
+                self._waiting.add(robot)  # (only read in COLLECT, where it is kept up to date)
+        elif robot in self._live:
+            self._live.discard(robot)
+            self._waiting.discard(robot)
+            self._note(f"agent {robot} is gone")
+        if self._phase is Phase.GATHER:
+            return self._gathered(now)
+        if self._phase is Phase.COLLECT:  # a robot that died is not waited for
+            return self._collected(now)
+        return []
+
+    def on_held(self, notice: MoveHeld, now: float) -> list[Action]:
+        """The world holds a robot's move; notices of other rounds (or robots) are ignored."""
+        if notice.round == self._round and notice.robot in self.active_set:
+            self._held.add(notice.robot)  # kept while the world keeps the round open
+            self._waiting.discard(notice.robot)
+        if self._phase is Phase.COLLECT:
+            return self._collected(now)
+        return []
+
+    def on_tick(self, now: float) -> list[Action]:
+        """Act on a deadline that has passed; nothing otherwise (calling it again is harmless)."""
+        if self._phase is Phase.GATHER:
+            return self._gathered(now)
+        if self._phase is Phase.COLLECT:
+            return self._collected(now)
+        if self._deadline is None or now < self._deadline:
+            return []
+        if self._phase is Phase.RETRY:
+            return self._ask_hello()
+        if self._phase is Phase.PACE:
+            return self._open(now)
+        return []
+
+    # -- transitions ----------------------------------------------------------------------------
+
+    def _note(self, text: str, warning: bool = False) -> None:
+        self._notes.append(Note(text, warning))
+
+    def _ask_hello(self) -> list[Action]:
+        self._phase, self._deadline = Phase.HELLO, None
+        return [Ask(Hello())]
+
+    def _retry(self, now: float) -> list[Action]:
+        self._phase, self._deadline = Phase.RETRY, now + self.times.retry_s
+        return []
+
+    def _finish(self, status: Status) -> list[Action]:
+        self._phase, self._deadline = Phase.DONE, None
+        self._finished = Finished(status, self._collisions)
+        return [self._finished]
+
+    def _on_hello(self, reply: ControlReply | None, now: float) -> list[Action]:
+        if reply is None or not reply.ok:
+            return self._retry(now)
+        if self._n is None:
+            return self._first_hello(reply, now)
+        if reply.n != self._n:
+            self._note(f"the world now says n = {reply.n}; this coordinator keeps n = {self._n}",
+                       warning=True)
+        if reply.status != Status.RUNNING:
+            return self._finish(Status(reply.status))
+        if reply.open_round != self._round:
+            self._held = set()  # the world restarted: it lost the moves it held
+        # Open the round after the world's last committed one: the same round again if it lost
+        # it, or the next one if only the reply to a commit was lost.
+        return self._next_round(reply.committed + 1, now)
+
+    def _first_hello(self, reply: ControlReply, now: float) -> list[Action]:
+        self._n = reply.n  # the world owns the run's parameters
+        self._live = {r for r in self._live if r < self._n}
+        self._scheduler = self._make_scheduler(self._n)
+        if reply.status != Status.RUNNING:
+            return self._finish(Status(reply.status))  # nothing to wait for
+        if reply.committed:
+            # A restarted coordinator advances a seeded scheduler past the rounds already run.
+            replay_live = sorted(self._resume_live or range(self._n))
+            for r in range(1, reply.committed + 1):
+                self._scheduler.active(r, replay_live)
+            self._note(f"resuming after round {reply.committed}")
+        self._round = reply.committed + 1
+        times = self.times
+        self._gather_s = times.resume_grace_s if reply.committed else times.start_timeout_s
+        self._phase, self._deadline = Phase.GATHER, now + self._gather_s
+        return self._gathered(now)
+
+    def _gathered(self, now: float) -> list[Action]:
+        """GATHER: all n agents (or the deadline passed, then anyone) -> open the round."""
+        if self._deadline is not None:
+            if len(self._live) == self._n:
+                return self._begin(now)
+            if now < self._deadline:
+                return []
+            self._deadline = None
+            self._note(f"only {len(self._live)} of {self._n} agents after {self._gather_s:.1f} s; "
+                       "going on with them", warning=True)
+        return self._begin(now) if self._live else []
+
+    def _next_round(self, round_no: int, now: float) -> list[Action]:
+        self._round = round_no
+        if self.times.pace_s > 0 and self._began_at is not None:
+            due = self._began_at + self.times.pace_s
+            if now < due:
+                self._phase, self._deadline = Phase.PACE, due
+                return []
+        return self._open(now)
+
+    def _open(self, now: float) -> list[Action]:
+        if not self._live:  # never a round with no live agent: wait for one
+            self._phase, self._deadline = Phase.GATHER, None
+            return []
+        return self._begin(now)
+
+    def _begin(self, now: float) -> list[Action]:
+        if self._planned is None or self._planned[0] != self._round:
+            assert self._scheduler is not None
+            active = self._scheduler.active(self._round, sorted(self._live))
+            self._planned = (self._round, tuple(active))
+            self._active_set = frozenset(active)
+            self._held = set()
+        self._began_at = now
+        self._phase, self._deadline = Phase.BEGIN, None
+        return [Ask(Begin(round=self._round, active=self.active))]
+
+    def _on_begun(self, reply: ControlReply | None, now: float) -> list[Action]:
+        if reply is None or not reply.ok:
+            why = "no answer" if reply is None else reply.reason
+            self._note(f"world refused round {self._round}: {why}", warning=True)
+            return self._retry(now)  # then Hello, and on from where the world stands
+        self._phase, self._deadline = Phase.COLLECT, now + self.times.move_timeout_s
+        self._waiting = {r for r in self.active if r in self._live and r not in self._held}
+        timeout_ms = int(self.times.move_timeout_s * 1000)
+        start = RoundStart(round=self._round, active=self.active, timeout_ms=timeout_ms)
+        return [Announce(start), *self._collected(now)]
+
+    def _collected(self, now: float) -> list[Action]:
+        """COLLECT: every live active robot's move held, or the deadline -> Commit."""
+        assert self._deadline is not None
+        if self._waiting and now < self._deadline:
+            return []
+        timed_out = tuple(r for r in self.active if r not in self._held)
+        if timed_out:
+            self._note(f"round {self._round}: no move from {list(timed_out)}")
+        self._phase, self._deadline = Phase.COMMIT, None
+        return [Ask(Commit(round=self._round, timed_out=timed_out))]
+
+    def _on_committed(self, reply: ControlReply | None, now: float) -> list[Action]:
+        if reply is None or not reply.ok:
+            # The world restarted and lost the open round (or the reply was lost): ask where it
+            # stands, and open the round it has not committed again.
+            why = "no answer" if reply is None else reply.reason
+            self._note(f"commit of round {self._round} failed: {why}", warning=True)
+            return self._ask_hello()
+        if reply.status != Status.RUNNING:
+            return self._finish(Status(reply.status))
+        return self._next_round(reply.committed + 1, now)
+
+
+__all__ = [
+    "Action",
+    "Announce",
+    "Ask",
+    "CoordinatorCore",
+    "CoreMisuse",
+    "Finished",
+    "Note",
+    "Phase",
+    "RoundTimes",
+]

@@ -1,0 +1,453 @@
+"""The world's state machine: looks, moves, control requests and commits, with no I/O but its
+journal (an injected sink: the run record, or nothing).
+
+The Zenoh shell (world/service.py) and the in-process lock step (deploy/lockstep.py) drive this
+very core, so a networked run and a lock-step run of the same configuration are one computation.
+Physics and the end test are the core's (`world.physics.apply_round`, `world.progress`).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections import Counter
+from collections.abc import Callable, Collection, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Final, Protocol
+
+import numpy as np
+
+from fatswarm.agent.path import Path, path_length, transform
+from fatswarm.agent.protocol import MoveSubmitted
+from fatswarm.agent.registry import DEFAULT, load_algorithm
+from fatswarm.agent.seam import Configured, ParamValue
+from fatswarm.agent.tolerance import snap
+from fatswarm.world.outcome import Status
+from fatswarm.world.physics import Collision, RoundOutcome, apply_round
+from fatswarm.world.progress import ProgressTracker
+from fatswarm.world.protocol import (
+    AgentInfo,
+    Begin,
+    Commit,
+    ControlReply,
+    ControlRequest,
+    Hello,
+    MoveHeld,
+    Points,
+    Snapshot,
+    WorldState,
+)
+from fatswarm.world.record import Header, RecordWriter, RoundEntry, RunRecord, read_record
+
+log = logging.getLogger("fatswarm.world")
+
+LOOK_STREAM: Final = 0x5A0F  # orders the others in a view; compute must not depend on the order
+
+
+class Journal(Protocol):
+    """Where committed rounds go: `world.record.RecordWriter`, or `NullJournal`."""
+
+    def header(self, n: int, seed: int | None, scheduler: str, initial: Points, *,
+               algorithm: str, params: Mapping[str, ParamValue], **extra: Any) -> None: ...
+
+    def round(self, round_no: int, active: Sequence[int],
+              moves: Mapping[int, tuple[Path, float]], positions: Points,
+              collisions: Sequence[Collision] = (), **extra: Any) -> None: ...
+
+    def result(self, status: str, rounds: int, positions: Points, **extra: Any) -> None: ...
+
+    def close(self) -> None: ...
+
+
+class NullJournal:
+    """A journal that keeps nothing (a lock-step run without a record)."""
+
+    def header(self, n: int, seed: int | None, scheduler: str, initial: Points, *,
+               algorithm: str, params: Mapping[str, ParamValue], **extra: Any) -> None:
+        del n, seed, scheduler, initial, algorithm, params, extra
+
+    def round(self, round_no: int, active: Sequence[int],
+              moves: Mapping[int, tuple[Path, float]], positions: Points,
+              collisions: Sequence[Collision] = (), **extra: Any) -> None:
+        del round_no, active, moves, positions, collisions, extra
+
+    def result(self, status: str, rounds: int, positions: Points, **extra: Any) -> None:
+        del status, rounds, positions, extra
+
+    def close(self) -> None:
+        return None
+
+
+@dataclass(frozen=True, slots=True)
+class WorldSetup:
+    """What a run starts from (or what the state file's header says when resuming)."""
+
+    swarm: str
+    n: int
+    seed: int
+    scheduler: str
+    initial: Points  # (n, 2)
+    max_rounds: int | None
+    algorithm: str = DEFAULT  # how every process loads it: a name or module:attribute
+    params: Mapping[str, ParamValue] = field(default_factory=dict)  # given ones; defaults fill in
+    extra: Mapping[str, Any] = field(default_factory=dict)  # more header fields (how it was run)
+
+
+@dataclass(frozen=True, slots=True)
+class Committed:
+    """The round just committed: who was active, the world-frame paths applied, what physics did."""
+
+    round: int
+    active: tuple[int, ...]
+    paths: dict[int, Path]
+    outcome: RoundOutcome
+
+
+def view_order(seed: int, round_no: int, robot: int, k: int) -> np.ndarray:
+    """The order in which robot `robot` sees the k others in round `round_no`: drawn from the run's
+    seed, the round and the robot, so it does not depend on who looks first."""
+    rng = np.random.default_rng([LOOK_STREAM, seed & 0xFFFFFFFF, round_no, robot])
+    return rng.permutation(k)
+
+
+# --- the durable log: the run record itself, fsynced line by line ----------------------------
+
+
+def cut_torn_line(path: str) -> None:
+    """Drop a torn last line (the world died mid-write): it was never committed nor announced."""
+    with open(path, "rb") as f:
+        data = f.read()
+    end = data.rfind(b"\n") + 1
+    if end < len(data):
+        log.warning("state file %s: dropping a torn last line of %d bytes", path, len(data) - end)
+        with open(path, "r+b") as f:
+            f.truncate(end)
+            f.flush()
+            os.fsync(f.fileno())
+
+
+def setup_from_header(header: Header, swarm: str, max_rounds: int | None) -> WorldSetup:
+    """The run described by a state file's header line."""
+    saved = header.extra.get("max_rounds", max_rounds)
+    return WorldSetup(
+        swarm=swarm,
+        n=header.n,
+        seed=int(header.seed or 0),
+        scheduler=header.scheduler,
+        initial=np.asarray(header.initial, dtype=np.float64),
+        max_rounds=int(saved) if isinstance(saved, int) else max_rounds,
+        algorithm=header.algorithm_ref,
+        params=dict(header.params),
+        extra={k: v for k, v in header.extra.items() if k not in ("max_rounds", "swarm")},
+    )
+
+
+# --- the state machine ------------------------------------------------------------------------
+
+
+class WorldCore:
+    """The world's state and its answers to looks, moves and control requests (no I/O but the log).
+
+    Robot identity comes from the key a message arrives on and must match the robot it names; a
+    move counts only for the open round, from an active robot that has looked, once.
+    """
+
+    def __init__(
+        self,
+        setup: WorldSetup,
+        journal: Journal | None = None,
+        history: RunRecord | None = None,
+        algorithm: Configured | None = None,
+    ) -> None:
+        """`algorithm`: the run's algorithm, configured; loaded from `setup.algorithm` if None.
+
+        Raises AlgorithmError or AlgorithmParamsError for an algorithm it cannot load or
+        configure, and the algorithm's own refusal of the start (`check_start`).
+        """
+        self.setup = setup
+        self.journal: Journal = NullJournal() if journal is None else journal
+        n = setup.n
+        if algorithm is None:
+            algorithm = Configured.of(load_algorithm(setup.algorithm), n, setup.params)
+        self.algorithm = algorithm
+        # On the grid, so that every robot's view is exact (agent/tolerance.py); a start that came
+        # through validate_configuration is there already.
+        self.positions: Points = snap(np.array(setup.initial, dtype=np.float64).reshape(n, 2))
+        if history is None:
+            algorithm.check_start(self.positions)
+        self.tracker = ProgressTracker(n, algorithm.goal, setup.max_rounds)
+        self.status: str = Status.RUNNING
+        self.committed = 0
+        self.open_round = 0
+        self.active: tuple[int, ...] = ()
+        self.looked: set[int] = set()
+        self.held: dict[int, Path] = {}
+        self.moved: tuple[int, ...] = ()
+        self.stopped: tuple[int, ...] = ()
+        self.collisions_total = 0
+        self.alive = [False] * n
+        self.last_active = [-1] * n
+        self.last_length = [0.0] * n
+        self.timeouts = [0] * n
+        self.rejected: Counter[str] = Counter()
+        self._agents: tuple[AgentInfo, ...] | None = None  # cache of state().agents
+        self._figures: dict[str, float] | None = None  # cache of state().figures
+        self.last_commit: Committed | None = None
+        if history is None:
+            self.journal.header(
+                n, setup.seed, setup.scheduler, self.positions,
+                algorithm=algorithm.name, params=algorithm.values,
+                algorithm_ref=setup.algorithm, max_rounds=setup.max_rounds, swarm=setup.swarm,
+                **setup.extra,
+            )
+        else:
+            self._replay(history)
+
+    # -- resume ---------------------------------------------------------------------------------
+
+    def _replay(self, record: RunRecord) -> None:
+        """Rebuild the state from the committed rounds of a state file."""
+        for entry in record.rounds:
+            self._replay_round(entry)
+        if record.result is not None:
+            self.status = record.result.status
+        elif self.tracker.status is not None:
+            self._finish()  # died between the last round line and the result line
+        log.info("resumed %s after round %d (%s)", getattr(self.journal, "path", "a run"),
+                 self.committed, self.status)
+
+    def _replay_round(self, entry: RoundEntry) -> None:
+        before = self.positions
+        after = np.asarray(entry.positions, dtype=np.float64)
+        timed_out = {int(r) for r in entry.extra.get("timed_out", [])}
+        traveled = {m.robot: m.traveled for m in entry.moves}
+        paths = {m.robot: m.path for m in entry.moves}
+        self._account(entry.round, entry.active, paths, timed_out, before, after, traveled,
+                      entry.collisions)
+
+    def _account(
+        self,
+        round_no: int,
+        active: Sequence[int],
+        paths: dict[int, Path],
+        timed_out: Collection[int],
+        before: Points,
+        after: Points,
+        traveled: dict[int, float],
+        collisions: Sequence[Collision],
+    ) -> None:
+        """Book one committed round (live or replayed) into the state and the progress tracker."""
+        self._agents = None
+        self._figures = None
+        for robot in active:
+            self.last_active[robot] = round_no
+        for robot in timed_out:
+            self.timeouts[robot] += 1
+        for robot, path in paths.items():
+            self.last_length[robot] = path_length((float(before[robot, 0]),
+                                                   float(before[robot, 1])), path)
+        self.collisions_total += len(collisions)
+        self.tracker.observe(
+            [r for r in active if r not in timed_out], paths.keys(), before, after, traveled,
+            len(collisions),
+        )
+        self.positions, self.committed = after, round_no
+        self.active = tuple(active)
+        self.moved = tuple(sorted(paths))
+        self.stopped = tuple(sorted({c.robot for c in collisions}))
+
+    # -- requests -------------------------------------------------------------------------------
+
+    def reject(self, reason: str, detail: str) -> None:
+        """Count and log a refused input (never raised, never applied)."""
+        self.rejected[reason] += 1
+        log.warning("rejected (%s): %s [total %d]", reason, detail, self.rejected[reason])
+
+    def look(self, robot: int) -> Snapshot | None:
+        """Robot `robot`'s snapshot, or None (refused, counted) if it is not active now."""
+        if not 0 <= robot < self.setup.n:
+            self.reject("look-bad-key", f"robot {robot}")
+            return None
+        if not self.open_round or robot not in self.active:
+            self.reject("look-not-active", f"robot {robot} round {self.open_round}")
+            return None
+        self.looked.add(robot)
+        pos = self.positions
+        others = np.concatenate((pos[:robot], pos[robot + 1 :])) - pos[robot]
+        others = others[view_order(self.setup.seed, self.open_round, robot, len(others))]
+        return Snapshot(round=self.open_round, n=self.setup.n, algorithm=self.algorithm.name,
+                        params=dict(self.algorithm.values), view=others)
+
+    def admit_look(self, robot: int) -> bool:
+        """Count robot `robot`'s Look without building its view (a lock step that plans the round
+        at once); False (refused, counted) if it is not active now."""
+        if not self.open_round or robot not in self.active or not 0 <= robot < self.setup.n:
+            self.reject("look-not-active", f"robot {robot} round {self.open_round}")
+            return False
+        self.looked.add(robot)
+        return True
+
+    def move(self, robot: int | None, msg: MoveSubmitted) -> MoveHeld | None:
+        """Hold a move for the open round from the robot `robot` it came from (None: a key with no
+        robot); returns the notice to publish, None if refused (counted)."""
+        if robot != msg.robot:
+            self.reject("move-wrong-robot", f"robot {msg.robot} sent as robot {robot}")
+        elif msg.round != self.open_round:
+            self.reject("move-wrong-round", f"robot {robot} round {msg.round} != {self.open_round}")
+        elif robot not in self.active:
+            self.reject("move-not-active", f"robot {robot} round {msg.round}")
+        elif robot not in self.looked:
+            self.reject("move-without-look", f"robot {robot} round {msg.round}")
+        elif robot in self.held:
+            self.reject("move-duplicate", f"robot {robot} round {msg.round}")
+        else:
+            self.held[robot] = msg.path
+            return MoveHeld(round=msg.round, robot=robot)
+        return None
+
+    def control(self, req: ControlRequest) -> tuple[ControlReply, bool]:
+        """Answer a coordinator request; the flag says whether the state changed (publish it)."""
+        if isinstance(req, Hello):
+            return self.reply(True), False
+        if self.status != Status.RUNNING:
+            return self.reply(False, f"the run has ended ({self.status})"), False
+        if isinstance(req, Begin):
+            return self._begin(req)
+        return self._commit(req)
+
+    def reply(self, ok: bool, reason: str = "") -> ControlReply:
+        return ControlReply(
+            ok=ok,
+            reason=reason,
+            n=self.setup.n,
+            committed=self.committed,
+            open_round=self.open_round,
+            status=self.status,
+            collisions=self.collisions_total,
+        )
+
+    def _begin(self, req: Begin) -> tuple[ControlReply, bool]:
+        if req.round != self.committed + 1:
+            return self.reply(False, f"next round is {self.committed + 1}, not {req.round}"), False
+        if not req.active or req.active[-1] >= self.setup.n:
+            return self.reply(False, "active set empty or not robots of this run"), False
+        if self.open_round == req.round and self.active == req.active:
+            return self.reply(True), False  # a coordinator retrying: keep what is held
+        self.open_round, self.active = req.round, req.active
+        self.looked, self.held = set(), {}
+        return self.reply(True), True
+
+    def _commit(self, req: Commit) -> tuple[ControlReply, bool]:
+        if req.round == self.committed and not self.open_round:
+            return self.reply(True), False  # the reply to a commit was lost: it is durable
+        if req.round != self.open_round:
+            return self.reply(False, f"round {req.round} is not open"), False
+        self.commit_open_round()
+        return self.reply(True), True
+
+    def commit_open_round(self) -> None:
+        """Apply the held moves through physics, log the round durably, then update the state."""
+        round_no, before = self.open_round, self.positions
+        paths = {  # the lockstep runner applies and records non-empty paths only: so do we
+            robot: transform(path, (float(before[robot, 0]), float(before[robot, 1])), False)
+            for robot, path in sorted(self.held.items())
+            if path
+        }
+        outcome = apply_round(before, paths) if paths else RoundOutcome(before.copy())
+        after = np.asarray(outcome.positions, dtype=np.float64)
+        traveled = {r: float(outcome.traveled.get(r, 0.0)) for r in paths}
+        timed_out = [r for r in self.active if r not in self.held]
+        extra = {"timed_out": timed_out} if timed_out else {}
+        self.journal.round(
+            round_no,
+            self.active,
+            {r: (p, traveled[r]) for r, p in paths.items()},
+            after,
+            outcome.collisions,
+            **extra,
+        )
+        self._account(round_no, self.active, paths, timed_out, before, after, traveled,
+                      outcome.collisions)
+        self.last_commit = Committed(round_no, self.active, paths, outcome)
+        self.open_round, self.looked, self.held = 0, set(), {}
+        if self.tracker.status is not None:
+            self._finish()
+
+    def _finish(self) -> None:
+        progress = self.tracker.snapshot()
+        status = progress.status or "stalled"
+        self.journal.result(
+            status,
+            progress.rounds,
+            self.positions,
+            epochs=progress.epochs,
+            moves=progress.moves,
+            total_distance=progress.total_distance,
+            collisions=progress.collisions,
+        )
+        self.status = status
+
+    def set_alive(self, robot: int, alive: bool) -> bool:
+        """Note an agent's liveliness; True if it changed."""
+        if not 0 <= robot < self.setup.n or self.alive[robot] == alive:
+            return False
+        self.alive[robot] = alive
+        self._agents = None
+        return True
+
+    def state(self) -> WorldState:
+        """The observers' view of the world now."""
+        n = self.setup.n
+        return WorldState(
+            round=self.committed,
+            n=n,
+            algorithm=self.algorithm.name,
+            params=dict(self.algorithm.values),
+            figures=self._algorithm_figures(),
+            seed=self.setup.seed,
+            scheduler=self.setup.scheduler,
+            swarm=self.setup.swarm,
+            positions=self.positions,
+            active=self.active,
+            moved=self.moved,
+            stopped=self.stopped,
+            collisions_total=self.collisions_total,
+            status=self.status,
+            agents=self._agent_infos(),
+        )
+
+    def _algorithm_figures(self) -> dict[str, float]:
+        """The algorithm's figures for the positions, made once per committed round."""
+        if self._figures is None:
+            self._figures = self.algorithm.figures(self.positions)
+        return self._figures
+
+    def _agent_infos(self) -> tuple[AgentInfo, ...]:
+        """Per-robot agent info, rebuilt only after it changed (it is published twice a round)."""
+        if self._agents is None:
+            self._agents = tuple(
+                AgentInfo(self.alive[i], self.last_active[i], self.last_length[i], self.timeouts[i])
+                for i in range(self.setup.n)
+            )
+        return self._agents
+
+
+def open_world(
+    state_path: str,
+    make_setup: Callable[[], WorldSetup],
+    swarm: str,
+    max_rounds: int | None,
+    fsync: bool = True,
+) -> WorldCore:
+    """Resume from `state_path` if it holds a record, else start a new one from `make_setup()`.
+
+    Raises RecordFormatError (a file that is not a run record) or what `make_setup` raises.
+    """
+    if os.path.exists(state_path) and os.path.getsize(state_path) > 0:
+        cut_torn_line(state_path)
+        record = read_record(state_path)
+        setup = setup_from_header(record.header, swarm, max_rounds)
+        return WorldCore(setup, RecordWriter(state_path, fsync=fsync, append=True), record)
+    return WorldCore(make_setup(), RecordWriter(state_path, fsync=fsync))
+
+
