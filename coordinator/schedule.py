@@ -168,19 +168,15 @@ class Scripted:
         return chosen or robots
 
 
-def _script_from_record(lines: list[str], path: str) -> list[Any]:
-    """Active sets of a JSON Lines run record (its "round" lines), to replay a recorded run."""
-    rounds: list[Any] = []
-    for number, line in enumerate(lines, start=1):
-        if not line.strip():
-            continue
-        try:
-            entry = json.loads(line)
-        except json.JSONDecodeError as exc:
-            raise ScheduleFileError(f"{path}:{number}: not JSON ({exc.msg})") from None
-        if isinstance(entry, dict) and entry.get("type") == "round":
-            rounds.append(entry.get("active"))
-    return rounds
+def _script_from_record(path: str) -> list[Any]:
+    """Active sets of a run record's committed rounds, to replay a recorded run exactly."""
+    from fatswarm.world.record import RecordFormatError, read_record
+
+    try:
+        record = read_record(path, allow_torn_end=True)
+    except RecordFormatError as exc:
+        raise ScheduleFileError(f"schedule file {path}: {exc}") from None
+    return [list(entry.active) for entry in record.rounds]
 
 
 def load_script(path: str, n: int) -> Scripted:
@@ -204,7 +200,7 @@ def load_script(path: str, n: int) -> Scripted:
             raise ScheduleFileError(
                 f"schedule file {path} is not JSON (line {exc.lineno}: {exc.msg})"
             ) from None
-        rounds: Any = _script_from_record(lines, path)
+        rounds: Any = _script_from_record(path)
     else:
         if not isinstance(data, dict) or "rounds" not in data:
             raise ScheduleFileError(

@@ -25,7 +25,7 @@ from fatswarm.coordinator.rounds import (
     RoundTimes,
 )
 from fatswarm.coordinator.schedule import Scheduler
-from fatswarm.world.outcome import ExitCode, Status, exit_code_for
+from fatswarm.world.outcome import Status, exit_code_for
 from fatswarm.world.protocol import (
     Begin,
     Commit,
@@ -39,8 +39,6 @@ from fatswarm.world.protocol import (
 
 log = logging.getLogger("fatswarm.coordinator")
 
-EXIT_FORMED = ExitCode.FORMED
-EXIT_NOT_FORMED = ExitCode.NOT_FORMED
 CONTROL_TIMEOUT_S = 10.0  # the world answers in milliseconds; a commit includes one fsync
 STOP_POLL_S = 0.1  # the loop looks at the stop flag at least this often while it waits
 _TIMES = RoundTimes()  # the defaults

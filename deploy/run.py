@@ -32,7 +32,7 @@ from fatswarm.deploy.config import (
     input_errors,
     resolve_start,
 )
-from fatswarm.world.outcome import ExitCode, exit_code_for
+from fatswarm.world.outcome import ExitCode, Status, exit_code_for
 
 if TYPE_CHECKING:
     from fatswarm.agent.path import Points
@@ -325,9 +325,9 @@ def read_resumable(path: str, *, lockstep: bool) -> RunRecord:
 
 def ended(result: Result) -> str:
     """How a finished record ended, in a few words: "formed in 31 rounds"."""
-    if result.status == "formed":
+    if result.status == Status.FORMED:
         return f"formed in {result.rounds} rounds"
-    if result.status == "max_rounds":
+    if result.status == Status.MAX_ROUNDS:
         return f"stopped at the round limit of {result.rounds} rounds"
     return f"{result.status} after {result.rounds} rounds"
 
@@ -528,7 +528,7 @@ def print_outcome(
 class Outcome:
     """How a finished run ended (lockstep result or networked record): what the summary says."""
 
-    status: str  # "formed" | "stalled" | "max_rounds"
+    status: str  # a world.outcome.Status that ended the run
     rounds: int
     collisions: int  # robots stopped at contact, over the whole run
     n: int
@@ -557,14 +557,14 @@ def verdict(outcome: Outcome) -> str:
     """One line: formed or not, in how many rounds, and whether robots collided on the way."""
     k, rounds = outcome.collisions, outcome.rounds
     collisions = f"{k} collision{'' if k == 1 else 's'}"
-    if outcome.status == "formed":
+    if outcome.status == Status.FORMED:
         if k == 0:
             return f"formed in {rounds} rounds, collision-free"
         return (f"formed in {rounds} rounds, but with {collisions}: not the collision-free "
                 "formation the paper guarantees")
-    if outcome.status == "stalled":
+    if outcome.status == Status.STALLED:
         head = f"not formed: stalled after {rounds} rounds"
-    elif outcome.status == "max_rounds":
+    elif outcome.status == Status.MAX_ROUNDS:
         head = f"not formed: stopped at the round limit ({rounds} rounds)"
     else:
         head = f"not formed: {outcome.status} after {rounds} rounds"

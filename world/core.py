@@ -375,7 +375,7 @@ class WorldCore:
 
     def _finish(self) -> None:
         progress = self.tracker.snapshot()
-        status = progress.status or "stalled"
+        status = progress.status or Status.STALLED
         self.journal.result(
             status,
             progress.rounds,

@@ -261,7 +261,7 @@ class WorldState:
     moved: tuple[int, ...]  # robots whose move was applied in `round`
     stopped: tuple[int, ...]  # robots stopped by contact in `round`
     collisions_total: int
-    status: str  # "running" | "formed" | "stalled" | "max_rounds"
+    status: str  # a world.outcome.Status
     agents: tuple[AgentInfo, ...]  # one per robot
 
     @property
@@ -444,7 +444,7 @@ class ControlReply:
     n: int
     committed: int  # last committed (durable) round, 0 before the first
     open_round: int  # the round open for moves, 0 if none
-    status: str  # "running" | "formed" | "stalled" | "max_rounds"
+    status: str  # a world.outcome.Status
     collisions: int = 0  # robots stopped at contact so far (a formation with any is not clean)
 
     def encode(self) -> bytes:

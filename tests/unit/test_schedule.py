@@ -14,6 +14,7 @@ from fatswarm.coordinator.schedule import (
     load_script,
     make_scheduler,
 )
+from fatswarm.world.record import read_record
 
 
 def run(name: str, n: int, seed: int, rounds: int, **kw: object) -> list[list[int]]:
@@ -128,17 +129,19 @@ def test_script_skips_dead_robots_and_never_returns_empty(tmp_path: Path) -> Non
     assert sched.active(2, [0, 2]) == [0, 2]
 
 
-def test_script_from_run_record(tmp_path: Path) -> None:
+def test_script_from_run_record_replays_its_active_sets() -> None:
+    path = Path(__file__).resolve().parents[1] / "data" / "lockstep-n6-seed1.jsonl"
+    recorded = [list(entry.active) for entry in read_record(path).rounds]
+    sched = load_script(str(path), 6)
+    assert [sched.active(k, range(6)) for k in range(1, len(recorded) + 1)] == recorded
+
+
+def test_a_schedule_file_that_is_a_broken_record_is_one_line(tmp_path: Path) -> None:
     path = tmp_path / "run.jsonl"
-    lines = [
-        {"type": "header", "version": 1, "n": 2},
-        {"type": "round", "round": 1, "active": [1]},
-        {"type": "round", "round": 2, "active": [0, 1]},
-        {"type": "result", "status": "formed"},
-    ]
+    lines = [{"type": "header", "version": 1, "n": 2}, {"type": "round", "round": 1}]
     path.write_text("".join(json.dumps(x) + "\n" for x in lines))
-    sched = load_script(str(path), 2)
-    assert [sched.active(k, [0, 1]) for k in (1, 2)] == [[1], [0, 1]]
+    with pytest.raises(ScheduleFileError, match=r"schedule file .*run.jsonl: .*:1: 'a'"):
+        load_script(str(path), 2)
 
 
 @pytest.mark.parametrize(
