@@ -80,7 +80,7 @@ class RunConfig:
             fairness=args.fairness,
             max_rounds=args.max_rounds,
             move_timeout_s=float(getattr(args, "move_timeout", DEFAULT_MOVE_TIMEOUT_S)),
-            pace_s=float(getattr(args, "pace", 0.0)),
+            pace_s=float(getattr(args, "pace", None) or 0.0),
             command=tuple(getattr(args, "_argv", None) or sys.argv),
         )
 

@@ -47,6 +47,8 @@ log = logging.getLogger("fatswarm.launcher")
 STDERR_FD = 2  # a file descriptor, not sys.stderr: that may be an in-process capture
 STOP_GRACE_S = 5.0  # SIGTERM first; SIGKILL whatever is still there after this
 STOP_GRACE_PER_AGENT_S = 0.1  # hundreds of agents closing sessions at once share two cores
+WATCH_S = 15.0  # a watched run (live dashboard, no --pace) lasts about this long
+MIN_WATCH_PACE_S, MAX_WATCH_PACE_S = 0.02, 1.0
 FINAL_STATE_WAIT_S = 5.0  # the dashboard's wait for the final state (re-published every second)
 
 
@@ -130,9 +132,10 @@ def add_network_arguments(p: argparse.ArgumentParser) -> None:
         g.add_argument("--move-timeout", type=float, default=5.0, metavar="SECONDS",
                        help="an active robot that has not moved by then stays put (default 5; "
                        "finite, > 0)"),
-        g.add_argument("--pace", type=float, default=0.0, metavar="SECONDS",
-                       help="least time per round, to watch a run unfold (default 0: full "
-                       "speed; finite, >= 0)"),
+        g.add_argument("--pace", type=float, default=None, metavar="SECONDS",
+                       help="least time per round, to watch a run unfold (finite, >= 0; 0: full "
+                       f"speed). Default: with the live dashboard, about {WATCH_S:g} s for a "
+                       "typical run; else 0"),
         g.add_argument("--spawn", choices=("fork", "exec"), default="fork",
                        help="agent processes forked from one preloaded host process before any "
                        "Zenoh session exists (fork, fast) or one fresh interpreter each (exec)"),
@@ -140,6 +143,21 @@ def add_network_arguments(p: argparse.ArgumentParser) -> None:
     # what `fatswarm run --lockstep` refuses when given (deploy.run.networked_flags_given)
     p.set_defaults(_networked_flags=tuple((a.option_strings[-1], a.dest, a.default)
                                           for a in flags))
+
+
+def watchable_pace(n: int, scheduler: str) -> float:
+    """Seconds per round that make a typical run last about WATCH_S, so a person can follow it
+    (the algorithm's steps times the rounds a step takes under `scheduler`), within bounds."""
+    from fatswarm.deploy.run import EXPECTED_ROUNDS_PER_STEP
+
+    rounds = EXPECTED_ROUNDS_PER_STEP.get(scheduler, max(1, n)) * (n + 2)
+    return min(MAX_WATCH_PACE_S, max(MIN_WATCH_PACE_S, WATCH_S / rounds))
+
+
+def live_dashboard(args: argparse.Namespace) -> bool:
+    """Whether this run shows the live dashboard (a terminal, not --no-dashboard or --json)."""
+    plain = getattr(args, "no_dashboard", False) or getattr(args, "json", False)
+    return not plain and sys.stdout.isatty()
 
 
 def _child_endpoint(listen: str) -> str:
@@ -158,6 +176,9 @@ def run_networked(args: argparse.Namespace) -> int:
     if problem is not None:
         print(f"fatswarm run: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    if setup is not None and args.pace is None:
+        pace = watchable_pace(setup.params.n, setup.scheduler.name) if live_dashboard(args) else 0.0
+        args = argparse.Namespace(**{**vars(args), "pace": pace})
     if setup is not None and setup.resumed is not None:
         args = with_record_values(args, setup)
     elif args.seed is None and not args.quiet:
@@ -180,7 +201,8 @@ def check_inputs(args: argparse.Namespace) -> tuple[str | None, int, RunSetup | 
     setup = None
     try:
         check_seconds("--move-timeout", args.move_timeout, zero_ok=False)
-        check_seconds("--pace", args.pace, zero_ok=True)
+        if args.pace is not None:
+            check_seconds("--pace", args.pace, zero_ok=True)
         setup = resolve_run(args, seed)
         seed = setup.seed
         if args.swarm is not None:

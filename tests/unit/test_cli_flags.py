@@ -7,6 +7,7 @@ import argparse
 import io
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -283,3 +284,36 @@ def test_a_closed_stdout_ends_quietly_with_141(
     code = fatswarm(["run", "--lockstep", "-n", "3", "--seed", "1", "-q"])
     assert code == run.ExitCode.BROKEN_PIPE == 141
     assert capsys.readouterr().err == ""
+
+
+def test_a_watched_run_paces_itself_to_about_fifteen_seconds() -> None:
+    from fatswarm.deploy.launcher import MAX_WATCH_PACE_S, MIN_WATCH_PACE_S, WATCH_S, watchable_pace
+
+    assert watchable_pace(8, "ssync") == pytest.approx(WATCH_S / (2 * 10))  # ~2 rounds a step
+    assert watchable_pace(20, "fsync") == pytest.approx(WATCH_S / 22)
+    assert watchable_pace(2000, "centralized") == MIN_WATCH_PACE_S
+    assert watchable_pace(1, "fsync") == MAX_WATCH_PACE_S
+
+
+@pytest.mark.parametrize(("tty", "flags", "paced"), [
+    (True, [], True), (False, [], False), (True, ["--no-dashboard"], False),
+    (True, ["--json"], False), (True, ["--pace", "0"], False),
+])
+def test_the_default_pace_is_watchable_only_with_the_live_dashboard(
+    monkeypatch: pytest.MonkeyPatch, tty: bool, flags: list[str], paced: bool
+) -> None:
+    import sys
+
+    from fatswarm.deploy import cli, launcher
+
+    seen: list[float] = []
+
+    def launch(args: Any, seed: int, record: str, config: object) -> int:
+        seen.append(args.pace)
+        return 1
+
+    monkeypatch.setattr(launcher, "_launch", launch)
+    monkeypatch.setattr(launcher, "check_network", lambda *a: None)
+    monkeypatch.setattr(sys.stdout, "isatty", lambda: tty)
+    cli.main(["run", "-n", "4", "--seed", "1", *flags])
+    assert len(seen) == 1 and (seen[0] > 0) == paced
