@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import logging
 import os
 import secrets
@@ -40,7 +39,7 @@ from fatswarm.deploy.zconf import (
 )
 
 if TYPE_CHECKING:
-    from fatswarm.deploy.config import RunConfig, RunSetup
+    from fatswarm.deploy.config import RunSetup
 
 log = logging.getLogger("fatswarm.launcher")
 
@@ -176,18 +175,17 @@ def run_networked(args: argparse.Namespace) -> int:
     if problem is not None:
         print(f"fatswarm run: {problem}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    if setup is not None and args.pace is None:
+    assert setup is not None
+    pace: float = args.pace
+    if pace is None:
         pace = watchable_pace(setup.params.n, setup.scheduler.name) if live_dashboard(args) else 0.0
-        args = argparse.Namespace(**{**vars(args), "pace": pace})
-    if setup is not None and setup.resumed is not None:
-        args = with_record_values(args, setup)
-    elif args.seed is None and not args.quiet:
+    if setup.resumed is None and args.seed is None and not args.quiet:
         print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
     with tempfile.TemporaryDirectory(prefix="fatswarm-") as tmp:
         record = args.record or os.path.join(tmp, "record.jsonl")
         if args.record and not args.resume and os.path.exists(record):
             os.unlink(record)  # --force (checked): a new run, as in lockstep (which truncates)
-        return _launch(args, seed, record, None if setup is None else setup.config)
+        return _launch(args, setup, record, pace)
 
 
 def check_inputs(args: argparse.Namespace) -> tuple[str | None, int, RunSetup | None]:
@@ -215,18 +213,19 @@ def check_inputs(args: argparse.Namespace) -> tuple[str | None, int, RunSetup | 
     return None, seed, setup
 
 
-def with_record_values(args: argparse.Namespace, setup: RunSetup) -> argparse.Namespace:
-    """`args` with a resumed record's run (n, a, seed, scheduler, round cap) in place of the
-    flags, for the parts: the world takes its run from the record anyway; the coordinator must
-    replay the record's schedule and the agents draw the record's private frames."""
-    return argparse.Namespace(**{
-        **vars(args), "n": setup.params.n, "a": None, "seed": setup.seed,
-        "scheduler": setup.scheduler.name, "max_rounds": setup.max_rounds, "init": None,
-        "algorithm": setup.algorithm_ref,
-        "fairness": getattr(setup.scheduler, "fairness", args.fairness),
-        "param": [f"{k}={v!r}" if isinstance(v, float) else f"{k}={v}"
-                  for k, v in setup.params.values.items()],
-    })
+def write_header(setup: RunSetup, record: str, swarm: str) -> None:
+    """Start the record of a new run with its header: the world then runs exactly this run (it
+    resumes the record, with no round yet), so none of it travels as flags to the world."""
+    from fatswarm.world.core import WorldCore, WorldSetup
+    from fatswarm.world.record import RecordWriter
+
+    assert setup.config is not None
+    extra = setup.config.header_extra(networked=True, n=setup.params.n)
+    world = WorldSetup(swarm, setup.params.n, setup.seed, setup.scheduler.name, setup.initial,
+                       setup.max_rounds, algorithm=setup.algorithm_ref,
+                       params=dict(setup.params.values), extra=extra)
+    with RecordWriter(record, fsync=True) as journal:
+        WorldCore(world, journal, algorithm=setup.params)
 
 
 class StopSignal:
@@ -246,7 +245,9 @@ class StopSignal:
         return ExitCode.TERMINATED if self.signum == signal.SIGTERM else ExitCode.INTERRUPTED
 
 
-def _launch(args: argparse.Namespace, seed: int, record: str, config: RunConfig | None) -> int:
+def _launch(args: argparse.Namespace, setup: RunSetup, record: str, pace: float) -> int:
+    """Start the router (unless --connect), the world, the coordinator and the agents for the
+    resolved run `setup`; follow it; the exit code."""
     stop = StopSignal()
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)}
     # Our own router holds one swarm: the default name lets `fatswarm dashboard` attach as is. On
@@ -269,12 +270,14 @@ def _launch(args: argparse.Namespace, seed: int, record: str, config: RunConfig 
         if not args.quiet:
             print(f"swarm {swarm!r} on {endpoints[0]} (watch from elsewhere: fatswarm dashboard "
                   f"--connect {endpoints[0]} --swarm {swarm})", file=sys.stderr)
+        if setup.resumed is None:
+            write_header(setup, record, swarm)
         watcher = _follow(args, swarm, router, endpoints[0])
         try:
             # the agents host needs its own grace first, to stop its agents one by one
-            with Children(stop_grace_s(_robot_count(args)) + STOP_GRACE_S) as children:
-                code = _run_children(args, seed, record, swarm, endpoints, children, stop,
-                                     config)
+            with Children(stop_grace_s(setup.params.n) + STOP_GRACE_S) as children:
+                code = _run_children(args, setup, pace, record, swarm, endpoints, children,
+                                     stop)
                 if watcher is not None and code in (EXIT_FORMED, EXIT_NOT_FORMED):
                     _await_final_state(watcher, FINAL_STATE_WAIT_S)
         finally:
@@ -331,47 +334,38 @@ def _part(name: str, *flags: str) -> list[str]:
 
 def _run_children(
     args: argparse.Namespace,
-    seed: int,
+    setup: RunSetup,
+    pace: float,
     record: str,
     swarm: str,
     endpoints: Sequence[str],
     children: Children,
     stop: StopSignal,
-    config: RunConfig | None = None,
 ) -> int:
+    """Start the parts, configured from the resolved run (the world from the record's header),
+    and wait until the coordinator or the world ends or a signal comes."""
     from fatswarm.deploy.parts import agents_command
 
     net = ["--swarm", swarm]
     for ep in endpoints:
         net += ["--connect", ep]
     quiet = ["--log-level", "warning", "--exit-with-parent", str(os.getpid())]
-    world = ["--state", record, "--seed", str(seed), "--scheduler", args.scheduler, "--start",
-             args.start]
-    if args.init:
-        world += ["--init", args.init]
-    if args.n is not None:
-        world += ["-n", str(args.n)]
-    if args.a is not None:
-        world += ["-a", repr(args.a)]
-    world += ["--algorithm", args.algorithm]
-    if config is not None:
-        world += ["--header", json.dumps(config.header_extra(networked=True, n=_robot_count(args)))]
-    for assignment in args.param:
-        world += ["--param", assignment]
-    if args.max_rounds is not None:
-        world += ["--max-rounds", str(args.max_rounds)]
-    coord = ["--seed", str(seed), "--scheduler", args.scheduler,
-             "--move-timeout", repr(args.move_timeout), "--pace", repr(args.pace)]
-    if args.schedule:
-        coord += ["--schedule", args.schedule]
-    if args.fairness is not None:
-        coord += ["--fairness", str(args.fairness)]
+    world = ["--state", record]  # the header there says the whole run
+    seed, scheduler = setup.seed, setup.scheduler
+    coord = ["--seed", str(seed), "--scheduler", scheduler.name,
+             "--move-timeout", repr(args.move_timeout), "--pace", repr(pace)]
+    script = args.schedule or _schedule_of(setup)
+    if script is not None:
+        coord += ["--schedule", script]
+    fairness = getattr(scheduler, "fairness", None)
+    if isinstance(fairness, int):
+        coord += ["--fairness", str(fairness)]
     # the parts' standard output joins ours on stderr (fd 2): stdout carries only the summary
     children.start("world", _part("world", *net, *quiet, *world), stdout=STDERR_FD)
     children.start("coordinator", _part("coordinator", *net, *quiet, *coord), stdout=STDERR_FD)
-    n = _robot_count(args)
+    n = setup.params.n
     children.start("agents", [*agents_command(n, seed, swarm, endpoints, "warning", args.spawn,
-                                              algorithm=args.algorithm),
+                                              algorithm=setup.algorithm_ref),
                               "--exit-with-parent", str(os.getpid())], stdout=STDERR_FD)
     while not stop.event.wait(0.1):
         gone = children.exited()
@@ -389,14 +383,14 @@ def _run_children(
     return code
 
 
-def _robot_count(args: argparse.Namespace) -> int:
-    if args.init is not None:
-        from fatswarm.world.starts import load_init
-
-        return len(load_init(args.init)[0])
-    from fatswarm.deploy.config import DEFAULT_N
-
-    return int(args.n if args.n is not None else DEFAULT_N)
+def _schedule_of(setup: RunSetup) -> str | None:
+    """The schedule file of a scripted run: the one asked for, or the one its record names."""
+    if setup.config is not None:
+        return setup.config.schedule
+    if setup.resumed is not None:
+        named = setup.resumed.header.extra.get("schedule")
+        return named if isinstance(named, str) else None
+    return None
 
 
 def print_summary(record: str, out: Any) -> Outcome | None:

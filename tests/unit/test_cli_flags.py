@@ -308,8 +308,8 @@ def test_the_default_pace_is_watchable_only_with_the_live_dashboard(
 
     seen: list[float] = []
 
-    def launch(args: Any, seed: int, record: str, config: object) -> int:
-        seen.append(args.pace)
+    def launch(args: Any, setup: object, record: str, pace: float) -> int:
+        seen.append(pace)
         return 1
 
     monkeypatch.setattr(launcher, "_launch", launch)

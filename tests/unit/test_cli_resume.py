@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from fatswarm.deploy import cli, launcher, run
+from fatswarm.deploy.config import RunSetup
 from fatswarm.world.record import read_record
 
 MODES = pytest.mark.parametrize("mode", [["--lockstep"], []], ids=["lockstep", "networked"])
@@ -178,16 +179,19 @@ def test_resume_needs_a_record(mode: list[str], capsys: pytest.CaptureFixture[st
     one_line_refusal(capsys, "--resume continues a run record: name it with --record PATH")
 
 
-def test_lockstep_refuses_another_schedule_than_the_records(
+def test_resume_takes_the_fairness_from_the_header_and_refuses_another(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    part = cut(whole_run(tmp_path, "ssync", "--fairness", "3"), 5)
+    whole = whole_run(tmp_path, "ssync", "--fairness", "3")
+    expected = whole.read_text()
+    part = cut(whole, 5)
     capsys.readouterr()
     before = part.read_text()
-    assert fatswarm(["--lockstep", "--record", str(part), "--resume", "-q"]) == 2
-    one_line_refusal(capsys, "cannot be continued exactly in lock step", "activated robots")
+    assert fatswarm(["--lockstep", "--record", str(part), "--resume", "-q", "--fairness", "5"]) == 2
+    one_line_refusal(capsys, "--fairness 5 contradicts", "fairness=3")
     assert part.read_text() == before
-    assert fatswarm(["--lockstep", "--record", str(part), "--resume", "-q", "--fairness", "3"]) == 0
+    assert fatswarm(["--lockstep", "--record", str(part), "--resume", "-q"]) == 0
+    assert part.read_text() == expected  # the uninterrupted run's record, byte for byte
 
 
 def test_lockstep_refuses_a_networked_record_in_which_robots_timed_out(
@@ -218,17 +222,18 @@ def test_lockstep_refuses_a_torn_last_line_rather_than_cut_it(
 def test_networked_resume_runs_the_records_seed_scheduler_and_robots(
     ssync_cut: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    launched: list[tuple[argparse.Namespace, int, str]] = []
+    launched: list[tuple[RunSetup, str]] = []
 
-    def launch(args: argparse.Namespace, seed: int, record: str, config: object) -> int:
-        launched.append((args, seed, record))
+    def launch(args: argparse.Namespace, setup: RunSetup, record: str, pace: float) -> int:
+        launched.append((setup, record))
         return run.ExitCode.NOT_FORMED
 
     monkeypatch.setattr(launcher, "_launch", launch)
     assert fatswarm(["--record", str(ssync_cut), "--resume", "-q"]) == run.ExitCode.NOT_FORMED
-    ((args, seed, record),) = launched
-    assert (seed, args.seed, args.n, args.param, args.scheduler, args.max_rounds, args.init) == (
-        3, 3, 8, ["a=4.0"], "ssync", 720, None)
-    assert args.algorithm == "uniform-circle" and args.a is None
+    ((setup, record),) = launched
+    assert (setup.seed, setup.params.n, dict(setup.params.values), setup.scheduler.name,
+            setup.max_rounds, setup.algorithm_ref) == (3, 8, {"a": 4.0}, "ssync", 720,
+                                                       "uniform-circle")
+    assert setup.resumed is not None and len(setup.resumed.rounds) > 0
     assert record == str(ssync_cut)
     assert "pass --seed" not in capsys.readouterr().err
