@@ -17,7 +17,7 @@ import sys
 import threading
 from collections.abc import Callable, Sequence
 from types import FrameType
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from fatswarm import __version__
 from fatswarm.deploy.run import ExitCode
@@ -52,12 +52,17 @@ class Terminated(BaseException):
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse's parser, except that a failed write of --help or --version is not swallowed:
-    `main` ends a closed pipe the same way (exit 141) whatever printed into it."""
+    """argparse's parser, except that a failed write of --help or --version is not swallowed
+    (`main` ends a closed pipe the same way, exit 141, whatever printed into it), and a usage
+    error is one line."""
 
     def _print_message(self, message: str, file: SupportsWrite[str] | None = None) -> None:
         if message:
             (file or sys.stderr).write(message)
+
+    def error(self, message: str) -> NoReturn:
+        """A usage error in one line on stderr, pointing at --help; exit 2 (bad input)."""
+        self.exit(ExitCode.BAD_INPUT, f"{self.prog}: {message} (see {self.prog} --help)\n")
 
 
 def build_parser() -> argparse.ArgumentParser:

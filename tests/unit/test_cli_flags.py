@@ -317,3 +317,12 @@ def test_the_default_pace_is_watchable_only_with_the_live_dashboard(
     monkeypatch.setattr(sys.stdout, "isatty", lambda: tty)
     cli.main(["run", "-n", "4", "--seed", "1", *flags])
     assert len(seen) == 1 and (seen[0] > 0) == paced
+
+
+@pytest.mark.parametrize("argv", [["run", "--bogus"], ["run", "-n", "x"], ["nope"], ["world"]])
+def test_a_usage_error_is_one_line_pointing_at_help(
+    argv: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("fatswarm") and err[0].endswith("--help)"), err
