@@ -180,6 +180,7 @@ class WorldCore:
         self.committed = 0
         self.open_round = 0
         self.active: tuple[int, ...] = ()
+        self._active_set: frozenset[int] = frozenset()  # the same, for O(1) membership
         self.looked: set[int] = set()
         self.held: dict[int, Path] = {}
         self.moved: tuple[int, ...] = ()
@@ -253,6 +254,7 @@ class WorldCore:
         )
         self.positions, self.committed = after, round_no
         self.active = tuple(active)
+        self._active_set = frozenset(self.active)
         self.moved = tuple(sorted(paths))
         self.stopped = tuple(sorted({c.robot for c in collisions}))
 
@@ -268,7 +270,7 @@ class WorldCore:
         if not 0 <= robot < self.setup.n:
             self.reject("look-bad-key", f"robot {robot}")
             return None
-        if not self.open_round or robot not in self.active:
+        if not self.open_round or robot not in self._active_set:
             self.reject("look-not-active", f"robot {robot} round {self.open_round}")
             return None
         self.looked.add(robot)
@@ -281,7 +283,7 @@ class WorldCore:
     def admit_look(self, robot: int) -> bool:
         """Count robot `robot`'s Look without building its view (a lock step that plans the round
         at once); False (refused, counted) if it is not active now."""
-        if not self.open_round or robot not in self.active or not 0 <= robot < self.setup.n:
+        if not self.open_round or robot not in self._active_set:
             self.reject("look-not-active", f"robot {robot} round {self.open_round}")
             return False
         self.looked.add(robot)
@@ -294,7 +296,7 @@ class WorldCore:
             self.reject("move-wrong-robot", f"robot {msg.robot} sent as robot {robot}")
         elif msg.round != self.open_round:
             self.reject("move-wrong-round", f"robot {robot} round {msg.round} != {self.open_round}")
-        elif robot not in self.active:
+        elif robot not in self._active_set:
             self.reject("move-not-active", f"robot {robot} round {msg.round}")
         elif robot not in self.looked:
             self.reject("move-without-look", f"robot {robot} round {msg.round}")
@@ -334,6 +336,7 @@ class WorldCore:
         if self.open_round == req.round and self.active == req.active:
             return self.reply(True), False  # a coordinator retrying: keep what is held
         self.open_round, self.active = req.round, req.active
+        self._active_set = frozenset(req.active)
         self.looked, self.held = set(), {}
         return self.reply(True), True
 
