@@ -3,6 +3,7 @@
 `render_frame(frame)` builds a rich renderable (canvas to scale, counters, agents, outcome) from a
 plain dataclass, so tests and replay need no network. `StateWatcher` follows the world's published
 state (`fatswarm/<swarm>/world/state`) through a ring channel of one: it never slows the round.
+It knows no algorithm: it shows the run's algorithm by name, its parameters and its figures.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -29,14 +30,17 @@ from rich.text import Text
 
 from fatswarm.agent import geometry, tolerance
 from fatswarm.agent.path import Points
+from fatswarm.agent.registry import DEFAULT as DEFAULT_ALGORITHM
+from fatswarm.agent.seam import ParamValue
 from fatswarm.deploy.canvas import Canvas, Mode, Viewport
 from fatswarm.deploy.run import EXIT_BAD_INPUT, EXIT_NOT_FORMED, exit_code_for
+from fatswarm.world.outcome import ENDED, Status
 
 if TYPE_CHECKING:
     from fatswarm.world.protocol import WorldState
 
 DEFAULT_SWARM = "default"
-FINAL_STATUSES = ("formed", "stalled", "max_rounds")
+TARGET_RADIUS = "target radius"  # the figure that draws the paper's target points (see `Frame`)
 
 # Canvas layers: where several meet in one cell, the highest number wins.
 LAYER_SEC, LAYER_TARGET_CIRCLE, LAYER_TRAIL, LAYER_TARGET = 1, 2, 3, 4
@@ -51,30 +55,35 @@ LAYER_STYLES: dict[int, str] = {
     LAYER_STOPPED: "bold red",
 }
 _LAYER_STYLES = {layer: Style.parse(style) for layer, style in LAYER_STYLES.items()}
-LEGEND = Text.from_markup(
-    "[green]idle[/] [bold cyan]active[/] [bold red]stopped[/] [magenta]path[/] "
-    "[grey50]SEC[/] [blue]circle r[/] [bold yellow]targets[/]"
-)
+LEGEND = "[green]idle[/] [bold cyan]active[/] [bold red]stopped[/] [magenta]path[/] [grey50]SEC[/]"
+LEGEND_TARGETS = " [blue]circle r[/] [bold yellow]targets[/]"
 ROBOT_RADIUS = 1.0  # robots are unit discs
 SIDE_WIDTH = 46  # columns of the counters and agents column
+KEY_WIDTH = 14  # at most, of the counters' labels (an algorithm's figure may have a long one)
 PROGRESS_EVERY = 50  # rounds between two progress lines when output is not a terminal
 MAX_DUTY = 10  # the live view draws for at most a tenth of the wall time (one core)
+MAX_FIGURE_ROWS = 8  # figures shown as rows; a line says how many more there are
+BELOW_FINAL_FRAME = 6  # lines left under the final frame: the run's summary and the prompt
 
 
 @dataclass(frozen=True, slots=True, eq=False)
 class Frame:
-    """Everything one dashboard frame shows; built from a live `WorldState` or a record."""
+    """One dashboard frame, from a live `WorldState` or a record. Each of `figures` is a row; only
+    a "target radius" figure (the paper's algorithm's) draws and counts its target points."""
 
     round: int
     n: int
-    a: float
     scheduler: str
     positions: Points  # (n, 2) world frame
+    algorithm: str = DEFAULT_ALGORITHM  # its registered name
+    params: dict[str, ParamValue] = field(default_factory=dict)  # its parameters
+    figures: dict[str, float] = field(default_factory=dict)  # its `figures` hook, label -> value
+    a: float | None = None  # the paper's side, as before `params`: the same as params["a"]
     active: tuple[int, ...] = ()  # robots active in `round`
     moved: tuple[int, ...] = ()
     stopped: tuple[int, ...] = ()  # stopped by contact in `round`
     collisions_total: int = 0
-    status: str = "running"  # "running" | "formed" | "stalled" | "max_rounds"
+    status: str = Status.RUNNING  # a world.outcome.Status
     swarm: str = ""
     seed: int | None = None
     alive: tuple[bool, ...] | None = None  # None when unknown (a record holds no liveliness)
@@ -87,16 +96,23 @@ class Frame:
     trails: tuple[Points, ...] = ()  # replay: sampled world paths (k, 2) of this round's moves
     source: str = "live"
 
+    def __post_init__(self) -> None:
+        side = self.params.get("a")
+        if self.a is None and isinstance(side, (int, float)) and not isinstance(side, bool):
+            object.__setattr__(self, "a", float(side))
+        elif self.a is not None and "a" not in self.params:
+            object.__setattr__(self, "params", {**self.params, "a": self.a})
+
 
 @dataclass(frozen=True, slots=True)
-class Figures:
-    """What the frame derives from positions: SEC, target radius and points, targets filled."""
+class Derived:
+    """What a frame derives from its positions: the SEC and, with a target radius, the targets."""
 
     sec_center: tuple[float, float]
     sec_radius: float  # r_c
-    target_radius: float  # r (ComputeRadius, a* = max(a, 4))
-    targets: Points  # (n, 2) target points on the current SEC
-    filled: int  # target points with a robot centre on them
+    target_radius: float | None  # r, the "target radius" figure; None: no target points
+    targets: Points  # (n, 2) target points on the current SEC, (0, 2) without a target radius
+    filled: int | None  # target points with a robot centre on them; None without targets
 
 
 def enclosing_circle(points: Points) -> tuple[tuple[float, float], float]:
@@ -113,30 +129,47 @@ def enclosing_circle(points: Points) -> tuple[tuple[float, float], float]:
     return (float(cx + origin[0]), float(cy + origin[1])), float(circle.radius)
 
 
-def derive(frame: Frame) -> Figures:
-    """SEC, target radius, target points and how many are filled, for the frame's positions."""
+def derive(frame: Frame) -> Derived:
+    """The SEC of the positions (any algorithm); the paper's target points and how many are filled
+    only when the frame's figures give a "target radius"."""
     pts = np.asarray(frame.positions, dtype=np.float64).reshape(-1, 2)
     center, rc = enclosing_circle(pts)
-    targets = (geometry.target_points(pts - pts[0], frame.n) + pts[0] if len(pts)
-               else np.zeros((0, 2)))
+    radius = frame.figures.get(TARGET_RADIUS)
+    if radius is None or not len(pts):
+        return Derived(center, rc, radius, np.zeros((0, 2)), None)
+    targets = geometry.target_points(pts - pts[0], frame.n) + pts[0]
     tol = tolerance.EPS_AT_REL * tolerance.scale(rc)  # "a robot at the point", as the algorithm
-    filled = 0
-    if len(targets) and len(pts):
-        dist = np.hypot(*(targets[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
-        filled = int(np.count_nonzero(dist.min(axis=1) <= tol))
-    return Figures(center, rc, geometry.target_radius(frame.n, frame.a), targets, filled)
+    dist = np.hypot(*(targets[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
+    filled = int(np.count_nonzero(dist.min(axis=1) <= tol)) if len(targets) else 0
+    return Derived(center, rc, radius, targets, filled)
+
+
+def algorithm_text(algorithm: str, params: dict[str, ParamValue]) -> str:
+    """`uniform-circle a=4`: the algorithm's name and its parameters."""
+    shown = " ".join(
+        f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in params.items()
+    )
+    return f"{algorithm} {shown}".strip()
+
+
+def figure_text(value: float) -> str:
+    """A figure as the counters show it: three decimals, or four significant digits far from 1."""
+    if value != 0 and not 1e-3 <= abs(value) < 1e6:
+        return f"{value:.4g}"
+    return f"{value:.3f}"
 
 
 # --- canvas ---------------------------------------------------------------------------------------
 
 
 def build_canvas(
-    frame: Frame, figures: Figures, cols: int, rows: int, mode: Mode = "braille"
+    frame: Frame, derived: Derived, cols: int, rows: int, mode: Mode = "braille"
 ) -> Canvas:
-    """Draw the frame to scale: SEC, target circle r, target points, paths and discs."""
+    """Draw the frame to scale: SEC, paths and discs (and the paper's circle r and targets)."""
     pts = np.asarray(frame.positions, dtype=np.float64).reshape(-1, 2)
-    (cx, cy), rc = figures.sec_center, figures.sec_radius
-    reach = max(rc, figures.target_radius) + ROBOT_RADIUS
+    (cx, cy), rc = derived.sec_center, derived.sec_radius
+    r = derived.target_radius if derived.target_radius is not None else 0.0
+    reach = max(rc, r) + ROBOT_RADIUS
     xmin, xmax = cx - reach, cx + reach
     ymin, ymax = cy - reach, cy + reach
     if len(pts):
@@ -145,11 +178,11 @@ def build_canvas(
     pad = 0.03 * max(xmax - xmin, ymax - ymin)
     canvas = Canvas(Viewport.fit(xmin - pad, xmax + pad, ymin - pad, ymax + pad, cols, rows, mode))
     canvas.circle(cx, cy, rc, LAYER_SEC)
-    if figures.target_radius > 0:
-        canvas.circle(cx, cy, figures.target_radius, LAYER_TARGET_CIRCLE)
+    if r > 0:
+        canvas.circle(cx, cy, r, LAYER_TARGET_CIRCLE)
     for trail in frame.trails:
         canvas.polyline(trail, LAYER_TRAIL)
-    for x, y in figures.targets:
+    for x, y in derived.targets:
         canvas.marker(float(x), float(y), LAYER_TARGET)
     active, stopped = set(frame.active), set(frame.stopped)
     for i, (x, y) in enumerate(pts):
@@ -161,15 +194,15 @@ def build_canvas(
 class CanvasView:
     """Renders the frame's canvas at whatever size rich gives it (braille by default)."""
 
-    def __init__(self, frame: Frame, figures: Figures, mode: Mode = "braille") -> None:
-        self.frame, self.figures, self.mode = frame, figures, mode
+    def __init__(self, frame: Frame, derived: Derived, mode: Mode = "braille") -> None:
+        self.frame, self.derived, self.mode = frame, derived, mode
         self._cache: dict[tuple[int, int], list[Segment]] = {}
 
     def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
         cols = max(1, options.max_width)
         rows = max(1, (options.height or options.size.height or 20))
         if (cols, rows) not in self._cache:  # rich may render a panel's content twice
-            canvas = build_canvas(self.frame, self.figures, cols, rows, self.mode)
+            canvas = build_canvas(self.frame, self.derived, cols, rows, self.mode)
             self._cache[(cols, rows)] = list(canvas.segments(_LAYER_STYLES))
         yield from self._cache[(cols, rows)]
 
@@ -184,27 +217,36 @@ def _fmt_rate(rate: float | None) -> str:
 def outcome_text(frame: Frame) -> str:
     """One line saying how the run ended, or that it still runs."""
     k = frame.collisions_total
-    if frame.status == "formed" and k:
-        return (
-            f"FORMED WITH {k} COLLISION{'' if k == 1 else 'S'}: uniform circle of {frame.n} robots "
-            f"after {frame.round} rounds, not the collision-free formation the paper guarantees"
-        )
-    if frame.status == "formed":
-        head = f"FORMED: uniform circle of {frame.n} robots after {frame.round} rounds"
-    elif frame.status == "stalled":
+    reached = f"{frame.algorithm} goal reached by {frame.n} robots after {frame.round} rounds"
+    if frame.status == Status.FORMED and k:
+        return f"FORMED WITH {k} COLLISION{'' if k == 1 else 'S'}: {reached}, not collision-free"
+    if frame.status == Status.FORMED:
+        head = f"FORMED: {reached}"
+    elif frame.status == Status.STALLED:
         head = f"STALLED after {frame.round} rounds: no robot can make progress"
-    elif frame.status == "max_rounds":
+    elif frame.status == Status.MAX_ROUNDS:
         head = f"NOT FORMED: stopped at the round limit ({frame.round} rounds)"
     else:
         return f"running: round {frame.round}"
     return f"{head}, {frame.collisions_total} collisions"
 
 
-def counters_table(frame: Frame, figures: Figures) -> Table:
-    """Round, status, scheduler, r_c versus r, targets filled, collisions, rounds per second."""
+def run_lines(frame: Frame, width: int) -> list[str]:
+    """`n=8  uniform-circle a=4`, parameters going on to further lines of at most `width`."""
+    lines = [f"n={frame.n}  {frame.algorithm}"]
+    for word in algorithm_text("", frame.params).split(" ") if frame.params else ():
+        if len(lines[-1]) + 1 + len(word) <= width:
+            lines[-1] += " " + word
+        else:
+            lines.append(word)
+    return lines
+
+
+def counters_table(frame: Frame, derived: Derived) -> Table:
+    """Round, status, scheduler, algorithm, r_c (versus r, targets filled), figures, collisions."""
     grid = Table.grid(padding=(0, 1))
-    grid.add_column("key", style="bold", no_wrap=True)
-    grid.add_column("value", no_wrap=True)
+    grid.add_column("key", style="bold", no_wrap=True, max_width=KEY_WIDTH, overflow="ellipsis")
+    grid.add_column("value", no_wrap=True, overflow="ellipsis")
     round_text = f"{frame.round}"
     if frame.last_round is not None:
         round_text += f" / {frame.last_round}"
@@ -215,12 +257,24 @@ def counters_table(frame: Frame, figures: Figures) -> Table:
     grid.add_row(
         "scheduler", frame.scheduler + (f"  seed {frame.seed}" if frame.seed is not None else "")
     )
-    grid.add_row("robots", f"n={frame.n}  a={frame.a:g}")
-    r, rc = figures.target_radius, figures.sec_radius
-    grid.add_row("r_c / r", f"{rc:.3f} / {r:.3f}")
-    grid.add_row("", ProgressBar(total=max(r, 1e-9), completed=min(rc, r), width=22))
-    grid.add_row("targets", f"{figures.filled} / {frame.n} filled")
-    grid.add_row("", ProgressBar(total=max(frame.n, 1), completed=figures.filled, width=22))
+    keys = min(KEY_WIDTH, max([len("this round"), *(len(k) for k in frame.figures)]))
+    for i, line in enumerate(run_lines(frame, SIDE_WIDTH - 4 - keys - 1)):  # borders, padding
+        grid.add_row("" if i else "robots", Text(line))  # Text: a user's name is no markup
+    r, rc = derived.target_radius, derived.sec_radius
+    if r is None or derived.filled is None:
+        grid.add_row("r_c", f"{rc:.3f}")
+    else:
+        grid.add_row("r_c / r", f"{rc:.3f} / {r:.3f}")
+        grid.add_row("", ProgressBar(total=max(r, 1e-9), completed=min(rc, r), width=22))
+        grid.add_row("targets", f"{derived.filled} / {frame.n} filled")
+        grid.add_row("", ProgressBar(total=max(frame.n, 1), completed=derived.filled, width=22))
+    shown = list(frame.figures.items())
+    if len(shown) > MAX_FIGURE_ROWS:  # the counters must leave the agents panel some room
+        shown = shown[: MAX_FIGURE_ROWS - 1]
+    for label, value in shown:
+        grid.add_row(Text(label), figure_text(value))  # Text: a label is no markup
+    if len(shown) < len(frame.figures):
+        grid.add_row("", Text(f"… {len(frame.figures) - len(shown)} more figures", style="dim"))
     counts = f"{len(frame.active)} active  {len(frame.moved)} moved  {len(frame.stopped)} stopped"
     grid.add_row("this round", counts)
     grid.add_row("collisions", str(frame.collisions_total))
@@ -278,7 +332,7 @@ class AgentsView:
 
 def render_frame(frame: Frame, *, footer: str | None = None, mode: Mode = "braille") -> Layout:
     """The whole dashboard for one frame: header, canvas, counters, agents, outcome or key help."""
-    figures = derive(frame)
+    derived = derive(frame)
     title = f"fatswarm · {frame.source}"
     if frame.swarm:
         title += f" · swarm {frame.swarm}"
@@ -286,10 +340,10 @@ def render_frame(frame: Frame, *, footer: str | None = None, mode: Mode = "brail
     bottom = outcome_text(frame)
     if footer:
         bottom = f"{bottom}    {footer}"
-    if frame.status == "formed":
+    if frame.status == Status.FORMED:
         style = "bold green" if frame.collisions_total == 0 else "bold yellow"
     else:
-        style = "bold" if frame.status != "running" else ""
+        style = "bold" if frame.status in ENDED else ""
     layout.split_column(
         Layout(Text(title, style="bold", no_wrap=True, overflow="ellipsis"), name="header", size=1),
         Layout(name="body"),
@@ -299,15 +353,17 @@ def render_frame(frame: Frame, *, footer: str | None = None, mode: Mode = "brail
             size=3,
         ),
     )
+    legend = Text.from_markup(LEGEND + (LEGEND_TARGETS if len(derived.targets) else ""))
     canvas = Panel(
-        CanvasView(frame, figures, mode), title="swarm, to scale", subtitle=LEGEND, padding=0
+        CanvasView(frame, derived, mode), title="swarm, to scale", subtitle=legend, padding=0
     )
+    counters = counters_table(frame, derived)
     layout["body"].split_row(
         Layout(canvas, name="canvas"),
         Layout(name="side", size=SIDE_WIDTH),
     )
     layout["side"].split_column(
-        Layout(Panel(counters_table(frame, figures), title="run"), name="counters", size=15),
+        Layout(Panel(counters, title="run"), name="counters", size=counters.row_count + 2),
         Layout(Panel(AgentsView(frame), title="agents"), name="agents"),
     )
     return layout
@@ -315,10 +371,15 @@ def render_frame(frame: Frame, *, footer: str | None = None, mode: Mode = "brail
 
 def progress_line(frame: Frame) -> str:
     """The one-line progress report printed when standard output is not a terminal."""
-    figures = derive(frame)
+    derived = derive(frame)
+    r, rc = derived.target_radius, derived.sec_radius
+    if r is None or derived.filled is None:
+        parts = [f"r_c {rc:.3f}"]
+    else:
+        parts = [f"targets {derived.filled}/{frame.n}", f"r_c {rc:.3f} / r {r:.3f}"]
+    parts += [f"{k} {figure_text(v)}" for k, v in frame.figures.items() if k != TARGET_RADIUS]
     return (
-        f"round {frame.round} {frame.status}: targets {figures.filled}/{frame.n}, "
-        f"r_c {figures.sec_radius:.3f} / r {figures.target_radius:.3f}, "
+        f"round {frame.round} {frame.status}: {', '.join(parts)}, "
         f"active {len(frame.active)}, collisions {frame.collisions_total}, "
         f"{_fmt_rate(frame.rounds_per_second)} rounds/s"
     )
@@ -353,9 +414,11 @@ def frame_from_state(
     return Frame(
         round=state.round,
         n=state.n,
-        a=state.a,
         scheduler=state.scheduler,
         positions=state.positions,
+        algorithm=state.algorithm,
+        params=dict(state.params),
+        figures=dict(state.figures),
         active=tuple(state.active),
         moved=tuple(state.moved),
         stopped=tuple(state.stopped),
@@ -410,7 +473,7 @@ class ProgressLog:
 
     def show(self, frame: Frame) -> None:
         self.last = frame
-        if frame.status in FINAL_STATUSES:
+        if frame.status in ENDED:
             return
         if frame.round >= self.next_round:
             self.out(progress_line(frame))
@@ -420,7 +483,7 @@ class ProgressLog:
         frame = final or self.last
         if frame is not None:
             self.out(progress_line(frame))
-            if frame.status in FINAL_STATUSES:
+            if frame.status in ENDED:
                 self.out(outcome_text(frame))
 
 
@@ -447,10 +510,12 @@ class LiveView:
         self.live.update(render_frame(frame), refresh=True)
 
     def close(self, final: Frame | None) -> None:
-        self.live.stop()
+        self.live.stop()  # leaves the alternate screen, whose content the terminal drops
         frame = final or self.last
-        if frame is not None:
-            print_frame(frame, self.console)
+        if frame is not None:  # so print it on the main screen, leaving room for the summary
+            height = min(self.console.size.height, 40)
+            height = max(min(height, 16), height - BELOW_FINAL_FRAME)
+            print_frame(frame, self.console, height)
 
 
 def _open_session(connect: str) -> Any:
@@ -531,7 +596,7 @@ class StateWatcher:
                                 rate = self.latest.rounds_per_second
                             frame = frame_from_state(state, rate, self.max_rounds)
                             self.latest = frame
-                            if frame.status in FINAL_STATUSES:
+                            if frame.status in ENDED:
                                 self.ended.set()
                     if stopping:
                         break  # the sink shows `latest` when it closes
@@ -541,7 +606,7 @@ class StateWatcher:
                     began = time.monotonic()
                     self.sink.show(frame)
                     busy = time.monotonic() - began
-                    if self.stop_at_end and frame.status in FINAL_STATUSES:
+                    if self.stop_at_end and frame.status in ENDED:
                         break
                     # drawing may take at most 1/MAX_DUTY of the time: the swarm needs the CPU
                     self._stop.wait(max(self.period, busy * (MAX_DUTY - 1)))
@@ -705,6 +770,6 @@ def main(args: argparse.Namespace) -> int:
         print(f"fatswarm dashboard: cannot follow {args.connect}: {reason}", file=sys.stderr)
         return EXIT_BAD_INPUT
     last = watcher.latest
-    if last is None or last.status == "running":
+    if last is None or last.status not in ENDED:
         return EXIT_NOT_FORMED
     return exit_code_for(last.status, last.collisions_total)  # as `fatswarm run`: 3 if collided

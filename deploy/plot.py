@@ -49,6 +49,19 @@ def final_positions(record: RunRecord) -> Points:
     return record.header.initial
 
 
+def default_title(record: RunRecord, rc: float) -> str:
+    """The run in one line: algorithm and parameters, n, scheduler, seed, outcome, final r_c."""
+    from fatswarm.deploy.dashboard import algorithm_text
+
+    header = record.header
+    status = record.result.status if record.result is not None else "unfinished"
+    rounds = record.rounds[-1].round if record.rounds else 0
+    return (
+        f"{algorithm_text(header.algorithm, header.params)}, n={header.n}, {header.scheduler}, "
+        f"seed {header.seed}: {status} after {rounds} rounds (final SEC r_c={rc:.3f})"
+    )
+
+
 def draw(record: RunRecord, out: str, title: str | None = None) -> None:
     """Render the record to `out` (format from its suffix); needs matplotlib."""
     import matplotlib
@@ -77,14 +90,7 @@ def draw(record: RunRecord, out: str, title: str | None = None) -> None:
     lo, hi = everything.min(axis=0) - 1.5, everything.max(axis=0) + 1.5
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
-    status = record.result.status if record.result is not None else "unfinished"
-    rounds = record.rounds[-1].round if record.rounds else 0
-    ax.set_title(
-        title
-        or f"n={header.n}, a={header.a:g}, {header.scheduler}, seed {header.seed}: "
-        f"{status} after {rounds} rounds (final circle r_c={rc:.3f})",
-        fontsize=9,
-    )
+    ax.set_title(title or default_title(record, rc), fontsize=9)
     ax.set_xlabel("x (robot radii)")
     ax.set_ylabel("y (robot radii)")
     ax.grid(True, lw=0.3, alpha=0.5)

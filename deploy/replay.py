@@ -2,6 +2,7 @@
 
 The record (JSON Lines, issue 2 item 8) becomes one `Frame` per round (round 0 is the start); a
 small pure `Player` turns keys and elapsed time into the round shown; the terminal shell draws it.
+The algorithm's figures are computed for the rounds shown, by loading the record's algorithm.
 """
 
 from __future__ import annotations
@@ -11,22 +12,27 @@ import math
 import os
 import select
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import Any
 
-from fatswarm.agent.path import sample, truncate
+from fatswarm.agent.path import Points, sample, truncate
+from fatswarm.agent.registry import load_algorithm
+from fatswarm.agent.seam import AlgorithmError, AlgorithmParamsError, Configured
 from fatswarm.deploy.dashboard import Frame, print_frame, render_frame, save_svg
 from fatswarm.deploy.run import ExitCode
-from fatswarm.world.record import RecordFormatError, RunRecord, read_record, torn_end_note
+from fatswarm.world.record import Header, RecordFormatError, RunRecord, read_record, torn_end_note
 
 EXIT_OK, EXIT_BAD_INPUT = ExitCode.OK, ExitCode.BAD_INPUT
 TRAIL_STEP = 0.25  # world units between samples of a drawn path (a quarter of a robot radius)
 
+FiguresOf = Callable[[Points], dict[str, float]]  # (n, 2) positions -> the algorithm's figures
+
 
 def build_frames(record: RunRecord, source: str = "replay") -> list[Frame]:
-    """One frame per round, round 0 being the start; the last carries the result's status."""
+    """One frame per round, round 0 being the start; the last carries the result's status. No
+    figures: `FrameFigures` adds them to the frames shown."""
     run = record.header
     n = run.n
     last_active = [-1] * n
@@ -37,7 +43,8 @@ def build_frames(record: RunRecord, source: str = "replay") -> list[Frame]:
 
     def frame(**fields: Any) -> Frame:
         return Frame(
-            n=n, a=run.a, scheduler=run.scheduler, seed=run.seed, source=source,
+            n=n, algorithm=run.algorithm, params=dict(run.params), scheduler=run.scheduler,
+            seed=run.seed, source=source,
             last_active=tuple(last_active), last_path_length=tuple(last_length),
             last_round=last_round, **fields,
         )  # fmt: skip
@@ -70,6 +77,43 @@ def build_frames(record: RunRecord, source: str = "replay") -> list[Frame]:
     if record.result is not None:
         frames[-1] = replace(frames[-1], status=record.result.status)
     return frames
+
+
+def figures_of(header: Header, warn: Callable[[str], None]) -> FiguresOf | None:
+    """The record's algorithm's figures hook, for its n and parameters; None (and one line to
+    `warn`) when the algorithm cannot be loaded here, e.g. a file of someone else's."""
+    try:
+        configured = Configured.of(load_algorithm(header.algorithm_ref), header.n, header.params)
+    except (AlgorithmError, AlgorithmParamsError) as exc:
+        reason = " ".join(str(exc).split())  # one line, whatever the message holds
+        warn(f"replaying without the figures of {header.algorithm_ref!r}: {reason}")
+        return None
+    return configured.figures
+
+
+class FrameFigures:
+    """Adds the algorithm's figures to the frames shown, each computed once; if the hook raises,
+    says so once to `warn` and shows no more figures."""
+
+    def __init__(self, figures: FiguresOf | None, warn: Callable[[str], None]) -> None:
+        self.figures, self.warn = figures, warn
+        self._done: dict[int, dict[str, float]] = {}
+
+    def __call__(self, frame: Frame) -> Frame:
+        """`frame` with its figures (as it is, without a hook)."""
+        if self.figures is None:
+            return frame
+        if frame.round not in self._done:
+            try:
+                self._done[frame.round] = self.figures(frame.positions)
+            except Exception as exc:  # the algorithm's own code: a replay must not die of it
+                self.figures = None
+                self.warn(
+                    f"replaying without figures: the algorithm's figures hook raised "
+                    f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+                )
+                return frame
+        return replace(frame, figures=self._done[frame.round])
 
 
 # --- the player: pure state of what is shown ------------------------------------------------------
@@ -189,8 +233,10 @@ def _read_keys(fd: int, timeout: float) -> list[str]:
     return parse_keys(data.decode("utf-8", errors="ignore"))
 
 
-def play(frames: Sequence[Frame], player: Player) -> Frame:
-    """Show the frames interactively until q; returns the frame on screen at the end."""
+def play(
+    frames: Sequence[Frame], player: Player, shown_as: Callable[[Frame], Frame] = lambda f: f
+) -> Frame:
+    """Show the frames (each through `shown_as`) interactively until q; returns the last shown."""
     import time
 
     from rich.console import Console
@@ -203,7 +249,7 @@ def play(frames: Sequence[Frame], player: Player) -> Frame:
         last = time.monotonic()
         while not player.quit:
             if shown != player.index or player.playing:
-                live.update(render_frame(frames[player.index], footer=player.footer()))
+                live.update(render_frame(shown_as(frames[player.index]), footer=player.footer()))
                 live.refresh()
                 shown = player.index
             wait = 0.05 if player.playing else 0.5
@@ -213,7 +259,7 @@ def play(frames: Sequence[Frame], player: Player) -> Frame:
             now = time.monotonic()
             player.tick(now - last)
             last = now
-    frame = frames[player.index]
+    frame = shown_as(frames[player.index])
     print_frame(frame, console)
     return frame
 
@@ -244,6 +290,10 @@ def main(args: argparse.Namespace) -> int:
     if note is not None:
         print(f"fatswarm replay: {note}", file=sys.stderr)
     frames = build_frames(record, source=f"replay {os.path.basename(args.record)}")
+
+    def warn(line: str) -> None:
+        print(f"fatswarm replay: {line}", file=sys.stderr)
+
     last = len(frames) - 1
     if args.round is not None and not 0 <= args.round <= frames[-1].round:
         print(
@@ -257,17 +307,18 @@ def main(args: argparse.Namespace) -> int:
     index = last
     if args.round is not None:
         index = next(i for i, f in enumerate(frames) if f.round >= args.round)
+    shown_as = FrameFigures(figures_of(record.header, warn), warn)
     interactive = not args.no_play and sys.stdin.isatty() and sys.stdout.isatty()
     if interactive:
         start = index if args.round is not None else 0
         player = Player(
             count=len(frames), index=start, playing=args.round is None, speed=args.speed
         )
-        frame = play(frames, player)
+        frame = play(frames, player, shown_as)
     else:
         from rich.console import Console
 
-        frame = frames[index]
+        frame = shown_as(frames[index])
         print_frame(frame, Console(width=None if sys.stdout.isatty() else 120), height=40)
     if args.svg:
         try:

@@ -37,7 +37,7 @@ ANSI = re.compile(
 )
 COMMAND_MAIN = (
     "import argparse, sys\n"
-    "from deploy import {module} as m\n"
+    "from fatswarm.deploy import {module} as m\n"
     "p = argparse.ArgumentParser()\n"
     "m.add_arguments(p)\n"
     "sys.exit(m.main(p.parse_args(sys.argv[1:])))\n"
@@ -161,7 +161,7 @@ def world_state(round_no: int, n: int, status: str, swarm: str) -> WorldState:
     )
     return WorldState(
         round=round_no, n=n,
-        algorithm="uniform-circle", params={"a": 4.0}, figures={},
+        algorithm="uniform-circle", params={"a": 4.0}, figures={"target radius": r},
         seed=3, scheduler="fsync", swarm=swarm, positions=positions,
         active=tuple(range(n)), moved=(), stopped=(), collisions_total=0, status=status,
         agents=agents,
@@ -203,7 +203,10 @@ def test_attached_dashboard_shows_the_published_state_and_the_outcome() -> None:
             code = child.finish(deadline)
             text = child.text
             assert code == 0, text[-3000:]
-            assert f"FORMED: uniform circle of 6 robots after {round_no + 1} rounds" in text
+            assert (
+                f"FORMED: uniform-circle goal reached by 6 robots after {round_no + 1} rounds"
+                in text
+            )
             assert re.search(r"targets\s+6 / 6 filled", text)
         finally:
             child.kill()
@@ -234,14 +237,18 @@ def test_replay_on_a_terminal_steps_with_keys_and_quits() -> None:
         os.write(child.master, b"..")  # two steps forward
         assert child.wait_for(lambda t: re.search(r"round\s+7 / 17", t), deadline), child.text
         os.write(child.master, b"G")  # to the end: the outcome shows
-        assert child.wait_for(lambda t: "FORMED: uniform circle of 6" in t, deadline), child.text
+        assert child.wait_for(
+            lambda t: "FORMED: uniform-circle goal reached by 6" in t, deadline
+        ), child.text
         os.write(child.master, b"q")
         assert child.finish(deadline) == 0, child.text[-2000:]
     finally:
         child.kill()
 
 
-def test_fatswarm_run_shows_the_live_dashboard_on_a_terminal(tmp_path: Path) -> None:
+def test_fatswarm_run_shows_the_live_dashboard_and_leaves_the_final_frame_on_screen(
+    tmp_path: Path,
+) -> None:
     svg = tmp_path / "final.svg"
     # Paced rounds: unpaced, the whole run can end between two looks of the live view (5 per
     # second), which then never sees two states and cannot measure a rate.
@@ -262,8 +269,18 @@ def test_fatswarm_run_shows_the_live_dashboard_on_a_terminal(tmp_path: Path) -> 
         assert "fatswarm · live" in text
         assert re.search(r"rounds/s\s+[\d,.]+", text)
         assert re.search(r"targets\s+5 / 5 filled", text)
-        assert "FORMED: uniform circle of 5 robots" in text
+        assert "FORMED: uniform-circle goal reached by 5 robots" in text
         assert svg.read_text().startswith("<svg")
+        # the live view ran on the alternate screen, which the terminal drops on leaving it: the
+        # final frame is printed after that, whole, with the summary still below it on screen
+        raw = bytes(child.output)
+        left = raw.rfind(b"\x1b[?1049l")
+        assert left > raw.find(b"\x1b[?1049h") >= 0
+        after = screen_text(raw[left:])
+        final = after[after.index("fatswarm · live") :].rstrip("\n").splitlines()
+        assert len(final) <= ROWS - 1, "\n".join(final)  # the prompt fits below it too
+        assert any("FORMED: uniform-circle goal reached by 5 robots" in line for line in final)
+        assert any(line.startswith("formed in ") for line in final)  # the summary
     finally:
         child.kill()
 

@@ -11,12 +11,18 @@ import numpy as np
 import pytest
 from rich.console import Console
 
+from fatswarm.agent.registry import load_algorithm
+from fatswarm.agent.seam import Configured
 from fatswarm.deploy.dashboard import (
     LAYER_ACTIVE,
     LAYER_ROBOT,
+    LAYER_SEC,
     LAYER_STOPPED,
     LAYER_TARGET,
+    LAYER_TARGET_CIRCLE,
+    MAX_FIGURE_ROWS,
     Frame,
+    LiveView,
     ProgressLog,
     RateMeter,
     StateWatcher,
@@ -26,12 +32,16 @@ from fatswarm.deploy.dashboard import (
     build_canvas,
     derive,
     enclosing_circle,
+    figure_text,
     follow,
     frame_from_state,
     outcome_text,
     print_frame,
+    progress_line,
+    run_lines,
     save_svg,
 )
+from fatswarm.world.outcome import ENDED, Status
 from fatswarm.world.protocol import AgentInfo, WorldState
 
 
@@ -50,13 +60,30 @@ def polygon(n: int, side: float) -> np.ndarray:
     return np.column_stack((10 + r * np.sin(theta), -5 + r * np.cos(theta)))
 
 
+def hook_figures(algorithm: str, positions: np.ndarray, **params: object) -> dict[str, float]:
+    """What the algorithm's own `figures` hook gives, as the world publishes it."""
+    return Configured.of(load_algorithm(algorithm), len(positions), params).figures(positions)
+
+
+def paper_frame(**fields: object) -> Frame:
+    """A frame of the paper's algorithm (a = 4 unless given), with the figures its hook gives."""
+    positions = np.asarray(fields["positions"], dtype=np.float64)
+    a = fields.pop("a", 4.0)
+    figures = hook_figures("uniform-circle", positions, a=a)
+    return Frame(params={"a": a}, figures=figures, **fields)  # type: ignore[arg-type]
+
+
+SAMPLE_POSITIONS = np.array([[0.0, 0.0], [8.0, 0.0], [0.0, 8.0], [-6.0, -5.0]])
+
+
 def sample_frame(**changes: object) -> Frame:
     fields: dict[str, object] = dict(
         round=7,
         n=4,
         a=4.0,
+        figures=hook_figures("uniform-circle", SAMPLE_POSITIONS, a=4.0),
         scheduler="ssync",
-        positions=np.array([[0.0, 0.0], [8.0, 0.0], [0.0, 8.0], [-6.0, -5.0]]),
+        positions=SAMPLE_POSITIONS,
         active=(1, 2),
         moved=(1,),
         stopped=(2,),
@@ -100,6 +127,95 @@ def test_agents_panel_lists_alive_last_activation_path_length_and_timeouts() -> 
     assert re.search(r"\b3\s+yes\s+never\s+0\.000\s+0\b", text)
     # this round's active robots come first
     assert text.index(" NO ") < text.index("never")
+
+
+def test_info_grid_names_the_algorithm_and_its_parameters() -> None:
+    assert re.search(r"robots\s+n=4  uniform-circle a=4\b", render_text(sample_frame()))
+    frame = Frame(
+        round=1,
+        n=3,
+        scheduler="fsync",
+        positions=SAMPLE_POSITIONS[:3],
+        algorithm="spread-out",
+        params={"spacing": 5.0, "step": 1.0, "mode": "wide"},
+    )
+    # parameters that do not fit go on to the next line, never cut
+    lines = run_lines(frame, 31)
+    assert " ".join(lines) == "n=3  spread-out spacing=5 step=1 mode=wide" and len(lines) == 2
+    text = render_text(frame)
+    assert re.search(rf"robots\s+{lines[0]}\s", text) and re.search(rf"\s{lines[1]}\s+│", text)
+
+
+def test_gathering_frame_draws_the_sec_but_no_targets_and_shows_its_spread() -> None:
+    pts = polygon(6, 4.0)
+    figures = hook_figures("gathering", pts)
+    frame = Frame(
+        round=4,
+        n=6,
+        scheduler="fsync",
+        positions=pts,
+        algorithm="gathering",
+        params={"tolerance": 0.001},
+        figures=figures,
+    )
+    derived = derive(frame)
+    assert derived.target_radius is None and derived.filled is None and not len(derived.targets)
+    layers = build_canvas(frame, derived, cols=60, rows=30).cell_layers()
+    assert (layers == LAYER_SEC).any()
+    assert not (layers == LAYER_TARGET).any() and not (layers == LAYER_TARGET_CIRCLE).any()
+    text = render_text(frame)
+    assert re.search(rf"spread\s+{figures['spread']:.3f}\b", text)
+    assert re.search(rf"r_c\s+{derived.sec_radius:.3f}\b", text)
+    assert "targets" not in text and "r_c / r" not in text and "circle r" not in text
+    assert "target radius" not in text
+    assert f"spread {figures['spread']:.3f}" in progress_line(frame)
+    assert "targets" not in progress_line(frame)
+
+
+def test_paper_frame_draws_its_targets_because_its_figures_give_a_target_radius() -> None:
+    frame = sample_frame()
+    assert set(frame.figures) == {"target radius"}
+    derived = derive(frame)
+    assert derived.target_radius == frame.figures["target radius"] and derived.filled is not None
+    layers = build_canvas(frame, derived, cols=60, rows=30).cell_layers()
+    assert (layers == LAYER_TARGET_CIRCLE).any() and (layers == LAYER_TARGET).any()
+    text = render_text(frame)
+    assert re.search(rf"target radius\s+{derived.target_radius:.3f}\b", text)
+    assert "circle r" in text and "targets" in text
+    # the same positions without the figure: the paper's algorithm is not assumed
+    bare = derive(sample_frame(figures={}))
+    assert bare.target_radius is None and not len(bare.targets)
+
+
+def test_every_figure_is_a_row_and_labels_are_shown_as_they_are() -> None:
+    figures = {"[bold]x": 0.5, "tiny": 1.5e-7, "huge": 3.2e9, "zero": 0.0}
+    text = render_text(sample_frame(algorithm="mine", params={}, a=None, figures=figures))
+    assert re.search(r"\[bold\]x\s+0\.500\b", text)
+    assert re.search(r"tiny\s+1\.5e-07\b", text) and re.search(r"huge\s+3\.2e\+09\b", text)
+    assert re.search(r"zero\s+0\.000\b", text)
+    assert figure_text(12.3456) == "12.346"
+
+
+def test_figure_rows_are_capped_with_a_line_saying_how_many_more() -> None:
+    figures = {f"f{i}": float(i) for i in range(MAX_FIGURE_ROWS + 3)}
+    text = render_text(sample_frame(figures=figures), height=50)
+    assert "… 4 more figures" in text
+    assert re.search(rf"f{MAX_FIGURE_ROWS - 2}\s+", text) and "f10" not in text
+
+
+def test_frame_a_is_the_same_as_the_parameter_a() -> None:
+    pts = polygon(3, 4.0)
+    assert Frame(round=0, n=3, scheduler="fsync", positions=pts, a=5.0).params == {"a": 5.0}
+    assert Frame(round=0, n=3, scheduler="fsync", positions=pts, params={"a": 6}).a == 6.0
+    gathering = Frame(
+        round=0,
+        n=3,
+        scheduler="fsync",
+        positions=pts,
+        algorithm="gathering",
+        params={"tolerance": 0.5},
+    )
+    assert gathering.a is None and gathering.params == {"tolerance": 0.5}
 
 
 def test_agents_panel_lists_active_then_gone_then_the_rest() -> None:
@@ -146,7 +262,7 @@ def test_canvas_is_blank_away_from_everything_drawn() -> None:
 def test_formed_polygon_fills_every_target_and_says_formed() -> None:
     n = 6
     pts = polygon(n, 4.0)
-    frame = Frame(round=42, n=n, a=4.0, scheduler="fsync", positions=pts, status="formed")
+    frame = paper_frame(round=42, n=n, scheduler="fsync", positions=pts, status="formed")
     fig = derive(frame)
     assert fig.filled == n
     assert fig.sec_radius == pytest.approx(fig.target_radius)
@@ -156,15 +272,15 @@ def test_formed_polygon_fills_every_target_and_says_formed() -> None:
         assert canvas.cell_layers()[row, col] >= LAYER_ROBOT  # a disc sits on each target
     text = render_text(frame)
     assert re.search(r"targets\s+6 / 6 filled", text)
-    assert "FORMED: uniform circle of 6 robots after 42 rounds, 0 collisions" in text
+    assert "FORMED: uniform-circle goal reached by 6 robots after 42 rounds, 0 collisions" in text
 
 
 def test_empty_targets_are_marked_on_the_canvas() -> None:
     n = 6
     pts = polygon(n, 4.0) * 0.0 + np.array([[0.0, 0.0]]) + np.arange(n)[:, None] * [2.5, 0.0]
-    frame = Frame(round=1, n=n, a=4.0, scheduler="fsync", positions=pts)
+    frame = paper_frame(round=1, n=n, scheduler="fsync", positions=pts)
     fig = derive(frame)
-    assert fig.filled < n
+    assert fig.filled is not None and fig.filled < n
     canvas = build_canvas(frame, fig, cols=80, rows=40)
     marked = [
         canvas.cell_layers()[row, col]
@@ -214,7 +330,7 @@ def test_frame_from_world_state_carries_every_field() -> None:
     )
     state = WorldState(
         round=5, n=3,
-        algorithm="uniform-circle", params={"a": 4.5}, figures={},
+        algorithm="uniform-circle", params={"a": 4.5}, figures={"target radius": 2.598},
         seed=11, scheduler="centralized", swarm="s",
         positions=np.array([[0.0, 0.0], [3.0, 0.0], [0.0, 3.0]]), active=(2,), moved=(2,),
         stopped=(), collisions_total=0, status="running", agents=agents,
@@ -227,6 +343,8 @@ def test_frame_from_world_state_carries_every_field() -> None:
         11,
         "centralized",
     )
+    assert (frame.algorithm, frame.params) == ("uniform-circle", {"a": 4.5})
+    assert frame.figures == {"target radius": 2.598}
     assert frame.alive == (True, False, True)
     assert frame.last_active == (0, 1, 2) and frame.timeouts == (0, 1, 2)
     assert frame.last_path_length == (0.0, 0.5, 1.0)
@@ -299,11 +417,13 @@ class FakeSession:
 
 def state(round_no: int, status: str = "running") -> WorldState:
     agents = tuple(AgentInfo(True, round_no, 1.0, 0) for _ in range(3))
+    positions = np.array([[0.0, 0.0], [5.0, 0.0], [0.0, 5.0]])
     return WorldState(
         round=round_no, n=3,
-        algorithm="uniform-circle", params={"a": 4.0}, figures={},
+        algorithm="uniform-circle", params={"a": 4.0},
+        figures=hook_figures("uniform-circle", positions, a=4.0),
         seed=1, scheduler="fsync", swarm="w",
-        positions=np.array([[0.0, 0.0], [5.0, 0.0], [0.0, 5.0]]), active=(0, 1, 2), moved=(),
+        positions=positions, active=(0, 1, 2), moved=(),
         stopped=(), collisions_total=0, status=status, agents=agents,
     )  # fmt: skip
 
@@ -340,7 +460,9 @@ def test_watcher_stop_shows_the_final_state_it_is_given() -> None:
     watcher = StateWatcher("w", ProgressLog(out=lines.append), session=FakeSession([]))
     watcher.start()
     watcher.stop(state(9, "formed"))
-    assert lines[-1] == "FORMED: uniform circle of 3 robots after 9 rounds, 0 collisions"
+    assert lines[-1] == (
+        "FORMED: uniform-circle goal reached by 3 robots after 9 rounds, 0 collisions"
+    )
 
 
 @pytest.mark.parametrize("quiet", [False, True])
@@ -357,7 +479,7 @@ def test_follow_prints_progress_lines_off_a_terminal_unless_quiet(
         assert out == ""
     else:
         assert out.splitlines()[0].startswith("round 1 running: targets")
-        assert out.splitlines()[-1].startswith("FORMED: uniform circle of 3 robots after 2 rounds")
+        assert out.splitlines()[-1].startswith("FORMED: uniform-circle goal reached by 3 robots")
 
 
 def test_the_enclosing_circle_is_right_far_from_the_origin() -> None:
@@ -368,3 +490,35 @@ def test_the_enclosing_circle_is_right_far_from_the_origin() -> None:
         (cx, cy), rc = enclosing_circle(tri + offset)
         assert rc == pytest.approx(4.0 / math.sqrt(3.0), abs=1e-9)
         assert (cx - offset, cy - offset) == pytest.approx((2.0, 2.0 / math.sqrt(3.0)), abs=1e-9)
+
+
+@pytest.mark.parametrize("status", ENDED)
+def test_the_statuses_that_end_a_run_are_world_outcomes(status: Status) -> None:
+    watcher = StateWatcher(
+        "w", ProgressLog(out=lambda line: None), session=FakeSession([state(3, status).encode()]),
+        fps=200.0, stop_at_end=True,
+    )  # fmt: skip
+    watcher.start()
+    assert watcher.finished.wait(10.0) and watcher.ended.is_set()
+    watcher.stop()
+    lines: list[str] = []
+    log = ProgressLog(out=lines.append)
+    log.show(sample_frame(status=status))
+    assert lines == []  # an ended run is said once, when the log closes
+    log.close(None)
+    assert lines[-1] == outcome_text(sample_frame(status=status)) != "running: round 7"
+
+
+def test_the_final_frame_stays_on_the_main_screen_with_room_for_the_summary() -> None:
+    out = io.StringIO()
+    console = Console(file=out, force_terminal=True, width=120, height=40, color_system=None)
+    view = LiveView(console)
+    view.show(sample_frame(round=3))
+    view.close(sample_frame(round=9, status="formed", collisions_total=0))
+    raw = out.getvalue()
+    left = raw.rfind("\x1b[?1049l")  # the live view leaves the alternate screen, then prints
+    assert left > raw.find("\x1b[?1049h") >= 0
+    after = re.sub(r"\x1b\[[0-?]*[ -/]*[@-~]", "", raw[left:])
+    assert "FORMED: uniform-circle goal reached by 4 robots after 9 rounds" in after
+    frame_lines = after[after.index("fatswarm · live") :].rstrip("\n").split("\n")
+    assert len(frame_lines) <= 40 - 5  # the summary and the prompt fit below it

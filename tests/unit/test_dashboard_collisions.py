@@ -16,13 +16,13 @@ def formed(collisions: int) -> Frame:
 
 def test_a_formation_without_collisions_is_shown_as_formed() -> None:
     assert outcome_text(formed(0)) == (
-        "FORMED: uniform circle of 4 robots after 12 rounds, 0 collisions"
+        "FORMED: uniform-circle goal reached by 4 robots after 12 rounds, 0 collisions"
     )
 
 
 def test_a_formation_through_collisions_says_it_is_not_collision_free() -> None:
     assert outcome_text(formed(2)) == (
-        "FORMED WITH 2 COLLISIONS: uniform circle of 4 robots after 12 rounds, not the "
-        "collision-free formation the paper guarantees"
+        "FORMED WITH 2 COLLISIONS: uniform-circle goal reached by 4 robots after 12 rounds, "
+        "not collision-free"
     )
     assert outcome_text(formed(1)).startswith("FORMED WITH 1 COLLISION:")

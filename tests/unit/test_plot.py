@@ -6,17 +6,19 @@ import argparse
 import math
 import pathlib
 import sys
+from dataclasses import replace
 
 import pytest
 
 from fatswarm.deploy.plot import (
     MISSING_MATPLOTLIB,
     add_arguments,
+    default_title,
     final_positions,
     main,
     trajectories,
 )
-from fatswarm.world.record import read_record
+from fatswarm.world.record import Header, read_record
 
 RECORD = pathlib.Path(__file__).resolve().parents[1] / "data" / "replay-small.jsonl"
 
@@ -73,3 +75,21 @@ def test_unreadable_record_exits_2(
 ) -> None:
     assert run_plot(tmp_path / "none.jsonl", tmp_path / "x.svg") == 2
     assert "none.jsonl" in capsys.readouterr().err
+
+
+def test_title_names_the_algorithm_and_its_parameters() -> None:
+    record = read_record(RECORD)
+    title = default_title(record, 3.0)
+    assert title.startswith("uniform-circle a=4, n=4, scripted, seed 7: max_rounds after 3 rounds")
+    header = record.header
+    gathering = Header(
+        header.n,
+        header.seed,
+        header.scheduler,
+        header.initial,
+        "gathering",
+        {"tolerance": 0.5},
+        "gathering",
+    )
+    other = default_title(replace(record, header=gathering), 3.0)
+    assert other.startswith("gathering tolerance=0.5, n=4,") and "a=" not in other

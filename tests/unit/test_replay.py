@@ -3,13 +3,22 @@
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import pathlib
 import re
 
 import pytest
 
-from fatswarm.deploy.replay import Player, add_arguments, build_frames, main, parse_keys
+from fatswarm.deploy.replay import (
+    FrameFigures,
+    Player,
+    add_arguments,
+    build_frames,
+    figures_of,
+    main,
+    parse_keys,
+)
 from fatswarm.world.record import read_record
 
 RECORD = pathlib.Path(__file__).resolve().parents[1] / "data" / "replay-small.jsonl"
@@ -145,7 +154,92 @@ def test_real_lockstep_record_replays_to_a_formed_circle(
     assert frames[-1].status == "formed" and frames[-1].collisions_total == 0
     assert run_replay(LOCKSTEP, "--no-play") == 0
     out = capsys.readouterr().out
-    assert "FORMED: uniform circle of 6 robots after 17 rounds, 0 collisions" in out
+    assert "FORMED: uniform-circle goal reached by 6 robots after 17 rounds, 0 collisions" in out
     assert re.search(r"targets\s+6 / 6 filled", out)
     assert run_replay(LOCKSTEP, "--no-play", "--round", "0") == 0
     assert re.search(r"round\s+0 / 17", capsys.readouterr().out)
+
+
+def with_header(tmp_path: pathlib.Path, **fields: object) -> pathlib.Path:
+    """A copy of the lock-step record whose header says `fields` (e.g. another algorithm)."""
+    lines = LOCKSTEP.read_text().splitlines()
+    header = {**json.loads(lines[0]), **fields}
+    header.pop("a", None)
+    out = tmp_path / "changed.jsonl"
+    out.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
+    return out
+
+
+def test_frames_carry_the_records_algorithm_and_parameters() -> None:
+    frame = build_frames(read_record(LOCKSTEP))[0]
+    assert (frame.algorithm, frame.params, frame.figures) == ("uniform-circle", {"a": 4.0}, {})
+
+
+def test_replay_computes_the_figures_of_the_records_algorithm(
+    tmp_path: pathlib.Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    record = with_header(
+        tmp_path, algorithm="gathering", algorithm_ref="gathering", params={"tolerance": 0.25}
+    )
+    assert run_replay(record, "--no-play", "--round", "3") == 0
+    captured = capsys.readouterr()
+    assert re.search(r"robots\s+n=6  gathering tolerance=0\.25", captured.out)
+    assert re.search(r"spread\s+\d+\.\d{3}", captured.out)
+    assert "targets" not in captured.out and captured.err == ""
+
+
+def test_replay_of_an_algorithm_not_loadable_here_plays_without_figures_and_says_so_once(
+    tmp_path: pathlib.Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    ref = str(tmp_path / "gone.py") + ":ALGORITHM"  # someone's file, not on this machine
+    record = with_header(tmp_path, algorithm="mine", algorithm_ref=ref, params={"k": 2})
+    assert run_replay(record, "--no-play", "--round", "3") == 0
+    captured = capsys.readouterr()
+    assert re.search(r"round\s+3 / 17", captured.out)
+    assert re.search(r"robots\s+n=6  mine k=2", captured.out)
+    assert "targets" not in captured.out
+    assert captured.err.count("\n") == 1 and "without the figures" in captured.err
+    assert ref in captured.err and "no file" in captured.err
+    warned: list[str] = []
+    shown_as = FrameFigures(figures_of(read_record(record).header, warned.append), warned.append)
+    frames = build_frames(read_record(record))
+    assert [shown_as(f) for f in frames] and all(f.figures == {} for f in map(shown_as, frames))
+    assert len(warned) == 1
+
+
+def test_replay_survives_a_figures_hook_that_raises_and_says_so_once(
+    tmp_path: pathlib.Path,
+) -> None:
+    module = tmp_path / "broken.py"
+    module.write_text(
+        "from fatswarm.agent.gathering import Gathering\n"
+        "class Broken(Gathering):\n"
+        "    name = 'broken'\n"
+        "    def figures(self, positions, params):\n"
+        "        raise RuntimeError('no figures\\ntoday')\n"
+        "ALGORITHM = Broken()\n"
+    )
+    record = read_record(
+        with_header(tmp_path, algorithm="broken", algorithm_ref=f"{module}:ALGORITHM", params={})
+    )
+    warned: list[str] = []
+    shown_as = FrameFigures(figures_of(record.header, warned.append), warned.append)
+    shown = [shown_as(f) for f in build_frames(record)]
+    assert all(f.figures == {} for f in shown)
+    assert warned == [
+        "replaying without figures: the algorithm's figures hook raised "
+        "RuntimeError: no figures today"
+    ]
+
+
+def test_figures_are_computed_once_per_round_shown() -> None:
+    calls: list[int] = []
+
+    def count(positions: object) -> dict[str, float]:
+        calls.append(1)
+        return {"calls": float(len(calls))}
+
+    frames = build_frames(read_record(RECORD))
+    shown_as = FrameFigures(count, lambda line: None)
+    assert shown_as(frames[2]).figures == shown_as(frames[2]).figures == {"calls": 1.0}
+    assert shown_as(frames[3]).figures == {"calls": 2.0} and len(calls) == 2
