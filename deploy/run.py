@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import importlib
-import importlib.util
 import json
 import math
 import os
@@ -32,12 +30,17 @@ from fatswarm.deploy.config import (
     input_errors,
     resolve_start,
 )
+from fatswarm.deploy.estimate import (
+    ESTIMATE_FROM_N,
+    ESTIMATE_FROM_S,
+    estimate_lockstep,
+    estimate_text,
+    eta_text,
+)
 from fatswarm.world.outcome import ExitCode, Status, exit_code_for
 
 if TYPE_CHECKING:
-    from fatswarm.agent.path import Points
     from fatswarm.deploy.lockstep import RoundReport
-    from fatswarm.world.record import Header, Result, RunRecord
 
 
 EXIT_FORMED: Final = ExitCode.FORMED
@@ -85,20 +88,11 @@ def flag_given(args: argparse.Namespace, dest: str) -> bool:
     return getattr(args, dest, None) is not None
 
 
-def _optional_adder(module_name: str, function: str) -> Callable[[argparse.ArgumentParser], None]:
-    """`module.function` if the module exists and defines it, else a no-op (parts land later)."""
-    try:
-        if importlib.util.find_spec(module_name) is None:
-            return lambda p: None
-    except ModuleNotFoundError:
-        return lambda p: None
-    adder = getattr(importlib.import_module(module_name), function, None)
-    return adder if callable(adder) else (lambda p: None)
-
-
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Flags of `fatswarm run` (plus the launcher's and dashboard's, once those modules exist)."""
+    """Flags of `fatswarm run`, the launcher's (networked) and the dashboard's among them."""
     from fatswarm.coordinator.schedule import NAMES
+    from fatswarm.deploy.dashboard import add_run_arguments
+    from fatswarm.deploy.launcher import add_network_arguments
     from fatswarm.world.starts import KINDS
 
     p.epilog = EXIT_CODES_HELP
@@ -145,10 +139,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true",
                    help="print the summary as one JSON object on stdout (progress stays on "
                    "stderr; no live dashboard)")
-    _optional_adder("fatswarm.deploy.launcher", "add_network_arguments")(p)
+    add_network_arguments(p)
     # The dashboard's run flags (--no-dashboard, --svg): `add_run_arguments`, because the CLI
     # would hand an `add_dashboard_arguments` to `fatswarm dashboard` itself.
-    _optional_adder("fatswarm.deploy.dashboard", "add_run_arguments")(p)
+    add_run_arguments(p)
 
 
 def add_algorithm_arguments(p: argparse.ArgumentParser, *, params: bool = True) -> None:
@@ -178,17 +172,9 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _networked(args: argparse.Namespace) -> int:
-    try:
-        launcher = importlib.import_module("fatswarm.deploy.launcher")
-    except ModuleNotFoundError as exc:
-        if exc.name != "fatswarm.deploy.launcher":
-            raise
-        launcher = None
-    run_networked: Any = getattr(launcher, "run_networked", None)
-    if run_networked is None:
-        return _fail("the networked emulator is not available in this build; use --lockstep")
-    code: int = run_networked(args)
-    return code
+    from fatswarm.deploy.launcher import run_networked
+
+    return run_networked(args)
 
 
 def networked_flags_given(args: argparse.Namespace) -> list[str]:
@@ -251,160 +237,10 @@ def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
     the same input with the same message); raises one of `input_errors()`."""
     check_outputs(args)
     if getattr(args, "resume", False):
+        from fatswarm.deploy.resume import resolve_resume
+
         return resolve_resume(args)
     return RunConfig.from_args(args, seed).resolve()
-
-
-def resolve_resume(args: argparse.Namespace) -> RunSetup:
-    """The run `--resume` continues: the --record file's header (n, a, seed, scheduler, start,
-    round cap) and committed rounds; raises one of `input_errors()` for a record that cannot be
-    continued or a flag given that contradicts it (flags that agree with it are fine)."""
-    from fatswarm.agent.registry import load_algorithm
-    from fatswarm.agent.seam import Configured
-    from fatswarm.coordinator.schedule import make_scheduler
-    from fatswarm.deploy.lockstep import default_max_rounds
-    from fatswarm.world.physics import validate_configuration
-
-    path: str = args.record
-    record = read_resumable(path, lockstep=bool(args.lockstep))
-    h = record.header
-    if h.seed is None:
-        raise RunInputError(f"--resume: {path} does not say its seed; its run cannot be continued")
-    saved = h.extra.get("max_rounds")
-    cap = saved if isinstance(saved, int) and not isinstance(saved, bool) and saved >= 1 else None
-    if args.max_rounds is not None and args.max_rounds < 1:
-        raise RunInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
-    check_against_header(args, h, cap, path)
-    if h.scheduler != "scripted" and args.schedule is not None:
-        raise RunInputError(f"--schedule only goes with --scheduler scripted; {path}'s run has "
-                            f"scheduler={h.scheduler}")
-    params = Configured.of(load_algorithm(h.algorithm_ref), h.n, h.params)
-    params.check_start(h.initial)
-    initial = validate_configuration(h.initial)
-    recorded_k = h.extra.get("fairness")
-    if isinstance(recorded_k, int) and args.fairness is not None and args.fairness != recorded_k:
-        raise RunInputError(f"--fairness {args.fairness} contradicts {path}, whose run has "
-                            f"fairness={recorded_k}; drop --fairness to resume it")
-    fairness = args.fairness if args.fairness is not None else (
-        recorded_k if isinstance(recorded_k, int) else None)
-    schedule = args.schedule
-    if schedule is None and isinstance(h.extra.get("schedule"), str):
-        schedule = h.extra["schedule"]  # the script the run was made with, where it was
-    scheduler = make_scheduler(h.scheduler, h.n, h.seed, schedule, fairness)
-    if cap is None:  # a header without its cap: as the run would have had it
-        cap = args.max_rounds or default_max_rounds(h.n, h.scheduler)
-    return RunSetup(h.seed, params, initial, scheduler, cap, record, h.algorithm_ref)
-
-
-def read_resumable(path: str, *, lockstep: bool) -> RunRecord:
-    """The run record at `path`, if it holds a run to continue; else RunInputError (one line).
-
-    A torn last line (a crash mid-write) is left for the networked world, which drops it; a
-    lockstep run never cuts a record, so it refuses one.
-    """
-    from fatswarm.world.record import RecordFormatError, read_record
-
-    if not os.path.exists(path):
-        raise RunInputError(f"--resume: {path} does not exist; nothing to resume (drop --resume "
-                            "to start a new run)")
-    if os.path.isfile(path) and os.path.getsize(path) == 0:
-        raise RunInputError(f"--resume: {path} is empty, not a run record; nothing to resume")
-    try:
-        record = read_record(path, allow_torn_end=True)
-    except RecordFormatError as exc:
-        raise RunInputError(f"--resume: not a run record: {exc}") from None
-    if record.result is not None:
-        raise RunInputError(f"--resume: {path} already finished ({ended(record.result)}); "
-                            "nothing to resume")
-    if lockstep and record.torn_line is not None:
-        raise RunInputError(f"--resume: {path} ends with a torn line (line {record.torn_line}, a "
-                            "crash mid-write) that --lockstep will not cut: delete that line, or "
-                            "resume without --lockstep (the world drops it)")
-    return record
-
-
-def ended(result: Result) -> str:
-    """How a finished record ended, in a few words: "formed in 31 rounds"."""
-    if result.status == Status.FORMED:
-        return f"formed in {result.rounds} rounds"
-    if result.status == Status.MAX_ROUNDS:
-        return f"stopped at the round limit of {result.rounds} rounds"
-    return f"{result.status} after {result.rounds} rounds"
-
-
-def check_against_header(
-    args: argparse.Namespace, header: Header, cap: int | None, path: str
-) -> None:
-    """Refuse (RunInputError, one line) a flag given with --resume that contradicts the record's
-    header, naming the flag and both values; `cap`: the header's round cap, if it says one."""
-    from fatswarm.world.starts import random_start
-
-    h = header
-    checks: list[tuple[str, str, Any, Any, str]] = [
-        ("-n", "n", args.n, h.n, f"n={h.n}"),
-        ("-a", "a", args.a, h.a, f"a={_number(h.a)}"),
-        ("--seed", "seed", args.seed, h.seed, f"seed={h.seed}"),
-        ("--scheduler", "scheduler", args.scheduler, h.scheduler, f"scheduler={h.scheduler}"),
-        ("--max-rounds", "max_rounds", args.max_rounds, cap, f"max_rounds={cap}"),
-    ]
-    if flag_given(args, "algorithm") and args.algorithm != header.algorithm_ref:
-        raise RunInputError(f"--algorithm {args.algorithm} contradicts {path}, whose run has "
-                            f"algorithm {header.algorithm_ref}; drop --algorithm to resume it")
-    from fatswarm.agent.seam import parse_assignments
-
-    for name, text in parse_assignments(list(getattr(args, "param", []) or [])).items():
-        recorded = header.params.get(name)
-        if recorded is None or (str(recorded) != text and _as_number(text) != recorded):
-            raise RunInputError(f"--param {name}={text} contradicts {path}, whose run has "
-                                f"{name}={recorded}; drop --param to resume it")
-    for flag, dest, value, recorded, says in checks:
-        if flag_given(args, dest) and recorded is not None and value != recorded:
-            shown = _number(value) if isinstance(value, float) else value
-            raise RunInputError(f"{flag} {shown} contradicts {path}, whose run has {says}; drop "
-                                f"{flag} to resume it")
-    if args.init is not None:
-        from fatswarm.world.physics import validate_configuration
-        from fatswarm.world.starts import load_init
-
-        positions, _ = load_init(args.init)
-        if len(positions) != h.n:
-            raise RunInputError(f"--init {args.init} contradicts {path}, whose run has n={h.n} "
-                                f"(the file {len(positions)} robots); drop --init to resume it")
-        where = _first_difference(validate_configuration(positions), h.initial)
-        if where is not None:
-            robot, mine, theirs = where
-            raise RunInputError(f"--init {args.init} contradicts {path}, whose run started "
-                                f"elsewhere (robot {robot} at {theirs}, not at {mine} as in the "
-                                "file); drop --init to resume it")
-    elif flag_given(args, "start") and h.seed is not None:
-        kind: str = args.start
-        where = _first_difference(random_start(h.n, h.seed, kind, h.a), h.initial)
-        if where is not None:
-            robot, mine, theirs = where
-            raise RunInputError(f"--start {kind} contradicts {path}, whose run did not start "
-                                f"from the {kind} start of seed {h.seed} (robot {robot} at "
-                                f"{theirs}, not at {mine}); drop --start to resume it")
-
-
-def _as_number(text: str) -> float | None:
-    try:
-        return float(text)
-    except ValueError:
-        return None
-
-
-def _number(value: float) -> str:
-    """`value` as short as `:g` puts it, unless that would hide a difference."""
-    short = f"{value:g}"
-    return short if float(short) == value else repr(value)
-
-
-def _first_difference(mine: Points, theirs: Points) -> tuple[int, str, str] | None:
-    """The first robot placed differently in two (n, 2) starts, with both places; None if equal."""
-    for robot, (p, q) in enumerate(zip(mine, theirs, strict=True)):
-        if p[0] != q[0] or p[1] != q[1]:
-            return robot, f"({p[0]:.9g}, {p[1]:.9g})", f"({q[0]:.9g}, {q[1]:.9g})"
-    return None
 
 
 def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) -> int:
@@ -484,7 +320,9 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
         final = Frame(
             round=result.rounds,
             n=params.n,
-            a=_side(params.values),
+            algorithm=params.name,
+            params=dict(params.values),
+            figures=params.figures(result.positions),
             scheduler=scheduler.name,
             positions=result.positions,
             collisions_total=result.collisions,
@@ -600,80 +438,6 @@ def summary_json(
     return json.dumps(fields, allow_nan=False)
 
 
-# --- how long a lockstep run takes: a rough model, measured on a 2-core machine ------------------
-
-SECONDS_PER_ROUND: Final = 3e-4  # a round's fixed cost (scheduler, progress, record line)
-SECONDS_PER_ROBOT_ROUND: Final = 8e-6  # canonical form, plan and physics grow about linearly
-RECORD_BYTES_PER_ROUND: Final = 200
-RECORD_BYTES_PER_ROBOT_ROUND: Final = 45  # one position per robot and round, plus its path
-# Rounds a correct run takes, per sequential step of the algorithm (about n + 2 steps: one mover
-# or one mirror pair each): 1 under fsync, about 2 under ssync, about n when one robot moves at
-# a time (centralized; scripted is anyone's guess). deploy/lockstep.py sets its caps 10x higher.
-EXPECTED_ROUNDS_PER_STEP: Final = {"fsync": 1, "ssync": 2}
-ESTIMATE_FROM_N: Final = 200  # a lockstep run this large says what it will cost before it starts
-ESTIMATE_FROM_S: Final = 5.0  # ... as does one expected to take this long
-
-
-@dataclass(frozen=True, slots=True)
-class Estimate:
-    """A rough forecast of a lockstep run: as a correct run goes, and if it runs to the cap."""
-
-    rounds: int
-    seconds: float
-    record_bytes: int
-    cap_rounds: int
-    cap_seconds: float
-    cap_record_bytes: int
-
-
-def estimate_lockstep(n: int, scheduler: str, max_rounds: int) -> Estimate:
-    """The forecast of an n-robot lockstep run under `scheduler`, capped at `max_rounds`."""
-    per_step = EXPECTED_ROUNDS_PER_STEP.get(scheduler, max(1, n))
-    rounds = min(max_rounds, per_step * (n + 2))
-    round_s = SECONDS_PER_ROUND + SECONDS_PER_ROBOT_ROUND * n
-    round_bytes = RECORD_BYTES_PER_ROUND + RECORD_BYTES_PER_ROBOT_ROUND * n
-    return Estimate(rounds, rounds * round_s, rounds * round_bytes,
-                    max_rounds, max_rounds * round_s, max_rounds * round_bytes)
-
-
-def estimate_text(forecast: Estimate, n: int, *, record: bool) -> str:
-    """The line a large lockstep run prints before it starts (to stderr)."""
-    f = forecast
-    size = "record" if record else "a --record would take"
-    line = (f"estimate for n={n} (a rough model, not a measurement): ~{f.rounds} rounds, "
-            f"{_duration(f.seconds)}, {size} ~{_size(f.record_bytes)}")
-    if f.cap_rounds == f.rounds:
-        return line
-    return (f"{line}; at the round cap of {f.cap_rounds}: {_duration(f.cap_seconds)}, "
-            f"~{_size(f.cap_record_bytes)}")
-
-
-def eta_text(done: int, rounds_per_s: float, expected: int, cap: int) -> str:
-    """How long is left after `done` rounds at `rounds_per_s`: to the expected end, at most to
-    the round cap."""
-    if rounds_per_s <= 0:
-        return "eta unknown"
-    to_cap = _duration((cap - done) / rounds_per_s)
-    if done < expected:
-        return f"eta {_duration((expected - done) / rounds_per_s)}, at most {to_cap} (round cap)"
-    return f"eta: longer than estimated, at most {to_cap} (round cap)"
-
-
-def _duration(seconds: float) -> str:
-    if seconds < 90:
-        return f"~{max(1, round(seconds))} s"
-    if seconds < 90 * 60:
-        return f"~{seconds / 60:.1f} min"
-    return f"~{seconds / 3600:.1f} h"
-
-
-def _size(nbytes: float) -> str:
-    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
-        if nbytes >= scale:
-            return f"{nbytes / scale:.1f} {unit}"
-    return f"{nbytes:.0f} B"
-
-
 def _progress_printer(max_rounds: int, expected_rounds: int) -> Callable[[RoundReport], None]:
     """A round callback printing a progress line (with an ETA) to stderr at most once per
     PROGRESS_SECONDS."""
@@ -706,19 +470,15 @@ __all__ = [
     "EXIT_INTERRUPTED",
     "EXIT_NOT_FORMED",
     "EXIT_TERMINATED",
-    "Estimate",
     "ExitCode",
     "Outcome",
     "add_arguments",
     "check_outputs",
     "check_seconds",
-    "estimate_lockstep",
     "exit_code",
     "exit_code_for",
     "main",
     "print_outcome",
-    "read_resumable",
-    "resolve_resume",
     "resolve_start",
     "run_lockstep_command",
     "summary",

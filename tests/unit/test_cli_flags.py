@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 
 from fatswarm import __version__
-from fatswarm.deploy import cli, run
+from fatswarm.deploy import cli, estimate, run
 from fatswarm.world.record import read_record
 
 MODES = pytest.mark.parametrize("mode", [["--lockstep"], []], ids=["lockstep", "networked"])
@@ -242,11 +242,11 @@ def test_a_small_lockstep_run_prints_no_estimate(capsys: pytest.CaptureFixture[s
 
 
 def test_the_estimate_grows_with_n_and_the_scheduler_and_stops_at_the_cap() -> None:
-    fsync, ssync, central = (run.estimate_lockstep(100, s, 10**9)
+    fsync, ssync, central = (estimate.estimate_lockstep(100, s, 10**9)
                              for s in ("fsync", "ssync", "centralized"))
     assert fsync.seconds < ssync.seconds < central.seconds
-    assert run.estimate_lockstep(400, "ssync", 10**9).seconds > ssync.seconds
-    capped = run.estimate_lockstep(100, "centralized", 50)
+    assert estimate.estimate_lockstep(400, "ssync", 10**9).seconds > ssync.seconds
+    capped = estimate.estimate_lockstep(100, "centralized", 50)
     assert capped.rounds == capped.cap_rounds == 50
     assert capped.record_bytes == capped.cap_record_bytes
 
@@ -261,8 +261,8 @@ def test_the_progress_line_shows_an_eta(
 
 
 def test_eta_counts_to_the_expected_end_and_at_most_to_the_cap() -> None:
-    assert run.eta_text(100, 10.0, 400, 4000) == "eta ~30 s, at most ~6.5 min (round cap)"
-    assert run.eta_text(500, 10.0, 400, 4000) == (
+    assert estimate.eta_text(100, 10.0, 400, 4000) == "eta ~30 s, at most ~6.5 min (round cap)"
+    assert estimate.eta_text(500, 10.0, 400, 4000) == (
         "eta: longer than estimated, at most ~5.8 min (round cap)")
 
 

@@ -121,14 +121,6 @@ def test_n_disagreeing_with_init_file_is_refused(
     assert "disagrees with the 2 robots" in capsys.readouterr().err
 
 
-def test_networked_mode_without_launcher_exits_two(
-    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
-) -> None:
-    monkeypatch.setitem(sys.modules, "fatswarm.deploy.launcher", None)
-    assert fatswarm_run(["-n", "3"]) == 2
-    assert "use --lockstep" in capsys.readouterr().err
-
-
 def test_svg_of_the_final_frame(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     pytest.importorskip("fatswarm.deploy.dashboard")
     target = tmp_path / "final.svg"
