@@ -9,7 +9,7 @@ fatswarm knows which algorithm runs. docs/algorithms.md shows how to write one.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol, TypeVar, runtime_checkable
 
@@ -155,6 +155,18 @@ def parse_assignments(texts: list[str] | tuple[str, ...]) -> dict[str, str]:
     return out
 
 
+def checked(compute: Callable[[Points], Path]) -> Callable[[Points], Path]:
+    """`compute`, refusing (TypeError) anything but a Path: an algorithm's bug is said plainly."""
+
+    def run(view: Points) -> Path:
+        path = compute(view)
+        if not isinstance(path, Path):
+            raise TypeError(f"compute returned {type(path).__name__}, not a Path")
+        return path
+
+    return run
+
+
 @dataclass(frozen=True, slots=True, eq=False)
 class Configured:
     """An algorithm with its parameters for a run of n robots: what the world and agents hold."""
@@ -213,6 +225,7 @@ __all__ = [
     "ParamSpec",
     "ParamValue",
     "Points",
+    "checked",
     "parse_assignments",
     "resolve_values",
 ]

@@ -20,7 +20,7 @@ from fatswarm.agent.frames import compute_in_frame, draw_flip
 from fatswarm.agent.path import Path
 from fatswarm.agent.protocol import MoveSubmitted, alive_key, move_key
 from fatswarm.agent.registry import DEFAULT
-from fatswarm.agent.seam import Algorithm, AlgorithmParamsError, Configured
+from fatswarm.agent.seam import Algorithm, AlgorithmParamsError, Configured, checked
 from fatswarm.coordinator.protocol import RoundStart, round_key
 from fatswarm.world.protocol import ProtocolError, Snapshot, snapshot_key
 
@@ -63,7 +63,8 @@ class Robot:
         setting = self._setting
         if setting is None or setting.n != snapshot.n or dict(setting.values) != snapshot.params:
             setting = self._setting = Configured.of(self.algorithm, snapshot.n, snapshot.params)
-        return compute_in_frame(snapshot.view, self.flip_x, setting.compute)
+        path = compute_in_frame(snapshot.view, self.flip_x, checked(setting.compute))
+        return path
 
 
 def open_session(conf: Any, stop: threading.Event, waiting: str | None = None) -> Any:
@@ -172,6 +173,7 @@ def _cycle(cfg: AgentConfig, round_no: int, robot: Robot, querier: Any, mover: A
     t0, cpu0 = time.perf_counter(), time.thread_time()
     try:
         path = robot.look_compute(snapshot)
+        move = MoveSubmitted(robot=cfg.robot, round=round_no, path=path).encode()
     except (WrongAlgorithmError, AlgorithmParamsError) as exc:
         log.error("round %d: staying put: %s", round_no, exc)
         return
@@ -181,4 +183,4 @@ def _cycle(cfg: AgentConfig, round_no: int, robot: Robot, querier: Any, mover: A
     log.debug("round %d: look %.2f ms, compute %.2f ms (CPU %.2f ms)", round_no,
               1e3 * (t0 - t_look), 1e3 * (time.perf_counter() - t0),
               1e3 * (time.thread_time() - cpu0))
-    mover.put(MoveSubmitted(robot=cfg.robot, round=round_no, path=path).encode())
+    mover.put(move)

@@ -11,6 +11,7 @@ the very paths each robot's own `compute` returns; a `compute` passed in is call
 
 from __future__ import annotations
 
+import logging
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -22,7 +23,7 @@ from fatswarm.agent.frames import compute_in_frame, draw_flip, path_to_world
 from fatswarm.agent.params import Params
 from fatswarm.agent.path import Path, Points
 from fatswarm.agent.protocol import MoveSubmitted
-from fatswarm.agent.seam import Configured
+from fatswarm.agent.seam import Configured, checked
 from fatswarm.agent.uniform_circle import ALGORITHM as UNIFORM_CIRCLE
 from fatswarm.coordinator.rounds import Announce, Ask, CoordinatorCore, Finished, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
@@ -30,7 +31,7 @@ from fatswarm.world.core import Journal, WorldCore, WorldSetup
 from fatswarm.world.outcome import Status
 from fatswarm.world.physics import RoundOutcome, validate_configuration
 from fatswarm.world.progress import Progress
-from fatswarm.world.protocol import Commit
+from fatswarm.world.protocol import Commit, ProtocolError
 from fatswarm.world.record import Header, RoundEntry, RunRecord
 
 # Default round cap = ROUNDS_PER_STEP[scheduler] * (n + STEP_SLACK). The algorithm needs about
@@ -39,6 +40,9 @@ from fatswarm.world.record import Header, RoundEntry, RunRecord
 STEP_SLACK: Final = 10
 ROUNDS_PER_STEP: Final = {"fsync": 10, "ssync": 40}  # others (centralized, scripted): 10 n
 LOCKSTEP_SWARM: Final = "lockstep"
+SHOWN_FAULTS: Final = 3  # an algorithm's failing computes logged in full; the rest are counted
+
+log = logging.getLogger("fatswarm.lockstep")
 
 ComputeFn = Callable[[Points, Any], Path]
 
@@ -179,6 +183,7 @@ class _Bus:
         self.flips = flips
         self.on_round = on_round
         self.looks = 0
+        self.faults = 0  # computes that raised or gave no valid path (the robot stayed)
         self.compute: Callable[[Points], Path]
         if compute is not None:
             user, own = compute, setting.params
@@ -229,12 +234,40 @@ class _Bus:
                 snapshot = world.look(robot)
                 if snapshot is None:
                     continue
-                path = compute_in_frame(snapshot.view, self.flips[robot], self.compute)
+                self.looks += 1
+                msg = self._computed(world, robot, round_no, snapshot.view)
+                if msg is None:
+                    continue  # as a networked agent whose compute failed: it stays, timed out
+                notice = world.move(robot, msg)
+                if notice is not None:
+                    notices.append(notice)
+                continue
             self.looks += 1
             notice = world.move(robot, MoveSubmitted(robot=robot, round=round_no, path=path))
             if notice is not None:
                 notices.append(notice)
         return notices
+
+    def _computed(self, world: WorldCore, robot: int, round_no: int, view: Points
+                  ) -> MoveSubmitted | None:
+        """Robot `robot`'s move as the world would receive it over the wire (encoded and decoded,
+        so the same checks apply), or None where a networked agent would send none: its compute
+        raised, or returned something that is not a path (said on the log, first ones in full)."""
+        try:
+            path = compute_in_frame(view, self.flips[robot], checked(self.compute))
+            wire = MoveSubmitted(robot=robot, round=round_no, path=path).encode()
+            return MoveSubmitted.decode(wire)
+        except ProtocolError as exc:
+            world.reject("move-garbage", f"robot {robot} round {round_no}: {exc}")
+            problem = f"sent a move the world refuses: {exc}"
+        except Exception as exc:  # a bug in the algorithm: the robot stays put, as networked
+            problem = f"compute raised {type(exc).__name__}: {exc}"
+        self.faults += 1
+        if self.faults <= SHOWN_FAULTS:
+            log.warning("robot %d, round %d: %s; it stays put (timed out)%s", robot, round_no,
+                        problem, "; further faults are only counted"
+                        if self.faults == SHOWN_FAULTS else "")
+        return None
 
     def _report(self) -> None:
         done = self.world.last_commit

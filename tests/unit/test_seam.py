@@ -191,3 +191,49 @@ def test_the_api_takes_positions_and_refuses_bad_ones() -> None:
         fatswarm.run(positions=np.zeros(3))
     with pytest.raises(ValueError, match="overlap"):
         fatswarm.run(positions=np.zeros((2, 2)))
+
+
+FAULTY = '''
+from fatswarm.agent.path import STAY, Line, Path
+from fatswarm.agent.seam import ParamSpec
+
+class Faulty:
+    name = "faulty"
+    summary = "robots whose compute fails in the way `mode` says"
+    parameters = (ParamSpec("mode", "raise", "raise, none or nan"),)
+
+    def make_params(self, n, values):
+        return values["mode"]
+
+    def compute(self, view, mode):
+        if mode == "raise":
+            return 1 / 0
+        if mode == "none":
+            return None
+        return Path((Line((float("nan"), 0.0)),))
+
+    def goal(self, positions, mode):
+        return True
+
+ALGORITHM = Faulty()
+'''
+
+
+@pytest.mark.parametrize(("mode", "says"), [
+    ("raise", "compute raised ZeroDivisionError"),
+    ("none", "compute raised TypeError: compute returned NoneType, not a Path"),
+    ("nan", "sent a move the world refuses"),
+])
+def test_a_failing_compute_in_lock_step_leaves_the_robot_timed_out_as_networked(
+    tmp_path: Path, mode: str, says: str, caplog: pytest.LogCaptureFixture
+) -> None:
+    source = tmp_path / "faulty.py"
+    source.write_text(FAULTY)
+    record = tmp_path / "run.jsonl"
+    result = fatswarm.run(3, algorithm=f"{source}:ALGORITHM", params={"mode": mode}, seed=1,
+                          scheduler="fsync", max_rounds=4, record=record)
+    assert (result.status, result.rounds, result.moves) == ("max_rounds", 4, 0)
+    rounds = read_record(record).rounds
+    assert all(entry.extra["timed_out"] == [0, 1, 2] for entry in rounds)
+    faults = [r.getMessage() for r in caplog.records if r.name == "fatswarm.lockstep"]
+    assert len(faults) == 3 and says in faults[0] and "only counted" in faults[-1]
