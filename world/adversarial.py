@@ -41,7 +41,7 @@ SIDES: Final = (3.2, 4.0, 6.0)  # a of an adversarial case: just above 3, the de
 
 # Rotated square lattices with exact decimal coordinates: steps (p, q) with p^2 + q^2 = 4 exactly.
 PYTHAGOREAN_STEPS: Final = ((2.0, 0.0), (1.2, 1.6), (0.56, 1.92), (1.872, 0.704), (1.0752, 1.6864))
-STEP_PLACES: Final = (0, 1, 2, 3, 4)  # decimals each step needs: written to fewer, it shrinks below 2
+STEP_PLACES: Final = (0, 1, 2, 3, 4)  # decimals each step needs (fewer: shorter than 2)
 LATTICES: Final = ("square", "square-rotated", "hex", "hex-vertical")
 TIES: Final = ("axis-side", "two-pairs")
 TIE_MIN_N: Final = 7  # pins (3) + the tied robots (3 or 4); below this the ties do not fit
