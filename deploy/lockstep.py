@@ -298,14 +298,17 @@ class _CheckedScheduler:
 
 
 def _check_history(history: Sequence[RoundEntry]) -> None:
-    """Refuse rounds out of order, or with robots timed out (never so in lock step)."""
+    """Refuse rounds out of order, or with robots timed out (a networked run's slow agents cannot
+    be redone in lock step; an algorithm's failing compute could, but the record cannot say
+    which it was)."""
     for round_no, entry in enumerate(history, start=1):
         if entry.round != round_no:
             raise HistoryMismatchError(f"round {entry.round} comes where round {round_no} should")
         timed_out = entry.extra.get("timed_out")
         if timed_out:
-            raise HistoryMismatchError(f"round {round_no}: robots {timed_out} timed out, which "
-                                       "never happens in lock step")
+            raise HistoryMismatchError(f"round {round_no}: robots {timed_out} timed out (slow "
+                                       "agents, or a compute that failed), which a lock step "
+                                       "cannot tell apart, so it cannot redo them")
 
 
 __all__ = [
