@@ -217,6 +217,14 @@ class CoordinatorCore:
             return self._collected(now)
         return []
 
+    def on_world(self, alive: bool, now: float) -> list[Action]:
+        """The world's liveliness token appeared or went away. Waiting to ask it again after no
+        answer, the coordinator asks at once when it appears (a world just (re)started)."""
+        del now
+        if alive and self._phase is Phase.RETRY:
+            return self._ask_hello()
+        return []
+
     def on_held(self, notice: MoveHeld, now: float) -> list[Action]:
         """The world holds a robot's move; notices of other rounds (or robots) are ignored."""
         if notice.round == self._round and notice.robot in self.active_set:

@@ -36,6 +36,7 @@ from fatswarm.world.protocol import (
     control_key,
     moves_held_key,
 )
+from fatswarm.world.protocol import alive_key as world_alive_key
 
 log = logging.getLogger("fatswarm.coordinator")
 
@@ -91,6 +92,11 @@ class Coordinator:
 
         self.events.put(("alive", (str(sample.key_expr), sample.kind == zenoh.SampleKind.PUT)))
 
+    def _on_world(self, sample: Any) -> None:
+        import zenoh
+
+        self.events.put(("world", sample.kind == zenoh.SampleKind.PUT))
+
     def _on_held(self, sample: Any) -> None:
         self.events.put(("held", sample.payload.to_bytes()))
 
@@ -106,6 +112,9 @@ class Coordinator:
                 alive_any_key(self.cfg.swarm), self._on_alive, history=True
             )
             session.declare_subscriber(moves_held_key(self.cfg.swarm), self._on_held)
+            session.liveliness().declare_subscriber(
+                world_alive_key(self.cfg.swarm), self._on_world, history=True
+            )
             announce = session.declare_publisher(
                 round_key(self.cfg.swarm),
                 congestion_control=zenoh.CongestionControl.BLOCK,
@@ -162,6 +171,8 @@ class Coordinator:
 
     def _feed(self, kind: str, item: Any) -> list[Action]:
         now = time.monotonic()
+        if kind == "world":
+            return self.core.on_world(bool(item), now)
         if kind == "alive":
             key, alive = item
             robot = robot_of_alive_key(key)

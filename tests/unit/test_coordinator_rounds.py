@@ -346,6 +346,19 @@ def test_a_silent_world_is_asked_again_every_retry_interval() -> None:
     assert drive.core.n == 2 and drive.begins()[0] == Begin(round=1, active=(0, 1))
 
 
+def test_a_world_that_comes_up_is_asked_at_once_not_at_the_retry_deadline() -> None:
+    world = FakeWorld(2)
+    world.fail("hello", "none")
+    drive = Drive(world).start(0, 1)
+    assert drive.core.phase is Phase.RETRY and drive.core.next_deadline() == 0.25
+    drive.now = 0.01
+    drive.perform(drive.core.on_world(False, drive.now))  # its token going away changes nothing
+    assert drive.world.requests == [Hello()]
+    drive.perform(drive.core.on_world(True, drive.now))
+    assert drive.world.requests[:2] == [Hello(), Hello()]
+    assert drive.begins()[0] == Begin(round=1, active=(0, 1))
+
+
 @pytest.mark.parametrize("how", ["refuse", "none", "lost"])
 def test_a_failed_begin_is_asked_again_after_hello_with_the_same_round_and_active_set(
     how: str,
