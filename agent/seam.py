@@ -9,6 +9,8 @@ fatswarm knows which algorithm runs. docs/algorithms.md shows how to write one.
 from __future__ import annotations
 
 import math
+import os
+import traceback
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol, TypeVar, runtime_checkable
@@ -28,6 +30,20 @@ P = TypeVar("P")
 
 class AlgorithmError(ValueError):
     """An algorithm that cannot be found or loaded, or an object that is not an algorithm."""
+
+
+class AlgorithmFailure(RuntimeError):
+    """The algorithm's own code raised where fatswarm cannot go on without it (its goal)."""
+
+    @staticmethod
+    def of(what: str, exc: BaseException) -> AlgorithmFailure:
+        """`what raised Type: message (at file.py:line)`, pointing at the algorithm's line."""
+        frames = traceback.extract_tb(exc.__traceback__)
+        last = frames[-1] if frames else None
+        where = f" (at {os.path.basename(last.filename)}:{last.lineno})" if last else ""
+        failure = AlgorithmFailure(f"{what} raised {type(exc).__name__}: {exc}{where}")
+        failure.__cause__ = exc
+        return failure
 
 
 class AlgorithmParamsError(ValueError):
@@ -193,8 +209,12 @@ class Configured:
         return self.algorithm.compute(view, self.params)
 
     def goal(self, positions: Points) -> bool:
-        """Whether the goal holds for (n, 2) world positions."""
-        return bool(self.algorithm.goal(positions, self.params))
+        """Whether the goal holds for (n, 2) world positions; raises AlgorithmFailure if the
+        algorithm's goal raises (nobody can then say whether the run is over)."""
+        try:
+            return bool(self.algorithm.goal(positions, self.params))
+        except Exception as exc:
+            raise AlgorithmFailure.of(f"the goal of algorithm {self.name}", exc) from exc
 
     def check_start(self, positions: Points) -> None:
         """The algorithm's own refusal of a start it does not support, if it has one."""
@@ -203,11 +223,16 @@ class Configured:
             hook(positions, self.params)
 
     def figures(self, positions: Points) -> dict[str, float]:
-        """The algorithm's figures for the dashboard (none if it has no hook)."""
+        """The algorithm's finite figures for the dashboard (none if it has no hook); raises
+        AlgorithmFailure if the hook raises or gives something that is not a map of numbers."""
         hook = getattr(self.algorithm, "figures", None)
         if hook is None:
             return {}
-        return {str(k): float(v) for k, v in hook(positions, self.params).items()}
+        try:
+            given = {str(k): float(v) for k, v in hook(positions, self.params).items()}
+        except Exception as exc:
+            raise AlgorithmFailure.of(f"the figures of algorithm {self.name}", exc) from exc
+        return {k: v for k, v in given.items() if math.isfinite(v)}
 
     def describe(self) -> str:
         """`name a=4 ...`: the algorithm and its parameters, for summaries."""
@@ -220,6 +245,7 @@ __all__ = [
     "MAX_PARAMS",
     "Algorithm",
     "AlgorithmError",
+    "AlgorithmFailure",
     "AlgorithmParamsError",
     "Configured",
     "ParamSpec",

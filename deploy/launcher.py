@@ -278,7 +278,9 @@ def _launch(args: argparse.Namespace, setup: RunSetup, record: str, pace: float)
             with Children(stop_grace_s(setup.params.n) + STOP_GRACE_S) as children:
                 code = _run_children(args, setup, pace, record, swarm, endpoints, children,
                                      stop)
-                if watcher is not None and code in (EXIT_FORMED, EXIT_NOT_FORMED):
+                world_gone = "world" in children.exited()  # no final state will come
+                if watcher is not None and code in (EXIT_FORMED, EXIT_NOT_FORMED) \
+                        and not world_gone:
                     _await_final_state(watcher, FINAL_STATE_WAIT_S)
         finally:
             if watcher is not None:

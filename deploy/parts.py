@@ -155,6 +155,7 @@ def add_world_arguments(p: argparse.ArgumentParser) -> None:
 
 def main_world(args: argparse.Namespace) -> int:
     """Run the world until SIGTERM/SIGINT."""
+    from fatswarm.agent.seam import AlgorithmFailure
     from fatswarm.deploy.config import input_errors, resolve_start
     from fatswarm.deploy.lockstep import default_max_rounds
     from fatswarm.world.protocol import alive_key
@@ -203,6 +204,10 @@ def main_world(args: argparse.Namespace) -> int:
     except bad_input as exc:
         session.close()
         return _fail("world", str(exc))
+    except AlgorithmFailure as exc:  # replaying the state file, the goal raised
+        session.close()
+        print(f"fatswarm world: {exc}", file=sys.stderr)
+        return ExitCode.NOT_FORMED
     return serve(core, session, stop)
 
 

@@ -245,6 +245,7 @@ def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
 
 def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """`fatswarm run --lockstep`: build the run from the flags, run it, print the summary."""
+    from fatswarm.agent.seam import AlgorithmFailure
     from fatswarm.deploy.lockstep import HistoryMismatchError, run_lockstep
     from fatswarm.world.physics import InvalidConfigurationError
     from fatswarm.world.record import RecordFormatError, RecordWriter
@@ -290,6 +291,9 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
         )
     except InvalidConfigurationError as exc:
         return _fail(f"invalid start: {exc}")
+    except AlgorithmFailure as exc:  # the record holds every round before it
+        print(f"fatswarm run: {exc}", file=sys.stderr)
+        return ExitCode.NOT_FORMED
     except HistoryMismatchError as exc:  # refused before anything was appended
         return _fail(f"--resume: {args.record} cannot be continued exactly in lock step: {exc} "
                      "(resume it with the run's own --fairness or --schedule, or networked if "

@@ -20,7 +20,7 @@ import numpy as np
 from fatswarm.agent.path import Path, path_length, transform
 from fatswarm.agent.protocol import MoveSubmitted
 from fatswarm.agent.registry import DEFAULT, load_algorithm
-from fatswarm.agent.seam import Configured, ParamValue
+from fatswarm.agent.seam import AlgorithmFailure, Configured, ParamValue
 from fatswarm.agent.tolerance import snap
 from fatswarm.world.outcome import Status
 from fatswarm.world.physics import Collision, RoundOutcome, apply_round
@@ -194,6 +194,7 @@ class WorldCore:
         self._agents: tuple[AgentInfo, ...] | None = None  # cache of state().agents
         self._figures: dict[str, float] | None = None  # cache of state().figures
         self.last_commit: Committed | None = None
+        self._figures_failed = False
         if history is None:
             self.journal.header(
                 n, setup.seed, setup.scheduler, self.positions,
@@ -422,7 +423,12 @@ class WorldCore:
     def _algorithm_figures(self) -> dict[str, float]:
         """The algorithm's figures for the positions, made once per committed round."""
         if self._figures is None:
-            self._figures = self.algorithm.figures(self.positions)
+            try:
+                self._figures = self.algorithm.figures(self.positions)
+            except AlgorithmFailure as exc:  # only the dashboard misses them: say it once
+                if not self._figures_failed:
+                    log.warning("%s; the dashboard goes without figures", exc)
+                self._figures_failed, self._figures = True, {}
         return self._figures
 
     def _agent_infos(self) -> tuple[AgentInfo, ...]:

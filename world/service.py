@@ -13,7 +13,9 @@ import time
 from typing import Any
 
 from fatswarm.agent.protocol import MoveSubmitted, alive_any_key, move_any_key, robot_of_alive_key
+from fatswarm.agent.seam import AlgorithmFailure
 from fatswarm.world.core import WorldCore, WorldSetup, open_world
+from fatswarm.world.outcome import ExitCode
 from fatswarm.world.protocol import (
     ControlReply,
     MoveHeld,
@@ -46,7 +48,8 @@ REPUBLISH_S = 1.0  # the state is re-published this often when nothing happens, 
 
 
 def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) -> int:
-    """Run the world on an open Zenoh session until `stop` is set, then close it; returns 0.
+    """Run the world on an open Zenoh session until `stop` is set, then close it; returns 0, or 1
+    when the algorithm's goal raised (the world cannot decide the run any more).
 
     The caller opens the session (`deploy.zconf.open_client`: a deadline, one-line errors).
     """
@@ -77,6 +80,7 @@ def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) ->
         log.info("world of %d robots serving swarm %r", core.setup.n, swarm)
         state_pub.put(core.state().encode())
         dirty, published = False, time.monotonic()
+        code = ExitCode.OK
         while not stop.is_set():
             try:
                 kind, item = events.get(timeout=0.2)
@@ -93,9 +97,14 @@ def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) ->
                     dirty = True
             except zenoh.ZError as exc:  # e.g. the asker left before its reply: not our problem
                 log.warning("zenoh refused a %s reply or notice: %s", kind, exc)
+            except AlgorithmFailure as exc:  # its round is durable; nobody can say what next
+                log.error("%s; the world stops at round %d (in its record)", exc,
+                          core.open_round or core.committed)
+                code = ExitCode.NOT_FORMED
+                break
     core.journal.close()
     log.info("world stopped at round %d (%s)", core.committed, core.status)
-    return 0
+    return code
 
 
 def look_bytes(core: WorldCore, key: str) -> bytes | None:

@@ -206,6 +206,8 @@ class Faulty:
         return values["mode"]
 
     def compute(self, view, mode):
+        if mode in ("badgoal", "badfigures"):
+            return STAY
         if mode == "raise":
             return 1 / 0
         if mode == "none":
@@ -213,7 +215,12 @@ class Faulty:
         return Path((Line((float("nan"), 0.0)),))
 
     def goal(self, positions, mode):
+        if mode == "badgoal":
+            return positions[99]
         return True
+
+    def figures(self, positions, mode):
+        return {"x": float("nan"), "y": 1.0} if mode != "badfigures" else {"x": "wide"}
 
 ALGORITHM = Faulty()
 '''
@@ -237,3 +244,37 @@ def test_a_failing_compute_in_lock_step_leaves_the_robot_timed_out_as_networked(
     assert all(entry.extra["timed_out"] == [0, 1, 2] for entry in rounds)
     faults = [r.getMessage() for r in caplog.records if r.name == "fatswarm.lockstep"]
     assert len(faults) == 3 and says in faults[0] and "only counted" in faults[-1]
+
+
+def test_a_goal_that_raises_ends_the_lockstep_run_with_one_line_naming_its_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    source = tmp_path / "faulty.py"
+    source.write_text(FAULTY)
+    record = tmp_path / "run.jsonl"
+    argv = ["run", "--lockstep", "-n", "3", "--seed", "1", "--algorithm", f"{source}:ALGORITHM",
+            "--param", "mode=badgoal", "--record", str(record), "-q"]
+    assert cli.main(argv) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "the goal of algorithm faulty raised IndexError" in err[0], err
+    assert re.search(r"\(at faulty\.py:\d+\)", err[0])
+    assert len(read_record(record).rounds) >= 1  # the rounds before it are kept
+
+
+def test_figures_that_fail_leave_the_world_without_them_and_drop_non_finite_ones(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    from fatswarm.world.core import WorldCore, WorldSetup
+
+    source = tmp_path / "faulty.py"
+    source.write_text(FAULTY)
+    ref = f"{source}:ALGORITHM"
+    start = np.array([[0.0, 0.0], [5.0, 0.0], [0.0, 5.0]])
+    fine = WorldCore(WorldSetup("s", 3, 1, "fsync", start, 10, algorithm=ref,
+                                params={"mode": "stay"}))
+    assert fine.state().figures == {"y": 1.0}
+    broken = WorldCore(WorldSetup("s", 3, 1, "fsync", start, 10, algorithm=ref,
+                                  params={"mode": "badfigures"}))
+    assert broken.state().figures == {} and broken.state().figures == {}
+    warned = [r for r in caplog.records if "figures of algorithm faulty raised" in r.getMessage()]
+    assert len(warned) == 1
