@@ -19,7 +19,7 @@ from typing import Any
 
 from fatswarm.agent.path import Points, sample, truncate
 from fatswarm.agent.registry import load_algorithm
-from fatswarm.agent.seam import AlgorithmError, AlgorithmParamsError, Configured
+from fatswarm.agent.seam import AlgorithmError, AlgorithmFailure, AlgorithmParamsError, Configured
 from fatswarm.deploy.dashboard import Frame, print_frame, render_frame, save_svg
 from fatswarm.deploy.run import ExitCode
 from fatswarm.world.record import Header, RecordFormatError, RunRecord, read_record, torn_end_note
@@ -108,10 +108,9 @@ class FrameFigures:
                 self._done[frame.round] = self.figures(frame.positions)
             except Exception as exc:  # the algorithm's own code: a replay must not die of it
                 self.figures = None
-                self.warn(
-                    f"replaying without figures: the algorithm's figures hook raised "
-                    f"{type(exc).__name__}: {' '.join(str(exc).split())}"
-                )
+                said = str(exc) if isinstance(exc, AlgorithmFailure) else (
+                    f"the algorithm's figures hook raised {type(exc).__name__}: {exc}")
+                self.warn(f"replaying without figures: {' '.join(said.split())}")
                 return frame
         return replace(frame, figures=self._done[frame.round])
 
