@@ -27,9 +27,9 @@ from fatswarm.agent.seam import Configured, checked
 from fatswarm.agent.uniform_circle import ALGORITHM as UNIFORM_CIRCLE
 from fatswarm.coordinator.rounds import Announce, Ask, CoordinatorCore, Finished, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
-from fatswarm.world.core import Journal, WorldCore, WorldSetup
+from fatswarm.world.core import Committed, Journal, WorldCore, WorldSetup
 from fatswarm.world.outcome import Status
-from fatswarm.world.physics import RoundOutcome, validate_configuration
+from fatswarm.world.physics import validate_configuration
 from fatswarm.world.progress import Progress
 from fatswarm.world.protocol import Commit, ProtocolError
 from fatswarm.world.record import Header, RoundEntry, RunRecord
@@ -58,13 +58,10 @@ def default_max_rounds(n: int, scheduler: str) -> int:
 
 
 @dataclass(frozen=True, slots=True)
-class RoundReport:
-    """What happened in one committed round (world frame), for callbacks such as a dashboard."""
+class RoundReport(Committed):
+    """A committed round (world frame) and the run's figures after it, for callbacks such as a
+    progress line or a dashboard."""
 
-    round: int
-    active: tuple[int, ...]
-    paths: dict[int, Path]
-    outcome: RoundOutcome
     progress: Progress
 
 

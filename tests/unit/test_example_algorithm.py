@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-import itertools
-import math
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +16,9 @@ from fatswarm.agent.path import Path as RobotPath
 from fatswarm.agent.registry import load_algorithm
 from fatswarm.agent.seam import Algorithm, AlgorithmParamsError, Configured, Points
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "property"))
+from straight_moves import closest_during, grid_starts, view_of
+
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "spread_out.py"
 SETTINGS = settings(max_examples=60, deadline=None)
@@ -25,44 +27,6 @@ SETTINGS = settings(max_examples=60, deadline=None)
 @pytest.fixture(scope="module")
 def algorithm() -> Algorithm[Any]:
     return load_algorithm(f"{EXAMPLE}:ALGORITHM")
-
-
-@st.composite
-def crowded_starts(draw: st.DrawFn) -> Points:
-    """2..9 robots in distinct cells of a grid of pitch 2..5, jittered: never closer than 2."""
-    n = draw(st.integers(2, 9))
-    cells = draw(st.lists(st.tuples(st.integers(0, 3), st.integers(0, 3)),
-                          min_size=n, max_size=n, unique=True))
-    pitch = draw(st.floats(2.0, 5.0))
-    jitter = (pitch - 2.0) / 4.0  # two jitters of <= jitter * sqrt(2) each leave >= 2
-    offsets = draw(st.lists(st.tuples(st.floats(-jitter, jitter), st.floats(-jitter, jitter)),
-                            min_size=n, max_size=n))
-    return np.asarray(np.asarray(cells, dtype=np.float64) * pitch + np.asarray(offsets))
-
-
-def view_of(positions: Points, robot: int) -> Points:
-    """The others relative to `robot` (an identity frame)."""
-    return np.asarray(np.delete(positions, robot, axis=0) - positions[robot])
-
-
-def closest_during(positions: Points, moves: Points) -> float:
-    """Least distance between two centres while all move at once at unit speed, straight."""
-    lengths = np.hypot(moves[:, 0], moves[:, 1])
-    best = math.inf
-    for i in range(len(positions)):
-        for j in range(i + 1, len(positions)):
-            times = sorted({0.0, float(lengths[i]), float(lengths[j])})  # relative motion is
-            rel = [positions[j] - positions[i]                             # linear in between
-                   + moves[j] * (min(t, lengths[j]) / lengths[j] if lengths[j] else 0.0)
-                   - moves[i] * (min(t, lengths[i]) / lengths[i] if lengths[i] else 0.0)
-                   for t in times]
-            best = min(best, float(np.hypot(*rel[0])))
-            for a, b in itertools.pairwise(rel):
-                d = b - a
-                len2 = float(d @ d)
-                f = 0.0 if len2 == 0.0 else min(1.0, max(0.0, -float(a @ d) / len2))
-                best = min(best, float(np.hypot(*(a + f * d))))
-    return best
 
 
 def test_it_loads_by_file_path_as_the_docs_say(monkeypatch: pytest.MonkeyPatch,
@@ -82,7 +46,7 @@ def test_the_file_imports_only_the_seam_the_path_numpy_and_the_standard_library(
 
 
 @SETTINGS
-@given(crowded_starts(), st.data())
+@given(grid_starts(pitch_max=5.0), st.data())
 def test_path_is_the_same_for_every_order_of_the_view(algorithm: Algorithm[Any],
                                                       positions: Points,
                                                       data: st.DataObject) -> None:
@@ -94,7 +58,7 @@ def test_path_is_the_same_for_every_order_of_the_view(algorithm: Algorithm[Any],
 
 
 @SETTINGS
-@given(crowded_starts())
+@given(grid_starts(pitch_max=5.0))
 def test_mirroring_the_view_mirrors_the_path_exactly(algorithm: Algorithm[Any],
                                                      positions: Points) -> None:
     params = Configured.of(algorithm, len(positions)).params
@@ -105,7 +69,7 @@ def test_mirroring_the_view_mirrors_the_path_exactly(algorithm: Algorithm[Any],
 
 
 @SETTINGS
-@given(crowded_starts())
+@given(grid_starts(pitch_max=5.0))
 def test_robots_never_overlap_and_spread_out_when_all_move_at_once(algorithm: Algorithm[Any],
                                                                   positions: Points) -> None:
     params = Configured.of(algorithm, len(positions)).params

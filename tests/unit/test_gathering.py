@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import itertools
 import math
+import sys
+from pathlib import Path as FsPath
 
 import numpy as np
 import pytest
@@ -15,27 +16,12 @@ from fatswarm.agent.path import STAY, Line, Path, end_point, mirror
 from fatswarm.agent.registry import available, load_algorithm
 from fatswarm.agent.seam import AlgorithmParamsError, Configured, Points
 
+sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "property"))
+from straight_moves import closest_during, grid_starts, min_distance, view_of
+
 PARAMS = GatheringParams(8, 1e-3)
 SETTINGS = settings(max_examples=60, deadline=None)
-
-
-@st.composite
-def starts(draw: st.DrawFn) -> Points:
-    """2..9 robots in distinct cells of a grid of pitch 2..8, jittered: never closer than 2."""
-    n = draw(st.integers(2, 9))
-    cells = draw(st.lists(st.tuples(st.integers(0, 4), st.integers(0, 4)),
-                          min_size=n, max_size=n, unique=True))
-    pitch = draw(st.floats(2.0, 8.0))
-    jitter = (pitch - 2.0) / 4.0  # two jitters of <= jitter * sqrt(2) each leave >= 2
-    offsets = draw(st.lists(st.tuples(st.floats(-jitter, jitter), st.floats(-jitter, jitter)),
-                            min_size=n, max_size=n))
-    origin = np.array([draw(st.floats(-50.0, 50.0)), draw(st.floats(-50.0, 50.0))])
-    return np.asarray(np.asarray(cells, dtype=np.float64) * pitch + np.asarray(offsets) + origin)
-
-
-def view_of(positions: Points, robot: int) -> Points:
-    """The others relative to `robot` (an identity frame)."""
-    return np.asarray(np.delete(positions, robot, axis=0) - positions[robot])
+STARTS = grid_starts(cells=5, offset=50.0)
 
 
 def step_vectors(positions: Points, robots: list[int]) -> Points:
@@ -48,37 +34,8 @@ def step_vectors(positions: Points, robots: list[int]) -> Points:
     return moves
 
 
-def closest_during(positions: Points, moves: Points) -> float:
-    """Least distance between two centres while all move at once at unit speed, straight."""
-    lengths = np.hypot(moves[:, 0], moves[:, 1])
-    best = math.inf
-    n = len(positions)
-    for i in range(n):
-        for j in range(i + 1, n):
-            # relative motion is linear between the times either robot stops
-            times = sorted({0.0, float(lengths[i]), float(lengths[j])})
-            rel = [positions[j] - positions[i]
-                   + moves[j] * (min(t, lengths[j]) / lengths[j] if lengths[j] else 0.0)
-                   - moves[i] * (min(t, lengths[i]) / lengths[i] if lengths[i] else 0.0)
-                   for t in times]
-            best = min(best, float(np.hypot(*rel[0])))
-            for a, b in itertools.pairwise(rel):
-                d = b - a
-                len2 = float(d @ d)
-                f = 0.0 if len2 == 0.0 else min(1.0, max(0.0, -float(a @ d) / len2))
-                best = min(best, float(np.hypot(*(a + f * d))))
-    return best
-
-
-def min_distance(positions: Points) -> float:
-    diff = positions[:, np.newaxis, :] - positions[np.newaxis, :, :]
-    dist = np.hypot(diff[:, :, 0], diff[:, :, 1])
-    np.fill_diagonal(dist, np.inf)
-    return float(dist.min())
-
-
 @SETTINGS
-@given(starts(), st.data())
+@given(STARTS, st.data())
 def test_path_is_the_same_for_every_order_of_the_view(positions: Points, data: st.DataObject
                                                       ) -> None:
     for robot in range(len(positions)):
@@ -89,7 +46,7 @@ def test_path_is_the_same_for_every_order_of_the_view(positions: Points, data: s
 
 
 @SETTINGS
-@given(starts())
+@given(STARTS)
 def test_mirroring_the_view_mirrors_the_path_exactly(positions: Points) -> None:
     for robot in range(len(positions)):
         view = view_of(positions, robot)
@@ -98,8 +55,8 @@ def test_mirroring_the_view_mirrors_the_path_exactly(positions: Points) -> None:
 
 
 @SETTINGS
-@given(starts(), st.lists(st.lists(st.booleans(), min_size=9, max_size=9), min_size=1,
-                          max_size=6))
+@given(STARTS,
+       st.lists(st.lists(st.booleans(), min_size=9, max_size=9), min_size=1, max_size=6))
 def test_robots_never_overlap_when_they_move_at_once(positions: Points,
                                                      rounds: list[list[bool]]) -> None:
     for active in [[True] * 9, *rounds]:  # one fsync round, then any subsets
@@ -112,7 +69,7 @@ def test_robots_never_overlap_when_they_move_at_once(positions: Points,
 
 
 @SETTINGS
-@given(starts())
+@given(STARTS)
 def test_goal_holds_exactly_when_every_robot_stays(positions: Points) -> None:
     stays = all(not ALGORITHM.compute(view_of(positions, r), PARAMS)
                 for r in range(len(positions)))
