@@ -88,6 +88,12 @@ def _sec_through(support: list[Point], p: Point) -> tuple[Circle, list[Point]]:
     return best
 
 
+def _overshoot(circle: Circle, xs: np.ndarray, ys: np.ndarray) -> float:
+    """How far the farthest point lies outside `circle` (<= 0: none does)."""
+    cx, cy = circle.center
+    return float(np.max(np.hypot(xs - cx, ys - cy))) - circle.radius
+
+
 def sec(points: Points) -> Circle:
     """Smallest enclosing circle of the centres `points` (n, 2), n >= 1.
 
@@ -116,8 +122,9 @@ def sec(points: Points) -> Circle:
         if d2[k] <= lim * lim:
             return circle
         candidate, pinned = _sec_through(support, (float(xs[k]), float(ys[k])))
-        if candidate.radius <= circle.radius:  # rounding stalled the growth: accept as is
-            return circle
+        if candidate.radius <= circle.radius:  # rounding stalled the growth: of two circles of
+            # one radius, the one the points overshoot less (here 9e-9 on a radius of 5.5)
+            return min(circle, candidate, key=lambda c: _overshoot(c, xs, ys))
         circle, support = candidate, pinned
     return circle
 

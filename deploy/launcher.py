@@ -29,6 +29,7 @@ from fatswarm.deploy.run import (
     Outcome,
     exit_code,
     print_outcome,
+    side_of,
     summary,
 )
 from fatswarm.deploy.zconf import (
@@ -427,7 +428,7 @@ def read_outcome(record: str) -> Outcome | None:
         collisions=(collisions if isinstance(collisions, int)
                     else sum(len(r.collisions) for r in rec.rounds)),
         n=h.n,
-        a=float(h.params["a"]) if isinstance(h.params.get("a"), (int, float)) else 0.0,
+        a=side_of(h.params),
         seed=h.seed,
         scheduler=h.scheduler,
         epochs=epochs if isinstance(epochs, int) else None,

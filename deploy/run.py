@@ -307,7 +307,7 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
         rounds=result.rounds,
         collisions=result.collisions,
         n=params.n,
-        a=_side(params.values),
+        a=side_of(params.values),
         seed=seed,
         scheduler=scheduler.name,
         epochs=result.epochs,
@@ -374,7 +374,7 @@ class Outcome:
     rounds: int
     collisions: int  # robots stopped at contact, over the whole run
     n: int
-    a: float
+    a: float | None  # the paper's side, None for an algorithm without one
     seed: int | None
     scheduler: str
     epochs: int | None  # None when the record does not say
@@ -384,10 +384,10 @@ class Outcome:
     params: dict[str, Any] = dataclasses.field(default_factory=dict)
 
 
-def _side(values: Any) -> float:
-    """The parameter `a` (the paper's side), 0 for an algorithm without one."""
-    a = values.get("a", 0.0)
-    return float(a) if isinstance(a, (int, float)) and not isinstance(a, bool) else 0.0
+def side_of(values: Any) -> float | None:
+    """The parameter `a` (the paper's side), None for an algorithm without one."""
+    a = values.get("a")
+    return float(a) if isinstance(a, (int, float)) and not isinstance(a, bool) else None
 
 
 def exit_code(outcome: Outcome) -> ExitCode:
@@ -486,6 +486,7 @@ __all__ = [
     "resolve_start",
     "run_lockstep_command",
     "summary",
+    "side_of",
     "summary_json",
     "verdict",
 ]

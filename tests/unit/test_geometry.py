@@ -65,6 +65,15 @@ def test_sec_matches_brute_force_oracle(raw: list[tuple[float, float]]) -> None:
     assert np.all(d <= c.radius * (1 + 1e-9) + 1e-12)
 
 
+def test_sec_of_a_nearly_right_triangle_encloses_its_right_angle() -> None:
+    # its circumcircle and the diametral circle of the long side round to one radius: the SEC
+    # once kept the diametral one, with (0, 0) 9e-9 outside
+    pts = np.array([(0.0, 0.0), (1.0, 0.0), (1e-7, 11.0)])
+    c = sec(pts)
+    d = np.hypot(pts[:, 0] - c.center[0], pts[:, 1] - c.center[1])
+    assert np.all(d <= c.radius * (1 + 1e-12))
+
+
 def test_sec_of_collinear_points_is_the_extreme_pair() -> None:
     pts = np.array([[0.0, -3.0], [0.0, 1.0], [0.0, 5.0], [0.0, -1.0]])
     c = sec(pts)
