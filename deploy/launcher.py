@@ -38,6 +38,7 @@ from fatswarm.deploy.zconf import (
     check_network,
     loopback_endpoint,
 )
+from fatswarm.world.record import RecordWriteError, RecordWriter
 
 if TYPE_CHECKING:
     from fatswarm.deploy.config import RunSetup
@@ -182,11 +183,18 @@ def run_networked(args: argparse.Namespace) -> int:
         pace = watchable_pace(setup.params.n, setup.scheduler.name) if live_dashboard(args) else 0.0
     if setup.resumed is None and args.seed is None and not args.quiet:
         print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
+    # Our own router holds one swarm: the default name lets `fatswarm dashboard` attach as is. On
+    # a shared router (--connect), a fresh name keeps two runs from mixing their messages.
+    swarm = args.swarm or (f"run-{secrets.token_hex(4)}" if args.connect else DEFAULT_SWARM)
     with tempfile.TemporaryDirectory(prefix="fatswarm-") as tmp:
         record = args.record or os.path.join(tmp, "record.jsonl")
-        if args.record and not args.resume and os.path.exists(record):
-            os.unlink(record)  # --force (checked): a new run, as in lockstep (which truncates)
-        return _launch(args, setup, record, pace)
+        if setup.resumed is None:
+            try:  # a new run (an existing file only with --force, checked): truncated
+                write_header(setup, record, swarm)
+            except RecordWriteError as exc:
+                print(f"fatswarm run: {exc}", file=sys.stderr)
+                return ExitCode.RECORD_FAILED
+        return _launch(args, setup, record, pace, swarm)
 
 
 def check_inputs(args: argparse.Namespace) -> tuple[str | None, int, RunSetup | None]:
@@ -216,9 +224,9 @@ def check_inputs(args: argparse.Namespace) -> tuple[str | None, int, RunSetup | 
 
 def write_header(setup: RunSetup, record: str, swarm: str) -> None:
     """Start the record of a new run with its header: the world then runs exactly this run (it
-    resumes the record, with no round yet), so none of it travels as flags to the world."""
+    resumes the record, with no round yet), so none of it travels as flags to the world.
+    Raises RecordWriteError (a full disk, a permission)."""
     from fatswarm.world.core import WorldCore, WorldSetup
-    from fatswarm.world.record import RecordWriter
 
     assert setup.config is not None
     extra = setup.config.header_extra(networked=True, n=setup.params.n)
@@ -246,14 +254,13 @@ class StopSignal:
         return ExitCode.TERMINATED if self.signum == signal.SIGTERM else ExitCode.INTERRUPTED
 
 
-def _launch(args: argparse.Namespace, setup: RunSetup, record: str, pace: float) -> int:
+def _launch(
+    args: argparse.Namespace, setup: RunSetup, record: str, pace: float, swarm: str
+) -> int:
     """Start the router (unless --connect), the world, the coordinator and the agents for the
     resolved run `setup`; follow it; the exit code."""
     stop = StopSignal()
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)}
-    # Our own router holds one swarm: the default name lets `fatswarm dashboard` attach as is. On
-    # a shared router (--connect), a fresh name keeps two runs from mixing their messages.
-    swarm = args.swarm or (f"run-{secrets.token_hex(4)}" if args.connect else DEFAULT_SWARM)
     router = None
     try:
         if args.connect:
@@ -271,8 +278,6 @@ def _launch(args: argparse.Namespace, setup: RunSetup, record: str, pace: float)
         if not args.quiet:
             print(f"swarm {swarm!r} on {endpoints[0]} (watch from elsewhere: fatswarm dashboard "
                   f"--connect {endpoints[0]} --swarm {swarm})", file=sys.stderr)
-        if setup.resumed is None:
-            write_header(setup, record, swarm)
         watcher = _follow(args, swarm, router, endpoints[0])
         try:
             # the agents host needs its own grace first, to stop its agents one by one
@@ -379,7 +384,8 @@ def _run_children(
         if "world" in gone:
             print(f"fatswarm run: the world process exited with code {gone['world']}",
                   file=sys.stderr)
-            return EXIT_NOT_FORMED if gone["world"] != EXIT_BAD_INPUT else EXIT_BAD_INPUT
+            said = (EXIT_BAD_INPUT, ExitCode.RECORD_FAILED)  # its own line says why
+            return ExitCode(gone["world"]) if gone["world"] in said else EXIT_NOT_FORMED
     code = stop.exit_code()
     print(f"{'terminated' if code == ExitCode.TERMINATED else 'interrupted'}: stopping every "
           "process started", file=sys.stderr)

@@ -8,6 +8,7 @@ interrupted (SIGINT), 141 standard output closed early (a broken pipe), 143 term
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import math
@@ -54,7 +55,9 @@ EXIT_CODES_HELP: Final = (
     f"exit codes: {EXIT_FORMED:d} formed with no collision; {EXIT_NOT_FORMED:d} not formed "
     f"(stalled or out of rounds); {EXIT_BAD_INPUT:d} bad input (one line on stderr says what to "
     f"fix); {EXIT_FORMED_WITH_COLLISIONS:d} formed, but with collisions (robots stopped at "
-    f"contact: not the collision-free formation the paper guarantees); {EXIT_INTERRUPTED:d} "
+    f"contact: not the collision-free formation the paper guarantees); "
+    f"{ExitCode.RECORD_FAILED:d} the run record could not be written (disk full, permissions: "
+    f"the run stopped; --resume goes on once fixed); {EXIT_INTERRUPTED:d} "
     f"interrupted (Ctrl-C); {EXIT_BROKEN_PIPE:d} standard output closed early (e.g. | head); "
     f"{EXIT_TERMINATED:d} terminated (SIGTERM)."
 )
@@ -206,6 +209,9 @@ def check_outputs(args: argparse.Namespace) -> None:
         if resume and args.force:
             raise RunInputError("--resume continues the --record file, --force overwrites it: "
                                 "pass one of them")
+        if os.path.exists(record) and not os.path.isfile(record):
+            raise RunInputError(f"--record {record} exists and is not a regular file (a device, "
+                                "a pipe...); name a file")
         if os.path.exists(record) and not (args.force or resume):
             raise RunInputError(f"--record {record} exists; pass --force to overwrite it")
     svg: str | None = getattr(args, "svg", None)  # the dashboard's flag
@@ -248,7 +254,7 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
     from fatswarm.agent.seam import AlgorithmFailure
     from fatswarm.deploy.lockstep import HistoryMismatchError, run_lockstep
     from fatswarm.world.physics import InvalidConfigurationError
-    from fatswarm.world.record import RecordFormatError, RecordWriter
+    from fatswarm.world.record import RecordFormatError, RecordWriteError, RecordWriter
 
     out = sys.stdout if out is None else out
     seed_given = args.seed is not None
@@ -294,13 +300,18 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
     except AlgorithmFailure as exc:  # the record holds every round before it
         print(f"fatswarm run: {exc}", file=sys.stderr)
         return ExitCode.NOT_FORMED
+    except RecordWriteError as exc:  # the rounds written stay; --resume goes on from them
+        print(f"fatswarm run: {exc}; the run stopped (resume it with --resume once fixed)",
+              file=sys.stderr)
+        return ExitCode.RECORD_FAILED
     except HistoryMismatchError as exc:  # refused before anything was appended
         return _fail(f"--resume: {args.record} cannot be continued exactly in lock step: {exc} "
                      "(resume it with the run's own --fairness or --schedule, or networked if "
                      "it ran so)")
     finally:
         if record is not None:
-            record.close()
+            with contextlib.suppress(RecordWriteError):  # said above, if it matters
+                record.close()
 
     outcome = Outcome(
         status=result.status,
@@ -485,8 +496,8 @@ __all__ = [
     "print_outcome",
     "resolve_start",
     "run_lockstep_command",
-    "summary",
     "side_of",
+    "summary",
     "summary_json",
     "verdict",
 ]

@@ -31,6 +31,10 @@ class RecordFormatError(ValueError):
     """A run record file is missing, unreadable or not of the documented schema."""
 
 
+class RecordWriteError(RuntimeError):
+    """A line could not be written to the run record (disk full, a permission, an I/O error)."""
+
+
 @dataclass(frozen=True, slots=True)
 class Header:
     """First line: the run's algorithm and parameters, scheduler, seed and start positions (n, 2);
@@ -152,10 +156,15 @@ class RecordWriter:
         line = json.dumps(entry, separators=(",", ":"), allow_nan=False) + "\n"
         if self._newline_first:
             line, self._newline_first = "\n" + line, False
-        self._fh.write(line)
-        self._fh.flush()
-        if self.fsync:
-            os.fsync(self._fh.fileno())
+        try:
+            self._fh.write(line)
+            self._fh.flush()
+            if self.fsync:
+                os.fsync(self._fh.fileno())
+        except OSError as exc:  # what was written of the line is a torn end: resume drops it
+            raise RecordWriteError(
+                f"cannot write the run record {self.path}: {exc.strerror or exc}"
+            ) from exc
 
     def header(
         self,
@@ -223,9 +232,15 @@ class RecordWriter:
         )
 
     def close(self) -> None:
-        if self._fh is not None:
-            self._fh.close()
-            self._fh = None
+        """Close the file; a failure to flush its last bytes is a RecordWriteError."""
+        fh, self._fh = self._fh, None
+        if fh is not None:
+            try:
+                fh.close()
+            except OSError as exc:
+                raise RecordWriteError(
+                    f"cannot write the run record {self.path}: {exc.strerror or exc}"
+                ) from exc
 
 
 def _ends_without_newline(path: str) -> bool:

@@ -28,6 +28,7 @@ from fatswarm.world.protocol import (
     snapshot_any_key,
     state_key,
 )
+from fatswarm.world.record import RecordWriteError
 
 __all__ = [
     "REPUBLISH_S",
@@ -97,12 +98,21 @@ def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) ->
                     dirty = True
             except zenoh.ZError as exc:  # e.g. the asker left before its reply: not our problem
                 log.warning("zenoh refused a %s reply or notice: %s", kind, exc)
+            except RecordWriteError as exc:  # what is in the record stays; resume goes on from it
+                log.error("%s; the world stops at round %d (resume it once this is fixed)", exc,
+                          core.open_round or core.committed)
+                code = ExitCode.RECORD_FAILED
+                break
             except AlgorithmFailure as exc:  # its round is durable; nobody can say what next
                 log.error("%s; the world stops at round %d (in its record)", exc,
                           core.open_round or core.committed)
                 code = ExitCode.NOT_FORMED
                 break
-    core.journal.close()
+    try:
+        core.journal.close()
+    except RecordWriteError as exc:
+        log.error("%s", exc)
+        code = ExitCode.RECORD_FAILED
     log.info("world stopped at round %d (%s)", core.committed, core.status)
     return code
 

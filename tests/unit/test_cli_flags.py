@@ -308,7 +308,8 @@ def test_the_default_pace_is_watchable_only_with_the_live_dashboard(
 
     seen: list[float] = []
 
-    def launch(args: Any, setup: object, record: str, pace: float) -> int:
+    def launch(args: Any, setup: object, record: str, pace: float,
+               swarm: str) -> int:
         seen.append(pace)
         return 1
 

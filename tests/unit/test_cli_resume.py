@@ -224,7 +224,8 @@ def test_networked_resume_runs_the_records_seed_scheduler_and_robots(
 ) -> None:
     launched: list[tuple[RunSetup, str]] = []
 
-    def launch(args: argparse.Namespace, setup: RunSetup, record: str, pace: float) -> int:
+    def launch(args: argparse.Namespace, setup: RunSetup, record: str, pace: float,
+               swarm: str) -> int:
         launched.append((setup, record))
         return run.ExitCode.NOT_FORMED
 

@@ -169,7 +169,8 @@ def test_exit_codes_are_listed_in_the_help() -> None:
 
 
 def test_exit_codes_are_one_enum_whose_old_names_still_import() -> None:
-    assert [int(c) for c in run.ExitCode] == [0, 1, 2, 3, 130, 141, 143]
+    assert [int(c) for c in run.ExitCode] == [0, 1, 2, 3, 4, 130, 141, 143]
+    assert str(int(run.ExitCode.RECORD_FAILED)) in run.EXIT_CODES_HELP
     assert (run.EXIT_FORMED, run.EXIT_NOT_FORMED, run.EXIT_BAD_INPUT,
             run.EXIT_FORMED_WITH_COLLISIONS, run.EXIT_INTERRUPTED) == (0, 1, 2, 3, 130)
     assert run.EXIT_TERMINATED is run.ExitCode.TERMINATED
