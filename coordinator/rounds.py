@@ -343,6 +343,8 @@ class CoordinatorCore:
             why = "no answer" if reply is None else reply.reason
             self._note(f"world refused round {self._round}: {why}", warning=True)
             return self._retry(now)  # then Hello, and on from where the world stands
+        if reply.open_round == self._round:  # moves it already holds (this coordinator restarted,
+            self._held |= set(reply.held) & self.active_set  # or the world kept a retried round)
         self._phase, self._deadline = Phase.COLLECT, now + self.times.move_timeout_s
         self._waiting = {r for r in self.active if r in self._live and r not in self._held}
         timeout_ms = int(self.times.move_timeout_s * 1000)

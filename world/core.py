@@ -327,6 +327,7 @@ class WorldCore:
             open_round=self.open_round,
             status=self.status,
             collisions=self.collisions_total,
+            held=tuple(sorted(self.held)) if self.open_round else (),
         )
 
     def _begin(self, req: Begin) -> tuple[ControlReply, bool]:

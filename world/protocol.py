@@ -446,6 +446,8 @@ class ControlReply:
     open_round: int  # the round open for moves, 0 if none
     status: str  # a world.outcome.Status
     collisions: int = 0  # robots stopped at contact so far (a formation with any is not clean)
+    held: tuple[int, ...] = ()  # robots whose moves it holds for `open_round` (a restarted
+    # coordinator need not wait for their notices again)
 
     def encode(self) -> bytes:
         """msgpack bytes."""
@@ -459,6 +461,7 @@ class ControlReply:
                 "open_round": int(self.open_round),
                 "status": self.status,
                 "collisions": int(self.collisions),
+                "held": _robot_list(self.held),
             },
         )
 
@@ -477,6 +480,7 @@ class ControlReply:
             open_round=get_int(obj, "open_round", 0, 2**62),
             status=status,
             collisions=get_int(obj, "collisions", 0, 2**62),
+            held=get_robots(obj, "held"),
         )
 
 

@@ -68,7 +68,8 @@ class FakeWorld:
     def reply(self, ok: bool, reason: str = "") -> ControlReply:
         return ControlReply(ok=ok, reason=reason, n=self.n, committed=self.committed,
                             open_round=self.open_round, status=str(self.status),
-                            collisions=self.collisions)
+                            collisions=self.collisions,
+                            held=tuple(sorted(self.held)) if self.open_round else ())
 
     def answer(self, req: Request) -> ControlReply | None:
         self.requests.append(req)
@@ -344,6 +345,20 @@ def test_a_silent_world_is_asked_again_every_retry_interval() -> None:
     assert drive.world.requests == [Hello(), Hello()] and drive.core.next_deadline() == 0.5
     drive.tick(0.5)
     assert drive.core.n == 2 and drive.begins()[0] == Begin(round=1, active=(0, 1))
+
+
+def test_a_restarted_coordinator_counts_the_moves_the_world_already_holds() -> None:
+    # The first coordinator opened round 3 and the world holds robots 0 and 1's moves; the new
+    # one re-opens round 3 (same scheduler, same active set) and waits only for robot 2.
+    world = FakeWorld(3, end_after=5, committed=2)
+    world.open_round, world.active, world.held = 3, (0, 1, 2), {0, 1}
+    drive = Drive(world, resume_live=range(3))
+    drive.auto_move = False
+    drive.start(0, 1, 2)
+    assert drive.core.phase is Phase.COLLECT and drive.core.held == {0, 1}
+    drive.now = 0.01
+    drive.move(2)
+    assert world.applied[0] == (Commit(round=3, timed_out=()), ())  # no wait for a deadline
 
 
 def test_a_world_that_comes_up_is_asked_at_once_not_at_the_retry_deadline() -> None:
