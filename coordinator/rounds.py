@@ -218,10 +218,11 @@ class CoordinatorCore:
         return []
 
     def on_world(self, alive: bool, now: float) -> list[Action]:
-        """The world's liveliness token appeared or went away. Waiting to ask it again after no
-        answer, the coordinator asks at once when it appears (a world just (re)started)."""
+        """The world's liveliness token appeared or went away. When it appears (a world just
+        started, or restarted and lost the round it held open), the coordinator asks it where it
+        stands at once, rather than at its retry or move deadline."""
         del now
-        if alive and self._phase is Phase.RETRY:
+        if alive and self._phase in (Phase.RETRY, Phase.COLLECT):
             return self._ask_hello()
         return []
 

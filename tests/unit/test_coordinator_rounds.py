@@ -361,6 +361,20 @@ def test_a_restarted_coordinator_counts_the_moves_the_world_already_holds() -> N
     assert world.applied[0] == (Commit(round=3, timed_out=()), ())  # no wait for a deadline
 
 
+def test_a_world_that_restarts_mid_round_is_asked_at_once_and_the_round_opened_again() -> None:
+    world = FakeWorld(3, end_after=5)
+    drive = Drive(world)
+    drive.silent = {2}  # robot 2's move is on its way when the world dies
+    drive.start(0, 1, 2)
+    assert drive.core.phase is Phase.COLLECT and drive.core.held == {0, 1}
+    world.restart()  # it lost the open round and the moves it held
+    drive.now = 0.2
+    drive.silent = set()
+    drive.perform(drive.core.on_world(True, drive.now))
+    assert world.requests[2:4] == [Hello(), Begin(round=1, active=(0, 1, 2))]
+    assert world.applied[0] == (Commit(round=1, timed_out=()), ())  # all three moved again
+
+
 def test_a_world_that_comes_up_is_asked_at_once_not_at_the_retry_deadline() -> None:
     world = FakeWorld(2)
     world.fail("hello", "none")
