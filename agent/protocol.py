@@ -23,6 +23,7 @@ from fatswarm.world.protocol import (
 )
 
 MAX_SWEEP = 8 * math.pi  # an arc never needs more than a few turns; bounds physics work
+MAX_MOVE_BYTES = 16 << 10  # a move of MAX_SEGMENTS segments is ~3 KB: larger is dropped unread
 
 
 def move_key(swarm: str, robot: int) -> str:

@@ -21,7 +21,8 @@ from fatswarm.agent.path import Path
 from fatswarm.agent.protocol import MoveSubmitted, alive_key, move_key
 from fatswarm.agent.registry import DEFAULT
 from fatswarm.agent.seam import Algorithm, AlgorithmParamsError, Configured, checked
-from fatswarm.coordinator.protocol import RoundStart, round_key
+from fatswarm.coordinator.protocol import MAX_ROUND_START_BYTES, RoundStart, round_key
+from fatswarm.world.inbox import Inbox
 from fatswarm.world.protocol import ProtocolError, Snapshot, snapshot_key
 
 log = logging.getLogger("fatswarm.agent")
@@ -117,13 +118,13 @@ def serve(
 
     stop = stop or threading.Event()
     robot = Robot(algorithm or load_algorithm(cfg.algorithm), draw_flip(cfg.seed, cfg.robot))
-    starts: queue.Queue[bytes] = queue.Queue()
+    starts: Inbox[bytes] = Inbox(max_items=64)  # only the newest start matters
     session = open_session(conf, stop, waiting)
     if session is None:
         return 0
     with session:
         session.declare_subscriber(
-            round_key(cfg.swarm), lambda s: starts.put(s.payload.to_bytes())
+            round_key(cfg.swarm), lambda s: _offer_start(starts, s)
         )
         mover = session.declare_publisher(
             move_key(cfg.swarm, cfg.robot),
@@ -139,21 +140,40 @@ def serve(
         _token = session.liveliness().declare_token(alive_key(cfg.swarm, cfg.robot))
         log.info("robot %d up", cfg.robot)
         while not stop.is_set():
-            try:
-                data = starts.get(timeout=0.2)
-            except queue.Empty:
-                continue
-            try:
-                start = RoundStart.decode(data)
-            except ProtocolError as exc:
-                log.warning("rejected round start: %s", exc)
-                continue
-            if cfg.robot in start.active and starts.empty():  # a newer start supersedes this one
+            start = _newest_start(starts)
+            if start is not None and cfg.robot in start.active:
                 try:
                     _cycle(cfg, start.round, robot, querier, mover)
                 except zenoh.ZError as exc:  # the router is away: this round goes without us
                     log.warning("round %d: %s", start.round, exc)
     return 0
+
+
+def _newest_start(starts: Inbox[bytes]) -> RoundStart | None:
+    """The newest valid round start queued (waiting a little for one): a newer start supersedes
+    an older one, and garbage after a real start does not hide it."""
+    try:
+        pending = [starts.get(timeout=0.2)]
+    except queue.Empty:
+        return None
+    while len(starts):
+        pending.append(starts.get_nowait())
+    newest = None
+    for data in pending:
+        try:
+            newest = RoundStart.decode(data)
+        except ProtocolError as exc:
+            log.warning("rejected round start: %s", exc)
+    return newest
+
+
+def _offer_start(starts: Inbox[bytes], sample: Any) -> None:
+    """Queue a round start unless it is larger than any can be (then it is dropped unread)."""
+    size = len(sample.payload)
+    if size > MAX_ROUND_START_BYTES:
+        starts.too_big("round-start")
+        return
+    starts.offer("round-start", sample.payload.to_bytes(), size)
 
 
 def _cycle(cfg: AgentConfig, round_no: int, robot: Robot, querier: Any, mover: Any) -> None:

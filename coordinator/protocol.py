@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 from fatswarm.world.protocol import MAX_ROBOTS, get_int, get_robots, pack, prefix, unpack
 
+MAX_ROUND_START_BYTES = 64 << 10  # naming 4096 active robots is ~20 KB: larger is dropped unread
+
 
 def round_key(swarm: str) -> str:
     """Coordinator -> agents (and observers): `RoundStart` once the world has opened the round."""

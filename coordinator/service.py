@@ -25,8 +25,10 @@ from fatswarm.coordinator.rounds import (
     RoundTimes,
 )
 from fatswarm.coordinator.schedule import Scheduler
+from fatswarm.world.inbox import Inbox
 from fatswarm.world.outcome import Status, exit_code_for
 from fatswarm.world.protocol import (
+    MAX_NOTICE_BYTES,
     Begin,
     Commit,
     ControlReply,
@@ -81,7 +83,7 @@ class Coordinator:
         self.cfg = cfg
         self.stop = stop
         self.core = CoordinatorCore(make_scheduler, cfg.times, cfg.resume_live)
-        self.events: queue.Queue[tuple[str, Any]] = queue.Queue()
+        self.events: Inbox[tuple[str, Any]] = Inbox()
         self.rejected = 0
         self._began = self._announced = 0.0  # perf_counter marks of the round (debug timings)
 
@@ -90,15 +92,20 @@ class Coordinator:
     def _on_alive(self, sample: Any) -> None:
         import zenoh
 
-        self.events.put(("alive", (str(sample.key_expr), sample.kind == zenoh.SampleKind.PUT)))
+        alive = sample.kind == zenoh.SampleKind.PUT
+        self.events.offer("alive", ("alive", (str(sample.key_expr), alive)))
 
     def _on_world(self, sample: Any) -> None:
         import zenoh
 
-        self.events.put(("world", sample.kind == zenoh.SampleKind.PUT))
+        self.events.offer("world", ("world", sample.kind == zenoh.SampleKind.PUT))
 
     def _on_held(self, sample: Any) -> None:
-        self.events.put(("held", sample.payload.to_bytes()))
+        size = len(sample.payload)
+        if size > MAX_NOTICE_BYTES:
+            self.events.too_big("held")
+            return
+        self.events.offer("held", ("held", sample.payload.to_bytes()), size)
 
     # -- the loop -------------------------------------------------------------------------------
 

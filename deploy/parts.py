@@ -32,6 +32,7 @@ from fatswarm.deploy.zconf import (
 EXIT_BAD_INPUT = ExitCode.BAD_INPUT
 DEFAULT_ROUTER_LISTEN = "tcp/127.0.0.1:7447"
 PARENT_POLL_S = 0.5
+MAX_LOG_CHARS = 300  # a log message longer than this is cut (ShortLines)
 
 
 def install_stop_signals(parent: int | None = None) -> threading.Event:
@@ -56,6 +57,19 @@ def install_stop_signals(parent: int | None = None) -> threading.Event:
     return stop
 
 
+class ShortLines(logging.Filter):
+    """Cuts a log message to MAX_LOG_CHARS, saying how much was cut: a peer's garbage quoted in a
+    refusal must not become megabytes of log in every process that receives it."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        message = record.getMessage()
+        if len(message) > MAX_LOG_CHARS:
+            record.msg = (f"{message[:MAX_LOG_CHARS]}... "
+                          f"({len(message) - MAX_LOG_CHARS} more characters cut)")
+            record.args = None
+        return True
+
+
 def _logging(args: argparse.Namespace, default: str) -> None:
     level = getattr(args, "log_level", None) or default
     logging.basicConfig(
@@ -63,6 +77,8 @@ def _logging(args: argparse.Namespace, default: str) -> None:
         format="%(asctime)s %(name)s[%(process)d] %(levelname)s %(message)s",
         stream=sys.stderr,
     )
+    for handler in logging.getLogger().handlers:
+        handler.addFilter(ShortLines())
 
 
 def _fail(part: str, message: str) -> int:

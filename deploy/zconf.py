@@ -142,12 +142,18 @@ def _host_port(endpoint: str) -> tuple[str, int] | None:
     return host.strip("[]"), int(port)
 
 
+# The largest message a router passes on (and a session takes in): larger ones are dropped where
+# they are reassembled, before any part holds them. A 4096-robot state is ~200 KB.
+MAX_MESSAGE_IN = 512 << 10
+
+
 def make_config(
     mode: str,
     connect: Sequence[str] = (),
     listen: Sequence[str] = (),
     lease_ms: int | None = None,
     shared_memory: bool = True,
+    max_message_in: int = MAX_MESSAGE_IN,
 ) -> zenoh.Config:
     """A Zenoh config with multicast (and gossip) scouting off and the given (checked) endpoints.
 
@@ -167,6 +173,7 @@ def make_config(
         conf.insert_json5("listen/endpoints", json.dumps(list(listen)))
     except zenoh.ZError as exc:  # something endpoint_problem let through
         raise ZenohSetupError(explain_zenoh_error(exc)) from None
+    conf.insert_json5("transport/link/rx/max_message_size", str(int(max_message_in)))
     if not shared_memory:
         # Agents send and receive small messages only; no 16 MB SHM pool per process.
         conf.insert_json5("transport/shared_memory/enabled", "false")

@@ -10,13 +10,23 @@ import logging
 import queue
 import threading
 import time
+from collections import Counter
+from collections.abc import Callable
 from typing import Any
 
-from fatswarm.agent.protocol import MoveSubmitted, alive_any_key, move_any_key, robot_of_alive_key
+from fatswarm.agent.protocol import (
+    MAX_MOVE_BYTES,
+    MoveSubmitted,
+    alive_any_key,
+    move_any_key,
+    robot_of_alive_key,
+)
 from fatswarm.agent.seam import AlgorithmFailure
 from fatswarm.world.core import WorldCore, WorldSetup, open_world
+from fatswarm.world.inbox import Inbox
 from fatswarm.world.outcome import ExitCode
 from fatswarm.world.protocol import (
+    MAX_CONTROL_BYTES,
     ControlReply,
     MoveHeld,
     ProtocolError,
@@ -44,6 +54,7 @@ __all__ = [
 log = logging.getLogger("fatswarm.world")
 
 REPUBLISH_S = 1.0  # the state is re-published this often when nothing happens, for late observers
+DROPPED_EVERY_S = 5.0  # dropped messages are counted in one log line at most this often
 
 # --- the Zenoh shell --------------------------------------------------------------------------
 
@@ -57,14 +68,30 @@ def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) ->
     import zenoh
 
     stop = stop or threading.Event()
-    events: queue.Queue[tuple[str, Any]] = queue.Queue()
+    events: Inbox[tuple[str, Any]] = Inbox()
     swarm = core.setup.swarm
 
     def on_alive(sample: zenoh.Sample) -> None:
-        events.put(("alive", (str(sample.key_expr), sample.kind == zenoh.SampleKind.PUT)))
+        alive = sample.kind == zenoh.SampleKind.PUT
+        events.offer("alive", ("alive", (str(sample.key_expr), alive)))
 
     def on_move(sample: zenoh.Sample) -> None:
-        events.put(("move", (str(sample.key_expr), sample.payload.to_bytes())))
+        size = len(sample.payload)
+        if size > MAX_MOVE_BYTES:
+            events.too_big("move")
+            return
+        events.offer("move", ("move", (str(sample.key_expr), sample.payload.to_bytes())), size)
+
+    def on_query(kind: str, limit: int) -> Callable[[Any], None]:
+        def take(query: Any) -> None:
+            size = len(query.payload) if query.payload is not None else 0
+            if size > limit:
+                events.too_big(kind)
+                query.drop()  # answered at once (with nothing): the asker does not wait
+            elif not events.offer(kind, (kind, query), size):
+                query.drop()
+
+        return take
 
     with session:
         state_pub = session.declare_publisher(
@@ -73,8 +100,8 @@ def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) ->
         held_pub = session.declare_publisher(
             moves_held_key(swarm), congestion_control=zenoh.CongestionControl.BLOCK, express=True
         )
-        session.declare_queryable(snapshot_any_key(swarm), lambda q: events.put(("look", q)))
-        session.declare_queryable(control_key(swarm), lambda q: events.put(("control", q)))
+        session.declare_queryable(snapshot_any_key(swarm), on_query("look", 0))
+        session.declare_queryable(control_key(swarm), on_query("control", MAX_CONTROL_BYTES))
         session.declare_subscriber(move_any_key(swarm), on_move)
         session.liveliness().declare_subscriber(alive_any_key(swarm), on_alive, history=True)
         _token = session.liveliness().declare_token(alive_key(swarm))
@@ -82,6 +109,8 @@ def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) ->
         state_pub.put(core.state().encode())
         dirty, published = False, time.monotonic()
         code = ExitCode.OK
+        said: Counter[str] = Counter()
+        said_at = -DROPPED_EVERY_S
         while not stop.is_set():
             try:
                 kind, item = events.get(timeout=0.2)
@@ -90,6 +119,8 @@ def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) ->
                     state_pub.put(core.state().encode())
                     dirty, published = False, time.monotonic()
                 continue
+            if events.dropped != said:  # a flood: say so, at most every few seconds
+                said_at = _say_dropped(events, said, said_at)
             try:
                 if _handle(core, kind, item, held_pub):
                     state_pub.put(core.state().encode())
@@ -145,6 +176,19 @@ def control_bytes(core: WorldCore, payload: bytes) -> tuple[ControlReply, bool]:
         core.reject("control-garbage", str(exc))
         return core.reply(False, f"bad request: {exc}"), False
     return core.control(request)
+
+
+def _say_dropped(events: Inbox[Any], said: Counter[str], said_at: float) -> float:
+    """Log how many messages were dropped (too big, or the inbox full) since it last said, at most
+    every DROPPED_EVERY_S; when it last said."""
+    now = time.monotonic()
+    if now - said_at < DROPPED_EVERY_S:
+        return said_at
+    fresh = events.dropped - said
+    log.warning("dropped %s messages (too big, or more than the inbox holds)",
+                ", ".join(f"{k} {v}" for k, v in sorted(fresh.items())))
+    said.update(fresh)
+    return now
 
 
 def _handle(core: WorldCore, kind: str, item: Any, held_pub: Any) -> bool:
