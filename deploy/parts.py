@@ -408,8 +408,9 @@ def _exec_agents(args: argparse.Namespace, robots: range) -> int:
         for robot in robots:  # the first one says for all that they wait for a router
             waiting_as = _waiting_as(robots) if robot == robots[0] else ""
             children.start(f"agent {robot}",
-                           agent_command(robot, args.seed, args.swarm, args.connect,
-                                         args.log_level, waiting_as, args.algorithm))
+                           [*agent_command(robot, args.seed, args.swarm, args.connect,
+                                           args.log_level, waiting_as, args.algorithm),
+                            "--exit-with-parent", str(os.getpid())])  # a killed host: none left
         while not stop.wait(0.5):
             if len(children.exited()) == len(robots):
                 return 1
@@ -430,12 +431,13 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
     algorithm = load_algorithm(args.algorithm)  # loaded once, before the forks share it
     log = logging.getLogger("fatswarm.agents")
     children: dict[int, int] = {}
+    host = os.getpid()
     for robot in robots:
         pid = os.fork()
         if pid == 0:  # the agent process: never returns into the parent's code
             code = 1
             try:
-                stop = install_stop_signals()
+                stop = install_stop_signals(host)  # a killed host leaves no agent behind
                 conf = _client_config(args, lease_ms=AGENT_LEASE_MS, shared_memory=False)
                 # the first one says for all that they wait for a router
                 waiting = _waiting_as(robots) if robot == robots[0] else None

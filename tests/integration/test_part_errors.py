@@ -2,17 +2,26 @@
 
 from __future__ import annotations
 
+import os
 import re
+import signal
 import subprocess
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from netharness import assert_one_line, part, run_all
+from netharness import assert_one_line, descendants_of, part, run_all, running
 
 from fatswarm.deploy.launcher import Children
-from fatswarm.deploy.zconf import CONNECT_DEADLINE_S, ZenohSetupError, check_network, free_port
+from fatswarm.deploy.zconf import (
+    CONNECT_DEADLINE_S,
+    ZenohSetupError,
+    check_network,
+    free_port,
+    loopback_endpoint,
+)
 
 pytestmark = pytest.mark.integration
 
@@ -128,3 +137,27 @@ def test_agents_say_every_few_seconds_that_they_wait_for_a_router_and_where(
         assert all(f"] WARNING {who}: " in line for line in lines), logs()  # one speaks per host
         waiting = [line for line in lines if "still waiting" in line]
         assert len(waiting) >= 2 and all(re.search(r"\(\d+ s so far\)", w) for w in waiting)
+
+
+@pytest.mark.parametrize("spawn", ["fork", "exec"])
+def test_a_killed_agents_host_leaves_no_agent_behind(spawn: str) -> None:
+    argv = [sys.executable, "-m", "fatswarm.deploy.parts", "agents", "-n", "3", "--spawn", spawn,
+            "--connect", loopback_endpoint(), "--seed", "1"]  # no router: they wait for one
+    host = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    agents: list[int] = []
+    try:
+        deadline = time.monotonic() + 60
+        while len(agents) < 3 and time.monotonic() < deadline:
+            agents = [p for p in descendants_of(host.pid) if running(p)]
+            time.sleep(0.1)
+        assert len(agents) == 3, agents
+        host.kill()  # SIGKILL: no chance to stop its agents itself
+        host.wait()
+        deadline = time.monotonic() + 30
+        while any(running(p) for p in agents) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not [p for p in agents if running(p)]
+    finally:
+        for pid in [host.pid, *agents]:
+            if running(pid):
+                os.kill(pid, signal.SIGKILL)
