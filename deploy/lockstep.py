@@ -142,6 +142,8 @@ def run_lockstep(
             raise HistoryMismatchError(f"the run already ended ({world.status}) after round "
                                        f"{len(history)}")
         checked = _CheckedScheduler(scheduler, history)
+    for robot in range(n):  # every robot's "agent" lives here, for the whole run
+        world.set_alive(robot, True)
     bus = _Bus(world, setting, compute, [draw_flip(seed, robot) for robot in range(n)], on_round)
     coordinator = CoordinatorCore(lambda _n: checked, RoundTimes(), resume_live=range(n))
     for robot in range(n):
@@ -301,6 +303,10 @@ def _check_history(history: Sequence[RoundEntry]) -> None:
     for round_no, entry in enumerate(history, start=1):
         if entry.round != round_no:
             raise HistoryMismatchError(f"round {entry.round} comes where round {round_no} should")
+        crashed = entry.extra.get("crashed")
+        if crashed:
+            raise HistoryMismatchError(f"round {round_no}: robots {crashed} counted as crashed "
+                                       "(their agents were gone), which a lock step cannot redo")
         timed_out = entry.extra.get("timed_out")
         if timed_out:
             raise HistoryMismatchError(f"round {round_no}: robots {timed_out} timed out (slow "

@@ -41,6 +41,15 @@ from fatswarm.world.record import Header, RecordWriter, RoundEntry, RunRecord, r
 
 log = logging.getLogger("fatswarm.world")
 
+CRASH_MIN_ROUNDS: Final = 10
+
+
+def crash_after(n: int) -> int:
+    """Committed rounds a robot's agent may be gone before it counts as crashed: twice the
+    default fairness bound (every live robot is active at least once in 2n rounds), >= 10."""
+    return max(CRASH_MIN_ROUNDS, 4 * n)
+
+
 LOOK_STREAM: Final = 0x5A0F  # orders the others in a view; compute must not depend on the order
 
 
@@ -187,6 +196,8 @@ class WorldCore:
         self.stopped: tuple[int, ...] = ()
         self.collisions_total = 0
         self.alive = [False] * n
+        self.gone_since: list[int | None] = [0] * n  # committed round its agent was last seen
+        # (None while it is alive)
         self.last_active = [-1] * n
         self.last_length = [0.0] * n
         self.timeouts = [0] * n
@@ -204,6 +215,7 @@ class WorldCore:
             )
         else:
             self._replay(history)
+        self.gone_since = [self.committed] * n  # no agent seen yet: counted from here
 
     # -- resume ---------------------------------------------------------------------------------
 
@@ -225,7 +237,8 @@ class WorldCore:
         traveled = {m.robot: m.traveled for m in entry.moves}
         paths = {m.robot: m.path for m in entry.moves}
         self._account(entry.round, entry.active, paths, timed_out, before, after, traveled,
-                      entry.collisions)
+                      entry.collisions, entry.extra.get("crashed", ()),
+                      entry.extra.get("recovered", ()))
 
     def _account(
         self,
@@ -237,8 +250,16 @@ class WorldCore:
         after: Points,
         traveled: dict[int, float],
         collisions: Sequence[Collision],
+        crashed: Collection[int] = (),
+        recovered: Collection[int] = (),
     ) -> None:
         """Book one committed round (live or replayed) into the state and the progress tracker."""
+        if crashed:
+            log.warning("robots %s count as crashed from round %d: their agents have been gone "
+                        "for %d rounds; they stay where they are, and are not waited for",
+                        sorted(crashed), round_no, crash_after(self.setup.n))
+        self.tracker.crash(crashed)
+        self.tracker.recover(recovered)
         self._agents = None
         self._figures = None
         for robot in active:
@@ -362,7 +383,11 @@ class WorldCore:
         after = np.asarray(outcome.positions, dtype=np.float64)
         traveled = {r: float(outcome.traveled.get(r, 0.0)) for r in paths}
         timed_out = [r for r in self.active if r not in self.held]
-        extra = {"timed_out": timed_out} if timed_out else {}
+        down, back = self._crashes(round_no)
+        extra: dict[str, list[int]] = {}
+        for key, robots in (("timed_out", timed_out), ("crashed", down), ("recovered", back)):
+            if robots:
+                extra[key] = robots
         self.journal.round(
             round_no,
             self.active,
@@ -372,7 +397,7 @@ class WorldCore:
             **extra,
         )
         self._account(round_no, self.active, paths, timed_out, before, after, traveled,
-                      outcome.collisions)
+                      outcome.collisions, down, back)
         self.last_commit = Committed(round_no, self.active, paths, outcome)
         self.open_round, self.looked, self.held = 0, set(), {}
         if self.tracker.status is not None:
@@ -397,8 +422,19 @@ class WorldCore:
         if not 0 <= robot < self.setup.n or self.alive[robot] == alive:
             return False
         self.alive[robot] = alive
+        self.gone_since[robot] = None if alive else self.committed
         self._agents = None
         return True
+
+    def _crashes(self, round_no: int) -> tuple[list[int], list[int]]:
+        """(robots that count as crashed from this round, crashed robots whose agent is back):
+        the rule of the record's `crashed` and `recovered` round fields (README, "Faults")."""
+        limit = crash_after(self.setup.n)
+        crashed = self.tracker.crashed
+        down = [r for r, since in enumerate(self.gone_since)
+                if since is not None and round_no - since >= limit and r not in crashed]
+        back = sorted(r for r in crashed if self.alive[r])
+        return down, back
 
     def state(self) -> WorldState:
         """The observers' view of the world now."""

@@ -46,6 +46,8 @@ class Progress:
 class ProgressTracker:
     """Observes committed rounds of an n-robot run and decides when it ends.
 
+    A crashed robot (`crash`) counts as active and staying in every round.
+
     formed:  the algorithm's goal holds for the configuration and every robot has been active
              since the configuration last changed, each time asking for an empty path;
     stalled: every robot has been active since the last change, the configuration is unchanged
@@ -72,6 +74,20 @@ class ProgressTracker:
         self._seen_since_change: set[int] = set()
         self._wanting_since_change: set[int] = set()
         self._status: str | None = None
+        self._crashed: set[int] = set()
+
+    def crash(self, robots: Iterable[int]) -> None:
+        """These robots count as crashed: still obstacles, no longer waited for (seen as staying
+        in every round), until `recover` says otherwise."""
+        self._crashed |= {int(r) for r in robots}
+
+    def recover(self, robots: Iterable[int]) -> None:
+        """These robots are back: waited for again."""
+        self._crashed -= {int(r) for r in robots}
+
+    @property
+    def crashed(self) -> frozenset[int]:
+        return frozenset(self._crashed)
 
     @property
     def status(self) -> str | None:
@@ -100,6 +116,7 @@ class ProgressTracker:
             raise RuntimeError(f"the run already ended ({self._status}); no more rounds")
         active_set = {int(r) for r in active}
         bad = [r for r in active_set | set(movers) if not 0 <= r < self.n]
+        active_set |= self._crashed  # a crashed robot stays, as if active and asking to stay
         if bad:
             raise ValueError(f"robots {sorted(bad)} are not in 0..{self.n - 1}")
         self._rounds += 1

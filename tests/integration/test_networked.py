@@ -299,3 +299,20 @@ def test_run_resume_continues_a_cut_record_as_its_own_run(tmp_path: Path) -> Non
     net = read_record(record)
     assert record.read_text().startswith("".join(lines[:6]))  # appended to, nothing rewritten
     assert_same_run(net, lock)
+
+
+def test_a_robot_dead_for_good_counts_as_crashed_and_the_run_ends(
+    make_swarm: Callable[..., Swarm],
+) -> None:
+    from fatswarm.world.core import crash_after
+
+    sw = make_swarm(6, SEED)
+    sw.start_all(pace=0.02)
+    sw.wait_for("round 2", lambda: (s := sw.state()) is not None and s.round >= 2)
+    sw.kill9("agent 4")  # and never restarted
+    end = sw.wait_done()
+    assert end.status in ("formed", "stalled") and end.round < 200, end.status
+    crashed = [r for r in read_record(sw.state_path).rounds if "crashed" in r.extra]
+    assert [r.extra["crashed"] for r in crashed] == [[4]]
+    assert crashed[0].round >= 2 + crash_after(6)
+    assert "robots [4] count as crashed" in sw.log("world")

@@ -116,3 +116,15 @@ def test_unknown_robot_and_bad_arguments_are_refused() -> None:
         ProgressTracker(0, CIRCLE)
     with pytest.raises(ValueError, match="max_rounds"):
         ProgressTracker(3, CIRCLE, max_rounds=0)
+
+
+def test_a_crashed_robot_counts_as_seen_staying_until_it_recovers(uniform: None) -> None:
+    t = ProgressTracker(3, CIRCLE)
+    t.crash([2])
+    t.observe([0, 1], [], P0, P0)  # robot 2 is never active: it crashed
+    assert t.status == "formed" and t.crashed == {2}
+    u = ProgressTracker(3, CIRCLE)
+    u.crash([2])
+    u.recover([2])
+    u.observe([0, 1], [], P0, P0)
+    assert u.status is None  # waited for again

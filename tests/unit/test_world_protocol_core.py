@@ -10,6 +10,7 @@ import pytest
 
 from fatswarm.agent.path import STAY, Line, Path
 from fatswarm.agent.protocol import MoveSubmitted, move_key
+from fatswarm.world.core import crash_after
 from fatswarm.world.protocol import (
     Begin,
     Commit,
@@ -155,3 +156,68 @@ def test_liveliness_shows_in_the_state(tmp_path: FsPath, alive: bool) -> None:
     assert w.set_alive(2, alive) is alive
     assert w.state().agents[2].alive is alive
     assert not w.set_alive(99, True)
+
+
+def _rounds(w: WorldCore, count: int, active: tuple[int, ...] = (0, 1)) -> None:
+    """`count` rounds in which `active` look and stay."""
+    for _ in range(count):
+        r = w.committed + 1
+        assert _ctl(w, Begin(r, active).encode()).ok
+        for robot in active:
+            look_bytes(w, snapshot_key(SWARM, robot))
+            _move(w, robot, robot, r, STAY)
+        _ctl(w, Commit(r).encode())
+
+
+def test_a_robot_whose_agent_stays_gone_counts_as_crashed_and_is_not_waited_for(
+    tmp_path: FsPath,
+) -> None:
+    w = open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=200), SWARM, None)
+    OPENED.append(w)
+    for robot in (0, 1, 2):
+        w.set_alive(robot, True)
+    w.set_alive(2, False)  # gone after round 0, for good
+    limit = crash_after(3)
+    _rounds(w, limit - 1)
+    assert w.status == "running" and not w.tracker.crashed  # waited for: the run goes on
+    _rounds(w, 1)
+    assert w.tracker.crashed == {2}
+    # robots 0 and 1 stay, robot 2 counts as staying: everyone has been seen since the last change
+    assert w.status == "stalled"  # START is no uniform circle
+    w.journal.close()
+    rounds = read_record(tmp_path / "s.jsonl").rounds
+    assert [r.round for r in rounds if "crashed" in r.extra] == [limit]
+    assert rounds[limit - 1].extra["crashed"] == [2]
+    again = open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=200), SWARM, None)
+    OPENED.append(again)
+    assert again.tracker.crashed == {2} and again.status == "stalled"  # replayed from the record
+
+
+def test_a_crashed_robot_whose_agent_comes_back_is_waited_for_again(tmp_path: FsPath) -> None:
+    w = open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=200), SWARM, None)
+    OPENED.append(w)
+    w.set_alive(0, True)
+    w.set_alive(1, True)  # robot 2 never comes: gone since round 0
+    _rounds(w, crash_after(3) - 1, active=(0,))  # robot 1 never active: nobody is stalled yet
+    _rounds(w, 1, active=(0,))
+    assert w.tracker.crashed == {2}
+    w.set_alive(2, True)
+    _rounds(w, 1, active=(0,))
+    assert not w.tracker.crashed
+    w.journal.close()
+    assert read_record(tmp_path / "s.jsonl").rounds[-1].extra["recovered"] == [2]
+
+
+def test_a_world_that_never_hears_of_agents_does_not_crash_them_on_resume(
+    tmp_path: FsPath,
+) -> None:
+    w = open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=200), SWARM, None)
+    OPENED.append(w)
+    for robot in (0, 1, 2):
+        w.set_alive(robot, True)
+    _rounds(w, crash_after(3) + 2, active=(0,))
+    w.journal.close()
+    again = open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=200), SWARM, None)
+    OPENED.append(again)  # its agents' tokens have not come yet: they are not gone since round 0
+    _rounds(again, 1, active=(0,))
+    assert not again.tracker.crashed
