@@ -158,6 +158,13 @@ def test_liveliness_shows_in_the_state(tmp_path: FsPath, alive: bool) -> None:
     assert not w.set_alive(99, True)
 
 
+def _opened(path: FsPath) -> WorldCore:
+    """The world of the state file `path` (resumed if it holds rounds), closed after the test."""
+    w = open_world(str(path), lambda: _setup(max_rounds=200), SWARM, None)
+    OPENED.append(w)
+    return w
+
+
 def _rounds(w: WorldCore, count: int, active: tuple[int, ...] = (0, 1)) -> None:
     """`count` rounds in which `active` look and stay."""
     for _ in range(count):
@@ -172,8 +179,7 @@ def _rounds(w: WorldCore, count: int, active: tuple[int, ...] = (0, 1)) -> None:
 def test_a_robot_whose_agent_stays_gone_counts_as_crashed_and_is_not_waited_for(
     tmp_path: FsPath,
 ) -> None:
-    w = open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=200), SWARM, None)
-    OPENED.append(w)
+    w = _opened(tmp_path / "s.jsonl")
     for robot in (0, 1, 2):
         w.set_alive(robot, True)
     w.set_alive(2, False)  # gone after round 0, for good
@@ -188,14 +194,12 @@ def test_a_robot_whose_agent_stays_gone_counts_as_crashed_and_is_not_waited_for(
     rounds = read_record(tmp_path / "s.jsonl").rounds
     assert [r.round for r in rounds if "crashed" in r.extra] == [limit]
     assert rounds[limit - 1].extra["crashed"] == [2]
-    again = open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=200), SWARM, None)
-    OPENED.append(again)
+    again = _opened(tmp_path / "s.jsonl")
     assert again.tracker.crashed == {2} and again.status == "stalled"  # replayed from the record
 
 
 def test_a_crashed_robot_whose_agent_comes_back_is_waited_for_again(tmp_path: FsPath) -> None:
-    w = open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=200), SWARM, None)
-    OPENED.append(w)
+    w = _opened(tmp_path / "s.jsonl")
     w.set_alive(0, True)
     w.set_alive(1, True)  # robot 2 never comes: gone since round 0
     _rounds(w, crash_after(3) - 1, active=(0,))  # robot 1 never active: nobody is stalled yet
@@ -211,13 +215,12 @@ def test_a_crashed_robot_whose_agent_comes_back_is_waited_for_again(tmp_path: Fs
 def test_a_world_that_never_hears_of_agents_does_not_crash_them_on_resume(
     tmp_path: FsPath,
 ) -> None:
-    w = open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=200), SWARM, None)
-    OPENED.append(w)
+    w = _opened(tmp_path / "s.jsonl")
     for robot in (0, 1, 2):
         w.set_alive(robot, True)
     _rounds(w, crash_after(3) + 2, active=(0,))
     w.journal.close()
-    again = open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=200), SWARM, None)
-    OPENED.append(again)  # its agents' tokens have not come yet: they are not gone since round 0
+    # its agents' tokens have not come yet: they are not gone since round 0
+    again = _opened(tmp_path / "s.jsonl")
     _rounds(again, 1, active=(0,))
     assert not again.tracker.crashed
