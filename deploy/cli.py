@@ -36,8 +36,12 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "agent": ("fatswarm.deploy.parts", "run one agent (robot) process alone"),
     "agents": ("fatswarm.deploy.parts", "run K agent processes on this host"),
     "dashboard": ("fatswarm.deploy.dashboard", "attach a read-only dashboard to a running swarm"),
+    "secure": ("fatswarm.deploy.pki", "make a swarm's certificates and Zenoh configurations for "
+               "several hosts: mutual TLS, access control (needs fatswarm[secure])"),
     "replay": ("fatswarm.deploy.replay", "play a run record in the dashboard"),
     "plot": ("fatswarm.deploy.plot", "draw a record's trajectories to SVG or PNG (fatswarm[plot])"),
+    "sweep": ("fatswarm.deploy.sweep_cli", "run a grid of lock-step runs on every core into a CSV "
+              "(resumable)"),
 }
 
 

@@ -425,7 +425,6 @@ def frame_from_state(
         collisions_total=state.collisions_total,
         status=state.status,
         swarm=state.swarm,
-        seed=state.seed,
         alive=tuple(g.alive for g in state.agents),
         last_active=tuple(g.last_active for g in state.agents),
         last_path_length=tuple(g.last_path_length for g in state.agents),
@@ -518,9 +517,13 @@ class LiveView:
             print_frame(frame, self.console, height)
 
 
-def _open_session(connect: str) -> Any:
+def _open_session(connect: str, config: str | None = None) -> Any:
     import zenoh
 
+    if config is not None:  # Zenoh's own file (`--config`), e.g. a dashboard's from `secure`
+        from fatswarm.deploy.zconf import make_config
+
+        return zenoh.open(make_config("client", [connect], config_file=config))
     conf = zenoh.Config()
     conf.insert_json5("mode", '"client"')
     conf.insert_json5("connect/endpoints", f'["{connect}"]')
@@ -546,10 +549,12 @@ class StateWatcher:
         max_rounds: int | None = None,
         stop_at_end: bool = False,
         svg: str | None = None,
+        config: str | None = None,
     ) -> None:
         if session is None and connect is None:
             raise ValueError("StateWatcher needs an open session or a connect endpoint")
         self.swarm, self.sink, self.session, self.connect = swarm, sink, session, connect
+        self.config = config  # Zenoh's configuration file for an own session (--config)
         self.period = 1.0 / fps
         self.max_rounds = max_rounds
         self.stop_at_end = stop_at_end
@@ -573,7 +578,8 @@ class StateWatcher:
 
         own = self.session is None
         try:
-            session = _open_session(self.connect) if own else self.session  # type: ignore[arg-type]
+            session = (_open_session(self.connect, self.config)  # type: ignore[arg-type]
+                       if own else self.session)
         except Exception as exc:  # zenoh raises its own ZError; report it to the caller
             self.error = exc
             self.finished.set()
@@ -727,6 +733,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--swarm", default=DEFAULT_SWARM, help=f"swarm name (default {DEFAULT_SWARM!r})")
     p.add_argument(
+        "--config", metavar="FILE", default=None,
+        help="Zenoh's own configuration file, e.g. dashboard-0.json5 of `fatswarm secure` (TLS); "
+        "its mode, multicast scouting and endpoint are this command's",
+    )
+    p.add_argument(
         "--exit-at-end", action="store_true", help="exit when the run ends (default: at Ctrl-C)"
     )
     p.add_argument(
@@ -744,6 +755,10 @@ def main(args: argparse.Namespace) -> int:
 
     try:
         check_swarm(args.swarm)
+        if args.config is not None:  # a bad file is one line, before any wait
+            from fatswarm.deploy.zconf import make_config
+
+            make_config("client", [args.connect], config_file=args.config)
     except ValueError as exc:
         print(f"fatswarm dashboard: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -753,7 +768,8 @@ def main(args: argparse.Namespace) -> int:
     dashboard = not args.no_dashboard and sys.stdout.isatty()
     sink: FrameSink = LiveView() if dashboard else ProgressLog(every=args.every)
     watcher = StateWatcher(
-        args.swarm, sink, connect=args.connect, stop_at_end=args.exit_at_end, svg=args.svg
+        args.swarm, sink, connect=args.connect, stop_at_end=args.exit_at_end, svg=args.svg,
+        config=args.config,
     )
     watcher.start()
     try:

@@ -10,6 +10,7 @@ import argparse
 import json
 import logging
 import os
+import secrets
 import signal
 import sys
 import threading
@@ -24,6 +25,7 @@ from fatswarm.deploy.zconf import (
     CONNECT_DEADLINE_S,
     add_zenoh_arguments,
     check_endpoints,
+    connect_endpoints,
     make_config,
     open_client,
     token_held,
@@ -50,8 +52,9 @@ def install_stop_signals(parent: int | None = None) -> threading.Event:
 
         def watch() -> None:
             while not stop.wait(PARENT_POLL_S):
-                if os.getppid() != parent:
-                    stop.set()
+                if os.getppid() != parent:  # as a signal: it also ends a wait in the main thread
+                    os.kill(os.getpid(), signal.SIGTERM)
+                    return
 
         threading.Thread(target=watch, name="parent-watch", daemon=True).start()
     return stop
@@ -104,8 +107,18 @@ GIVES_UP = (f"; if no router answers within {CONNECT_DEADLINE_S:g} s, it says so
 KEEPS_WAITING = "; until a router answers it keeps retrying and says so every {:g} s on stderr"
 
 
-def _add_common(p: argparse.ArgumentParser, connect_note: str = "") -> None:
+ROBOT_PLACEHOLDER = "{robot}"  # in an agent's --config, replaced by its robot id
+
+
+def _add_common(p: argparse.ArgumentParser, connect_note: str = "", config_note: str = "") -> None:
     add_zenoh_arguments(p, connect_note=connect_note)
+    p.add_argument("--config", default=None, metavar="FILE",
+                   help="Zenoh's own configuration file (JSON5, JSON or YAML), e.g. one written by "
+                   "`fatswarm secure` (TLS, access control); relative certificate paths in it are "
+                   "read from its folder. On top of it this part sets its mode, multicast "
+                   "scouting off, message size limit and lease, and the --connect/--listen "
+                   "endpoints given (the file's stay where none are given); the file wins for "
+                   "everything else" + config_note)
     p.add_argument("--log-level", choices=("debug", "info", "warning", "error"), default=None,
                    help="log level on stderr")
     p.add_argument("--exit-with-parent", type=int, default=None, metavar="PID",
@@ -113,12 +126,26 @@ def _add_common(p: argparse.ArgumentParser, connect_note: str = "") -> None:
 
 
 def _client_config(
-    args: argparse.Namespace, lease_ms: int | None = None, shared_memory: bool = True
+    args: argparse.Namespace, lease_ms: int | None = None, shared_memory: bool = True,
+    robot: int | None = None,
 ) -> Any:
-    if not args.connect:
+    """The part's client config; raises ValueError (ZenohSetupError) saying what to fix."""
+    config = config_for(args.config, robot)
+    if not args.connect and config is None:
         raise ValueError("give the router to use with --connect ENDPOINT (e.g. tcp/127.0.0.1:7447)")
-    return make_config("client", connect=args.connect, listen=args.listen, lease_ms=lease_ms,
-                       shared_memory=shared_memory)
+    conf = make_config("client", connect=args.connect, listen=args.listen, lease_ms=lease_ms,
+                       shared_memory=shared_memory, config_file=config)
+    if not connect_endpoints(conf):
+        raise ValueError(f"give the router to use with --connect ENDPOINT (--config {config} "
+                         "names none in connect/endpoints)")
+    return conf
+
+
+def config_for(config: str | None, robot: int | None) -> str | None:
+    """An agent's --config file: ROBOT_PLACEHOLDER replaced by its robot id."""
+    if config is None or robot is None:
+        return config
+    return config.replace(ROBOT_PLACEHOLDER, str(robot))
 
 
 # --- router ------------------------------------------------------------------------------------
@@ -136,7 +163,7 @@ def main_router(args: argparse.Namespace) -> int:
     _logging(args, "info")
     stop = install_stop_signals(args.exit_with_parent)
     try:
-        return run_router(args.listen or [DEFAULT_ROUTER_LISTEN], args.connect, stop)
+        return run_router(args.listen, args.connect, stop, args.config, [DEFAULT_ROUTER_LISTEN])
     except ValueError as exc:
         return _fail("router", str(exc))
 
@@ -193,7 +220,8 @@ def main_world(args: argparse.Namespace) -> int:
                           extra=_header_fields(args.header))
 
     def open_core(setup: Callable[[], WorldSetup]) -> WorldCore:
-        return open_world(args.state, setup, args.swarm, args.max_rounds, fsync=not args.no_fsync)
+        return open_world(args.state, setup, args.swarm, args.max_rounds, fsync=not args.no_fsync,
+                          epoch=secrets.randbelow(2**62) + 1)  # this world process's, never 0
 
     bad_input: tuple[type[Exception], ...] = (ValueError, RecordFormatError, *input_errors())
     try:
@@ -295,7 +323,7 @@ def add_agent_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm agent`."""
     from fatswarm.agent.service import WAIT_NOTICE_S
 
-    _add_common(p, KEEPS_WAITING.format(WAIT_NOTICE_S))
+    _add_common(p, KEEPS_WAITING.format(WAIT_NOTICE_S), PLACEHOLDER_NOTE)
     p.add_argument("--robot", type=int, required=True, metavar="I", help="robot id, 0..n-1")
     add_algorithm_arguments(p, params=False)
     p.add_argument("--seed", type=int, default=0, metavar="S",
@@ -315,7 +343,8 @@ def main_agent(args: argparse.Namespace) -> int:
     if args.robot < 0:
         return _fail("agent", f"--robot must be >= 0, got {args.robot}")
     try:
-        conf = _client_config(args, lease_ms=AGENT_LEASE_MS, shared_memory=False)
+        conf = _client_config(args, lease_ms=AGENT_LEASE_MS, shared_memory=False,
+                              robot=args.robot)
     except ValueError as exc:
         return _fail("agent", str(exc))
     try:
@@ -331,7 +360,7 @@ def add_agents_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm agents`."""
     from fatswarm.agent.service import WAIT_NOTICE_S
 
-    _add_common(p, KEEPS_WAITING.format(WAIT_NOTICE_S))
+    _add_common(p, KEEPS_WAITING.format(WAIT_NOTICE_S), PLACEHOLDER_NOTE)
     p.add_argument("-n", type=int, required=True, metavar="K", help="number of agent processes")
     add_algorithm_arguments(p, params=False)
     p.add_argument("--first", type=int, default=0, metavar="I",
@@ -344,16 +373,20 @@ def add_agents_arguments(p: argparse.ArgumentParser) -> None:
 
 
 SPAWN_MODES = ("fork", "exec")
+PLACEHOLDER_NOTE = (f"; {ROBOT_PLACEHOLDER} in FILE is replaced by the robot id, so that each "
+                    "agent has its own identity (e.g. --config 'secure/agent-{robot}.json5')")
 
 
 def agent_command(robot: int, seed: int, swarm: str, connect: Sequence[str],
                   log_level: str | None = None, waiting_as: str | None = None,
-                  algorithm: str = DEFAULT_ALGORITHM) -> list[str]:
+                  algorithm: str = DEFAULT_ALGORITHM, config: str | None = None) -> list[str]:
     """The argv that starts one agent process (`waiting_as`: who its waiting notice names)."""
     argv = [sys.executable, "-m", "fatswarm.deploy.parts", "agent", "--robot", str(robot),
             "--seed", str(seed), "--swarm", swarm, "--algorithm", algorithm]
     for endpoint in connect:
         argv += ["--connect", endpoint]
+    if config is not None:
+        argv += ["--config", config]
     if log_level:
         argv += ["--log-level", log_level]
     if waiting_as is not None:
@@ -363,13 +396,16 @@ def agent_command(robot: int, seed: int, swarm: str, connect: Sequence[str],
 
 def agents_command(count: int, seed: int, swarm: str, connect: Sequence[str],
                    log_level: str | None = None, spawn: str = "fork", first: int = 0,
-                   algorithm: str = DEFAULT_ALGORITHM) -> list[str]:
-    """The argv of one `agents` host process starting `count` agent processes."""
+                   algorithm: str = DEFAULT_ALGORITHM, config: str | None = None) -> list[str]:
+    """The argv of one `agents` host process starting `count` agent processes (`config`: their
+    --config, ROBOT_PLACEHOLDER in it replaced by each one's robot id)."""
     argv = [sys.executable, "-m", "fatswarm.deploy.parts", "agents", "-n", str(count), "--first",
             str(first), "--seed", str(seed), "--swarm", swarm, "--spawn", spawn,
             "--algorithm", algorithm]
     for endpoint in connect:
         argv += ["--connect", endpoint]
+    if config is not None:
+        argv += ["--config", config]
     if log_level:
         argv += ["--log-level", log_level]
     return argv
@@ -380,11 +416,15 @@ def main_agents(args: argparse.Namespace) -> int:
     _logging(args, "warning")
     if args.n < 1 or args.first < 0:
         return _fail("agents", "-n must be >= 1 and --first >= 0")
-    if not args.connect:
+    if not args.connect and args.config is None:
         return _fail("agents", "give the router to use with --connect ENDPOINT")
-    try:  # here, not in each agent process
+    robots = range(args.first, args.first + args.n)
+    try:  # here, not in each agent process: a bad endpoint or file is one line
         check_endpoints(args.connect, "--connect")
         check_endpoints(args.listen, "--listen")
+        if args.config is not None:
+            for robot in robots:  # a Config only: no session in this process (fork mode)
+                _client_config(args, robot=robot)
     except ValueError as exc:
         return _fail("agents", str(exc))
     from fatswarm.agent.registry import load_algorithm
@@ -394,7 +434,6 @@ def main_agents(args: argparse.Namespace) -> int:
         load_algorithm(args.algorithm)
     except AlgorithmError as exc:
         return _fail("agents", str(exc))
-    robots = range(args.first, args.first + args.n)
     if args.spawn == "exec":
         return _exec_agents(args, robots)
     return _fork_agents(args, robots)
@@ -409,7 +448,8 @@ def _exec_agents(args: argparse.Namespace, robots: range) -> int:
             waiting_as = _waiting_as(robots) if robot == robots[0] else ""
             children.start(f"agent {robot}",
                            [*agent_command(robot, args.seed, args.swarm, args.connect,
-                                           args.log_level, waiting_as, args.algorithm),
+                                           args.log_level, waiting_as, args.algorithm,
+                                           config_for(args.config, robot)),
                             "--exit-with-parent", str(os.getpid())])  # a killed host: none left
         while not stop.wait(0.5):
             if len(children.exited()) == len(robots):
@@ -438,7 +478,8 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
             code = 1
             try:
                 stop = install_stop_signals(host)  # a killed host leaves no agent behind
-                conf = _client_config(args, lease_ms=AGENT_LEASE_MS, shared_memory=False)
+                conf = _client_config(args, lease_ms=AGENT_LEASE_MS, shared_memory=False,
+                                      robot=robot)
                 # the first one says for all that they wait for a router
                 waiting = _waiting_as(robots) if robot == robots[0] else None
                 code = serve(AgentConfig(args.swarm, robot, args.seed, args.algorithm), conf, stop,

@@ -11,6 +11,7 @@ import argparse
 import errno
 import ipaddress
 import json
+import os
 import re
 import socket
 import threading
@@ -147,6 +148,10 @@ def _host_port(endpoint: str) -> tuple[str, int] | None:
 MAX_MESSAGE_IN = 512 << 10
 
 
+RETRY_INIT_MS = 50  # a lost router is tried again after this, then twice as long each time...
+RETRY_MAX_MS = 500  # ...up to this
+
+
 def make_config(
     mode: str,
     connect: Sequence[str] = (),
@@ -154,10 +159,19 @@ def make_config(
     lease_ms: int | None = None,
     shared_memory: bool = True,
     max_message_in: int = MAX_MESSAGE_IN,
+    config_file: str | None = None,
+    default_listen: Sequence[str] = (),
 ) -> zenoh.Config:
     """A Zenoh config with multicast (and gossip) scouting off and the given (checked) endpoints.
 
-    Raises ZenohSetupError for a malformed endpoint, ValueError for an unknown mode.
+    `config_file` (`--config`): Zenoh's own configuration file to start from (see
+    `load_config_file`). Applied on top of it: the mode, multicast scouting off, the message size
+    limit, the lease and shared memory as given here, and the endpoints given here; the file's
+    endpoints stay where none are given (`default_listen` where neither gives any). The file wins
+    for everything else (TLS, access control, authentication, timeouts...).
+
+    Raises ZenohSetupError for a malformed endpoint, a bad file or an endpoint the file's
+    `transport/link/protocols` does not allow; ValueError for an unknown mode.
     """
     import zenoh
 
@@ -165,27 +179,120 @@ def make_config(
         raise ValueError(f"mode must be client, peer or router, got {mode!r}")
     check_endpoints(connect, "--connect")
     check_endpoints(listen, "--listen")
-    conf = zenoh.Config()
+    conf = zenoh.Config() if config_file is None else load_config_file(config_file)
     conf.insert_json5("mode", json.dumps(mode))
     conf.insert_json5("scouting/multicast/enabled", "false")
     try:
-        conf.insert_json5("connect/endpoints", json.dumps(list(connect)))
-        conf.insert_json5("listen/endpoints", json.dumps(list(listen)))
+        for key, given, default in (("connect/endpoints", connect, ()),
+                                    ("listen/endpoints", listen, default_listen)):
+            if given or config_file is None or not _endpoints_in(conf, key):
+                conf.insert_json5(key, json.dumps(list(given or default)))
     except zenoh.ZError as exc:  # something endpoint_problem let through
         raise ZenohSetupError(explain_zenoh_error(exc)) from None
+    if config_file is not None:
+        _check_protocols(conf, config_file)
     conf.insert_json5("transport/link/rx/max_message_size", str(int(max_message_in)))
     if not shared_memory:
         # Agents send and receive small messages only; no 16 MB SHM pool per process.
         conf.insert_json5("transport/shared_memory/enabled", "false")
     if lease_ms is not None:
         conf.insert_json5("transport/link/tx/lease", str(int(lease_ms)))
+    if config_file is None or json.loads(conf.get_json("connect/retry")) is None:
+        # A restarted router is found again within RETRY_MAX_MS (Zenoh's default backs off to 4 s)
+        conf.insert_json5("connect/retry", json.dumps(
+            {"period_init_ms": RETRY_INIT_MS, "period_max_ms": RETRY_MAX_MS,
+             "period_increase_factor": 2}))
     return conf
 
 
 def connect_endpoints(conf: zenoh.Config) -> list[str]:
     """The `connect/endpoints` of a config (what a waiting client reports)."""
-    endpoints: Any = json.loads(conf.get_json("connect/endpoints"))
-    return [str(e) for e in endpoints] if isinstance(endpoints, list) else []
+    return _endpoints_in(conf, "connect/endpoints") or []
+
+
+def listen_endpoints(conf: zenoh.Config) -> list[str]:
+    """The `listen/endpoints` of a config."""
+    return _endpoints_in(conf, "listen/endpoints") or []
+
+
+def _endpoints_in(conf: zenoh.Config, key: str) -> list[str] | None:
+    """The endpoint list at `key`, or None where the config holds Zenoh's per-mode default."""
+    endpoints: Any = json.loads(conf.get_json(key))
+    return [str(e) for e in endpoints] if isinstance(endpoints, list) else None
+
+
+# --- `--config FILE` -------------------------------------------------------------------------
+
+# The paths a Zenoh configuration names (relative ones are taken from the file's folder).
+CONFIG_PATHS = (
+    "transport/link/tls/root_ca_certificate",
+    "transport/link/tls/listen_private_key",
+    "transport/link/tls/listen_certificate",
+    "transport/link/tls/connect_private_key",
+    "transport/link/tls/connect_certificate",
+    "transport/auth/usrpwd/dictionary_file",
+)
+CONFIG_SUFFIXES = (".json5", ".json", ".yaml")
+_PEST_AT = re.compile(r"^\s*-->\s*(?P<line>\d+):(?P<col>\d+).*?=\s*(?P<msg>[^\n]*)", re.DOTALL)
+_SERDE_AT = re.compile(r'msg: "(?P<msg>.*?)", location: Some\(Location \{ line: (?P<line>\d+), '
+                       r"column: (?P<col>\d+) \}\)", re.DOTALL)
+
+
+def load_config_file(path: str) -> zenoh.Config:
+    """Zenoh's own configuration file (`--config`: JSON5, JSON or YAML, as `zenoh.Config.from_file`
+    reads it), with every relative certificate, key or password-file path taken from the file's
+    folder (Zenoh alone reads them from the working directory), so a folder made by
+    `fatswarm secure` works from anywhere.
+
+    Raises ZenohSetupError in one line: a missing or unreadable file, one Zenoh cannot parse (with
+    line and column), or a file it names that is not there.
+    """
+    import zenoh
+
+    where = f"--config {path}"
+    if not os.path.isfile(path):
+        why = "is a folder" if os.path.isdir(path) else "no such file"
+        raise ZenohSetupError(f"{where}: {why}")
+    if not path.lower().endswith(CONFIG_SUFFIXES):
+        raise ZenohSetupError(f"{where}: Zenoh reads only {', '.join(CONFIG_SUFFIXES)} files")
+    try:
+        conf = zenoh.Config.from_file(path)
+    except zenoh.ZError as exc:
+        raise ZenohSetupError(f"{where}: {explain_config_error(exc)}") from None
+    folder = os.path.dirname(os.path.abspath(path))
+    for key in CONFIG_PATHS:
+        named: Any = json.loads(conf.get_json(key))
+        if not isinstance(named, str) or not named:
+            continue
+        full = named if os.path.isabs(named) else os.path.join(folder, named)
+        if not os.path.isfile(full):
+            raise ZenohSetupError(f"{where}: {key.rpartition('/')[2]} {full}: no such file")
+        conf.insert_json5(key, json.dumps(full))
+    return conf
+
+
+def explain_config_error(exc: BaseException) -> str:
+    """Zenoh's complaint about a configuration file in one line, with line and column."""
+    text = str(exc)
+    for pattern in (_SERDE_AT, _PEST_AT):
+        if m := pattern.search(text):
+            msg = " ".join(_RUST_AT.sub("", m["msg"].replace('\\"', '"')).split()).rstrip(" .")
+            return f"line {m['line']}, column {m['col']}: {_lower_first(msg)}"
+    return explain_zenoh_error(exc)
+
+
+def _check_protocols(conf: zenoh.Config, path: str) -> None:
+    """Refuse an endpoint whose protocol the file's `transport/link/protocols` leaves out (Zenoh
+    would fail on it with no word of why)."""
+    allowed: Any = json.loads(conf.get_json("transport/link/protocols"))
+    if not isinstance(allowed, list):
+        return
+    for key in ("connect/endpoints", "listen/endpoints"):
+        for endpoint in _endpoints_in(conf, key) or []:
+            if endpoint.partition("/")[0] not in allowed:
+                raise ZenohSetupError(
+                    f"endpoint {endpoint} uses a protocol --config {path} does not allow "
+                    f"(transport/link/protocols: {', '.join(map(str, allowed))})")
 
 
 # --- opening sessions ------------------------------------------------------------------------
@@ -246,6 +353,11 @@ def unreachable_message(endpoints: Sequence[str], waited_s: float) -> str:
             return f"host {host_port[0]!r} of --connect {endpoint} is not known: fix --connect"
     where = ", ".join(endpoints)
     first = endpoints[0] if endpoints else "ENDPOINT"
+    if any(e.startswith("tls/") for e in endpoints):  # a refused handshake looks the same
+        return (f"no Zenoh router answers at {where} (tried for {waited_s:g} s), or it refused "
+                "this part's certificate: start one there, or check that both --config files "
+                "come from the same `fatswarm secure` folder and that its certificate names this "
+                "address")
     return (f"no Zenoh router answers at {where} (tried for {waited_s:g} s): start one there "
             f"(fatswarm router --listen {first}) or fix --connect")
 
