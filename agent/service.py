@@ -1,18 +1,23 @@
-"""The agent process: one robot. On activation it Looks, Computes in its private frame, Moves.
+"""The agent process: one robot. It Looks, Computes in its private frame, Moves, and Looks again.
 
-It keeps only its identity and its frame (an X mirroring drawn at start-up, never sent). The world
-sends the others' positions relative to this robot with world axes; the agent mirrors them into its
-own frame, computes, mirrors the path back and sends it relative to itself, so no global coordinate
-ever reaches it or leaves it.
+Its Look is a query the world holds until the robot is activated: the answer is both the activation
+and the snapshot, so a round reaches an agent in one message. It keeps only its identity and its
+frame (an X mirroring drawn at start-up, never sent). The world sends the others' positions
+relative to this robot with world axes; the agent mirrors them into its own frame, computes,
+mirrors the path back and sends it relative to itself, so no global coordinate ever reaches it or
+leaves it.
 """
 
 from __future__ import annotations
 
 import json
 import logging
-import queue
+import os
+import signal
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,13 +26,12 @@ from fatswarm.agent.path import Path
 from fatswarm.agent.protocol import MoveSubmitted, alive_key, move_key
 from fatswarm.agent.registry import DEFAULT
 from fatswarm.agent.seam import Algorithm, AlgorithmParamsError, Configured, checked
-from fatswarm.coordinator.protocol import MAX_ROUND_START_BYTES, RoundStart, round_key
-from fatswarm.world.inbox import Inbox
-from fatswarm.world.protocol import ProtocolError, Snapshot, snapshot_key
+from fatswarm.world.protocol import LookRequest, ProtocolError, Snapshot, snapshot_key
 
 log = logging.getLogger("fatswarm.agent")
 
-LOOK_TIMEOUT_S = 5.0
+LOOK_WAIT_S = 30.0  # a Look waits this long for its answer; the world lets it go sooner (20 s)
+RELOOK_S = 0.05  # after a Look that came back empty at once (no world yet), wait this long
 OPEN_RETRY_S = 0.2  # a client cannot open a session before its router is up: retry
 WAIT_NOTICE_S = 5.0  # meanwhile, say this often that the robot still waits for its router
 
@@ -102,6 +106,17 @@ def _endpoints(conf: Any) -> str:
     return ", ".join(map(str, endpoints)) if isinstance(endpoints, list) else str(endpoints)
 
 
+# An agent exchanges two small messages a round: one Zenoh worker thread for every runtime of the
+# process (4 threads instead of 8, a fifth less CPU per Look). Read when the process first opens
+# a session, so it is set before; a value the user set wins.
+ONE_WORKER_RUNTIME = ("(app: (worker_threads: 1), rx: (handover: app), tx: (handover: app), "
+                      "net: (handover: app), acc: (handover: app))")
+
+
+class Stopped(Exception):
+    """A stop signal came while the agent waited for its Look's answer."""
+
+
 def serve(
     cfg: AgentConfig,
     conf: Any,
@@ -111,21 +126,20 @@ def serve(
 ) -> int:
     """Run one robot until `stop` is set; returns an exit code (`waiting`: see open_session).
 
-    `algorithm`: loaded from `cfg.algorithm` if None (raises AlgorithmError if it cannot be)."""
+    `algorithm`: loaded from `cfg.algorithm` if None (raises AlgorithmError if it cannot be).
+    Call it from the process's main thread: a stop signal interrupts a Look's wait there.
+    """
     import zenoh
 
     from fatswarm.agent.registry import load_algorithm
 
     stop = stop or threading.Event()
     robot = Robot(algorithm or load_algorithm(cfg.algorithm), draw_flip(cfg.seed, cfg.robot))
-    starts: Inbox[bytes] = Inbox(max_items=64)  # only the newest start matters
+    os.environ.setdefault("ZENOH_RUNTIME", ONE_WORKER_RUNTIME)
     session = open_session(conf, stop, waiting)
     if session is None:
         return 0
     with session:
-        session.declare_subscriber(
-            round_key(cfg.swarm), lambda s: _offer_start(starts, s)
-        )
         mover = session.declare_publisher(
             move_key(cfg.swarm, cfg.robot),
             congestion_control=zenoh.CongestionControl.BLOCK,
@@ -135,62 +149,91 @@ def serve(
             snapshot_key(cfg.swarm, cfg.robot),
             target=zenoh.QueryTarget.ALL,
             consolidation=zenoh.ConsolidationMode.NONE,
-            timeout=LOOK_TIMEOUT_S,
+            timeout=LOOK_WAIT_S,
         )
         _token = session.liveliness().declare_token(alive_key(cfg.swarm, cfg.robot))
         log.info("robot %d up", cfg.robot)
-        while not stop.is_set():
-            start = _newest_start(starts)
-            if start is not None and cfg.robot in start.active:
+        last = LookRequest()  # the world process and round it last answered
+        look_wait = _LookWait(stop)
+        with look_wait.install():
+            while not stop.is_set():
+                asked = time.monotonic()
                 try:
-                    _cycle(cfg, start.round, robot, querier, mover)
+                    snapshot = _look(querier, last, look_wait)
+                except Stopped:
+                    break
+                except zenoh.ZError as exc:  # the router is away: look again once it is back
+                    log.warning("look failed: %s", exc)
+                    snapshot = None
+                if snapshot is None:
+                    if time.monotonic() - asked < RELOOK_S:  # no world to hold it: do not spin
+                        stop.wait(RELOOK_S)
+                    continue
+                last = LookRequest(epoch=snapshot.epoch, after=snapshot.round)
+                try:
+                    _move(cfg, snapshot, robot, mover)
                 except zenoh.ZError as exc:  # the router is away: this round goes without us
-                    log.warning("round %d: %s", start.round, exc)
+                    log.warning("round %d: %s", snapshot.round, exc)
     return 0
 
 
-def _newest_start(starts: Inbox[bytes]) -> RoundStart | None:
-    """The newest valid round start queued (waiting a little for one): a newer start supersedes
-    an older one, and garbage after a real start does not hide it."""
-    try:
-        pending = [starts.get(timeout=0.2)]
-    except queue.Empty:
-        return None
-    while len(starts):
-        pending.append(starts.get_nowait())
-    newest = None
-    for data in pending:
+class _LookWait:
+    """SIGTERM and SIGINT set `stop`, and while a Look waits for its answer they also raise
+    Stopped in the main thread, so that a Look the world holds does not hold up the exit."""
+
+    def __init__(self, stop: threading.Event) -> None:
+        self.stop = stop
+        self.waiting = False
+
+    def handle(self, signum: int, frame: object) -> None:
+        del signum, frame
+        self.stop.set()
+        if self.waiting:
+            raise Stopped
+
+    @contextmanager
+    def install(self) -> Iterator[None]:
+        """The handlers, for the loop's lifetime (not in the main thread: a Look waits out its
+        answer or timeout)."""
         try:
-            newest = RoundStart.decode(data)
-        except ProtocolError as exc:
-            log.warning("rejected round start: %s", exc)
-    return newest
+            before = {sig: signal.signal(sig, self.handle)
+                      for sig in (signal.SIGTERM, signal.SIGINT)}
+        except ValueError:
+            yield
+            return
+        try:
+            yield
+        finally:
+            for sig, handler in before.items():
+                signal.signal(sig, handler)
 
 
-def _offer_start(starts: Inbox[bytes], sample: Any) -> None:
-    """Queue a round start unless it is larger than any can be (then it is dropped unread)."""
-    size = len(sample.payload)
-    if size > MAX_ROUND_START_BYTES:
-        starts.too_big("round-start")
-        return
-    starts.offer("round-start", sample.payload.to_bytes(), size)
-
-
-def _cycle(cfg: AgentConfig, round_no: int, robot: Robot, querier: Any, mover: Any) -> None:
-    """One Look-Compute-Move cycle for round `round_no`."""
+def _look(querier: Any, last: LookRequest, wait: _LookWait) -> Snapshot | None:
+    """Ask for this robot's snapshot of a round after `last` and wait until the world answers
+    (it holds the query until the robot is activated); None if it let the query go or sent
+    nothing valid."""
     snapshot = None
-    t_look = time.perf_counter()
-    for reply in querier.get():
-        if reply.ok is None:
-            log.info("round %d: world refused the look", round_no)
-            continue
-        try:
-            snapshot = Snapshot.decode(reply.ok.payload.to_bytes())
-        except ProtocolError as exc:
-            log.warning("rejected snapshot: %s", exc)
-    if snapshot is None or snapshot.round != round_no:
-        return
+    wait.waiting = True
+    try:
+        if wait.stop.is_set():  # a stop that came before the wait
+            raise Stopped
+        for reply in querier.get(payload=last.encode()):
+            if reply.ok is None:
+                log.info("the world refused the look")
+                continue
+            try:
+                snapshot = Snapshot.decode(reply.ok.payload.to_bytes())
+            except ProtocolError as exc:
+                log.warning("rejected snapshot: %s", exc)
+    finally:
+        wait.waiting = False
+    return snapshot
+
+
+def _move(cfg: AgentConfig, snapshot: Snapshot, robot: Robot, mover: Any) -> None:
+    """Compute in the private frame and publish the move for the snapshot's round."""
     t0, cpu0 = time.perf_counter(), time.thread_time()
+    round_no = snapshot.round
     try:
         path = robot.look_compute(snapshot)
         move = MoveSubmitted(robot=cfg.robot, round=round_no, path=path).encode()
@@ -200,7 +243,7 @@ def _cycle(cfg: AgentConfig, round_no: int, robot: Robot, querier: Any, mover: A
     except Exception:  # a bug in compute must not kill the robot: it stays put this round
         log.exception("round %d: compute failed, staying put", round_no)
         return
-    log.debug("round %d: look %.2f ms, compute %.2f ms (CPU %.2f ms)", round_no,
-              1e3 * (t0 - t_look), 1e3 * (time.perf_counter() - t0),
-              1e3 * (time.thread_time() - cpu0))
+    if log.isEnabledFor(logging.DEBUG):
+        log.debug("round %d: compute %.2f ms (CPU %.2f ms)", round_no,
+                  1e3 * (time.perf_counter() - t0), 1e3 * (time.thread_time() - cpu0))
     mover.put(move)

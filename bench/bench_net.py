@@ -4,7 +4,8 @@ Prints: the Zenoh get/reply round-trip floor on the router the runs use; per siz
 process per robot, world fsyncing every round): round latency (median, p95), rounds/s and Looks/s
 networked vs lockstep, resident memory per agent process, time to start N agents.
 
-    /work/venv/bin/python bench/bench_net.py [--sizes 8,32,64,128] [--seed 1]
+    /work/venv/bin/python bench/bench_net.py [--sizes 8,64,128,256,512] [--seed 1]
+        [--algorithm gathering]  # a cheap compute shows the emulator's own cost per Look
 """
 
 from __future__ import annotations
@@ -83,7 +84,7 @@ class NetRun:
     wall_s: float  # all agents alive -> final state received
     intervals: list[float]  # time between consecutive committed rounds
     memory_mb: list[tuple[float, float, float]]  # per agent process: RSS, PSS, private
-    cpu_s: float  # CPU of every process (router and observer included) from start to end
+    cpu_s: dict[str, float]  # CPU seconds by role (router: this process, with the observer)
 
 
 def _memory_mb(pid: int) -> tuple[float, float, float]:
@@ -121,7 +122,7 @@ def _agent_pids(children: Children) -> list[int]:
 
 
 def _cpu_s(pids: list[int]) -> float:
-    """User + system CPU seconds used so far by these processes (this one included by caller)."""
+    """User + system CPU seconds used so far by these processes."""
     total = 0
     for pid in pids:
         try:
@@ -134,7 +135,8 @@ def _cpu_s(pids: list[int]) -> float:
 
 
 def networked(
-    session: Any, endpoint: str, n: int, seed: int, tmp: str, spawn: str = "fork"
+    session: Any, endpoint: str, n: int, seed: int, tmp: str, spawn: str = "fork",
+    algorithm: str = "uniform-circle",
 ) -> NetRun:
     """One fsync run with N agent processes; timings seen from a client in this process."""
     swarm = f"bench-{n}-{seed}-{time.monotonic_ns() % 10**6}"
@@ -170,27 +172,28 @@ def networked(
         session.liveliness().declare_subscriber(alive_any_key(swarm), on_alive, history=True),
         session.declare_subscriber(state_key(swarm), on_state),
     ]
-    net = ["--connect", endpoint, "--swarm", swarm, "--log-level", "warning"]
+    net = ["--connect", endpoint, "--swarm", swarm, "--log-level", "error"]
     state = os.path.join(tmp, f"{swarm}.jsonl")
     with Children() as children:
         part = [sys.executable, "-m", "fatswarm.deploy.parts"]
-        children.start("world", [*part, "world", *net, "--state",
-                                 state, "-n", str(n), "--seed", str(seed), "--scheduler", "fsync"])
+        children.start("world", [*part, "world", *net, "--state", state, "-n", str(n), "--seed",
+                                 str(seed), "--scheduler", "fsync", "--algorithm", algorithm])
         children.start("coordinator", [*part, "coordinator", *net,
                                        "--seed", str(seed), "--scheduler", "fsync",
                                        "--start-timeout", "600", "--move-timeout", "30"])
         t0 = time.perf_counter()
         if spawn == "fork":
-            children.start("agents", agents_command(n, seed, swarm, [endpoint], "warning"))
+            children.start("agents", agents_command(n, seed, swarm, [endpoint], "error",
+                                                    algorithm=algorithm))
         else:
             for robot in range(n):
-                children.start(f"agent {robot}",
-                               agent_command(robot, seed, swarm, [endpoint], "warning"))
+                children.start(f"agent {robot}", agent_command(robot, seed, swarm, [endpoint],
+                                                               "error", algorithm=algorithm))
         if not all_alive.wait(600):
             raise RuntimeError(f"only {len(alive)} of {n} agents came up")
         t_alive = time.perf_counter()
-        pids = [os.getpid(), *(p.pid for p in children.procs.values()), *_agent_pids(children)]
-        cpu0 = _cpu_s(pids)
+        roles = _roles(children)
+        cpu0 = {role: _cpu_s(pids) for role, pids in roles.items()}
         rss: list[tuple[float, float, float]] = []
         while not done.wait(0.25):
             if not rss and len(commits) > 2:  # measure memory once the agents have computed
@@ -198,7 +201,7 @@ def networked(
             if time.perf_counter() - t_alive > 1800:
                 raise RuntimeError("run did not end in 30 minutes")
         t_end = time.perf_counter()
-        cpu1 = _cpu_s(pids)
+        cpu1 = {role: _cpu_s(pids) for role, pids in roles.items()}
         if not rss:
             rss = [_memory_mb(pid) for pid in _agent_pids(children)]
     for sub in subs:
@@ -212,22 +215,40 @@ def networked(
         wall_s=t_end - t_alive,
         intervals=[b - a for a, b in itertools.pairwise(times)],
         memory_mb=[m for m in rss if m[0] == m[0]],
-        cpu_s=cpu1 - cpu0,
+        cpu_s={role: cpu1[role] - cpu0[role] for role in roles},
     )
 
 
-def lockstep(n: int, seed: int) -> tuple[str, int, int, float, float]:
+def _roles(children: Children) -> dict[str, list[int]]:
+    """The processes of each role; the router runs in this process (with the observer)."""
+    host = children.procs.get("agents")
+    return {
+        "agents": _agent_pids(children) + ([host.pid] if host is not None else []),
+        "world": [children.procs["world"].pid],
+        "router": [os.getpid()],
+        "coordinator": [children.procs["coordinator"].pid],
+    }
+
+
+def lockstep(n: int, seed: int, algorithm: str) -> tuple[str, int, int, float, float]:
+    from fatswarm.agent.registry import load_algorithm
+    from fatswarm.agent.seam import Configured
     from fatswarm.deploy.lockstep import run_lockstep
 
     initial = random_start(n, seed, "clustered", 4.0)
+    setting: Params | Configured = Params(n, 4.0)
+    if algorithm != "uniform-circle":
+        setting = Configured.of(load_algorithm(algorithm), n, {})
     t0, c0 = time.perf_counter(), time.process_time()
-    res = run_lockstep(initial, Params(n, 4.0), make_scheduler("fsync", n, seed), seed=seed)
+    res = run_lockstep(initial, setting, make_scheduler("fsync", n, seed), seed=seed)
     return res.status, res.rounds, res.looks, time.perf_counter() - t0, time.process_time() - c0
 
 
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--sizes", default="8,32,64,128")
+    p.add_argument("--sizes", default="8,64,128,256,512")
+    p.add_argument("--algorithm", default="uniform-circle",
+                   help="a registered algorithm (gathering: a cheap compute)")
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--rtt-samples", type=int, default=2000)
     p.add_argument("--spawn", choices=("fork", "exec"), default="fork",
@@ -247,28 +268,31 @@ def main() -> int:
     ):
         rtt = rtt_floor(endpoint, args.rtt_samples)
         floor = statistics.median(rtt)
-        print(f"agents started by: {args.spawn}")
+        print(f"agents started by: {args.spawn}; algorithm: {args.algorithm}; fsync")
         print(f"zenoh get/reply round trip (2 client processes, 1 router): median "
               f"{floor * 1e3:.3f} ms  p95 {pct(rtt, 95) * 1e3:.3f} ms  ({len(rtt)} samples)")
         print(f"{'N':>4} {'status':>8} {'rounds':>6} {'round ms med':>12} {'p95':>7} "
               f"{'x floor':>7} {'net rounds/s':>12} {'net Looks/s':>11} {'lock rounds/s':>13} "
               f"{'lock Looks/s':>12} {'agent MB RSS/PSS/priv':>21} {'start s':>7} "
-              f"{'CPU ms/Look net':>15} {'lock':>5}")
+              f"{'CPU ms/Look net':>15} {'lock':>5}  CPU ms/Look by role")
         for n in sizes:
-            runs = [networked(session, endpoint, n, args.seed + k, tmp, args.spawn)
+            runs = [networked(session, endpoint, n, args.seed + k, tmp, args.spawn, args.algorithm)
                     for k in range(args.latency_runs if n == sizes[0] else 1)]
             run = runs[0]
             intervals = [x for r in runs for x in r.intervals]
             med = statistics.median(intervals) if intervals else float("nan")
-            l_status, l_rounds, l_looks, l_wall, l_cpu = lockstep(n, args.seed)
+            l_status, l_rounds, l_looks, l_wall, l_cpu = lockstep(n, args.seed, args.algorithm)
             mem = [statistics.median(col) for col in zip(*run.memory_mb, strict=True)]
+            looks = run.rounds * n
             mem_text = "/".join(f"{m:.1f}" for m in mem) if mem else "?"
             print(f"{n:>4} {run.status:>8} {run.rounds:>6} {med * 1e3:>12.2f} "
                   f"{pct(intervals, 95) * 1e3:>7.2f} {med / floor:>7.1f} "
                   f"{run.rounds / run.wall_s:>12.1f} {run.rounds * n / run.wall_s:>11.0f} "
                   f"{l_rounds / l_wall:>13.1f} {l_looks / l_wall:>12.0f} {mem_text:>21} "
-                  f"{run.start_s:>7.2f} {1e3 * run.cpu_s / (run.rounds * n):>15.2f} "
-                  f"{1e3 * l_cpu / l_looks:>5.2f}", flush=True)
+                  f"{run.start_s:>7.2f} {1e3 * sum(run.cpu_s.values()) / looks:>15.2f} "
+                  f"{1e3 * l_cpu / l_looks:>5.2f}  "
+                  + " ".join(f"{role} {1e3 * cpu / looks:.2f}" for role, cpu in run.cpu_s.items()),
+                  flush=True)
             if l_status != run.status or l_rounds != run.rounds:
                 print(f"     (lockstep: {l_status} after {l_rounds} rounds)")
     return 0

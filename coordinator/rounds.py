@@ -11,10 +11,9 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from fatswarm.coordinator.protocol import RoundStart
 from fatswarm.coordinator.schedule import Scheduler
 from fatswarm.world.outcome import Status
-from fatswarm.world.protocol import Begin, Commit, ControlReply, Hello, MoveHeld
+from fatswarm.world.protocol import Begin, Commit, ControlReply, Hello, MovesHeld
 
 MAX_NOTES = 256  # notes nobody takes are dropped oldest first (a driver may ignore them)
 
@@ -27,13 +26,6 @@ class Ask:
 
 
 @dataclass(frozen=True, slots=True)
-class Announce:
-    """Publish this round start to the agents."""
-
-    start: RoundStart
-
-
-@dataclass(frozen=True, slots=True)
 class Finished:
     """The run is over: `status` as the world said (RUNNING if the core was stopped first)."""
 
@@ -41,7 +33,7 @@ class Finished:
     collisions: int  # robots stopped at contact so far, from the world's last reply (else 0)
 
 
-Action = Ask | Announce | Finished
+Action = Ask | Finished
 
 
 @dataclass(frozen=True, slots=True)
@@ -72,7 +64,7 @@ class Phase(enum.Enum):
     GATHER = "gather"  # waiting for agents: all n until the deadline, then (no deadline) anyone
     BEGIN = "begin"  # Begin is out
     COLLECT = "collect"  # the round is open: waiting for the live active robots' moves
-    COMMIT = "commit"  # Commit is out
+    COMMIT = "commit"  # Commit is out (carrying the next round's Begin when it may open at once)
     PACE = "pace"  # the next round begins at the deadline (pace_s after the last Begin)
     DONE = "done"  # finished
 
@@ -86,6 +78,10 @@ _WAITING = (Phase.RETRY, Phase.GATHER, Phase.COLLECT, Phase.PACE)  # phases with
 
 class CoordinatorCore:
     """Runs semi-synchronous rounds: Hello, gather agents, then Begin, collect moves, Commit.
+
+    A Commit carries the next round's Begin when nothing (a pace) holds that round back, so a round
+    costs one request. The agents learn they are active from the world, which answers their held
+    Looks when it opens a round: the coordinator never talks to them.
 
     At most one request is out at a time, and an `Ask` is always the last action of a list.
     """
@@ -108,6 +104,9 @@ class CoordinatorCore:
         self._held: set[int] = set()
         self._round = 0  # the round being opened, open or next (0 before the first Hello reply)
         self._planned: tuple[int, tuple[int, ...]] | None = None  # round, active: kept for retries
+        self._next: tuple[int, tuple[int, ...]] | None = None  # planned ahead, carried by a Commit
+        self._chained = False  # the Commit out carries the next round's Begin
+        self._asked_at = 0.0  # when the request out was asked
         self._active_set: frozenset[int] = frozenset()  # of the planned round
         self._waiting: set[int] = set()  # COLLECT: live active robots without a held move
         self._began_at: float | None = None  # when the last Begin was asked (pace)
@@ -226,11 +225,12 @@ class CoordinatorCore:
             return self._ask_hello()
         return []
 
-    def on_held(self, notice: MoveHeld, now: float) -> list[Action]:
-        """The world holds a robot's move; notices of other rounds (or robots) are ignored."""
-        if notice.round == self._round and notice.robot in self.active_set:
-            self._held.add(notice.robot)  # kept while the world keeps the round open
-            self._waiting.discard(notice.robot)
+    def on_held(self, notice: MovesHeld, now: float) -> list[Action]:
+        """The world holds these robots' moves; notices of other rounds (or robots) are ignored."""
+        if notice.round == self._round:
+            robots = set(notice.robots) & self.active_set
+            self._held |= robots  # kept while the world keeps the round open
+            self._waiting -= robots
         if self._phase is Phase.COLLECT:
             return self._collected(now)
         return []
@@ -328,14 +328,25 @@ class CoordinatorCore:
             return []
         return self._begin(now)
 
-    def _begin(self, now: float) -> list[Action]:
+    def _plan(self, round_no: int) -> tuple[int, ...]:
+        """Round `round_no`'s active set: the scheduler is asked once per round, in order."""
+        if self._next is not None and self._next[0] == round_no:
+            return self._next[1]
+        assert self._scheduler is not None
+        self._next = (round_no, tuple(self._scheduler.active(round_no, sorted(self._live))))
+        return self._next[1]
+
+    def _take_plan(self) -> None:
+        """Make `round`'s planned active set the current one (a new round: nothing held yet)."""
         if self._planned is None or self._planned[0] != self._round:
-            assert self._scheduler is not None
-            active = self._scheduler.active(self._round, sorted(self._live))
-            self._planned = (self._round, tuple(active))
+            active = self._plan(self._round)
+            self._planned, self._next = (self._round, active), None
             self._active_set = frozenset(active)
             self._held = set()
-        self._began_at = now
+
+    def _begin(self, now: float) -> list[Action]:
+        self._take_plan()
+        self._began_at = self._asked_at = now
         self._phase, self._deadline = Phase.BEGIN, None
         return [Ask(Begin(round=self._round, active=self.active))]
 
@@ -344,13 +355,13 @@ class CoordinatorCore:
             why = "no answer" if reply is None else reply.reason
             self._note(f"world refused round {self._round}: {why}", warning=True)
             return self._retry(now)  # then Hello, and on from where the world stands
-        if reply.open_round == self._round:  # moves it already holds (this coordinator restarted,
-            self._held |= set(reply.held) & self.active_set  # or the world kept a retried round)
+        # What the world holds is what counts: moves of a round it kept (this coordinator restarted,
+        # or retried), none of a round it opened anew (it restarted while the core paced).
+        self._held = (set(reply.held) & self.active_set if reply.open_round == self._round
+                      else set())
         self._phase, self._deadline = Phase.COLLECT, now + self.times.move_timeout_s
         self._waiting = {r for r in self.active if r in self._live and r not in self._held}
-        timeout_ms = int(self.times.move_timeout_s * 1000)
-        start = RoundStart(round=self._round, active=self.active, timeout_ms=timeout_ms)
-        return [Announce(start), *self._collected(now)]
+        return self._collected(now)
 
     def _collected(self, now: float) -> list[Action]:
         """COLLECT: every live active robot's move held, or the deadline -> Commit."""
@@ -361,7 +372,11 @@ class CoordinatorCore:
         if timed_out:
             self._note(f"round {self._round}: no move from {list(timed_out)}")
         self._phase, self._deadline = Phase.COMMIT, None
-        return [Ask(Commit(round=self._round, timed_out=timed_out))]
+        paced = self._began_at is not None and now < self._began_at + self.times.pace_s
+        self._chained = bool(self._live) and not paced
+        then = self._plan(self._round + 1) if self._chained else ()
+        self._asked_at = now
+        return [Ask(Commit(round=self._round, timed_out=timed_out, then_active=then))]
 
     def _on_committed(self, reply: ControlReply | None, now: float) -> list[Action]:
         if reply is None or not reply.ok:
@@ -372,12 +387,16 @@ class CoordinatorCore:
             return self._ask_hello()
         if reply.status != Status.RUNNING:
             return self._finish(Status(reply.status))
+        if self._chained and reply.open_round == reply.committed + 1 == self._round + 1:
+            self._round += 1  # the world opened the next round with the commit
+            self._take_plan()
+            self._began_at = self._asked_at
+            return self._on_begun(reply, now)
         return self._next_round(reply.committed + 1, now)
 
 
 __all__ = [
     "Action",
-    "Announce",
     "Ask",
     "CoordinatorCore",
     "CoreMisuse",

@@ -1,7 +1,7 @@
 """The coordinator process: a Zenoh shell around the round state machine of `rounds.py`.
 
 Callbacks only enqueue. One loop feeds the queued events to the core, calls it at its deadlines,
-and performs what it asks: control requests to the world, round announcements to the agents.
+and performs what it asks: control requests to the world (which activates the agents).
 """
 
 from __future__ import annotations
@@ -16,10 +16,9 @@ from dataclasses import dataclass
 from typing import Any
 
 from fatswarm.agent.protocol import alive_any_key, robot_of_alive_key
-from fatswarm.coordinator.protocol import RoundStart, alive_key, round_key
+from fatswarm.coordinator.protocol import alive_key
 from fatswarm.coordinator.rounds import (
     Action,
-    Announce,
     CoordinatorCore,
     Finished,
     RoundTimes,
@@ -33,7 +32,7 @@ from fatswarm.world.protocol import (
     Commit,
     ControlReply,
     ControlRequest,
-    MoveHeld,
+    MovesHeld,
     ProtocolError,
     control_key,
     moves_held_key,
@@ -85,7 +84,7 @@ class Coordinator:
         self.core = CoordinatorCore(make_scheduler, cfg.times, cfg.resume_live)
         self.events: Inbox[tuple[str, Any]] = Inbox()
         self.rejected = 0
-        self._began = self._announced = 0.0  # perf_counter marks of the round (debug timings)
+        self._began = 0.0  # perf_counter mark of the round's opening (debug timings)
 
     # -- event intake (callbacks only enqueue) --------------------------------------------------
 
@@ -111,8 +110,6 @@ class Coordinator:
 
     def run(self, session: Any) -> int:
         """Run rounds on an open Zenoh session until the run ends, then close it."""
-        import zenoh
-
         with session:
             _token = session.liveliness().declare_token(alive_key(self.cfg.swarm))
             session.liveliness().declare_subscriber(
@@ -122,14 +119,9 @@ class Coordinator:
             session.liveliness().declare_subscriber(
                 world_alive_key(self.cfg.swarm), self._on_world, history=True
             )
-            announce = session.declare_publisher(
-                round_key(self.cfg.swarm),
-                congestion_control=zenoh.CongestionControl.BLOCK,
-                express=True,
-            )
-            return self._loop(session, announce)
+            return self._loop(session)
 
-    def _loop(self, session: Any, announce: Any) -> int:
+    def _loop(self, session: Any) -> int:
         todo: deque[Action] = deque(self.core.start(time.monotonic()))
         while not self.stop.is_set():
             self._log_notes()
@@ -139,11 +131,8 @@ class Coordinator:
             action = todo.popleft()
             if isinstance(action, Finished):
                 return self._end(action)
-            if isinstance(action, Announce):
-                self._announce(announce, action.start)
-            else:
-                reply = self._ask(session, action.request)
-                todo.extend(self.core.on_reply(reply, time.monotonic()))
+            reply = self._ask(session, action.request)
+            todo.extend(self.core.on_reply(reply, time.monotonic()))
         return self._end(self.core.stop())
 
     def _end(self, finished: Finished) -> int:
@@ -185,7 +174,7 @@ class Coordinator:
             robot = robot_of_alive_key(key)
             return [] if robot is None else self.core.on_alive(robot, alive, now)
         try:
-            notice = MoveHeld.decode(item)
+            notice = MovesHeld.decode(item)
         except ProtocolError as exc:
             self.rejected += 1
             log.warning("rejected move notice: %s [total %d]", exc, self.rejected)
@@ -194,25 +183,15 @@ class Coordinator:
 
     # -- actions --------------------------------------------------------------------------------
 
-    def _announce(self, announce: Any, start: RoundStart) -> None:
-        import zenoh
-
-        try:
-            announce.put(start.encode())
-        except zenoh.ZError as exc:  # nobody hears it: the robots stay put this round
-            log.warning("round %d announcement failed: %s", start.round, exc)
-        self._announced = time.perf_counter()
-
     def _ask(self, session: Any, request: ControlRequest) -> ControlReply | None:
         """One control request; None if the world did not answer (down or restarting)."""
         asked = time.perf_counter()
-        if isinstance(request, Begin):
-            self._began = asked
         reply = self._get(session, request.encode())
         if isinstance(request, Commit) and log.isEnabledFor(logging.DEBUG):
-            log.debug("round %d: begin %.2f ms, moves %.2f ms, commit %.2f ms", request.round,
-                      1e3 * (self._announced - self._began), 1e3 * (asked - self._announced),
-                      1e3 * (time.perf_counter() - asked))
+            log.debug("round %d: moves %.2f ms, commit %.2f ms", request.round,
+                      1e3 * (asked - self._began), 1e3 * (time.perf_counter() - asked))
+        if isinstance(request, Begin) or (isinstance(request, Commit) and request.then_active):
+            self._began = time.perf_counter()
         return reply
 
     def _get(self, session: Any, payload: bytes) -> ControlReply | None:

@@ -25,7 +25,7 @@ from fatswarm.agent.path import Path, Points
 from fatswarm.agent.protocol import MoveSubmitted
 from fatswarm.agent.seam import Configured, checked
 from fatswarm.agent.uniform_circle import ALGORITHM as UNIFORM_CIRCLE
-from fatswarm.coordinator.rounds import Announce, Ask, CoordinatorCore, Finished, RoundTimes
+from fatswarm.coordinator.rounds import Ask, CoordinatorCore, Finished, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
 from fatswarm.world.core import Committed, Journal, WorldCore, WorldSetup
 from fatswarm.world.outcome import Status
@@ -208,19 +208,23 @@ class _Bus:
             action = pending.popleft()
             if isinstance(action, Finished):
                 return action
-            if isinstance(action, Ask):
-                reply, _ = self.world.control(action.request)
-                if isinstance(action.request, Commit) and reply.ok:
-                    self._report()
-                pending.extend(coordinator.on_reply(reply, now))
-            elif isinstance(action, Announce):
-                for notice in self._act(action.start.round, action.start.active):
+            assert isinstance(action, Ask)
+            opened = self.world.open_round
+            reply, _ = self.world.control(action.request)
+            if isinstance(action.request, Commit) and reply.ok:
+                self._report()
+            pending.extend(coordinator.on_reply(reply, now))
+            if reply.ok and self.world.open_round and self.world.open_round != opened:
+                # every robot's Look is held at the world: the round's opening answers them
+                self._act(self.world.open_round, self.world.active)
+                notice = self.world.moves_notice()
+                if notice is not None:
                     pending.extend(coordinator.on_held(notice, now))
         raise RuntimeError("the coordinator stopped without finishing the run")  # a bug
 
-    def _act(self, round_no: int, active: Sequence[int]) -> list[Any]:
-        """Every active robot's Look, Compute and Move; the world's notices of held moves."""
-        world, notices = self.world, []
+    def _act(self, round_no: int, active: Sequence[int]) -> None:
+        """Every active robot's Look, Compute and Move."""
+        world = self.world
         planned = None
         if self.planner is not None:
             planned = self.planner.paths(world.positions, active, self.flips)
@@ -237,15 +241,10 @@ class _Bus:
                 msg = self._computed(world, robot, round_no, snapshot.view)
                 if msg is None:
                     continue  # as a networked agent whose compute failed: it stays, timed out
-                notice = world.move(robot, msg)
-                if notice is not None:
-                    notices.append(notice)
+                world.move(robot, msg)
                 continue
             self.looks += 1
-            notice = world.move(robot, MoveSubmitted(robot=robot, round=round_no, path=path))
-            if notice is not None:
-                notices.append(notice)
-        return notices
+            world.move(robot, MoveSubmitted(robot=robot, round=round_no, path=path))
 
     def _computed(self, world: WorldCore, robot: int, round_no: int, view: Points
                   ) -> MoveSubmitted | None:

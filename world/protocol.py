@@ -21,12 +21,13 @@ from numpy.typing import NDArray
 from fatswarm.agent.seam import MAX_PARAMS, MAX_TEXT, ParamValue
 from fatswarm.world.outcome import Status
 
-PROTOCOL_VERSION = 2  # 2: the algorithm and its parameters replace the paper's `a`
+PROTOCOL_VERSION = 3  # 3: the held Look is the activation; one moves notice a round; no seed
 ROOT = "fatswarm"
 MAX_ROBOTS = 4096  # bounds every list and array a peer can make us allocate
 MAX_MESSAGE_BYTES = 1 << 20  # 1 MiB: a 4096-robot state is ~130 KB
 MAX_CONTROL_BYTES = 64 << 10  # a Begin naming 4096 robots is ~20 KB: larger is dropped unread
-MAX_NOTICE_BYTES = 4 << 10  # a MoveHeld is a few dozen bytes
+MAX_LOOK_BYTES = 256  # a LookRequest is two integers: larger is refused unread
+MAX_NOTICE_BYTES = 64 << 10  # a MovesHeld naming 4096 robots is ~12 KB: larger is dropped unread
 MAX_COORD = 1e9  # coordinates beyond this are nonsense for unit discs and risk overflow
 STATUSES = tuple(Status)
 _SWARM_NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
@@ -66,7 +67,7 @@ def control_key(swarm: str) -> str:
 
 
 def moves_held_key(swarm: str) -> str:
-    """World -> coordinator: `MoveHeld` each time a move is accepted for the open round."""
+    """World -> coordinator: `MovesHeld` once every live active robot's move is held."""
     return f"{prefix(swarm)}/world/moves"
 
 
@@ -76,7 +77,8 @@ def alive_key(swarm: str) -> str:
 
 
 def snapshot_key(swarm: str, robot: int) -> str:
-    """Agent asks, world answers with a `Snapshot` (only while the robot is active)."""
+    """Agent asks, world answers with a `Snapshot` when the robot is active in an open round and
+    has not moved in it yet; until then the world holds the query: its answer is the activation."""
     return f"{prefix(swarm)}/robot/{robot}/snapshot"
 
 
@@ -255,11 +257,11 @@ class WorldState:
     algorithm: str  # its registered name
     params: dict[str, ParamValue]  # its parameters, every one
     figures: dict[str, float]  # the algorithm's figures for the configuration (may be empty)
-    seed: int
-    scheduler: str
+    scheduler: str  # (never the seed: it would give away every robot's private frame)
     swarm: str
     positions: Points  # (n, 2) world frame
     active: tuple[int, ...]  # active set of the round being run (or just committed)
+    open_round: int  # the round being run, 0 between a commit and the next round's opening
     moved: tuple[int, ...]  # robots whose move was applied in `round`
     stopped: tuple[int, ...]  # robots stopped by contact in `round`
     collisions_total: int
@@ -282,11 +284,11 @@ class WorldState:
                 "algorithm": self.algorithm,
                 "params": dict(self.params),
                 "figures": {k: float(v) for k, v in self.figures.items()},
-                "seed": int(self.seed),
                 "scheduler": self.scheduler,
                 "swarm": self.swarm,
                 "positions": points_to_bytes(self.positions),
                 "active": _robot_list(self.active),
+                "open_round": int(self.open_round),
                 "moved": _robot_list(self.moved),
                 "stopped": _robot_list(self.stopped),
                 "collisions_total": int(self.collisions_total),
@@ -331,11 +333,11 @@ class WorldState:
             algorithm=get_str(obj, "algorithm"),
             params=get_params(obj, "params"),
             figures=get_figures(obj, "figures"),
-            seed=get_int(obj, "seed", -(2**63), 2**64 - 1),
             scheduler=get_str(obj, "scheduler"),
             swarm=get_str(obj, "swarm"),
             positions=get_points(obj, "positions", n),
             active=get_robots(obj, "active", n),
+            open_round=get_int(obj, "open_round", 0, 2**62),
             moved=get_robots(obj, "moved", n),
             stopped=get_robots(obj, "stopped", n),
             collisions_total=get_int(obj, "collisions_total", 0, 2**62),
@@ -360,6 +362,7 @@ class Snapshot:
     algorithm: str  # the name of the algorithm the run is for: an agent running another stays
     params: dict[str, ParamValue]
     view: Points  # (n-1, 2): other centre minus asker's centre, world axes
+    epoch: int = 0  # the world process that answered (see LookRequest)
 
     def encode(self) -> bytes:
         """msgpack bytes."""
@@ -371,6 +374,7 @@ class Snapshot:
                 "algorithm": self.algorithm,
                 "params": dict(self.params),
                 "view": points_to_bytes(self.view),
+                "epoch": int(self.epoch),
             },
         )
 
@@ -385,7 +389,30 @@ class Snapshot:
             algorithm=get_str(obj, "algorithm"),
             params=get_params(obj, "params"),
             view=get_points(obj, "view", n - 1),
+            epoch=get_int(obj, "epoch", 0, 2**63 - 1),
         )
+
+
+@dataclass(frozen=True, slots=True)
+class LookRequest:
+    """An agent's Look (the query's payload): the snapshot of a round after `after`, the last
+    round it moved in at the world process `epoch`. The world holds the query until then, so a
+    Look that overtakes the agent's own move is not answered twice; a new world process (another
+    epoch) may reopen a round it lost, so it ignores `after` from another epoch."""
+
+    epoch: int = 0
+    after: int = 0
+
+    def encode(self) -> bytes:
+        """msgpack bytes."""
+        return pack("look", {"epoch": int(self.epoch), "after": int(self.after)})
+
+    @staticmethod
+    def decode(data: bytes | bytearray | memoryview) -> LookRequest:
+        """Parse and validate; raises ProtocolError."""
+        obj = unpack(data, "look")
+        return LookRequest(epoch=get_int(obj, "epoch", 0, 2**63 - 1),
+                           after=get_int(obj, "after", 0, 2**62))
 
 
 # --- coordinator <-> world: control queries ---------------------------------------------------
@@ -414,14 +441,23 @@ class Begin:
 
 @dataclass(frozen=True, slots=True)
 class Commit:
-    """Coordinator closes round `round`: the world applies the moves it holds, through physics."""
+    """Coordinator closes round `round`: the world applies the moves it holds, through physics;
+    with `then_active`, it then opens round `round + 1` with that active set, as a `Begin` would
+    (one request instead of two on the round's critical path)."""
 
     round: int
     timed_out: tuple[int, ...] = ()  # active robots that sent no move before the deadline
+    then_active: tuple[int, ...] = ()  # the next round's active set; () opens nothing
 
     def encode(self) -> bytes:
         """msgpack bytes."""
-        return pack("commit", {"round": int(self.round), "timed_out": _robot_list(self.timed_out)})
+        return pack("commit", {"round": int(self.round), "timed_out": _robot_list(self.timed_out),
+                               "then_active": _robot_list(self.then_active)})
+
+    @property
+    def then(self) -> Begin | None:
+        """The Begin this commit carries, if any."""
+        return Begin(self.round + 1, self.then_active) if self.then_active else None
 
 
 ControlRequest = Hello | Begin | Commit
@@ -434,7 +470,8 @@ def decode_control(data: bytes | bytearray | memoryview) -> ControlRequest:
         return Hello()
     if kind == "begin":
         return Begin(round=get_int(obj, "round", 1, 2**62), active=get_robots(obj, "active"))
-    return Commit(round=get_int(obj, "round", 1, 2**62), timed_out=get_robots(obj, "timed_out"))
+    return Commit(round=get_int(obj, "round", 1, 2**62), timed_out=get_robots(obj, "timed_out"),
+                  then_active=get_robots(obj, "then_active"))
 
 
 @dataclass(frozen=True, slots=True)
@@ -490,20 +527,20 @@ class ControlReply:
 
 
 @dataclass(frozen=True, slots=True)
-class MoveHeld:
-    """The world accepted robot `robot`'s move for round `round` (BLOCK, so none is lost)."""
+class MovesHeld:
+    """The world holds the moves of `robots` for round `round`, and every active robot whose agent
+    is alive is among them: the round can be committed (BLOCK, so none is lost). Sent once a round,
+    again only if a late robot's move joins them."""
 
     round: int
-    robot: int
+    robots: tuple[int, ...]
 
     def encode(self) -> bytes:
         """msgpack bytes."""
-        return pack("move-held", {"round": int(self.round), "robot": int(self.robot)})
+        return pack("moves-held", {"round": int(self.round), "robots": _robot_list(self.robots)})
 
     @staticmethod
-    def decode(data: bytes | bytearray | memoryview) -> MoveHeld:
+    def decode(data: bytes | bytearray | memoryview) -> MovesHeld:
         """Parse and validate; raises ProtocolError."""
-        obj = unpack(data, "move-held")
-        return MoveHeld(
-            round=get_int(obj, "round", 1, 2**62), robot=get_int(obj, "robot", 0, MAX_ROBOTS - 1)
-        )
+        obj = unpack(data, "moves-held")
+        return MovesHeld(round=get_int(obj, "round", 1, 2**62), robots=get_robots(obj, "robots"))

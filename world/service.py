@@ -1,7 +1,8 @@
 """The world process: the Zenoh shell around `world.core.WorldCore`.
 
 Its callbacks only enqueue; one thread decodes each event, hands it to the core and sends what the
-core answers. Nothing of the round's logic lives here.
+core answers. Nothing of the round's logic lives here. A Look the core cannot answer yet is held
+(the newest per robot) and answered when the robot is activated: that answer is its activation.
 """
 
 from __future__ import annotations
@@ -27,8 +28,9 @@ from fatswarm.world.inbox import Inbox
 from fatswarm.world.outcome import ExitCode
 from fatswarm.world.protocol import (
     MAX_CONTROL_BYTES,
+    MAX_LOOK_BYTES,
     ControlReply,
-    MoveHeld,
+    LookRequest,
     ProtocolError,
     alive_key,
     control_key,
@@ -54,6 +56,8 @@ __all__ = [
 log = logging.getLogger("fatswarm.world")
 
 REPUBLISH_S = 1.0  # the state is re-published this often when nothing happens, for late observers
+HOLD_LOOK_S = 20.0  # a held Look is let go (answered with nothing) after this: the agent asks
+# again well before its own query timeout (agent.service.LOOK_WAIT_S), so none is answered late
 DROPPED_EVERY_S = 5.0  # dropped messages are counted in one log line at most this often
 
 # --- the Zenoh shell --------------------------------------------------------------------------
@@ -100,7 +104,7 @@ def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) ->
         held_pub = session.declare_publisher(
             moves_held_key(swarm), congestion_control=zenoh.CongestionControl.BLOCK, express=True
         )
-        session.declare_queryable(snapshot_any_key(swarm), on_query("look", 0))
+        session.declare_queryable(snapshot_any_key(swarm), on_query("look", MAX_LOOK_BYTES))
         session.declare_queryable(control_key(swarm), on_query("control", MAX_CONTROL_BYTES))
         session.declare_subscriber(move_any_key(swarm), on_move)
         session.liveliness().declare_subscriber(alive_any_key(swarm), on_alive, history=True)
@@ -108,6 +112,7 @@ def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) ->
         log.info("world of %d robots serving swarm %r", core.setup.n, swarm)
         state_pub.put(core.state().encode())
         dirty, published = False, time.monotonic()
+        looks = HeldLooks()
         code = ExitCode.OK
         said: Counter[str] = Counter()
         said_at = -DROPPED_EVERY_S
@@ -118,11 +123,14 @@ def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) ->
                 if dirty or time.monotonic() - published > REPUBLISH_S:  # late joiners see it
                     state_pub.put(core.state().encode())
                     dirty, published = False, time.monotonic()
+                looks.expire(time.monotonic())
                 continue
+            if time.monotonic() - looks.expired_at > HOLD_LOOK_S / 4:  # also when never idle
+                looks.expire(time.monotonic())
             if events.dropped != said:  # a flood: say so, at most every few seconds
                 said_at = _say_dropped(events, said, said_at)
             try:
-                if _handle(core, kind, item, held_pub):
+                if _handle(core, kind, item, held_pub, looks):
                     state_pub.put(core.state().encode())
                     published = time.monotonic()
                 elif kind == "alive":
@@ -139,6 +147,7 @@ def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) ->
                           core.open_round or core.committed)
                 code = ExitCode.NOT_FORMED
                 break
+        looks.let_go_all()
     try:
         core.journal.close()
     except RecordWriteError as exc:
@@ -158,13 +167,13 @@ def look_bytes(core: WorldCore, key: str) -> bytes | None:
     return None if snapshot is None else snapshot.encode()
 
 
-def move_bytes(core: WorldCore, key: str, payload: bytes) -> MoveHeld | None:
-    """Decode a move that came on `key` and hand it to the core; the notice, None if refused."""
+def move_bytes(core: WorldCore, key: str, payload: bytes) -> bool:
+    """Decode a move that came on `key` and hand it to the core; False if refused (counted)."""
     try:
         msg = MoveSubmitted.decode(payload)
     except ProtocolError as exc:
         core.reject("move-garbage", f"on {key}: {exc}")
-        return None
+        return False
     return core.move(robot_of_key(key), msg)
 
 
@@ -191,39 +200,107 @@ def _say_dropped(events: Inbox[Any], said: Counter[str], said_at: float) -> floa
     return now
 
 
-def _handle(core: WorldCore, kind: str, item: Any, held_pub: Any) -> bool:
+class HeldLooks:
+    """Looks waiting for their robot's activation: the newest query per robot, and when it came.
+
+    A query is always finalised: answered, let go when a newer one replaces it, or let go after
+    HOLD_LOOK_S (the agent then asks again).
+    """
+
+    def __init__(self) -> None:
+        self._held: dict[int, tuple[Any, LookRequest, float]] = {}
+        self.expired_at = 0.0  # when `expire` last ran
+
+    def __len__(self) -> int:
+        return len(self._held)
+
+    def hold(self, robot: int, query: Any, request: LookRequest, now: float) -> None:
+        old = self._held.pop(robot, None)
+        if old is not None:
+            old[0].drop()
+        self._held[robot] = (query, request, now)
+
+    def answer_ready(self, core: WorldCore) -> None:
+        """Answer every held Look the core can answer now (its robot was just activated)."""
+        import zenoh
+
+        for robot in [r for r, (_, req, _) in self._held.items() if core.may_look(r, req)]:
+            try:
+                _answer_look(core, self._held.pop(robot)[0])
+            except zenoh.ZError as exc:  # its agent left meanwhile: it asks again if it comes back
+                log.debug("robot %d's held look: %s", robot, exc)
+
+    def expire(self, now: float) -> None:
+        self.expired_at = now
+        for robot in [r for r, (_, _, since) in self._held.items() if now - since > HOLD_LOOK_S]:
+            self._held.pop(robot)[0].drop()
+
+    def let_go_all(self) -> None:
+        for query, _, _ in self._held.values():
+            query.drop()
+        self._held.clear()
+
+
+def _handle(core: WorldCore, kind: str, item: Any, held_pub: Any, looks: HeldLooks) -> bool:
     """Apply one event; True when the observers' state changed enough to publish at once."""
     if kind == "look":
-        _answer_look(core, item)
+        _take_look(core, item, looks)
     elif kind == "move":
-        notice = move_bytes(core, *item)
-        if notice is not None:
-            held_pub.put(notice.encode())
+        if move_bytes(core, *item):
+            _notify(core, held_pub)
     elif kind == "control":
-        return _answer_control(core, item)
+        return _answer_control(core, item, looks)
     elif kind == "alive":
         key, alive = item
         robot = robot_of_alive_key(key)
-        if robot is not None:
-            core.set_alive(robot, alive)
+        if robot is not None and core.set_alive(robot, alive):
+            _notify(core, held_pub)  # a robot gone mid-round is not waited for
     return False
+
+
+def _notify(core: WorldCore, held_pub: Any) -> None:
+    notice = core.moves_notice()
+    if notice is not None:
+        held_pub.put(notice.encode())
+
+
+def _take_look(core: WorldCore, query: Any, looks: HeldLooks) -> None:
+    """Answer a Look now, hold it until its robot is activated, or refuse it (a key with no robot
+    of this run, or garbage)."""
+    robot = robot_of_key(str(query.key_expr))
+    try:
+        request = LookRequest.decode(query.payload.to_bytes() if query.payload is not None
+                                     else LookRequest().encode())
+    except ProtocolError as exc:
+        core.reject("look-garbage", str(exc))
+        try:
+            query.reply_err(b"not a look request")
+        finally:
+            query.drop()
+        return
+    if robot is None or not 0 <= robot < core.setup.n or core.may_look(robot, request):
+        _answer_look(core, query)
+    else:
+        looks.hold(robot, query, request, time.monotonic())
 
 
 def _answer_look(core: WorldCore, query: Any) -> None:
     try:
         data = look_bytes(core, str(query.key_expr))
         if data is None:
-            query.reply_err(b"not active in the open round")
+            query.reply_err(b"not a robot of this run")
         else:
             query.reply(query.key_expr, data)
     finally:
         query.drop()
 
 
-def _answer_control(core: WorldCore, query: Any) -> bool:
+def _answer_control(core: WorldCore, query: Any, looks: HeldLooks) -> bool:
     try:
         payload = query.payload.to_bytes() if query.payload is not None else b""
         reply, changed = control_bytes(core, payload)
+        if changed:
+            looks.answer_ready(core)  # a round opened: its robots start computing first
         query.reply(query.key_expr, reply.encode())
         return changed
     finally:

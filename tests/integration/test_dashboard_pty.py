@@ -162,8 +162,9 @@ def world_state(round_no: int, n: int, status: str, swarm: str) -> WorldState:
     return WorldState(
         round=round_no, n=n,
         algorithm="uniform-circle", params={"a": 4.0}, figures={"target radius": r},
-        seed=3, scheduler="fsync", swarm=swarm, positions=positions,
-        active=tuple(range(n)), moved=(), stopped=(), collisions_total=0, status=status,
+        scheduler="fsync", swarm=swarm, positions=positions,
+        active=tuple(range(n)), open_round=0, moved=(), stopped=(), collisions_total=0,
+        status=status,
         agents=agents,
     )  # fmt: skip
 

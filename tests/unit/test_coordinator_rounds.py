@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ast
 import inspect
+import itertools
 from collections import deque
 from collections.abc import Sequence
 
@@ -12,10 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fatswarm.coordinator import rounds
-from fatswarm.coordinator.protocol import RoundStart
 from fatswarm.coordinator.rounds import (
     Action,
-    Announce,
     Ask,
     CoordinatorCore,
     CoreMisuse,
@@ -24,9 +23,9 @@ from fatswarm.coordinator.rounds import (
     Phase,
     RoundTimes,
 )
-from fatswarm.coordinator.schedule import make_scheduler
+from fatswarm.coordinator.schedule import Scheduler, make_scheduler
 from fatswarm.world.outcome import ExitCode, Status, exit_code_for
-from fatswarm.world.protocol import Begin, Commit, ControlReply, Hello, MoveHeld
+from fatswarm.world.protocol import Begin, Commit, ControlReply, Hello, MovesHeld
 
 Request = Hello | Begin | Commit
 TIMES = RoundTimes(move_timeout_s=5.0, start_timeout_s=120.0, resume_grace_s=2.0, pace_s=0.0,
@@ -35,6 +34,10 @@ TIMES = RoundTimes(move_timeout_s=5.0, start_timeout_s=120.0, resume_grace_s=2.0
 
 class FakeWorld:
     """Answers Hello, Begin and Commit as the world does; the run ends after `end_after` commits.
+
+    A Commit with `then_active` commits and, if the run goes on, opens the next round with that
+    set. `notice()` is the world's one `MovesHeld` a round, due once every active robot whose agent
+    is alive has moved (again only if a late move joins them).
 
     `fail(kind, how)` makes the next request of that kind fail: "refuse" (ok=False), "none" (no
     answer) or "lost" (applied, but the answer never arrives). `restart()` loses the open round.
@@ -48,22 +51,39 @@ class FakeWorld:
         self.open_round = 0
         self.active: tuple[int, ...] = ()
         self.held: set[int] = set()
+        self.alive: set[int] = set()  # robots whose agent the world knows to be up
+        self.noticed: MovesHeld | None = None
         self.faults: list[tuple[str, str]] = []
         self.requests: list[Request] = []
+        self.opened: list[tuple[int, tuple[int, ...]]] = []  # every round opened anew, with its set
         self.applied: list[tuple[Commit, tuple[int, ...]]] = []  # and the world's timed out
 
     def fail(self, kind: str, how: str) -> None:
         self.faults.append((kind, how))
 
     def restart(self) -> None:
-        self.open_round, self.active, self.held = 0, (), set()
+        self.open_round, self.active, self.held, self.noticed = 0, (), set(), None
 
-    def hold(self, robot: int) -> MoveHeld | None:
-        """An agent's move: held (its notice returned) if the robot is active in the open round."""
+    def set_alive(self, robot: int, up: bool) -> None:
+        if 0 <= robot < self.n:
+            (self.alive.add if up else self.alive.discard)(robot)
+
+    def hold(self, robot: int) -> bool:
+        """An agent's move: held if the robot is active in the open round and has not moved."""
         if self.open_round and robot in self.active and robot not in self.held:
             self.held.add(robot)
-            return MoveHeld(round=self.open_round, robot=robot)
-        return None
+            return True
+        return False
+
+    def notice(self) -> MovesHeld | None:
+        """The moves notice due now, if any (never the same one twice)."""
+        if not self.open_round or any(r in self.alive - self.held for r in self.active):
+            return None
+        notice = MovesHeld(self.open_round, tuple(sorted(self.held)))
+        if notice == self.noticed:
+            return None
+        self.noticed = notice
+        return notice
 
     def reply(self, ok: bool, reason: str = "") -> ControlReply:
         return ControlReply(ok=ok, reason=reason, n=self.n, committed=self.committed,
@@ -90,11 +110,7 @@ class FakeWorld:
         if self.status != Status.RUNNING:
             return self.reply(False, f"the run has ended ({self.status})")
         if isinstance(req, Begin):
-            if req.round != self.committed + 1:
-                return self.reply(False, f"next round is {self.committed + 1}")
-            if (self.open_round, self.active) != (req.round, req.active):
-                self.open_round, self.active, self.held = req.round, req.active, set()
-            return self.reply(True)
+            return self._begin(req)
         if req.round == self.committed and not self.open_round:
             return self.reply(True)  # the answer to a commit was lost: it is durable
         if req.round != self.open_round:
@@ -103,54 +119,126 @@ class FakeWorld:
         self.committed, self.open_round, self.active, self.held = req.round, 0, (), set()
         if self.committed >= self.end_after:
             self.status = self.end_status
+        then = req.then
+        if then is not None and self.status == Status.RUNNING:
+            return self._begin(then)
+        return self.reply(True)
+
+    def _begin(self, req: Begin) -> ControlReply:
+        if req.round != self.committed + 1:
+            return self.reply(False, f"next round is {self.committed + 1}")
+        if (self.open_round, self.active) != (req.round, req.active):
+            self.open_round, self.active, self.held = req.round, req.active, set()
+            self.noticed = None
+            self.opened.append((req.round, req.active))
         return self.reply(True)
 
 
+class Recording:
+    """A scheduler that remembers which rounds it was asked for, in order, and what it said."""
+
+    def __init__(self, inner: Scheduler) -> None:
+        self.inner, self.name = inner, inner.name
+        self.asked: list[int] = []
+        self.said: dict[int, tuple[int, ...]] = {}
+
+    def active(self, round_no: int, live: Sequence[int]) -> list[int]:
+        out = self.inner.active(round_no, live)
+        self.asked.append(round_no)
+        self.said[round_no] = tuple(out)
+        return out
+
+
 class Drive:
-    """A core, a fake world and a fake clock; live agents move at once unless `silent`."""
+    """A core, a fake world and a fake clock.
+
+    The world holds every agent's Look: when a request opens a round (or opens it again), each
+    active robot whose agent is up moves at once, unless it is `silent` or `auto_move` is off. The
+    world's moves notices reach the core as events, after the actions of the reply in hand.
+    """
 
     def __init__(self, world: FakeWorld, scheduler: str = "fsync", seed: int = 7,
                  times: RoundTimes = TIMES, resume_live: Sequence[int] | None = None) -> None:
         self.world, self.times, self.now = world, times, 0.0
-        self.core = CoordinatorCore(lambda n: make_scheduler(scheduler, n, seed), times,
-                                    resume_live)
+        self.schedulers: list[Recording] = []
+        self.core = CoordinatorCore(lambda n: self._recording(make_scheduler(scheduler, n, seed)),
+                                    times, resume_live)
         self.auto_move = True
+        self.agents: set[int] = set()  # robots whose agent is up
         self.silent: set[int] = set()
-        self.announced: list[tuple[float, RoundStart]] = []
+        self.notices: deque[MovesHeld] = deque()  # sent by the world, not yet seen by the core
+        self.opened: list[tuple[float, int, tuple[int, ...]]] = []  # when the world opened what
+        self.collecting_since: dict[int, float] = {}  # round -> when a reply last opened it
         self.finished: Finished | None = None
+
+    def _recording(self, scheduler: Scheduler) -> Recording:
+        self.schedulers.append(Recording(scheduler))
+        return self.schedulers[-1]
+
+    @property
+    def scheduler(self) -> Recording:
+        (only,) = self.schedulers
+        return only
 
     def perform(self, actions: list[Action]) -> None:
         todo = deque(actions)
-        while todo:
+        while todo or self.notices:
+            if not todo:
+                todo.extend(self.core.on_held(self.notices.popleft(), self.now))
+                continue
             action = todo.popleft()
             if isinstance(action, Ask):
                 assert not todo, "an Ask is the last action of a list"
-                todo.extend(self.core.on_reply(self.world.answer(action.request), self.now))
-            elif isinstance(action, Announce):
-                self.announced.append((self.now, action.start))
-                live = self.core.live
-                for robot in action.start.active if self.auto_move else ():
-                    if robot in live and robot not in self.silent:
-                        todo.extend(self._held(robot))
+                todo.extend(self.core.on_reply(self._ask(action.request), self.now))
             else:
                 assert self.finished is None
                 self.finished = action
+
+    def _ask(self, request: Request) -> ControlReply | None:
+        world = self.world
+        opened = len(world.opened)
+        reply = world.answer(request)
+        if reply is not None and reply.ok and reply.open_round and not isinstance(request, Hello):
+            self.collecting_since[reply.open_round] = self.now
+        if len(world.opened) > opened:  # the held Looks are answered: the agents act
+            self.opened.append((self.now, world.open_round, world.active))
+            for robot in world.active if self.auto_move else ():
+                if robot in self.agents and robot not in self.silent:
+                    self._world_move(robot)
+        return reply
+
+    def _world_move(self, robot: int) -> None:
+        if self.world.hold(robot):
+            self._world_notice()
+
+    def _world_notice(self) -> None:
+        notice = self.world.notice()
+        if notice is not None:
+            self.notices.append(notice)
 
     def start(self, *alive: int) -> Drive:
         self.perform(self.core.start(self.now))
         self.alive(*alive)
         return self
 
-    def alive(self, *robots: int, up: bool = True) -> None:
+    def alive(self, *robots: int, up: bool = True, world_first: bool = False) -> None:
+        """Agents' tokens appear (or go away): the core and the world hear of it, in that order
+        unless `world_first`."""
         for robot in robots:
+            (self.agents.add if up else self.agents.discard)(robot)
+            if world_first:
+                self.world.set_alive(robot, up)
+                self._world_notice()
+                self.perform([])
             self.perform(self.core.on_alive(robot, up, self.now))
+            if not world_first:
+                self.world.set_alive(robot, up)
+                self._world_notice()
+                self.perform([])
 
     def move(self, robot: int) -> None:
-        self.perform(self._held(robot))
-
-    def _held(self, robot: int) -> list[Action]:
-        notice = self.world.hold(robot)
-        return [] if notice is None else self.core.on_held(notice, self.now)
+        self._world_move(robot)
+        self.perform([])
 
     def tick(self, now: float) -> None:
         self.now = max(self.now, now)
@@ -181,6 +269,9 @@ class Drive:
     def commits(self) -> list[Commit]:
         return [r for r in self.world.requests if isinstance(r, Commit)]
 
+    def kinds(self) -> list[str]:
+        return [type(r).__name__ for r in self.world.requests]
+
 
 def test_the_core_imports_no_zenoh_clock_threads_or_logging() -> None:
     tree = ast.parse(inspect.getsource(rounds))
@@ -193,15 +284,17 @@ def test_the_core_imports_no_zenoh_clock_threads_or_logging() -> None:
 
 # --- a whole run ------------------------------------------------------------------------------
 
+ALL4 = (0, 1, 2, 3)
+
 
 def test_a_full_fsync_run_ends_formed_after_the_worlds_last_commit() -> None:
-    drive = Drive(FakeWorld(4, end_after=3)).start(0, 1, 2, 3)
+    drive = Drive(FakeWorld(4, end_after=3)).start(*ALL4)
     assert drive.finished == Finished(Status.FORMED, 0)
-    assert [type(r).__name__ for r in drive.world.requests] == ["Hello"] + ["Begin", "Commit"] * 3
-    assert drive.begins() == [Begin(round=k, active=(0, 1, 2, 3)) for k in (1, 2, 3)]
-    assert drive.commits() == [Commit(round=k, timed_out=()) for k in (1, 2, 3)]
-    assert [s for _, s in drive.announced] == [
-        RoundStart(round=k, active=(0, 1, 2, 3), timeout_ms=5000) for k in (1, 2, 3)]
+    assert drive.world.requests == [
+        Hello(), Begin(round=1, active=ALL4),
+        *(Commit(round=k, timed_out=(), then_active=ALL4) for k in (1, 2, 3))]
+    assert drive.world.opened == [(1, ALL4), (2, ALL4), (3, ALL4)]  # the last commit opens none
+    assert [(at, r) for at, r, _ in drive.opened] == [(0.0, 1), (0.0, 2), (0.0, 3)]
     assert drive.now == 0.0  # nobody waited: every move came at once
     assert drive.core.phase is Phase.DONE and drive.core.next_deadline() is None
     assert drive.core.finished == drive.finished
@@ -230,6 +323,117 @@ def test_a_stopped_core_finishes_running_and_then_does_nothing() -> None:
     assert drive.core.stop() == Finished(Status.RUNNING, 0)
 
 
+# --- chained commits --------------------------------------------------------------------------
+
+
+def test_a_chained_commit_opens_the_next_round_with_one_request() -> None:
+    world = FakeWorld(3, end_after=9)
+    drive = Drive(world, scheduler="ssync", seed=5)
+    drive.auto_move = False
+    drive.start(0, 1, 2)
+    first = drive.core.active
+    for robot in first:
+        drive.move(robot)
+    (commit,) = drive.commits()
+    assert commit.round == 1 and commit.then_active == drive.scheduler.said[2]
+    assert world.requests == [Hello(), Begin(1, first), commit]  # no Begin for round 2
+    assert world.committed == 1 and world.opened == [(1, first), (2, commit.then_active)]
+    assert drive.core.phase is Phase.COLLECT and drive.core.round == 2
+    assert drive.core.active == commit.then_active and drive.core.held == set()
+    assert drive.core.next_deadline() == TIMES.move_timeout_s
+
+
+def test_every_round_after_the_first_costs_one_request_and_asks_the_scheduler_once() -> None:
+    drive = Drive(FakeWorld(5, end_after=8), scheduler="ssync", seed=3).start(*range(5))
+    assert drive.finished == Finished(Status.FORMED, 0)
+    assert drive.kinds() == ["Hello", "Begin"] + ["Commit"] * 8
+    assert drive.scheduler.asked == list(range(1, 10))  # round 9 planned, never opened
+    assert drive.world.opened == [(k, drive.scheduler.said[k]) for k in range(1, 9)]
+
+
+def test_with_a_pace_the_commit_is_not_chained_and_a_begin_follows_at_the_pace_deadline() -> None:
+    drive = Drive(FakeWorld(2, end_after=3), times=RoundTimes(pace_s=1.0)).start(0, 1)
+    assert drive.world.requests == [Hello(), Begin(1, (0, 1)), Commit(1, (), then_active=())]
+    assert drive.core.phase is Phase.PACE and drive.core.next_deadline() == 1.0
+    drive.tick(0.5)
+    assert len(drive.world.requests) == 3
+    drive.tick(1.0)
+    assert drive.world.requests[3:] == [Begin(2, (0, 1)), Commit(2, (), then_active=())]
+    assert drive.core.next_deadline() == 2.0
+    assert drive.scheduler.asked == [1, 2]  # the next round is planned when it begins
+
+
+def test_a_round_longer_than_the_pace_is_chained_to_the_next() -> None:
+    drive = Drive(FakeWorld(2, end_after=3), times=RoundTimes(pace_s=1.0))
+    drive.silent = {1}
+    drive.start(0, 1)
+    drive.tick(5.0)  # round 1 timed out after 5 s > pace
+    assert [b.round for b in drive.begins()] == [1]
+    assert drive.commits()[0].then_active == (0, 1)
+    assert drive.opened == [(0.0, 1, (0, 1)), (5.0, 2, (0, 1))]
+
+
+def test_the_pace_counts_from_the_commit_that_opened_the_round() -> None:
+    drive = Drive(FakeWorld(2, end_after=5), times=RoundTimes(pace_s=1.0))
+    drive.silent = {1}
+    drive.start(0, 1)
+    drive.silent = set()
+    drive.tick(5.0)  # round 1 timed out; its commit opens round 2 at 5.0, where both move at once
+    assert drive.commits()[1] == Commit(2, (), then_active=())  # 5.0 < 5.0 + pace
+    assert drive.core.phase is Phase.PACE and drive.core.next_deadline() == 6.0
+    drive.tick(6.0)
+    assert drive.begins()[1] == Begin(3, (0, 1))
+
+
+def test_a_lost_reply_to_a_chained_commit_recovers_to_the_same_round_and_set() -> None:
+    world = FakeWorld(4, end_after=6)
+    world.fail("commit", "lost")  # round 1 is committed and round 2 opened; the reply is lost
+    drive = Drive(world, scheduler="ssync", seed=9).start(*range(4))
+    lost = drive.commits()[0]
+    assert world.requests[:5] == [Hello(), Begin(1, drive.scheduler.said[1]), lost, Hello(),
+                                  Begin(2, lost.then_active)]
+    # the world kept the moves it held for round 2: its commit came at once, with nobody missing
+    assert world.applied[1] == (drive.commits()[1], ())
+    assert drive.commits()[1] == Commit(2, (), then_active=drive.scheduler.said[3])
+    assert drive.scheduler.asked == list(range(1, 8))  # each round once, in order
+    assert drive.finished == Finished(Status.FORMED, 0) and drive.now == 0.0
+
+
+def test_a_lost_chained_commit_request_is_sent_again_with_the_same_next_set() -> None:
+    world = FakeWorld(4, end_after=6)
+    world.fail("commit", "none")  # the world never saw it: round 1 is still open
+    drive = Drive(world, scheduler="ssync", seed=9).start(*range(4))
+    first, again = drive.commits()[:2]
+    assert world.requests[:6] == [Hello(), Begin(1, drive.scheduler.said[1]), first, Hello(),
+                                  Begin(1, drive.scheduler.said[1]), again]
+    assert first == again and first.then_active == drive.scheduler.said[2]
+    assert drive.scheduler.asked == list(range(1, 8))
+    assert drive.finished == Finished(Status.FORMED, 0)
+
+
+def test_a_world_that_opens_no_round_with_the_commit_is_sent_a_begin() -> None:
+    # A reply that says the commit went through but no round is open (the commit was already
+    # durable, its first reply lost): the core opens the next round itself, with the same set.
+    world = FakeWorld(3, end_after=5)
+    drive = Drive(world)
+    drive.auto_move = False
+    drive.start(0, 1, 2)
+    world.committed, world.open_round, world.active, world.held = 1, 0, (), set()
+    drive.tick(5.0)  # round 1 times out: Commit(1, then) finds it committed already
+    assert world.requests[-2:] == [Commit(1, (0, 1, 2), then_active=(0, 1, 2)),
+                                   Begin(2, (0, 1, 2))]
+    assert drive.core.phase is Phase.COLLECT and drive.core.round == 2
+
+
+def test_no_commit_is_chained_while_no_agent_is_live() -> None:
+    drive = Drive(FakeWorld(2, end_after=5))
+    drive.silent = {0, 1}
+    drive.start(0, 1)
+    drive.alive(0, 1, up=False)
+    assert drive.commits() == [Commit(round=1, timed_out=(0, 1), then_active=())]
+    assert drive.world.opened == [(1, (0, 1))]
+
+
 # --- moves and timeouts -----------------------------------------------------------------------
 
 
@@ -238,22 +442,25 @@ def test_a_robot_that_never_moves_is_timed_out_at_exactly_move_timeout() -> None
     drive.silent = {2}
     drive.now = 10.0
     drive.start(0, 1, 2)
-    assert drive.core.phase is Phase.COLLECT and drive.core.held == {0, 1}
+    assert drive.core.phase is Phase.COLLECT and drive.world.held == {0, 1}
     assert drive.core.next_deadline() == 15.0
     drive.tick(15.0 - 1e-9)
     assert drive.commits() == []
     drive.tick(15.0)
-    assert drive.commits()[0] == Commit(round=1, timed_out=(2,))
+    (commit, timed_out), *_ = drive.world.applied
+    assert commit.round == 1 and 2 in commit.timed_out and timed_out == (2,)
 
 
-def test_a_robot_that_dies_mid_round_is_not_waited_for() -> None:
+@pytest.mark.parametrize("world_first", [False, True])
+def test_a_robot_that_dies_mid_round_is_not_waited_for(world_first: bool) -> None:
     drive = Drive(FakeWorld(3))
     drive.silent = {1}
     drive.start(0, 1, 2)
+    assert drive.commits() == []
     drive.now = 1.0
-    drive.alive(1, up=False)
-    assert drive.commits()[0] == Commit(round=1, timed_out=(1,))
-    assert drive.begins()[1] == Begin(round=2, active=(0, 2))  # fsync over the live robots
+    drive.alive(1, up=False, world_first=world_first)
+    assert drive.commits()[0] == Commit(round=1, timed_out=(1,), then_active=(0, 2))
+    assert drive.world.opened[1] == (2, (0, 2))  # fsync over the live robots
     assert drive.now == 1.0
 
 
@@ -264,7 +471,7 @@ def test_a_retried_round_keeps_its_set_and_does_not_wait_for_a_robot_that_died()
     drive.alive(0, up=False)
     drive.tick(0.25)
     assert drive.begins() == [Begin(round=1, active=(0, 1))] * 2
-    assert drive.commits() == [Commit(round=1, timed_out=(0,))]
+    assert drive.commits() == [Commit(round=1, timed_out=(0,), then_active=(1,))]
     assert drive.now == 0.25
 
 
@@ -274,12 +481,33 @@ def test_move_notices_of_another_round_or_robot_are_ignored() -> None:
     drive.start(0, 1)
     drive.tick(120.0)  # robot 2 never came: round 1 with 0 and 1
     assert drive.core.round == 1 and drive.core.active == (0, 1)
-    for notice in (MoveHeld(round=2, robot=0), MoveHeld(round=1, robot=2)):
+    for notice in (MovesHeld(round=2, robots=(0, 1)), MovesHeld(round=1, robots=(2,))):
         assert drive.core.on_held(notice, drive.now) == []
     assert drive.core.held == set()
     drive.move(0)
+    assert drive.commits() == []  # robot 1 has not moved: the world sends no notice
     drive.move(1)
-    assert drive.commits() == [Commit(round=1, timed_out=())]
+    assert drive.commits() == [Commit(round=1, timed_out=(), then_active=(0, 1))]
+
+
+def test_a_notice_marks_only_the_robots_active_in_the_round() -> None:
+    drive = Drive(FakeWorld(3, end_after=5))
+    drive.auto_move = False
+    drive.start(0, 1)
+    drive.tick(120.0)
+    drive.perform(drive.core.on_held(MovesHeld(round=1, robots=(0, 2)), drive.now))
+    assert drive.core.held == {0} and drive.commits() == []  # robot 1 is still waited for
+    drive.perform(drive.core.on_held(MovesHeld(round=1, robots=(1,)), drive.now))
+    assert drive.commits() == [Commit(round=1, timed_out=(), then_active=(0, 1))]
+
+
+def test_a_notice_that_comes_after_the_commit_changes_nothing() -> None:
+    drive = Drive(FakeWorld(3, end_after=5), times=RoundTimes(pace_s=10.0))
+    drive.start(0, 1, 2)
+    assert drive.core.phase is Phase.PACE and len(drive.world.requests) == 3
+    assert drive.core.on_held(MovesHeld(round=1, robots=(0, 1, 2)), 1.0) == []
+    assert drive.core.on_held(MovesHeld(round=2, robots=(0, 1, 2)), 1.0) == []
+    assert drive.core.phase is Phase.PACE and len(drive.world.requests) == 3
 
 
 # --- gathering the agents ---------------------------------------------------------------------
@@ -299,7 +527,7 @@ def test_the_last_agent_arriving_opens_round_one_at_once() -> None:
     drive.now = 30.0
     drive.alive(2)
     assert drive.begins()[0] == Begin(round=1, active=(0, 1, 2))
-    assert drive.announced[0][0] == 30.0
+    assert drive.opened[0] == (30.0, 1, (0, 1, 2))
 
 
 def test_no_round_starts_with_nobody_live() -> None:
@@ -356,9 +584,10 @@ def test_a_restarted_coordinator_counts_the_moves_the_world_already_holds() -> N
     drive.auto_move = False
     drive.start(0, 1, 2)
     assert drive.core.phase is Phase.COLLECT and drive.core.held == {0, 1}
+    assert world.opened == []  # opened again as it was: the world keeps what it holds
     drive.now = 0.01
     drive.move(2)
-    assert world.applied[0] == (Commit(round=3, timed_out=()), ())  # no wait for a deadline
+    assert world.applied[0] == (Commit(round=3, timed_out=(), then_active=(0, 1, 2)), ())
 
 
 def test_a_world_that_restarts_mid_round_is_asked_at_once_and_the_round_opened_again() -> None:
@@ -366,13 +595,14 @@ def test_a_world_that_restarts_mid_round_is_asked_at_once_and_the_round_opened_a
     drive = Drive(world)
     drive.silent = {2}  # robot 2's move is on its way when the world dies
     drive.start(0, 1, 2)
-    assert drive.core.phase is Phase.COLLECT and drive.core.held == {0, 1}
+    assert drive.core.phase is Phase.COLLECT and world.held == {0, 1}
     world.restart()  # it lost the open round and the moves it held
     drive.now = 0.2
     drive.silent = set()
     drive.perform(drive.core.on_world(True, drive.now))
     assert world.requests[2:4] == [Hello(), Begin(round=1, active=(0, 1, 2))]
-    assert world.applied[0] == (Commit(round=1, timed_out=()), ())  # all three moved again
+    assert world.applied[0] == (Commit(round=1, timed_out=(), then_active=(0, 1, 2)), ())
+    assert drive.opened[:2] == [(0.0, 1, (0, 1, 2)), (0.2, 1, (0, 1, 2))]  # all three moved again
 
 
 def test_a_world_that_comes_up_is_asked_at_once_not_at_the_retry_deadline() -> None:
@@ -388,6 +618,23 @@ def test_a_world_that_comes_up_is_asked_at_once_not_at_the_retry_deadline() -> N
     assert drive.begins()[0] == Begin(round=1, active=(0, 1))
 
 
+def test_moves_held_by_a_world_that_then_restarted_are_not_counted_in_the_reopened_round() -> None:
+    world = FakeWorld(2, end_after=5)
+    world.fail("begin", "lost")  # the world opens round 1 and both move; the reply is lost
+    drive = Drive(world).start(0, 1)
+    assert drive.core.next_deadline() == 0.25  # Hello again then
+    assert drive.core.held == {0, 1}  # from the world's notice
+    world.restart()  # it loses the round and the moves
+    drive.silent = {1}
+    drive.tick(0.25)  # Hello, then round 1 again, where only robot 0 has moved yet
+    assert world.requests[2:] == [Hello(), Begin(1, (0, 1))]
+    assert drive.core.phase is Phase.COLLECT and drive.core.held == set()
+    drive.tick(1.25)  # robot 0's notice never comes: robot 1 is waited for, to the deadline
+    assert world.requests[2:] == [Hello(), Begin(1, (0, 1))]
+    drive.tick(5.25)
+    assert world.applied[0][1] == (1,) and 1 in world.applied[0][0].timed_out
+
+
 @pytest.mark.parametrize("how", ["refuse", "none", "lost"])
 def test_a_failed_begin_is_asked_again_after_hello_with_the_same_round_and_active_set(
     how: str,
@@ -401,7 +648,8 @@ def test_a_failed_begin_is_asked_again_after_hello_with_the_same_round_and_activ
     drive.tick(0.25)
     assert world.requests[2:4] == [Hello(), clean.begins()[0]]
     assert drive.run() == Finished(Status.FORMED, 0)
-    assert drive.begins()[1:] == clean.begins()  # the scheduler drew each round once
+    assert [a for _, a in world.opened] == [a for _, a in clean.world.opened]
+    assert drive.scheduler.asked == clean.scheduler.asked  # the scheduler drew each round once
 
 
 def test_a_refused_commit_asks_hello_and_opens_the_lost_round_again_with_the_same_set() -> None:
@@ -410,22 +658,28 @@ def test_a_refused_commit_asks_hello_and_opens_the_lost_round_again_with_the_sam
     drive.auto_move = False
     drive.start(*range(6))
     opened = drive.begins()[0]
+    assert len(opened.active) > 1
     drive.move(opened.active[0])
     world.restart()  # the world restarts and loses the open round with its held move
     drive.wait(5.0)  # the deadline: Commit, refused; Hello; Begin round 1 again at once
-    tail = world.requests[2:]
-    assert tail[:3] == [Commit(round=1, timed_out=opened.active[1:]), Hello(), opened]
+    commit, *tail = world.requests[2:]
+    assert isinstance(commit, Commit) and commit.then_active == drive.scheduler.said[2]
+    assert commit.round == 1 and set(opened.active[1:]) <= set(commit.timed_out)
+    assert tail[:2] == [Hello(), opened]
     assert drive.core.phase is Phase.COLLECT and drive.core.held == set()
     assert drive.core.next_deadline() == 10.0
+    drive.wait(5.0)  # round 1 times out again: its commit carries the same next set
+    assert world.requests[-1] == commit
+    assert drive.scheduler.asked == [1, 2]
 
 
 def test_a_round_the_world_still_holds_open_keeps_its_held_moves_when_opened_again() -> None:
     world = FakeWorld(3, end_after=1)
     world.fail("commit", "none")  # the request is lost: the world keeps round 1 and its moves
     drive = Drive(world).start(0, 1, 2)
-    assert world.requests == [Hello(), Begin(round=1, active=(0, 1, 2)),
-                              Commit(round=1, timed_out=()), Hello(),
-                              Begin(round=1, active=(0, 1, 2)), Commit(round=1, timed_out=())]
+    commit = Commit(round=1, timed_out=(), then_active=(0, 1, 2))
+    assert world.requests == [Hello(), Begin(round=1, active=(0, 1, 2)), commit, Hello(),
+                              Begin(round=1, active=(0, 1, 2)), commit]
     assert drive.finished == Finished(Status.FORMED, 0) and drive.now == 0.0
 
 
@@ -434,7 +688,7 @@ def test_a_lost_commit_reply_goes_on_from_the_round_the_world_committed() -> Non
     world.fail("commit", "lost")
     drive = Drive(world).start(0, 1, 2)
     assert world.requests[:5] == [Hello(), Begin(round=1, active=(0, 1, 2)),
-                                  Commit(round=1, timed_out=()), Hello(),
+                                  Commit(round=1, timed_out=(), then_active=(0, 1, 2)), Hello(),
                                   Begin(round=2, active=(0, 1, 2))]
     assert drive.finished == Finished(Status.FORMED, 0)
 
@@ -444,7 +698,7 @@ def test_a_world_that_ended_while_the_coordinator_was_asking_finishes_it() -> No
     world.fail("commit", "lost")
     drive = Drive(world).start(0, 1)
     assert drive.finished == Finished(Status.FORMED, 0)
-    assert world.requests[-1] == Hello()
+    assert world.requests[-1] == Hello() and world.opened == [(1, (0, 1))]
 
 
 # --- resuming ---------------------------------------------------------------------------------
@@ -455,8 +709,8 @@ def test_a_restarted_coordinator_replays_the_scheduler_to_the_uninterrupted_acti
     assert whole.finished is not None
     resumed = Drive(FakeWorld(6, end_after=9, committed=4), scheduler="ssync", seed=11)
     resumed.start(*range(6))
-    assert resumed.begins() == whole.begins()[4:]
-    assert len({b.active for b in whole.begins()}) > 1  # ssync drew different sets
+    assert resumed.world.opened == whole.world.opened[4:]
+    assert len({a for _, a in whole.world.opened}) > 1  # ssync drew different sets
 
 
 def test_a_restarted_coordinator_waits_only_the_resume_grace_for_its_agents() -> None:
@@ -472,27 +726,7 @@ def test_a_restarted_coordinator_waits_only_the_resume_grace_for_its_agents() ->
     assert drive.core.pop_notes() == []
 
 
-# --- pace and ticks ---------------------------------------------------------------------------
-
-
-def test_pace_delays_the_next_begin_by_a_deadline_not_a_sleep() -> None:
-    times = RoundTimes(pace_s=1.0)
-    drive = Drive(FakeWorld(2, end_after=3), times=times).start(0, 1)
-    assert len(drive.begins()) == 1 and len(drive.commits()) == 1
-    assert drive.core.phase is Phase.PACE and drive.core.next_deadline() == 1.0
-    drive.tick(0.5)
-    assert len(drive.begins()) == 1
-    drive.tick(1.0)
-    assert drive.begins()[1] == Begin(round=2, active=(0, 1))
-    assert drive.core.next_deadline() == 2.0
-
-
-def test_a_round_longer_than_the_pace_is_followed_at_once() -> None:
-    drive = Drive(FakeWorld(2, end_after=3), times=RoundTimes(pace_s=1.0))
-    drive.silent = {1}
-    drive.start(0, 1)
-    drive.tick(5.0)  # round 1 timed out after 5 s > pace
-    assert [b.round for b in drive.begins()] == [1, 2]
+# --- ticks ------------------------------------------------------------------------------------
 
 
 def test_on_tick_before_a_deadline_or_twice_does_nothing() -> None:
@@ -501,8 +735,9 @@ def test_on_tick_before_a_deadline_or_twice_does_nothing() -> None:
     assert drive.core.on_tick(0.0) == []  # not started
     drive.start(0, 1, 2)
     assert drive.core.on_tick(4.0) == []
-    first = drive.core.on_tick(5.0)
-    assert first == [Ask(Commit(round=1, timed_out=(2,)))]
+    (first,) = drive.core.on_tick(5.0)
+    assert isinstance(first, Ask) and isinstance(first.request, Commit)
+    assert (first.request.round, first.request.then_active) == (1, (0, 1, 2))
     assert drive.core.on_tick(5.0) == [] and drive.core.on_tick(6.0) == []
 
 
@@ -517,70 +752,106 @@ def test_a_reply_with_no_request_out_or_a_second_start_is_the_callers_bug() -> N
 # --- under any order of events ----------------------------------------------------------------
 
 OPS = st.one_of(
-    st.tuples(st.just("alive"), st.integers(0, 5), st.booleans()),
-    st.tuples(st.just("move"), st.integers(0, 5)),  # the i-th active robot moves
-    st.tuples(st.just("kill"), st.integers(0, 5)),  # the i-th active robot dies
-    st.tuples(st.just("stray"), st.integers(0, 5), st.sampled_from([-2, -1, 1, 2])),
+    st.tuples(st.just("alive"), st.integers(0, 5), st.booleans(), st.booleans()),
+    st.tuples(st.just("move"), st.integers(0, 5)),  # the i-th robot of the world's round moves
+    st.tuples(st.just("moves")),  # every robot of the world's round whose agent is up moves
+    st.tuples(st.just("quick"), st.integers(0, 5), st.booleans()),  # moves as it is answered
+    st.tuples(st.just("kill"), st.integers(0, 5), st.booleans()),  # the i-th active robot dies
+    st.tuples(st.just("stray"), st.integers(0, 5), st.sampled_from([-2, -1, 0, 1, 2])),
     st.tuples(st.just("wait"), st.floats(0.0, 1.5)),
     st.tuples(st.just("fault"), st.sampled_from(["hello", "begin", "commit"]),
               st.sampled_from(["refuse", "none", "lost"])),
     st.tuples(st.just("restart")),
 )
 
+Seen = tuple[float, float, Commit, frozenset[int]]  # when, round opened, what, live
 
-def _check_commits(
-    drive: Drive, seen: list[tuple[float, float, Commit, frozenset[int]]]
-) -> None:
-    """Every commit the world applied names exactly the active robots it holds no move for, and
-    came at the move deadline or once every live active robot had moved, never earlier."""
-    world = drive.world
-    for commit, timed_out in world.applied:
-        assert commit.timed_out == timed_out
+
+def _check_commits(drive: Drive, seen: list[Seen]) -> None:
+    """Every commit the world applied names every active robot it holds no move for (and maybe
+    more: the core hears of moves only in the world's one notice a round), and it came at the move
+    deadline or once every live active robot had moved, never earlier; with no pace, a commit
+    while some agent is live opens the next round."""
+    applied = {id(commit): timed_out for commit, timed_out in drive.world.applied}
+    for commit, timed_out in drive.world.applied:
+        assert set(timed_out) <= set(commit.timed_out)
     for at, opened, commit, live in seen:
-        waited = [r for r in commit.timed_out if r in live]
-        assert at >= opened + drive.core.times.move_timeout_s or not waited
+        if drive.core.times.pace_s == 0 and live:  # nothing holds the next round back
+            assert commit.then_active
+        if at < opened + drive.core.times.move_timeout_s and id(commit) in applied:
+            assert not set(commit.timed_out) & live
 
 
-@settings(max_examples=300, deadline=None)
-@given(
-    n=st.integers(1, 5),
-    scheduler=st.sampled_from(["fsync", "ssync", "centralized"]),
-    pace=st.sampled_from([0.0, 0.7]),
-    up=st.sets(st.integers(0, 5)),
-    ops=st.lists(OPS, min_size=3, max_size=60),
-)
-def test_under_any_events_commits_name_exactly_the_active_robots_without_a_held_move(
-    n: int, scheduler: str, pace: float, up: set[int], ops: list[tuple[object, ...]]
-) -> None:
+def _check_plans(drive: Drive) -> None:
+    """The scheduler is asked once per round, in order, and every set opened is its answer."""
+    for scheduler in drive.schedulers:
+        assert scheduler.asked == list(range(1, len(scheduler.asked) + 1))
+    said = drive.schedulers[-1].said if drive.schedulers else {}
+    for req in drive.world.requests:
+        plan = (req.round, req.active) if isinstance(req, Begin) else (
+            (req.round + 1, req.then_active) if isinstance(req, Commit) and req.then_active
+            else None)
+        if plan is not None:
+            assert plan[1] and plan[1] == tuple(sorted(set(plan[1])))
+            assert max(plan[1]) < drive.world.n
+            assert said[plan[0]] == plan[1]
+
+
+def _check_collecting(drive: Drive) -> None:
+    """The core counts only robots active in its round as held, and does not wait on a round in
+    which the world has said every live active robot has moved."""
+    core, notice = drive.core, drive.world.noticed
+    if core.phase is not Phase.COLLECT:
+        return
+    assert core.held <= core.active_set
+    if notice is not None and notice.round == core.round:
+        assert core.round != drive.world.open_round or (core.live & core.active_set) - set(
+            notice.robots), "a round with every live active robot's move held is not committed"
+
+
+def _check_pace(drive: Drive) -> None:
+    """The world opens no round (nor opens one again) sooner than `pace_s` after the last."""
+    times = [at for at, _, _ in drive.opened]
+    assert all(b >= a + drive.core.times.pace_s for a, b in itertools.pairwise(times))
+
+
+def _any_events(n: int, scheduler: str, pace: float, up: set[int], quick: set[int],
+                ops: list[tuple[object, ...]]) -> None:
     times = RoundTimes(move_timeout_s=1.0, start_timeout_s=0.5, resume_grace_s=0.5, pace_s=pace,
                        retry_s=0.25)
     world = FakeWorld(n, end_after=1000)
     drive = Drive(world, scheduler=scheduler, times=times)
-    drive.auto_move = False
-    seen: list[tuple[float, float, Commit, frozenset[int]]] = []  # when, opened, what, live
+    drive.silent = set(range(6)) - quick  # the others move as soon as their Look is answered
+    seen: list[Seen] = []
     answer = world.answer
 
     def answer_and_note(req: Request) -> ControlReply | None:
         if isinstance(req, Commit) and req.round == world.open_round:
-            seen.append((drive.now, drive.announced[-1][0], req, drive.core.live))
+            seen.append((drive.now, drive.collecting_since[req.round], req, drive.core.live))
         return answer(req)
 
     world.answer = answer_and_note  # type: ignore[method-assign]
     drive.start(*sorted(up))
     for op in ops:
         match op:
-            case ("alive", int(robot), bool(alive)):
-                drive.alive(robot, up=alive)
-            case ("move", int(i)):  # an agent acting on the round the core collects
-                active = drive.core.active
-                if drive.core.phase is Phase.COLLECT and drive.core.round == world.open_round:
-                    drive.move(active[i % len(active)])
-            case ("kill", int(i)):
+            case ("quick", int(robot), bool(fast)):
+                (drive.silent.discard if fast else drive.silent.add)(robot)
+            case ("alive", int(robot), bool(alive), bool(world_first)):
+                drive.alive(robot, up=alive, world_first=world_first)
+            case ("move", int(i)):  # an agent whose Look the world answered moves
+                if world.open_round:
+                    drive.move(world.active[i % len(world.active)])
+            case ("moves",):
+                for robot in world.active:
+                    if robot in drive.agents:
+                        drive.move(robot)
+            case ("kill", int(i), bool(world_first)):
                 if drive.core.active:
-                    drive.alive(drive.core.active[i % len(drive.core.active)], up=False)
-            case ("stray", int(robot), int(offset)):
-                if drive.core.round + offset >= 1:
-                    notice = MoveHeld(round=drive.core.round + offset, robot=robot)
+                    robot = drive.core.active[i % len(drive.core.active)]
+                    drive.alive(robot, up=False, world_first=world_first)
+            case ("stray", int(robot), int(offset)):  # never a notice the world could send
+                if drive.core.round + offset >= 1 and (offset or robot not in drive.core.active):
+                    notice = MovesHeld(round=drive.core.round + offset, robots=(robot,))
                     drive.perform(drive.core.on_held(notice, drive.now))
             case ("wait", float(dt)):
                 drive.wait(dt)
@@ -588,17 +859,57 @@ def test_under_any_events_commits_name_exactly_the_active_robots_without_a_held_
                 world.fail(kind, how)
             case ("restart",):
                 world.restart()
-        for begin in drive.begins():
-            assert begin.active and begin.active == tuple(sorted(set(begin.active)))
-            assert max(begin.active) < n
+        _check_plans(drive)
         _check_commits(drive, seen)
+        _check_collecting(drive)
+        _check_pace(drive)
     # then every agent comes back and moves at once, and the run goes on to its end
     world.faults.clear()
     world.end_after = world.committed + 2
-    drive.auto_move = True
+    drive.silent = set()
     drive.alive(*range(n))
-    if drive.core.phase is Phase.COLLECT:
-        for robot in drive.core.active:
-            drive.move(robot)
+    for robot in world.active:
+        drive.move(robot)
     assert drive.run().status == Status.FORMED
+    _check_plans(drive)
     _check_commits(drive, seen)
+
+
+# With its fixed examples this property fails on cores broken in any of these ways (each tried
+# on a copy of coordinator/rounds.py): a notice of another round counted; a commit before every
+# live active robot has moved, or only at the deadline; a dead robot still waited for; the
+# scheduler asked again for a round already planned; held moves kept into a new round; a chained
+# reply taken without making its plan current; a commit chained while the pace holds the next
+# round back, or never chained; the pace not counted from a chained opening. These need an
+# exact order of events and are pinned by named tests: a notice's robots not intersected with the
+# active set; held moves kept when the world lost the round; the reply's `held` ignored; a chain
+# assumed whatever the commit's reply says.
+@settings(max_examples=300, deadline=None)
+@given(
+    n=st.integers(1, 5),
+    scheduler=st.sampled_from(["fsync", "ssync", "centralized"]),
+    pace=st.sampled_from([0.0, 0.7]),
+    up=st.sets(st.integers(0, 5)),
+    quick=st.sets(st.integers(0, 5)),
+    ops=st.lists(OPS, min_size=3, max_size=60),
+)
+def test_under_any_events_rounds_follow_the_schedule_and_commits_wait_for_the_live_robots(
+    n: int, scheduler: str, pace: float, up: set[int], quick: set[int],
+    ops: list[tuple[object, ...]],
+) -> None:
+    _any_events(n, scheduler, pace, up, quick, ops)
+
+
+def test_a_round_the_world_lost_while_the_core_paced_waits_for_its_live_robots_again() -> None:
+    world = FakeWorld(2, end_after=5)
+    drive = Drive(world, times=RoundTimes(pace_s=1.0)).start(0, 1)
+    world.fail("commit", "none")  # round 2's commit is lost: the world keeps round 2 and its moves
+    drive.tick(1.0)  # Begin 2, both move, Commit lost, Hello: round 2 still open -> pace to 2.0
+    assert drive.core.phase is Phase.PACE and drive.core.held == {0, 1}
+    drive.now = 1.5
+    world.restart()  # the world restarts and loses round 2 (on_world does nothing in PACE)
+    drive.silent = {1}
+    drive.tick(2.0)  # Begin 2 again: the world opens it anew, holding no move
+    assert world.requests[-1] == Begin(2, (0, 1))
+    assert drive.core.phase is Phase.COLLECT and drive.core.held == set()
+    assert drive.core.next_deadline() == 7.0

@@ -331,8 +331,9 @@ def test_frame_from_world_state_carries_every_field() -> None:
     state = WorldState(
         round=5, n=3,
         algorithm="uniform-circle", params={"a": 4.5}, figures={"target radius": 2.598},
-        seed=11, scheduler="centralized", swarm="s",
-        positions=np.array([[0.0, 0.0], [3.0, 0.0], [0.0, 3.0]]), active=(2,), moved=(2,),
+        scheduler="centralized", swarm="s",
+        positions=np.array([[0.0, 0.0], [3.0, 0.0], [0.0, 3.0]]), active=(2,), open_round=0,
+        moved=(2,),
         stopped=(), collisions_total=0, status="running", agents=agents,
     )  # fmt: skip
     frame = frame_from_state(WorldState.decode(state.encode()), rounds_per_second=3.0)
@@ -340,7 +341,7 @@ def test_frame_from_world_state_carries_every_field() -> None:
         5,
         3,
         4.5,
-        11,
+        None,  # the seed is never published: it would give away the private frames
         "centralized",
     )
     assert (frame.algorithm, frame.params) == ("uniform-circle", {"a": 4.5})
@@ -422,8 +423,8 @@ def state(round_no: int, status: str = "running") -> WorldState:
         round=round_no, n=3,
         algorithm="uniform-circle", params={"a": 4.0},
         figures=hook_figures("uniform-circle", positions, a=4.0),
-        seed=1, scheduler="fsync", swarm="w",
-        positions=positions, active=(0, 1, 2), moved=(),
+        scheduler="fsync", swarm="w",
+        positions=positions, active=(0, 1, 2), open_round=0, moved=(),
         stopped=(), collisions_total=0, status=status, agents=agents,
     )  # fmt: skip
 

@@ -12,20 +12,24 @@ from hypothesis import strategies as st
 
 from fatswarm.agent.path import Arc, Line, Path
 from fatswarm.agent.protocol import MoveSubmitted, move_key, robot_of_alive_key
-from fatswarm.coordinator.protocol import RoundStart, round_key
 from fatswarm.world.protocol import (
+    MAX_CONTROL_BYTES,
+    MAX_NOTICE_BYTES,
+    MAX_ROBOTS,
     PROTOCOL_VERSION,
     AgentInfo,
     Begin,
     Commit,
     ControlReply,
     Hello,
-    MoveHeld,
+    LookRequest,
+    MovesHeld,
     ProtocolError,
     Snapshot,
     WorldState,
     check_swarm,
     decode_control,
+    moves_held_key,
     robot_of_key,
     snapshot_key,
     state_key,
@@ -37,11 +41,11 @@ def _state(n: int = 3) -> WorldState:
         round=4,
         n=n,
         algorithm="uniform-circle", params={"a": 4.0}, figures={},
-        seed=7,
         scheduler="ssync",
         swarm="s1",
         positions=np.arange(2 * n, dtype=np.float64).reshape(n, 2) / 3,
         active=(0, 2),
+        open_round=5,
         moved=(2,),
         stopped=(),
         collisions_total=1,
@@ -54,17 +58,24 @@ def test_world_state_round_trips_exactly() -> None:
     s = _state()
     d = WorldState.decode(s.encode())
     assert np.array_equal(d.positions, s.positions)
-    assert (d.round, d.n, d.a, d.seed, d.scheduler, d.swarm) == (4, 3, 4.0, 7, "ssync", "s1")
-    assert (d.active, d.moved, d.stopped, d.collisions_total, d.status) == (
-        (0, 2), (2,), (), 1, "running")
+    assert (d.round, d.n, d.a, d.scheduler, d.swarm) == (4, 3, 4.0, "ssync", "s1")
+    assert (d.active, d.open_round, d.moved, d.stopped, d.collisions_total, d.status) == (
+        (0, 2), 5, (2,), (), 1, "running")
     assert d.agents == s.agents
+
+
+def test_world_state_never_carries_the_seed() -> None:
+    # The seed would give away every robot's private frame: it is not on the wire at all.
+    fields = msgpack.unpackb(_state().encode(), raw=False)
+    assert not any("seed" in key for key in fields)
+    assert not hasattr(WorldState.decode(_state().encode()), "seed")
 
 
 def test_keys_live_under_the_swarm_prefix() -> None:
     assert state_key("s1") == "fatswarm/s1/world/state"
     assert snapshot_key("s1", 3) == "fatswarm/s1/robot/3/snapshot"
     assert move_key("s1", 3) == "fatswarm/s1/robot/3/move"
-    assert round_key("s1") == "fatswarm/s1/coordinator/round"
+    assert moves_held_key("s1") == "fatswarm/s1/world/moves"
     assert robot_of_key("fatswarm/s1/robot/12/move") == 12
     assert robot_of_key("fatswarm/s1/robot/012/move") is None
     assert robot_of_key("fatswarm/s1/robot/x/move") is None
@@ -93,21 +104,60 @@ def test_control_messages_round_trip() -> None:
     assert decode_control(Hello().encode()) == Hello()
     assert decode_control(Begin(3, (0, 4)).encode()) == Begin(3, (0, 4))
     assert decode_control(Commit(3, (4,)).encode()) == Commit(3, (4,))
+    chained = Commit(3, (4,), then_active=(0, 2))
+    assert decode_control(chained.encode()) == chained
     r = ControlReply(True, "", 5, 2, 3, "running")
     assert ControlReply.decode(r.encode()) == r
-    assert MoveHeld.decode(MoveHeld(3, 1).encode()) == MoveHeld(3, 1)
-    rs = RoundStart(9, (1, 2), 5000)
-    assert RoundStart.decode(rs.encode()) == rs
+    assert MovesHeld.decode(MovesHeld(3, (0, 1)).encode()) == MovesHeld(3, (0, 1))
+    assert MovesHeld.decode(MovesHeld(3, ()).encode()) == MovesHeld(3, ())
+
+
+ROBOT_SETS = st.lists(st.integers(0, MAX_ROBOTS - 1), unique=True, max_size=40).map(
+    lambda v: tuple(sorted(v)))
+
+
+@given(round_no=st.integers(1, 2**62), timed_out=ROBOT_SETS, then_active=ROBOT_SETS)
+def test_commit_round_trips_with_the_next_rounds_active_set(
+    round_no: int, timed_out: tuple[int, ...], then_active: tuple[int, ...]
+) -> None:
+    commit = Commit(round_no, timed_out, then_active)
+    assert decode_control(commit.encode()) == commit
+
+
+@given(round_no=st.integers(1, 2**62), robots=ROBOT_SETS)
+def test_moves_held_round_trips(round_no: int, robots: tuple[int, ...]) -> None:
+    notice = MovesHeld(round_no, robots)
+    assert MovesHeld.decode(notice.encode()) == notice
+
+
+def test_a_commit_carries_the_begin_of_the_next_round_only_with_an_active_set() -> None:
+    assert Commit(4, (1,), then_active=(0, 2)).then == Begin(5, (0, 2))
+    assert Commit(4, (1,)).then is None
+
+
+def test_the_largest_commit_and_moves_notice_fit_under_their_size_limits() -> None:
+    everyone = tuple(range(MAX_ROBOTS))
+    assert len(Commit(2**62, everyone, everyone).encode()) <= MAX_CONTROL_BYTES
+    assert len(MovesHeld(2**62, everyone).encode()) <= MAX_NOTICE_BYTES
 
 
 def test_snapshot_round_trips_and_checks_its_size() -> None:
     view = np.array([[1.0, -2.0], [3.5, 0.25]])
-    d = Snapshot.decode(Snapshot(2, 3, "uniform-circle", {"a": 4.0}, view).encode())
+    d = Snapshot.decode(Snapshot(2, 3, "uniform-circle", {"a": 4.0}, view, epoch=9).encode())
     assert np.array_equal(d.view, view)
-    assert (d.round, d.n, d.algorithm, d.params) == (2, 3, "uniform-circle", {"a": 4.0})
+    assert (d.round, d.n, d.algorithm, d.params, d.epoch) == (2, 3, "uniform-circle", {"a": 4.0}, 9)
     wrong = Snapshot(2, 4, "uniform-circle", {"a": 4.0}, view).encode()  # n = 4 needs 3 rows
     with pytest.raises(ProtocolError, match="bytes"):
         Snapshot.decode(wrong)
+
+
+def test_look_request_round_trips_and_refuses_garbage() -> None:
+    for request in (LookRequest(), LookRequest(epoch=2**63 - 1, after=2**62)):
+        assert LookRequest.decode(request.encode()) == request
+    good = {"v": PROTOCOL_VERSION, "t": "look", "epoch": 1, "after": 2}
+    for change in ({"after": -1}, {"epoch": -1}, {"after": "2"}, {"t": "snapshot"}):
+        with pytest.raises(ProtocolError):
+            LookRequest.decode(_raw(**{**good, **change}))
 
 
 def _raw(**fields: object) -> bytes:
@@ -165,6 +215,58 @@ def test_control_decoder_refuses_unknown_requests() -> None:
         decode_control(_raw(v=PROTOCOL_VERSION, t="format-disk"))
     with pytest.raises(ProtocolError):
         decode_control(_raw(v=PROTOCOL_VERSION, t="begin", round=1, active="all"))
-    with pytest.raises(ProtocolError):
-        RoundStart.decode(_raw(v=PROTOCOL_VERSION, t="round-start", round=1, active=[1],
-                               timeout_ms=-5))
+
+
+GOOD_COMMIT = {"v": PROTOCOL_VERSION, "t": "commit", "round": 2, "timed_out": [1],
+               "then_active": [0, 1]}
+
+
+@pytest.mark.parametrize(
+    ("change", "reason"),
+    [
+        ({"then_active": None}, "'then_active'"),
+        ({"then_active": "all"}, "'then_active'"),
+        ({"then_active": [0, 0]}, "repeats"),
+        ({"then_active": [-1]}, "'then_active'"),
+        ({"then_active": [MAX_ROBOTS]}, "'then_active'"),
+        ({"then_active": [True]}, "'then_active'"),
+        ({"then_active": [1.0]}, "'then_active'"),
+        ({"then_active": list(range(MAX_ROBOTS + 1))}, "'then_active'"),
+        ({"timed_out": [0, 0]}, "repeats"),
+        ({"round": 0}, "'round'"),
+        ({"v": PROTOCOL_VERSION - 1}, "protocol version"),
+    ],
+)
+def test_commit_decoder_refuses_a_bad_next_active_set(change: dict[str, object], reason: str
+                                                     ) -> None:
+    fields = {k: v for k, v in {**GOOD_COMMIT, **change}.items() if v is not None}
+    assert decode_control(_raw(**GOOD_COMMIT)) == Commit(2, (1,), (0, 1))  # the good one passes
+    with pytest.raises(ProtocolError, match=reason):
+        decode_control(_raw(**fields))
+
+
+GOOD_NOTICE = {"v": PROTOCOL_VERSION, "t": "moves-held", "round": 3, "robots": [0, 2]}
+
+
+@pytest.mark.parametrize(
+    ("change", "reason"),
+    [
+        ({"robots": None}, "'robots'"),
+        ({"robots": 2}, "'robots'"),
+        ({"robots": [2, 2]}, "repeats"),
+        ({"robots": [-1]}, "'robots'"),
+        ({"robots": [MAX_ROBOTS]}, "'robots'"),
+        ({"robots": ["0"]}, "'robots'"),
+        ({"round": 0}, "'round'"),
+        ({"round": None}, "'round'"),
+        ({"t": "move-held"}, "message type"),  # the old per-move notice
+        ({"v": 2}, "protocol version"),
+    ],
+)
+def test_moves_held_decoder_refuses_garbage(change: dict[str, object], reason: str) -> None:
+    fields = {k: v for k, v in {**GOOD_NOTICE, **change}.items() if v is not None}
+    assert MovesHeld.decode(_raw(**GOOD_NOTICE)) == MovesHeld(3, (0, 2))  # the good one passes
+    with pytest.raises(ProtocolError, match=reason):
+        MovesHeld.decode(_raw(**fields))
+    with pytest.raises(ProtocolError, match="not msgpack"):
+        MovesHeld.decode(b"\xc1")

@@ -16,7 +16,8 @@ from fatswarm.world.protocol import (
     Commit,
     ControlReply,
     Hello,
-    MoveHeld,
+    LookRequest,
+    MovesHeld,
     Snapshot,
     snapshot_key,
 )
@@ -58,7 +59,7 @@ def _ctl(world: WorldCore, data: bytes) -> ControlReply:
     return control_bytes(world, data)[0]
 
 
-def _move(world: WorldCore, key_robot: int, robot: int, round_no: int, path: Path) -> object:
+def _move(world: WorldCore, key_robot: int, robot: int, round_no: int, path: Path) -> bool:
     return move_bytes(world, move_key(SWARM, key_robot),
                       MoveSubmitted(robot, round_no, path).encode())
 
@@ -80,15 +81,15 @@ def test_moves_are_taken_once_from_active_robots_that_looked(tmp_path: FsPath) -
     w = _world(tmp_path)
     _ctl(w, Begin(1, (0, 1)).encode())
     step = Path((Line((1.0, 0.0)),))
-    assert _move(w, 0, 0, 1, step) is None  # has not looked yet
+    assert _move(w, 0, 0, 1, step) is False  # has not looked yet
     look_bytes(w, snapshot_key(SWARM, 0))
     look_bytes(w, snapshot_key(SWARM, 1))
-    assert _move(w, 0, 1, 1, step) is None  # names someone else
-    assert _move(w, 2, 2, 1, step) is None  # not active
-    assert _move(w, 0, 0, 2, step) is None  # not the open round
-    assert move_bytes(w, move_key(SWARM, 0), b"\x00garbage") is None
-    assert _move(w, 0, 0, 1, step) == MoveHeld(1, 0)
-    assert _move(w, 0, 0, 1, STAY) is None  # a second move for the round
+    assert _move(w, 0, 1, 1, step) is False  # names someone else
+    assert _move(w, 2, 2, 1, step) is False  # not active
+    assert _move(w, 0, 0, 2, step) is False  # not the open round
+    assert move_bytes(w, move_key(SWARM, 0), b"\x00garbage") is False
+    assert _move(w, 0, 0, 1, step) is True
+    assert _move(w, 0, 0, 1, STAY) is False  # a second move for the round
     assert set(w.rejected) == {
         "move-without-look", "move-wrong-robot", "move-not-active", "move-wrong-round",
         "move-garbage", "move-duplicate",
@@ -98,7 +99,164 @@ def test_moves_are_taken_once_from_active_robots_that_looked(tmp_path: FsPath) -
     assert w.positions[0].tolist() == [1.0, 0.0]  # translated by the robot's own position
     assert w.positions[1].tolist() == [10.0, 0.0]  # looked, never moved: stays
     assert w.timeouts == [0, 1, 0]
-    assert _move(w, 0, 0, 1, step) is None  # a replay of an old round
+    assert _move(w, 0, 0, 1, step) is False  # a replay of an old round
+
+
+def _looked_and_moved(world: WorldCore, *robots: int, path: Path = STAY) -> None:
+    for robot in robots:
+        assert look_bytes(world, snapshot_key(SWARM, robot)) is not None
+        assert _move(world, robot, robot, world.open_round, path)
+
+
+def _live(world: WorldCore, *robots: int) -> WorldCore:
+    for robot in robots:
+        world.set_alive(robot, True)
+    return world
+
+
+def test_the_moves_notice_comes_once_when_every_live_active_robot_has_moved(
+    tmp_path: FsPath,
+) -> None:
+    w = _live(_world(tmp_path), 0, 1, 2)
+    assert w.moves_notice() is None  # no round open
+    assert _ctl(w, Begin(1, (0, 2)).encode()).ok
+    assert w.moves_notice() is None  # nobody has moved yet
+    _looked_and_moved(w, 2)
+    assert w.moves_notice() is None  # robot 0 is live and has not moved
+    _looked_and_moved(w, 0)
+    assert w.moves_notice() == MovesHeld(1, (0, 2))
+    assert w.moves_notice() is None  # not twice
+    assert _ctl(w, Commit(1).encode()).ok
+    assert w.moves_notice() is None  # the round is committed
+    assert _ctl(w, Begin(2, (0, 2)).encode()).ok
+    _looked_and_moved(w, 0, 2)
+    assert w.moves_notice() == MovesHeld(2, (0, 2))  # the same robots, another round
+
+
+def test_a_robot_whose_agent_is_not_up_is_not_waited_for(tmp_path: FsPath) -> None:
+    w = _live(_world(tmp_path), 0)  # robot 1's agent never came
+    assert _ctl(w, Begin(1, (0, 1)).encode()).ok
+    _looked_and_moved(w, 0)
+    assert w.moves_notice() == MovesHeld(1, (0,))
+
+
+def test_a_robot_gone_mid_round_is_not_waited_for_and_a_late_move_is_noticed_again(
+    tmp_path: FsPath,
+) -> None:
+    w = _live(_world(tmp_path), 0, 1, 2)
+    assert _ctl(w, Begin(1, (0, 1, 2)).encode()).ok
+    _looked_and_moved(w, 0, 1)
+    look_bytes(w, snapshot_key(SWARM, 2))
+    assert w.moves_notice() is None
+    assert w.set_alive(2, False)  # its agent goes away before it moves
+    assert w.moves_notice() == MovesHeld(1, (0, 1))
+    assert _move(w, 2, 2, 1, STAY)  # its move was on its way: it is held, and noticed
+    assert w.moves_notice() == MovesHeld(1, (0, 1, 2))
+    assert w.moves_notice() is None
+
+
+def test_a_robot_back_mid_round_is_waited_for_again(tmp_path: FsPath) -> None:
+    w = _live(_world(tmp_path), 0, 1)
+    assert _ctl(w, Begin(1, (0, 1)).encode()).ok
+    _looked_and_moved(w, 0)
+    w.set_alive(1, False)
+    w.set_alive(1, True)  # back before the notice was asked for
+    assert w.moves_notice() is None
+    _looked_and_moved(w, 1)
+    assert w.moves_notice() == MovesHeld(1, (0, 1))
+
+
+def test_a_robot_that_moved_then_left_does_not_hold_back_the_notice(tmp_path: FsPath) -> None:
+    w = _live(_world(tmp_path), 0, 1)
+    assert _ctl(w, Begin(1, (0, 1)).encode()).ok
+    _looked_and_moved(w, 0)
+    w.set_alive(0, False)
+    w.set_alive(0, True)  # it comes back: its move is held already
+    _looked_and_moved(w, 1)
+    assert w.moves_notice() == MovesHeld(1, (0, 1))
+
+
+def test_a_world_restarted_mid_round_waits_for_the_moves_of_the_reopened_round(
+    tmp_path: FsPath,
+) -> None:
+    w = _live(_world(tmp_path), 0, 1)
+    assert _ctl(w, Begin(1, (0, 1)).encode()).ok
+    _looked_and_moved(w, 0, 1)
+    w.journal.close()
+    again = _live(_world(tmp_path), 0, 1)  # the open round and its moves are lost
+    assert _ctl(again, Begin(1, (0, 1)).encode()).ok
+    assert again.moves_notice() is None
+    _looked_and_moved(again, 0, 1)
+    assert again.moves_notice() == MovesHeld(1, (0, 1))
+
+
+def test_may_look_only_while_active_in_the_open_round_and_not_moved(tmp_path: FsPath) -> None:
+    w = _live(_world(tmp_path), 0, 1, 2)
+    assert not any(w.may_look(r) for r in range(3))  # no round open
+    assert _ctl(w, Begin(1, (0, 1)).encode()).ok
+    assert [w.may_look(r) for r in range(3)] == [True, True, False]
+    assert look_bytes(w, snapshot_key(SWARM, 0)) is not None
+    assert w.may_look(0)  # looking is not moving: it may look again
+    assert _move(w, 0, 0, 1, STAY)
+    assert [w.may_look(r) for r in range(3)] == [False, True, False]
+    assert _ctl(w, Commit(1).encode()).ok
+    assert not any(w.may_look(r) for r in range(3))
+    assert _ctl(w, Begin(2, (0, 2)).encode()).ok
+    assert [w.may_look(r) for r in range(3)] == [True, False, True]
+
+
+def test_a_look_after_a_round_waits_for_a_later_one_unless_another_world_answered_it(
+    tmp_path: FsPath,
+) -> None:
+    w = _live(_world(tmp_path), 0, 1)
+    assert _ctl(w, Begin(1, (0, 1)).encode()).ok
+    assert not w.may_look(0, LookRequest(epoch=w.epoch, after=1))  # it moved in round 1 here
+    assert w.may_look(0, LookRequest(epoch=w.epoch + 1, after=1))  # a world that lost round 1
+    assert w.may_look(0, LookRequest(epoch=w.epoch, after=0))
+    assert _ctl(w, Commit(1, then_active=(0,)).encode()).open_round == 2
+    assert w.may_look(0, LookRequest(epoch=w.epoch, after=1))
+
+
+def test_a_commit_with_the_next_active_set_commits_and_opens_the_next_round(
+    tmp_path: FsPath,
+) -> None:
+    w = _live(_world(tmp_path), 0, 1, 2)
+    assert _ctl(w, Begin(1, (0, 1)).encode()).ok
+    _looked_and_moved(w, 0, path=Path((Line((1.0, 0.0)),)))
+    reply, changed = control_bytes(w, Commit(1, (1,), then_active=(1, 2)).encode())
+    assert changed and reply.ok and (reply.committed, reply.open_round) == (1, 2)
+    assert reply.held == () and reply.status == "running"
+    assert w.positions[0].tolist() == [1.0, 0.0]  # round 1's move applied
+    assert (w.open_round, w.active) == (2, (1, 2))
+    assert [w.may_look(r) for r in range(3)] == [False, True, True]
+    assert _ctl(w, Begin(2, (1, 2)).encode()).ok  # the same Begin again keeps it
+    _looked_and_moved(w, 1, 2)
+    assert w.moves_notice() == MovesHeld(2, (1, 2))
+    assert _ctl(w, Commit(2).encode()).committed == 2
+    w.journal.close()
+    assert [(r.round, r.active) for r in read_record(tmp_path / "state.jsonl").rounds] == [
+        (1, (0, 1)), (2, (1, 2))]
+
+
+def test_a_commit_that_ends_the_run_opens_no_next_round(tmp_path: FsPath) -> None:
+    w = open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=1), SWARM, None)
+    OPENED.append(w)
+    assert _ctl(w, Begin(1, (0, 1, 2)).encode()).ok
+    reply = _ctl(w, Commit(1, then_active=(0, 1, 2)).encode())
+    assert reply.ok and reply.status != "running"
+    assert (reply.committed, reply.open_round, w.open_round) == (1, 0, 0)
+    assert not any(w.may_look(r) for r in range(3))
+
+
+def test_a_chained_commit_sent_again_is_refused_and_changes_nothing(tmp_path: FsPath) -> None:
+    w = _live(_world(tmp_path), 0, 1)
+    assert _ctl(w, Begin(1, (0, 1)).encode()).ok
+    chained = Commit(1, then_active=(0, 1)).encode()
+    assert _ctl(w, chained).open_round == 2
+    _looked_and_moved(w, 0)
+    reply, changed = control_bytes(w, chained)
+    assert not reply.ok and not changed
+    assert (w.committed, w.open_round, set(w.held)) == (1, 2, {0})
 
 
 def test_control_refuses_out_of_order_rounds_and_is_idempotent(tmp_path: FsPath) -> None:
@@ -224,3 +382,22 @@ def test_a_world_that_never_hears_of_agents_does_not_crash_them_on_resume(
     again = _opened(tmp_path / "s.jsonl")
     _rounds(again, 1, active=(0,))
     assert not again.tracker.crashed
+
+
+def test_a_round_opened_again_with_another_set_is_noticed_again(tmp_path: FsPath) -> None:
+    w = _live(_world(tmp_path), 0, 1)
+    assert _ctl(w, Begin(1, (0, 1)).encode()).ok
+    _looked_and_moved(w, 0, 1)
+    assert w.moves_notice() == MovesHeld(1, (0, 1))  # to a coordinator that dies before its commit
+    w.set_alive(2, True)
+    assert _ctl(w, Begin(1, (0, 1, 2)).encode()).ok and not w.held  # the next coordinator's plan
+    _looked_and_moved(w, 0, 1)
+    w.set_alive(2, False)  # robot 2's agent goes away before it moves
+    assert w.moves_notice() == MovesHeld(1, (0, 1))
+
+
+def test_a_chained_commit_naming_robots_not_of_the_run_is_refused_whole(tmp_path: FsPath) -> None:
+    w = _live(_world(tmp_path), 0, 1)
+    assert _ctl(w, Begin(1, (0, 1)).encode()).ok
+    reply = _ctl(w, Commit(1, then_active=(0, 99)).encode())
+    assert not reply.ok and w.committed == 0 and w.open_round == 1  # nothing half done

@@ -1,0 +1,129 @@
+"""The world shell's held Looks, with fake queries: the answer to a held Look is the activation."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path as FsPath
+
+import numpy as np
+import pytest
+import zenoh
+
+from fatswarm.agent.path import STAY
+from fatswarm.agent.protocol import MoveSubmitted
+from fatswarm.world.protocol import Begin, Commit, LookRequest, Snapshot, snapshot_key
+from fatswarm.world.service import HOLD_LOOK_S, HeldLooks, WorldCore, WorldSetup, open_world
+
+SWARM = "t"
+START = np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]])
+FIRST = LookRequest()
+
+
+class FakeQuery:
+    """A Look query as the shell sees it: its key, what it was answered, how often it was
+    dropped. `fail` makes its reply raise as Zenoh does when the asker has gone."""
+
+    def __init__(self, robot: int, fail: bool = False) -> None:
+        self.key_expr = snapshot_key(SWARM, robot)
+        self.payload = None
+        self.fail = fail
+        self.replies: list[bytes] = []
+        self.errors: list[bytes] = []
+        self.drops = 0
+
+    def reply(self, key: str, data: bytes) -> None:
+        assert key == self.key_expr and self.drops == 0, "answered after it was let go"
+        if self.fail:
+            raise zenoh.ZError("the asker is gone")
+        self.replies.append(data)
+
+    def reply_err(self, data: bytes) -> None:
+        assert self.drops == 0, "answered after it was let go"
+        self.errors.append(data)
+
+    def drop(self) -> None:
+        self.drops += 1
+
+    @property
+    def answered_round(self) -> int | None:
+        return Snapshot.decode(self.replies[0]).round if self.replies else None
+
+
+@pytest.fixture
+def world(tmp_path: FsPath) -> Iterator[WorldCore]:
+    setup = WorldSetup(SWARM, 3, 1, "ssync", START, 50, params={"a": 4.0})
+    core = open_world(str(tmp_path / "state.jsonl"), lambda: setup, SWARM, None, epoch=7)
+    for robot in range(3):
+        core.set_alive(robot, True)
+    yield core
+    core.journal.close()
+
+
+def _open(core: WorldCore, *active: int) -> None:
+    reply, changed = core.control(Begin(core.committed + 1, active))
+    assert reply.ok and changed
+
+
+def test_a_newer_look_replaces_the_held_one_which_is_let_go_unanswered() -> None:
+    looks, old, new = HeldLooks(), FakeQuery(0), FakeQuery(0)
+    looks.hold(0, old, FIRST, 0.0)
+    looks.hold(0, new, FIRST, 1.0)
+    assert len(looks) == 1
+    assert (old.drops, old.replies, old.errors) == (1, [], [])
+    assert new.drops == 0
+
+
+def test_answer_ready_answers_only_the_robots_that_may_look(world: WorldCore) -> None:
+    looks = HeldLooks()
+    queries = [FakeQuery(r) for r in range(3)]
+    for robot, query in enumerate(queries):
+        looks.hold(robot, query, FIRST, 0.0)
+    looks.answer_ready(world)  # no round open: nobody is activated
+    assert len(looks) == 3 and not any(q.replies or q.drops for q in queries)
+    _open(world, 0, 2)
+    looks.answer_ready(world)
+    assert [q.answered_round for q in queries] == [1, None, 1]
+    assert [q.drops for q in queries] == [1, 0, 1] and len(looks) == 1
+
+
+def test_a_look_after_the_round_its_robot_moved_in_waits_for_the_next_round(
+    world: WorldCore,
+) -> None:
+    _open(world, 0, 1)
+    assert world.look(0) is not None
+    assert world.move(0, MoveSubmitted(0, 1, STAY))
+    looks, again, other_world = HeldLooks(), FakeQuery(0), FakeQuery(1)
+    looks.hold(0, again, LookRequest(epoch=7, after=1), 0.0)  # its next Look overtook nothing
+    looks.hold(1, other_world, LookRequest(epoch=3, after=1), 0.0)  # a round 1 of another world
+    looks.answer_ready(world)
+    assert again.drops == 0 and other_world.answered_round == 1
+    reply, changed = world.control(Commit(1, then_active=(0, 2)))
+    assert reply.ok and changed and world.open_round == 2
+    looks.answer_ready(world)
+    assert again.answered_round == 2 and len(looks) == 0
+
+
+def test_expire_lets_go_only_the_looks_held_too_long() -> None:
+    looks, old, young = HeldLooks(), FakeQuery(0), FakeQuery(1)
+    looks.hold(0, old, FIRST, 0.0)
+    looks.hold(1, young, FIRST, 5.0)
+    looks.expire(HOLD_LOOK_S)  # not longer than HOLD_LOOK_S yet
+    assert len(looks) == 2
+    looks.expire(HOLD_LOOK_S + 1.0)
+    assert (old.drops, old.replies, young.drops) == (1, [], 0) and len(looks) == 1
+
+
+def test_every_held_look_is_dropped_exactly_once(world: WorldCore) -> None:
+    looks = HeldLooks()
+    queries = [FakeQuery(0), FakeQuery(0), FakeQuery(1, fail=True), FakeQuery(2), FakeQuery(2)]
+    looks.hold(0, queries[0], FIRST, 0.0)
+    looks.hold(0, queries[1], FIRST, 1.0)  # replaces the first
+    looks.hold(1, queries[2], FIRST, 0.0)  # its agent has gone: the reply fails
+    looks.hold(2, queries[3], FIRST, 0.0)
+    _open(world, 0, 1)
+    looks.answer_ready(world)  # answers robot 0, tries robot 1
+    looks.expire(HOLD_LOOK_S + 0.5)  # lets robot 2's first go
+    looks.hold(2, queries[4], FIRST, HOLD_LOOK_S)
+    looks.let_go_all()
+    assert [q.drops for q in queries] == [1] * 5 and len(looks) == 0
+    assert [q.answered_round for q in queries] == [None, 1, None, None, None]
