@@ -1,7 +1,9 @@
 """The agent process: one robot. It Looks, Computes in its private frame, Moves, and Looks again.
 
 Its Look is a query the world holds until the robot is activated: the answer is both the activation
-and the snapshot, so a round reaches an agent in one message. It keeps only its identity and its
+and the snapshot, so a round reaches an agent in one message. The Look names the last round it moved
+in (and at which world process), all it keeps between rounds besides its frame; compute stays a
+pure function of the snapshot. It keeps only its identity and its
 frame (an X mirroring drawn at start-up, never sent). The world sends the others' positions
 relative to this robot with world axes; the agent mirrors them into its own frame, computes,
 mirrors the path back and sends it relative to itself, so no global coordinate ever reaches it or
