@@ -38,6 +38,7 @@ def run(
     fairness: int | None = None,
     schedule: str | os.PathLike[str] | None = None,
     max_rounds: int | None = None,
+    non_rigid: float | None = None,
     record: str | os.PathLike[str] | None = None,
     on_round: Callable[[RoundReport], None] | None = None,
 ) -> RunResult:
@@ -45,8 +46,10 @@ def run(
 
     The start is `positions` ((n, 2) world coordinates), else the JSON file `init`, else a random
     start of kind `start` drawn from `seed`. `record`: write the run record there (overwritten).
-    `on_round` is called after every committed round. Raises one of
-    `fatswarm.deploy.config.input_errors()` (a ValueError) for a configuration it refuses.
+    `on_round` is called after every committed round. `non_rigid`: the adversary's delta (a move
+    may be stopped anywhere after the robot travelled delta, drawn from `seed`); None: rigid.
+    Raises one of `fatswarm.deploy.config.input_errors()` (a ValueError) for a configuration it
+    refuses.
     """
     config = RunConfig(
         n=n,
@@ -60,6 +63,7 @@ def run(
         schedule=None if schedule is None else os.fspath(schedule),
         fairness=fairness,
         max_rounds=max_rounds,
+        non_rigid=non_rigid,
     )
     setup = config.resolve()
     writer = None if record is None else RecordWriter(record)
@@ -74,6 +78,7 @@ def run(
             on_round=on_round,
             algorithm_ref=setup.algorithm_ref,
             header_extra=config.header_extra(networked=False, n=setup.params.n),
+            non_rigid=setup.non_rigid,
         )
     finally:
         if writer is not None:

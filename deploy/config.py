@@ -9,6 +9,7 @@ be repeated exactly. Every refusal is one of `input_errors()`, with a message sa
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 from collections.abc import Mapping, Sequence
@@ -54,6 +55,7 @@ class RunConfig:
     schedule: str | None = None
     fairness: int | None = None
     max_rounds: int | None = None
+    non_rigid: float | None = None  # the adversary's delta: moves may stop after it (None: rigid)
     move_timeout_s: float = DEFAULT_MOVE_TIMEOUT_S
     pace_s: float = 0.0
     command: tuple[str, ...] = ()
@@ -79,6 +81,7 @@ class RunConfig:
             schedule=args.schedule,
             fairness=args.fairness,
             max_rounds=args.max_rounds,
+            non_rigid=getattr(args, "non_rigid", None),
             move_timeout_s=float(getattr(args, "move_timeout", DEFAULT_MOVE_TIMEOUT_S)),
             pace_s=float(getattr(args, "pace", None) or 0.0),
             command=tuple(getattr(args, "_argv", None) or sys.argv),
@@ -93,6 +96,7 @@ class RunConfig:
             raise RunInputError("--schedule only goes with --scheduler scripted")
         if self.max_rounds is not None and self.max_rounds < 1:
             raise RunInputError(f"--max-rounds must be at least 1, got {self.max_rounds}")
+        check_non_rigid(self.non_rigid)
         setting, initial = resolve_start(self.init, self.n, None, self.seed, self.start,
                                          self.algorithm, params=self.params,
                                          positions=self.positions)
@@ -100,7 +104,7 @@ class RunConfig:
                                    self.fairness)
         max_rounds = self.max_rounds or default_max_rounds(setting.n, self.scheduler)
         return RunSetup(self.seed, setting, initial, scheduler, max_rounds,
-                        algorithm_ref=self.algorithm, config=self)
+                        algorithm_ref=self.algorithm, config=self, non_rigid=self.non_rigid)
 
     def header_extra(self, *, networked: bool, n: int) -> dict[str, Any]:
         """What the record's header adds: the software version, start kind (or file), fairness
@@ -136,6 +140,14 @@ class RunSetup:
     resumed: RunRecord | None = None  # --resume: the record whose committed rounds go on
     algorithm_ref: str = "uniform-circle"  # how every process loads the algorithm
     config: RunConfig | None = None  # what was asked for (None: a resumed record's run)
+    non_rigid: float | None = None  # the adversary's delta (world.core.cut_path); None: rigid
+
+
+def check_non_rigid(delta: float | None) -> None:
+    """Refuse a non-rigid delta that is not a finite number > 0 (RunInputError)."""
+    if delta is not None and not (math.isfinite(delta) and delta > 0):
+        raise RunInputError(f"--non-rigid must be a finite distance > 0 (robot radii), got "
+                            f"{delta:g}")
 
 
 def input_errors() -> tuple[type[Exception], ...]:
@@ -218,6 +230,7 @@ __all__ = [
     "RunConfig",
     "RunInputError",
     "RunSetup",
+    "check_non_rigid",
     "input_errors",
     "resolve_start",
 ]

@@ -232,7 +232,8 @@ def write_header(setup: RunSetup, record: str, swarm: str) -> None:
     extra = setup.config.header_extra(networked=True, n=setup.params.n)
     world = WorldSetup(swarm, setup.params.n, setup.seed, setup.scheduler.name, setup.initial,
                        setup.max_rounds, algorithm=setup.algorithm_ref,
-                       params=dict(setup.params.values), extra=extra)
+                       params=dict(setup.params.values), extra=extra,
+                       non_rigid=setup.non_rigid)
     with RecordWriter(record, fsync=True) as journal:
         WorldCore(world, journal, algorithm=setup.params)
 

@@ -7,7 +7,7 @@ import argparse
 import os
 from typing import TYPE_CHECKING, Any
 
-from fatswarm.deploy.config import RunInputError, RunSetup
+from fatswarm.deploy.config import RunInputError, RunSetup, check_non_rigid
 from fatswarm.deploy.run import flag_given
 from fatswarm.world.outcome import Status
 
@@ -54,7 +54,22 @@ def resolve_resume(args: argparse.Namespace) -> RunSetup:
     scheduler = make_scheduler(h.scheduler, h.n, h.seed, schedule, fairness)
     if cap is None:  # a header without its cap: as the run would have had it
         cap = args.max_rounds or default_max_rounds(h.n, h.scheduler)
-    return RunSetup(h.seed, params, initial, scheduler, cap, record, h.algorithm_ref)
+    return RunSetup(h.seed, params, initial, scheduler, cap, record, h.algorithm_ref,
+                    non_rigid=recorded_non_rigid(args, h, path))
+
+
+def recorded_non_rigid(args: argparse.Namespace, header: Header, path: str) -> float | None:
+    """The header's non-rigid delta (None: rigid moves); RunInputError for a --non-rigid that is
+    not a finite number > 0 or that says otherwise than the record."""
+    saved = header.extra.get("non_rigid")
+    delta = float(saved) if isinstance(saved, (int, float)) else None
+    given: float | None = getattr(args, "non_rigid", None)
+    check_non_rigid(given)
+    if given is not None and given != delta:
+        says = "rigid moves" if delta is None else f"non_rigid={delta:g}"
+        raise RunInputError(f"--non-rigid {given:g} contradicts {path}, whose run has {says}; "
+                            "drop --non-rigid to resume it")
+    return delta
 
 
 def read_resumable(path: str, *, lockstep: bool) -> RunRecord:
@@ -168,4 +183,6 @@ def _first_difference(mine: Points, theirs: Points) -> tuple[int, str, str] | No
     return None
 
 
-__all__ = ["check_against_header", "ended", "read_resumable", "resolve_resume"]
+__all__ = [
+    "check_against_header", "ended", "read_resumable", "recorded_non_rigid", "resolve_resume",
+]

@@ -129,6 +129,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-rounds", type=int, default=None, metavar="R",
                    help="stop after R rounds (default: 10 (n + 10) for fsync, 40 (n + 10) for "
                    "ssync, 10 n (n + 10) otherwise)")
+    p.add_argument("--non-rigid", type=float, default=None, metavar="DELTA",
+                   help="non-rigid moves: the adversary may stop a move anywhere after the robot "
+                   "has travelled DELTA (> 0, robot radii; e.g. 1) or at its end, drawn from the "
+                   "seed (default: rigid moves)")
     p.add_argument("--record", metavar="PATH",
                    help="write the run record (JSON Lines) to PATH (a new file, unless --force)")
     p.add_argument("--force", action="store_true",
@@ -294,6 +298,7 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
             header_extra=({} if setup.config is None
                           else setup.config.header_extra(networked=False,
                                                        n=setup.params.n)),
+            non_rigid=setup.non_rigid,
         )
     except InvalidConfigurationError as exc:
         return _fail(f"invalid start: {exc}")

@@ -18,7 +18,7 @@ from typing import Any, Final, Protocol
 
 import numpy as np
 
-from fatswarm.agent.path import Path, path_length, transform
+from fatswarm.agent.path import Path, Point, path_length, transform, truncate
 from fatswarm.agent.protocol import MoveSubmitted
 from fatswarm.agent.registry import DEFAULT, load_algorithm
 from fatswarm.agent.seam import AlgorithmFailure, Configured, ParamValue
@@ -54,6 +54,7 @@ def crash_after(n: int) -> int:
 
 
 LOOK_STREAM: Final = 0x5A0F  # orders the others in a view; compute must not depend on the order
+CUT_STREAM: Final = 0xC07A  # where the non-rigid adversary stops a move
 
 
 class Journal(Protocol):
@@ -103,6 +104,7 @@ class WorldSetup:
     algorithm: str = DEFAULT  # how every process loads it: a name or module:attribute
     params: Mapping[str, ParamValue] = field(default_factory=dict)  # given ones; defaults fill in
     extra: Mapping[str, Any] = field(default_factory=dict)  # more header fields (how it was run)
+    non_rigid: float | None = None  # the adversary's delta (non-rigid moves); None: rigid moves
 
 
 @dataclass(frozen=True, slots=True)
@@ -129,6 +131,24 @@ def view_order(seed: int, round_no: int, robot: int, k: int) -> np.ndarray:
     z = (z ^ (z >> _S27)) * _C3
     z ^= z >> _S31
     return np.argsort(z)
+
+
+def cut_fraction(seed: int, round_no: int, robot: int) -> float:
+    """The non-rigid adversary's draw u in [0, 1) for robot `robot`'s move in round `round_no`:
+    a keyed splitmix64 hash of (seed, round, robot), as `view_order`, so every run mode (and a
+    resumed world) draws the same, and no other draw of the run shifts it."""
+    key = _mix64(_mix64(_mix64(CUT_STREAM ^ (seed & _MASK64)) ^ round_no) ^ robot)
+    return (key >> 11) * 2.0**-53  # the top 53 bits: a double in [0, 1)
+
+
+def cut_path(start: Point, path: Path, delta: float, u: float) -> Path:
+    """`path` (from `start`) as the non-rigid adversary stops it: whole if its length L is at most
+    `delta`, else its prefix of length delta + u (L - delta), u in [0, 1) (issue 10's model: the
+    robot travels at least delta, or reaches its end)."""
+    length = path_length(start, path)
+    if length <= delta:
+        return path
+    return truncate(start, path, delta + u * (length - delta))
 
 
 _MASK64: Final = (1 << 64) - 1
@@ -172,6 +192,7 @@ def cut_torn_line(path: str) -> None:
 def setup_from_header(header: Header, swarm: str, max_rounds: int | None) -> WorldSetup:
     """The run described by a state file's header line."""
     saved = header.extra.get("max_rounds", max_rounds)
+    delta = header.extra.get("non_rigid")
     return WorldSetup(
         swarm=swarm,
         n=header.n,
@@ -181,7 +202,9 @@ def setup_from_header(header: Header, swarm: str, max_rounds: int | None) -> Wor
         max_rounds=int(saved) if isinstance(saved, int) else max_rounds,
         algorithm=header.algorithm_ref,
         params=dict(header.params),
-        extra={k: v for k, v in header.extra.items() if k not in ("max_rounds", "swarm")},
+        extra={k: v for k, v in header.extra.items()
+               if k not in ("max_rounds", "swarm", "non_rigid")},
+        non_rigid=float(delta) if isinstance(delta, (int, float)) else None,
     )
 
 
@@ -252,6 +275,7 @@ class WorldCore:
                 n, setup.seed, setup.scheduler, self.positions,
                 algorithm=algorithm.name, params=algorithm.values,
                 algorithm_ref=setup.algorithm, max_rounds=setup.max_rounds, swarm=setup.swarm,
+                **({} if setup.non_rigid is None else {"non_rigid": setup.non_rigid}),
                 **setup.extra,
             )
         else:
@@ -447,13 +471,15 @@ class WorldCore:
             for robot, path in sorted(self.held.items())
             if path
         }
+        cut = self._cut(round_no, before, paths)
         outcome = apply_round(before, paths) if paths else RoundOutcome(before.copy())
         after = np.asarray(outcome.positions, dtype=np.float64)
         traveled = {r: float(outcome.traveled.get(r, 0.0)) for r in paths}
         timed_out = [r for r in self.active if r not in self.held]
         down, back = self._crashes(round_no)
         extra: dict[str, list[int]] = {}
-        for key, robots in (("timed_out", timed_out), ("crashed", down), ("recovered", back)):
+        for key, robots in (("timed_out", timed_out), ("crashed", down), ("recovered", back),
+                            ("cut", cut)):
             if robots:
                 extra[key] = robots
         self.journal.round(
@@ -470,6 +496,21 @@ class WorldCore:
         self.open_round, self.looked, self.held, self._missing = 0, set(), {}, set()
         if self.tracker.status is not None:
             self._finish()
+
+    def _cut(self, round_no: int, before: Points, paths: dict[int, Path]) -> list[int]:
+        """Non-rigid moves: the adversary stops each path of `paths` (world frame, replaced in
+        place) where `cut_path` says; returns the robots it stopped short."""
+        delta = self.setup.non_rigid
+        if delta is None:
+            return []
+        cut = []
+        for robot, path in paths.items():
+            start = (float(before[robot, 0]), float(before[robot, 1]))
+            short = cut_path(start, path, delta, cut_fraction(self.setup.seed, round_no, robot))
+            if short is not path:
+                paths[robot] = short
+                cut.append(robot)
+        return cut
 
     def _finish(self) -> None:
         progress = self.tracker.snapshot()

@@ -315,3 +315,25 @@ def test_a_robot_dead_for_good_counts_as_crashed_and_the_run_ends(
     assert [r.extra["crashed"] for r in crashed] == [[4]]
     assert crashed[0].round >= 2 + crash_after(6)
     assert "robots [4] count as crashed" in sw.log("world")
+
+
+def test_a_non_rigid_run_records_the_lockstep_run_with_the_same_delta(tmp_path: Path) -> None:
+    # the adversary's cuts are the world core's, drawn from the seed: the same in both modes
+    record = tmp_path / "net.jsonl"
+    code, out = _fatswarm_run(["-n", "6", "--seed", str(SEED), "--scheduler", "fsync",
+                               "--non-rigid", "1", "--record", str(record), "-q"])
+    assert code == 0, out
+    net = read_record(str(record))
+    assert net.header.extra["non_rigid"] == 1.0
+    assert any(entry.extra.get("cut") for entry in net.rounds)
+    from fatswarm.agent.params import Params
+    from fatswarm.coordinator.schedule import make_scheduler
+    from fatswarm.deploy.lockstep import run_lockstep
+    from fatswarm.world.record import RecordWriter
+    from fatswarm.world.starts import random_start
+
+    lock = tmp_path / "lock.jsonl"
+    with RecordWriter(lock) as rec:
+        run_lockstep(random_start(6, SEED, "clustered", 4.0), Params(6, 4.0),
+                     make_scheduler("fsync", 6, SEED), seed=SEED, record=rec, non_rigid=1.0)
+    assert_same_run(net, read_record(str(lock)))
