@@ -39,6 +39,7 @@ def run(
     schedule: str | os.PathLike[str] | None = None,
     max_rounds: int | None = None,
     non_rigid: float | None = None,
+    crash: int | None = None,
     record: str | os.PathLike[str] | None = None,
     on_round: Callable[[RoundReport], None] | None = None,
 ) -> RunResult:
@@ -48,6 +49,8 @@ def run(
     start of kind `start` drawn from `seed`. `record`: write the run record there (overwritten).
     `on_round` is called after every committed round. `non_rigid`: the adversary's delta (a move
     may be stopped anywhere after the robot travelled delta, drawn from `seed`); None: rigid.
+    `crash`: f robots the adversary crashes for good (which and when drawn from `seed`,
+    `world.core.crash_plan`; the goal is then judged on the live robots); None: no crashes.
     Raises one of `fatswarm.deploy.config.input_errors()` (a ValueError) for a configuration it
     refuses.
     """
@@ -64,6 +67,7 @@ def run(
         fairness=fairness,
         max_rounds=max_rounds,
         non_rigid=non_rigid,
+        crash=crash,
     )
     setup = config.resolve()
     writer = None if record is None else RecordWriter(record)
@@ -79,6 +83,7 @@ def run(
             algorithm_ref=setup.algorithm_ref,
             header_extra=config.header_extra(networked=False, n=setup.params.n),
             non_rigid=setup.non_rigid,
+            crash=setup.crash,
         )
     finally:
         if writer is not None:

@@ -56,6 +56,7 @@ class RunConfig:
     fairness: int | None = None
     max_rounds: int | None = None
     non_rigid: float | None = None  # the adversary's delta: moves may stop after it (None: rigid)
+    crash: int | None = None  # f robots the adversary crashes for good (None: none)
     move_timeout_s: float = DEFAULT_MOVE_TIMEOUT_S
     pace_s: float = 0.0
     command: tuple[str, ...] = ()
@@ -82,6 +83,7 @@ class RunConfig:
             fairness=args.fairness,
             max_rounds=args.max_rounds,
             non_rigid=getattr(args, "non_rigid", None),
+            crash=getattr(args, "crash", None),
             move_timeout_s=float(getattr(args, "move_timeout", DEFAULT_MOVE_TIMEOUT_S)),
             pace_s=float(getattr(args, "pace", None) or 0.0),
             command=tuple(getattr(args, "_argv", None) or sys.argv),
@@ -103,8 +105,10 @@ class RunConfig:
         scheduler = make_scheduler(self.scheduler, setting.n, self.seed, self.schedule,
                                    self.fairness)
         max_rounds = self.max_rounds or default_max_rounds(setting.n, self.scheduler)
+        check_crash(self.crash, setting.n)
         return RunSetup(self.seed, setting, initial, scheduler, max_rounds,
-                        algorithm_ref=self.algorithm, config=self, non_rigid=self.non_rigid)
+                        algorithm_ref=self.algorithm, config=self, non_rigid=self.non_rigid,
+                        crash=self.crash)
 
     def header_extra(self, *, networked: bool, n: int) -> dict[str, Any]:
         """What the record's header adds: the software version, start kind (or file), fairness
@@ -141,6 +145,7 @@ class RunSetup:
     algorithm_ref: str = "uniform-circle"  # how every process loads the algorithm
     config: RunConfig | None = None  # what was asked for (None: a resumed record's run)
     non_rigid: float | None = None  # the adversary's delta (world.core.cut_path); None: rigid
+    crash: int | None = None  # f robots crashed for good (world.core.crash_plan); None: none
 
 
 def check_non_rigid(delta: float | None) -> None:
@@ -148,6 +153,12 @@ def check_non_rigid(delta: float | None) -> None:
     if delta is not None and not (math.isfinite(delta) and delta > 0):
         raise RunInputError(f"--non-rigid must be a finite distance > 0 (robot radii), got "
                             f"{delta:g}")
+
+
+def check_crash(f: int | None, n: int) -> None:
+    """Refuse a crash count f that is not 0 < f < n (RunInputError)."""
+    if f is not None and not 0 < f < n:
+        raise RunInputError(f"--crash must be between 1 and n - 1 = {n - 1}, got {f}")
 
 
 def input_errors() -> tuple[type[Exception], ...]:
@@ -230,6 +241,7 @@ __all__ = [
     "RunConfig",
     "RunInputError",
     "RunSetup",
+    "check_crash",
     "check_non_rigid",
     "input_errors",
     "resolve_start",

@@ -233,7 +233,7 @@ def write_header(setup: RunSetup, record: str, swarm: str) -> None:
     world = WorldSetup(swarm, setup.params.n, setup.seed, setup.scheduler.name, setup.initial,
                        setup.max_rounds, algorithm=setup.algorithm_ref,
                        params=dict(setup.params.values), extra=extra,
-                       non_rigid=setup.non_rigid)
+                       non_rigid=setup.non_rigid, crash=setup.crash)
     with RecordWriter(record, fsync=True) as journal:
         WorldCore(world, journal, algorithm=setup.params)
 

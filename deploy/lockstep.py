@@ -102,6 +102,7 @@ def run_lockstep(
     algorithm_ref: str | None = None,
     header_extra: dict[str, Any] | None = None,
     non_rigid: float | None = None,
+    crash: int | None = None,
 ) -> RunResult:
     """Run until formed, stalled or `max_rounds` (default `default_max_rounds`).
 
@@ -113,7 +114,8 @@ def run_lockstep(
     recorded again (nor the header); the run then goes on exactly as it would have without the
     break. `algorithm_ref` (how to load the algorithm again; default its name) and
     `header_extra` go into the record's header. `non_rigid`: the adversary's delta (moves may be
-    stopped after delta, `world.core.cut_path`); None for rigid moves.
+    stopped after delta, `world.core.cut_path`); None for rigid moves. `crash`: f robots the
+    adversary crashes for good (`world.core.crash_plan`); None for none.
     Raises InvalidConfigurationError for an invalid start, the algorithm's refusal of the start
     (UnsupportedInputError for the paper's, outside the supported range), ValueError if n
     disagrees with params, HistoryMismatchError for a history this run would not have produced.
@@ -127,7 +129,7 @@ def run_lockstep(
     setup = WorldSetup(
         swarm=LOCKSTEP_SWARM, n=n, seed=seed, scheduler=scheduler.name, initial=positions,
         max_rounds=cap, algorithm=algorithm_ref or setting.name, params=dict(setting.values),
-        extra=dict(header_extra or {}), non_rigid=non_rigid,
+        extra=dict(header_extra or {}), non_rigid=non_rigid, crash=crash,
     )
     if history is None:
         setting.check_start(positions)

@@ -7,7 +7,7 @@ import argparse
 import os
 from typing import TYPE_CHECKING, Any
 
-from fatswarm.deploy.config import RunInputError, RunSetup, check_non_rigid
+from fatswarm.deploy.config import RunInputError, RunSetup, check_crash, check_non_rigid
 from fatswarm.deploy.run import flag_given
 from fatswarm.world.outcome import Status
 
@@ -55,7 +55,8 @@ def resolve_resume(args: argparse.Namespace) -> RunSetup:
     if cap is None:  # a header without its cap: as the run would have had it
         cap = args.max_rounds or default_max_rounds(h.n, h.scheduler)
     return RunSetup(h.seed, params, initial, scheduler, cap, record, h.algorithm_ref,
-                    non_rigid=recorded_non_rigid(args, h, path))
+                    non_rigid=recorded_non_rigid(args, h, path),
+                    crash=recorded_crash(args, h, path))
 
 
 def recorded_non_rigid(args: argparse.Namespace, header: Header, path: str) -> float | None:
@@ -70,6 +71,20 @@ def recorded_non_rigid(args: argparse.Namespace, header: Header, path: str) -> f
         raise RunInputError(f"--non-rigid {given:g} contradicts {path}, whose run has {says}; "
                             "drop --non-rigid to resume it")
     return delta
+
+
+def recorded_crash(args: argparse.Namespace, header: Header, path: str) -> int | None:
+    """The header's crash count f (None: no crashes); RunInputError for a --crash that is not
+    0 < f < n or that says otherwise than the record."""
+    saved = header.extra.get("crash")
+    f = saved if isinstance(saved, int) and not isinstance(saved, bool) else None
+    given: int | None = getattr(args, "crash", None)
+    check_crash(given, header.n)
+    if given is not None and given != f:
+        says = "no crashes" if f is None else f"crash={f}"
+        raise RunInputError(f"--crash {given} contradicts {path}, whose run has {says}; "
+                            "drop --crash to resume it")
+    return f
 
 
 def read_resumable(path: str, *, lockstep: bool) -> RunRecord:
@@ -184,5 +199,6 @@ def _first_difference(mine: Points, theirs: Points) -> tuple[int, str, str] | No
 
 
 __all__ = [
-    "check_against_header", "ended", "read_resumable", "recorded_non_rigid", "resolve_resume",
+    "check_against_header", "ended", "read_resumable", "recorded_crash",
+    "recorded_non_rigid", "resolve_resume",
 ]

@@ -133,6 +133,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="non-rigid moves: the adversary may stop a move anywhere after the robot "
                    "has travelled DELTA (> 0, robot radii; e.g. 1) or at its end, drawn from the "
                    "seed (default: rigid moves)")
+    p.add_argument("--crash", type=int, default=None, metavar="F",
+                   help="F robots (0 < F < n) crash at rounds the adversary draws from the seed "
+                   "and stay for good as still obstacles; the goal is then judged on the live "
+                   "robots (default: none)")
     p.add_argument("--record", metavar="PATH",
                    help="write the run record (JSON Lines) to PATH (a new file, unless --force)")
     p.add_argument("--force", action="store_true",
@@ -299,6 +303,7 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
                           else setup.config.header_extra(networked=False,
                                                        n=setup.params.n)),
             non_rigid=setup.non_rigid,
+            crash=setup.crash,
         )
     except InvalidConfigurationError as exc:
         return _fail(f"invalid start: {exc}")

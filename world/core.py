@@ -55,6 +55,7 @@ def crash_after(n: int) -> int:
 
 LOOK_STREAM: Final = 0x5A0F  # orders the others in a view; compute must not depend on the order
 CUT_STREAM: Final = 0xC07A  # where the non-rigid adversary stops a move
+CRASH_STREAM: Final = 0xC4A5  # which robots the crash adversary stops for good, and when
 
 
 class Journal(Protocol):
@@ -105,6 +106,7 @@ class WorldSetup:
     params: Mapping[str, ParamValue] = field(default_factory=dict)  # given ones; defaults fill in
     extra: Mapping[str, Any] = field(default_factory=dict)  # more header fields (how it was run)
     non_rigid: float | None = None  # the adversary's delta (non-rigid moves); None: rigid moves
+    crash: int | None = None  # f: robots the adversary crashes for good (`crash_plan`); None: 0
 
 
 @dataclass(frozen=True, slots=True)
@@ -151,6 +153,23 @@ def cut_path(start: Point, path: Path, delta: float, u: float) -> Path:
     return truncate(start, path, delta + u * (length - delta))
 
 
+def crash_plan(seed: int, n: int, f: int) -> dict[int, int]:
+    """The crash adversary's plan: robot -> the round from which it is crashed, for f of n robots.
+
+    Each robot gets a keyed splitmix64 hash of (seed, robot) (its own stream, as `cut_fraction`);
+    the f robots with the smallest hashes crash, each in round 1 + floor(u * 2n), u in [0, 1) the
+    top 53 bits of the hash mixed once more: within the first two default fairness bounds. A pure
+    function of (seed, n, f), so every run mode, a resumed world and a replay agree.
+    Raises ValueError unless 0 < f < n.
+    """
+    if not 0 < f < n:
+        raise ValueError(f"--crash must be between 1 and n - 1 = {n - 1}, got {f}")
+    base = _mix64(CRASH_STREAM ^ (seed & _MASK64))
+    keys = {robot: _mix64(base ^ robot) for robot in range(n)}
+    chosen = sorted(range(n), key=lambda r: (keys[r], r))[:f]
+    return {r: 1 + int(((_mix64(keys[r]) >> 11) * 2.0**-53) * 2 * n) for r in sorted(chosen)}
+
+
 _MASK64: Final = (1 << 64) - 1
 _C1, _C2, _C3 = (np.uint64(c) for c in (0x9E3779B97F4A7C15, 0xBF58476D1CE4E5B9,
                                           0x94D049BB133111EB))
@@ -193,6 +212,7 @@ def setup_from_header(header: Header, swarm: str, max_rounds: int | None) -> Wor
     """The run described by a state file's header line."""
     saved = header.extra.get("max_rounds", max_rounds)
     delta = header.extra.get("non_rigid")
+    crash = header.extra.get("crash")
     return WorldSetup(
         swarm=swarm,
         n=header.n,
@@ -203,8 +223,9 @@ def setup_from_header(header: Header, swarm: str, max_rounds: int | None) -> Wor
         algorithm=header.algorithm_ref,
         params=dict(header.params),
         extra={k: v for k, v in header.extra.items()
-               if k not in ("max_rounds", "swarm", "non_rigid")},
+               if k not in ("max_rounds", "swarm", "non_rigid", "crash")},
         non_rigid=float(delta) if isinstance(delta, (int, float)) else None,
+        crash=crash if isinstance(crash, int) and not isinstance(crash, bool) else None,
     )
 
 
@@ -246,7 +267,11 @@ class WorldCore:
         self.positions: Points = snap(np.array(setup.initial, dtype=np.float64).reshape(n, 2))
         if history is None:
             algorithm.check_start(self.positions)
-        self.tracker = ProgressTracker(n, algorithm.goal, setup.max_rounds)
+        # the crash adversary's plan (robot -> round it crashes in) and the robots crashed so far
+        self.crash_plan = {} if setup.crash is None else crash_plan(setup.seed, n, setup.crash)
+        self.stuck: frozenset[int] = frozenset()
+        self._live_goals: dict[int, Configured | None] = {n: algorithm}
+        self.tracker = ProgressTracker(n, self._goal, setup.max_rounds)
         self.status: str = Status.RUNNING
         self.committed = 0
         self.open_round = 0
@@ -276,6 +301,7 @@ class WorldCore:
                 algorithm=algorithm.name, params=algorithm.values,
                 algorithm_ref=setup.algorithm, max_rounds=setup.max_rounds, swarm=setup.swarm,
                 **({} if setup.non_rigid is None else {"non_rigid": setup.non_rigid}),
+                **({} if setup.crash is None else {"crash": setup.crash}),
                 **setup.extra,
             )
         else:
@@ -303,7 +329,7 @@ class WorldCore:
         paths = {m.robot: m.path for m in entry.moves}
         self._account(entry.round, entry.active, paths, timed_out, before, after, traveled,
                       entry.collisions, entry.extra.get("crashed", ()),
-                      entry.extra.get("recovered", ()))
+                      entry.extra.get("recovered", ()), self._stuck_in(entry.round))
 
     def _account(
         self,
@@ -317,8 +343,15 @@ class WorldCore:
         collisions: Sequence[Collision],
         crashed: Collection[int] = (),
         recovered: Collection[int] = (),
+        stuck: Collection[int] = (),
     ) -> None:
-        """Book one committed round (live or replayed) into the state and the progress tracker."""
+        """Book one committed round (live or replayed) into the state and the progress tracker.
+        `stuck`: the robots the crash adversary crashes in this round (for good)."""
+        if stuck:
+            log.info("robots %s crash in round %d (the crash adversary): they stay where they "
+                     "are for good", sorted(stuck), round_no)
+            self.stuck |= frozenset(stuck)
+            self.tracker.crash(stuck)
         if crashed:
             log.warning("robots %s count as crashed from round %d: their agents have been gone "
                         "for %d rounds; they stay where they are, and are not waited for",
@@ -471,6 +504,9 @@ class WorldCore:
             for robot, path in sorted(self.held.items())
             if path
         }
+        stuck = self._stuck_in(round_no)
+        for robot in self.stuck | frozenset(stuck):  # a crashed robot's moves are not applied
+            paths.pop(robot, None)
         cut = self._cut(round_no, before, paths)
         outcome = apply_round(before, paths) if paths else RoundOutcome(before.copy())
         after = np.asarray(outcome.positions, dtype=np.float64)
@@ -479,7 +515,7 @@ class WorldCore:
         down, back = self._crashes(round_no)
         extra: dict[str, list[int]] = {}
         for key, robots in (("timed_out", timed_out), ("crashed", down), ("recovered", back),
-                            ("cut", cut)):
+                            ("cut", cut), ("crash", stuck)):
             if robots:
                 extra[key] = robots
         self.journal.round(
@@ -491,7 +527,7 @@ class WorldCore:
             **extra,
         )
         self._account(round_no, self.active, paths, timed_out, before, after, traveled,
-                      outcome.collisions, down, back)
+                      outcome.collisions, down, back, stuck)
         self.last_commit = Committed(round_no, self.active, paths, outcome)
         self.open_round, self.looked, self.held, self._missing = 0, set(), {}, set()
         if self.tracker.status is not None:
@@ -511,6 +547,26 @@ class WorldCore:
                 paths[robot] = short
                 cut.append(robot)
         return cut
+
+    def _stuck_in(self, round_no: int) -> list[int]:
+        """The robots the crash adversary crashes in round `round_no` (`crash_plan`)."""
+        return sorted(r for r, at in self.crash_plan.items() if at == round_no)
+
+    def _goal(self, positions: Points) -> bool:
+        """The run's goal: the algorithm's for all robots, or once the crash adversary has crashed
+        some, the algorithm's for the live robots alone, configured for their number (False if
+        the algorithm refuses that number): README, "Faults"."""
+        if not self.stuck:
+            return self.algorithm.goal(positions)
+        live = [r for r in range(self.setup.n) if r not in self.stuck]
+        if len(live) not in self._live_goals:
+            try:
+                self._live_goals[len(live)] = Configured.of(self.algorithm.algorithm, len(live),
+                                                            self.algorithm.values)
+            except ValueError:  # AlgorithmParamsError, or a refusal of that n
+                self._live_goals[len(live)] = None
+        setting = self._live_goals[len(live)]
+        return setting is not None and setting.goal(positions[live])
 
     def _finish(self) -> None:
         progress = self.tracker.snapshot()
@@ -546,7 +602,7 @@ class WorldCore:
         crashed = self.tracker.crashed
         down = [r for r, since in enumerate(self.gone_since)
                 if since is not None and round_no - since >= limit and r not in crashed]
-        back = sorted(r for r in crashed if self.alive[r])
+        back = sorted(r for r in crashed if self.alive[r] and r not in self.stuck)
         return down, back
 
     def state(self) -> WorldState:

@@ -337,3 +337,25 @@ def test_a_non_rigid_run_records_the_lockstep_run_with_the_same_delta(tmp_path: 
         run_lockstep(random_start(6, SEED, "clustered", 4.0), Params(6, 4.0),
                      make_scheduler("fsync", 6, SEED), seed=SEED, record=rec, non_rigid=1.0)
     assert_same_run(net, read_record(str(lock)))
+
+
+def test_a_crash_run_records_the_lockstep_run_with_the_same_crashes(tmp_path: Path) -> None:
+    # the crash adversary's plan is the world core's, drawn from the seed: the same in both modes
+    record = tmp_path / "net.jsonl"
+    code, out = _fatswarm_run(["-n", "6", "--seed", str(SEED), "--scheduler", "fsync",
+                               "--crash", "1", "--record", str(record), "-q"])
+    net = read_record(str(record))
+    assert net.header.extra["crash"] == 1
+    assert any(entry.extra.get("crash") for entry in net.rounds)
+    assert net.result is not None and code == (0 if net.result.status == "formed" else 1), out
+    from fatswarm.agent.params import Params
+    from fatswarm.coordinator.schedule import make_scheduler
+    from fatswarm.deploy.lockstep import run_lockstep
+    from fatswarm.world.record import RecordWriter
+    from fatswarm.world.starts import random_start
+
+    lock = tmp_path / "lock.jsonl"
+    with RecordWriter(lock) as rec:
+        run_lockstep(random_start(6, SEED, "clustered", 4.0), Params(6, 4.0),
+                     make_scheduler("fsync", 6, SEED), seed=SEED, record=rec, crash=1)
+    assert_same_run(net, read_record(str(lock)))
