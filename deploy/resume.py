@@ -62,8 +62,9 @@ def resolve_resume(args: argparse.Namespace) -> RunSetup:
 def recorded_non_rigid(args: argparse.Namespace, header: Header, path: str) -> float | None:
     """The header's non-rigid delta (None: rigid moves); RunInputError for a --non-rigid that is
     not a finite number > 0 or that says otherwise than the record."""
-    saved = header.extra.get("non_rigid")
-    delta = float(saved) if isinstance(saved, (int, float)) else None
+    from fatswarm.world.core import header_non_rigid
+
+    delta = header_non_rigid(header)
     given: float | None = getattr(args, "non_rigid", None)
     check_non_rigid(given)
     if given is not None and given != delta:
@@ -76,8 +77,9 @@ def recorded_non_rigid(args: argparse.Namespace, header: Header, path: str) -> f
 def recorded_crash(args: argparse.Namespace, header: Header, path: str) -> int | None:
     """The header's crash count f (None: no crashes); RunInputError for a --crash that is not
     0 < f < n or that says otherwise than the record."""
-    saved = header.extra.get("crash")
-    f = saved if isinstance(saved, int) and not isinstance(saved, bool) else None
+    from fatswarm.world.core import header_crash
+
+    f = header_crash(header)
     given: int | None = getattr(args, "crash", None)
     check_crash(given, header.n)
     if given is not None and given != f:

@@ -208,11 +208,21 @@ def cut_torn_line(path: str) -> None:
             os.fsync(f.fileno())
 
 
+def header_non_rigid(header: Header) -> float | None:
+    """The non-rigid adversary's delta a record's header gives (None: rigid moves)."""
+    delta = header.extra.get("non_rigid")
+    return float(delta) if isinstance(delta, (int, float)) else None
+
+
+def header_crash(header: Header) -> int | None:
+    """The crash adversary's f a record's header gives (None: no crashes)."""
+    crash = header.extra.get("crash")
+    return crash if isinstance(crash, int) and not isinstance(crash, bool) else None
+
+
 def setup_from_header(header: Header, swarm: str, max_rounds: int | None) -> WorldSetup:
     """The run described by a state file's header line."""
     saved = header.extra.get("max_rounds", max_rounds)
-    delta = header.extra.get("non_rigid")
-    crash = header.extra.get("crash")
     return WorldSetup(
         swarm=swarm,
         n=header.n,
@@ -224,8 +234,8 @@ def setup_from_header(header: Header, swarm: str, max_rounds: int | None) -> Wor
         params=dict(header.params),
         extra={k: v for k, v in header.extra.items()
                if k not in ("max_rounds", "swarm", "non_rigid", "crash")},
-        non_rigid=float(delta) if isinstance(delta, (int, float)) else None,
-        crash=crash if isinstance(crash, int) and not isinstance(crash, bool) else None,
+        non_rigid=header_non_rigid(header),
+        crash=header_crash(header),
     )
 
 
