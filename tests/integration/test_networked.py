@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import queue
 import signal
 import subprocess
 import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 from netharness import Swarm, assert_same_run, descendants_of, lockstep_record, running
@@ -15,7 +17,15 @@ from netharness import Swarm, assert_same_run, descendants_of, lockstep_record, 
 from fatswarm.agent.path import Line
 from fatswarm.agent.path import Path as RobotPath
 from fatswarm.agent.protocol import MoveSubmitted, move_key
-from fatswarm.world.protocol import Begin, Commit, control_key, snapshot_key
+from fatswarm.world.protocol import (
+    Begin,
+    Commit,
+    ProtocolError,
+    WorldState,
+    control_key,
+    snapshot_key,
+    state_key,
+)
 from fatswarm.world.record import read_record
 
 pytestmark = pytest.mark.integration
@@ -149,14 +159,21 @@ def test_a_foreign_client_changes_nothing_and_crashes_nothing(
     sw.wait_for("round 2", lambda: (s := sw.state()) is not None and s.round >= 2)
     s = sw.session
     step = RobotPath((Line((3.0, 0.0)),))
+    opened: queue.Queue[WorldState] = queue.Queue()  # the state names a round's robots as it opens
+    s.declare_subscriber(state_key(sw.swarm), lambda sample: _offer_open(opened, sample))
     seen = 0
     while (state := sw.state()) is not None and state.status == "running":
-        if state.open_round in (0, seen):  # the state names each round's robots when it opens
-            time.sleep(0.02)
+        try:
+            state = opened.get(timeout=0.5)
+        except queue.Empty:
+            continue
+        if state.open_round == seen:
             continue
         seen = r = state.open_round
         active = state.active
         idle = [robot for robot in range(8) if robot not in active]
+        for robot in idle:  # not active in this round: first, while the round is still open
+            s.put(move_key(sw.swarm, robot), MoveSubmitted(robot, r, step).encode())
         s.put(move_key(sw.swarm, 0), b"\x93garbage")
         s.put(move_key(sw.swarm, 0), b"\xc1")
         s.put(f"fatswarm/{sw.swarm}/robot/99999/move", MoveSubmitted(0, r, step).encode())
@@ -164,8 +181,6 @@ def test_a_foreign_client_changes_nothing_and_crashes_nothing(
             other = (robot + 1) % 8
             s.put(move_key(sw.swarm, other), MoveSubmitted(robot, r, step).encode())
             s.put(move_key(sw.swarm, robot), MoveSubmitted(robot, 1, step).encode())
-        for robot in idle:  # not active in this round
-            s.put(move_key(sw.swarm, robot), MoveSubmitted(robot, r, step).encode())
         replies = list(s.get(snapshot_key(sw.swarm, 1000), timeout=2.0))
         assert replies and all(x.ok is None for x in replies), "a snapshot for no robot"
         replies = list(s.get(snapshot_key(sw.swarm, 0), payload=b"\x81", timeout=2.0))
@@ -180,6 +195,16 @@ def test_a_foreign_client_changes_nothing_and_crashes_nothing(
         assert f"rejected ({reason})" in log, reason
     assert sw.children.procs["world"].poll() is None, "the world crashed"
     assert_same_run(read_record(sw.state_path), lockstep_record(tmp_path / "lock.jsonl", 8, SEED))
+
+
+def _offer_open(opened: queue.Queue[WorldState], sample: Any) -> None:
+    """Queue a state that names an open round (the callback only decodes and enqueues)."""
+    try:
+        state = WorldState.decode(sample.payload.to_bytes())
+    except ProtocolError:
+        return
+    if state.open_round:
+        opened.put(state)
 
 
 def test_agents_and_world_outlive_a_router_restart(make_swarm: Callable[..., Swarm]) -> None:
