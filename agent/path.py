@@ -143,6 +143,23 @@ def truncate(start: Point, path: Path, s: float) -> Path:
     return Path(tuple(out))
 
 
+def remainder(start: Point, path: Path, s: float) -> Path:
+    """What is left of the path after arc length `s` (from where `truncate` stops): the rest of
+    a move that goes on, as an asynchronous robot's does between two instants."""
+    here = start
+    remaining = max(0.0, s)
+    for k, seg in enumerate(path.segments):
+        length = segment_length(here, seg)
+        if remaining < length:
+            first: Segment = seg
+            if isinstance(seg, Arc) and remaining > 0.0:
+                first = Arc(seg.center, seg.sweep * (1.0 - remaining / length))
+            return Path((first, *path.segments[k + 1 :]))
+        remaining -= length
+        here = segment_end(here, seg)
+    return Path()
+
+
 def sample(start: Point, path: Path, step: float) -> Points:
     """Points along the path no more than `step` apart in arc length, both ends included."""
     pts: list[Point] = [start]

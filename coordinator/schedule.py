@@ -13,9 +13,12 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from fatswarm.coordinator.adversary import ASYNC_NAMES, make_async
+
 SCHEDULE_STREAM = 0x5CED  # keeps scheduler draws apart from other seeded streams of the same run
 SSYNC_P = 0.5  # each live robot is drawn with this probability: every subset is equally likely
-NAMES = ("fsync", "ssync", "centralized", "scripted")
+ROUND_NAMES = ("fsync", "ssync", "centralized", "scripted")
+NAMES = (*ROUND_NAMES, *ASYNC_NAMES)  # the async models have no rounds: coordinator/adversary.py
 AFTER_SCRIPT = ("repeat", "fsync")  # what a script does once its rounds are used up
 
 
@@ -30,7 +33,8 @@ class ScheduleFileError(ScheduleError):
 class Scheduler(Protocol):
     """Picks the active set of a round among the live robots."""
 
-    name: str
+    @property
+    def name(self) -> str: ...
 
     def active(self, round_no: int, live: Sequence[int]) -> list[int]:
         """The sorted, non-empty active subset of `live` for round `round_no` (1-based)."""
@@ -230,7 +234,8 @@ def load_script(path: str, n: int) -> Scripted:
 def make_scheduler(
     name: str, n: int, seed: int, schedule_path: str | None = None, fairness: int | None = None
 ) -> Scheduler:
-    """Build 'fsync', 'ssync', 'centralized' or 'scripted' (the latter reads `schedule_path`).
+    """Build 'fsync', 'ssync', 'centralized' or 'scripted' (the latter reads `schedule_path`), or
+    an async model ('async', 'async-slowest': coordinator/adversary.py), which has no rounds.
 
     `fairness` is the bound K of ssync and centralized (default `default_fairness(n)`).
     """
@@ -247,11 +252,14 @@ def make_scheduler(
         if schedule_path is None:
             raise ScheduleError("the scripted scheduler needs a schedule file (--schedule PATH)")
         return load_script(schedule_path, n)
+    if name in ASYNC_NAMES:
+        return make_async(name, n, seed)
     raise ScheduleError(f"unknown scheduler {name!r}; choose one of {', '.join(NAMES)}")
 
 
 __all__ = [
     "NAMES",
+    "ROUND_NAMES",
     "Centralized",
     "Fsync",
     "ScheduleError",

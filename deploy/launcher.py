@@ -200,7 +200,8 @@ def run_networked(args: argparse.Namespace) -> int:
 def check_inputs(args: argparse.Namespace) -> tuple[str | None, int, RunSetup | None]:
     """(what to fix or None, the seed, the run): the lockstep run's checks, before any process
     starts; with --resume, the seed and the run are the record's."""
-    from fatswarm.deploy.config import input_errors
+    from fatswarm.coordinator.adversary import ASYNC_NAMES
+    from fatswarm.deploy.config import RunInputError, input_errors
     from fatswarm.deploy.run import check_seconds, resolve_run
 
     seed: int = args.seed if args.seed is not None else secrets.randbelow(2**31)
@@ -212,6 +213,9 @@ def check_inputs(args: argparse.Namespace) -> tuple[str | None, int, RunSetup | 
             check_seconds("--pace", args.pace, zero_ok=True)
         setup = resolve_run(args, seed)
         seed = setup.seed
+        if setup.scheduler.name in ASYNC_NAMES:
+            raise RunInputError(f"--scheduler {setup.scheduler.name} runs in lock step only (for "
+                                "now: the networked async clock is not built): add --lockstep")
         if args.swarm is not None:
             from fatswarm.world.protocol import check_swarm
 

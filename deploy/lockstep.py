@@ -25,9 +25,18 @@ from fatswarm.agent.path import Path, Points
 from fatswarm.agent.protocol import MoveSubmitted
 from fatswarm.agent.seam import Configured, checked
 from fatswarm.agent.uniform_circle import ALGORITHM as UNIFORM_CIRCLE
+from fatswarm.coordinator.adversary import AsyncModel
 from fatswarm.coordinator.rounds import Ask, CoordinatorCore, Finished, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
-from fatswarm.world.core import Committed, Journal, WorldCore, WorldSetup
+from fatswarm.deploy.lockstep_async import AsyncRun
+from fatswarm.world.core import (
+    Committed,
+    Journal,
+    NullJournal,
+    WorldCore,
+    WorldSetup,
+    crash_plan,
+)
 from fatswarm.world.outcome import Status
 from fatswarm.world.physics import validate_configuration
 from fatswarm.world.progress import Progress
@@ -79,6 +88,7 @@ class RunResult:
     initial: Points
     positions: Points
     moves_by_robot: tuple[int, ...]
+    time: float | None = None  # async models: the virtual time the run ended at
 
 
 def configured(params: Params | Configured) -> Configured:
@@ -126,6 +136,13 @@ def run_lockstep(
     if n != setting.n:
         raise ValueError(f"the start has {n} robots but params say n={setting.n}")
     cap = default_max_rounds(n, scheduler.name) if max_rounds is None else max_rounds
+    if isinstance(scheduler, AsyncModel):
+        if history is not None:
+            raise HistoryMismatchError(f"a {scheduler.name} run cannot be resumed (yet)")
+        return _run_async(positions, setting, scheduler, seed=seed, max_rounds=cap,
+                          record=record, on_round=on_round, compute=compute,
+                          algorithm_ref=algorithm_ref, header_extra=header_extra,
+                          non_rigid=non_rigid, crash=crash)
     setup = WorldSetup(
         swarm=LOCKSTEP_SWARM, n=n, seed=seed, scheduler=scheduler.name, initial=positions,
         max_rounds=cap, algorithm=algorithm_ref or setting.name, params=dict(setting.values),
@@ -166,6 +183,57 @@ def run_lockstep(
         initial=np.array(positions),
         positions=world.positions,
         moves_by_robot=progress.moves_by_robot,
+    )
+
+
+def _run_async(
+    positions: Points,
+    setting: Configured,
+    model: AsyncModel,
+    *,
+    seed: int,
+    max_rounds: int,
+    record: Journal | None,
+    on_round: Callable[[RoundReport], None] | None,
+    compute: ComputeFn | None,
+    algorithm_ref: str | None,
+    header_extra: dict[str, Any] | None,
+    non_rigid: float | None,
+    crash: int | None,
+) -> RunResult:
+    """`run_lockstep` under an async model: one record line per ended cycle."""
+    setting.check_start(positions)
+    if crash is not None:
+        crash_plan(seed, len(positions), crash)  # refuses a bad f before anything is written
+    journal = NullJournal() if record is None else record
+    journal.header(
+        len(positions), seed, model.name, positions, algorithm=setting.name,
+        params=setting.values, algorithm_ref=algorithm_ref or setting.name,
+        max_rounds=max_rounds, swarm=LOCKSTEP_SWARM, fairness_time=model.bound(),
+        **({} if non_rigid is None else {"non_rigid": non_rigid}),
+        **({} if crash is None else {"crash": crash}),
+        **dict(header_extra or {}),
+    )
+    own = setting.params
+    user = None if compute is None else (lambda view: compute(view, own))
+
+    def report(committed: Committed, _done: object) -> None:
+        if on_round is not None:
+            on_round(RoundReport(committed.round, committed.active, committed.paths,
+                                 committed.outcome, run.tracker.snapshot()))
+
+    run = AsyncRun(positions, setting, model, seed=seed, max_rounds=max_rounds,
+                   journal=journal, compute=user, non_rigid=non_rigid, crash=crash,
+                   on_cycle=report)
+    run.run()
+    progress = run.tracker.snapshot()
+    assert progress.status is not None
+    return RunResult(
+        status=progress.status, rounds=progress.rounds, epochs=progress.epochs,
+        moves=progress.moves, total_distance=progress.total_distance,
+        collisions=progress.collisions, looks=run.looks, initial=np.array(positions),
+        positions=run.world.positions.copy(), moves_by_robot=progress.moves_by_robot,
+        time=run.world.now,
     )
 
 

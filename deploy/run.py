@@ -120,7 +120,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"kind of random start without --init (default {DEFAULT_START}: "
                    "needs SEC expansion)")
     p.add_argument("--scheduler", choices=NAMES, default=DEFAULT_SCHEDULER, action=_StoreGiven,
-                   help=f"who is active each round (default {DEFAULT_SCHEDULER})")
+                   help=f"who is active each round (default {DEFAULT_SCHEDULER}); async, "
+                   "async-slowest: no rounds, robots on their own clocks in virtual time, the "
+                   "adversary's delays random or slowest robot last (--lockstep only)")
     p.add_argument("--schedule", metavar="PATH",
                    help='scripted scheduler: JSON {"rounds": [[0, 2], [1], ...]} or a run record')
     p.add_argument("--fairness", type=int, default=None, metavar="K",
@@ -260,6 +262,7 @@ def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
 def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """`fatswarm run --lockstep`: build the run from the flags, run it, print the summary."""
     from fatswarm.agent.seam import AlgorithmFailure
+    from fatswarm.coordinator.adversary import ASYNC_NAMES
     from fatswarm.deploy.lockstep import HistoryMismatchError, run_lockstep
     from fatswarm.world.physics import InvalidConfigurationError
     from fatswarm.world.record import RecordFormatError, RecordWriteError, RecordWriter
@@ -272,6 +275,9 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
         check_lockstep_flags(args)
         setup = resolve_run(args, seed)
         resumed = setup.resumed
+        if resumed is not None and setup.scheduler.name in ASYNC_NAMES:
+            raise RunInputError(f"--resume: a {setup.scheduler.name} run cannot be resumed yet; "
+                                "run it again with its --seed: a lock-step run repeats exactly")
         # --resume appends after the committed rounds: nothing there is ever cut or rewritten
         record = RecordWriter(args.record, append=resumed is not None) if args.record else None
     except bad_input as exc:

@@ -139,7 +139,16 @@ def cut_fraction(seed: int, round_no: int, robot: int) -> float:
     """The non-rigid adversary's draw u in [0, 1) for robot `robot`'s move in round `round_no`:
     a keyed splitmix64 hash of (seed, round, robot), as `view_order`, so every run mode (and a
     resumed world) draws the same, and no other draw of the run shifts it."""
-    key = _mix64(_mix64(_mix64(CUT_STREAM ^ (seed & _MASK64)) ^ round_no) ^ robot)
+    return keyed_fraction(CUT_STREAM, seed, round_no, robot)
+
+
+def keyed_fraction(stream: int, seed: int, *keys: int) -> float:
+    """A draw u in [0, 1) that is a pure function of (stream, seed, keys): a chain of splitmix64
+    finalisers, its top 53 bits. The adversaries' draws (`cut_fraction`, async delays) use it, so
+    no draw depends on the order or the number of others."""
+    key = _mix64(stream ^ (seed & _MASK64))
+    for k in keys:
+        key = _mix64(key ^ (k & _MASK64))
     return (key >> 11) * 2.0**-53  # the top 53 bits: a double in [0, 1)
 
 

@@ -92,7 +92,7 @@ def test_empty_live_set_is_refused() -> None:
 
 def test_unknown_name_and_bad_fairness_are_refused() -> None:
     with pytest.raises(ScheduleError, match="unknown scheduler"):
-        make_scheduler("async", 3, 0)
+        make_scheduler("asynchronous", 3, 0)
     with pytest.raises(ScheduleError, match="fairness"):
         make_scheduler("ssync", 3, 0, fairness=0)
     with pytest.raises(ScheduleError, match="schedule file"):

@@ -265,7 +265,7 @@ def test_the_summary_counts_and_takes_medians_of_formed_runs() -> None:
     (["--seeds", "9..3"], "LOW <= HIGH"),
     (["--start", "nowhere"], "not a start kind"),
     (["--scheduler", "scripted"], "needs a schedule file"),
-    (["--scheduler", "async"], "is not a scheduler"),
+    (["--scheduler", "asynchronous"], "is not a scheduler"),
     (["--algorithm", "nope"], "no algorithm named 'nope'"),
     (["--param", "a=2"], "a must be > 3"),
     (["--param", "zzz=1"], "has no parameter 'zzz'"),

@@ -1,0 +1,279 @@
+"""Issue 10's async models: robots Look, Compute, Move and Wait on their own clocks in virtual
+time, a Look sees robots in the middle of their moves, and collision detection covers paths that
+start at different times. Lock-step runs are deterministic from one seed and their records let a
+reader rebuild every robot's position at any time."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from pathlib import Path as FsPath
+from typing import Any
+
+import numpy as np
+import pytest
+
+from fatswarm.agent.params import Params
+from fatswarm.agent.path import Line, Path, Point, path_length, point_at, remainder, truncate
+from fatswarm.coordinator.adversary import (
+    ASYNC_NAMES,
+    RANDOM_MAX,
+    STALE_STEP,
+    STALE_WAIT,
+    Delays,
+    NotRoundBasedError,
+    make_async,
+)
+from fatswarm.coordinator.schedule import make_scheduler
+from fatswarm.deploy import cli
+from fatswarm.deploy.lockstep import configured, run_lockstep
+from fatswarm.deploy.lockstep_async import AsyncRun
+from fatswarm.world import asynchrony
+from fatswarm.world.asynchrony import AsyncWorld, CycleDone, Phase
+from fatswarm.world.core import crash_plan
+from fatswarm.world.record import RecordWriter, read_record
+from fatswarm.world.starts import random_start
+
+PATHS = [
+    Path((Line((3.0, 0.0)),)),
+    Path((Line((1.0, 0.0)), Line((1.0, 2.0)), Line((-1.0, 2.0)))),
+]
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("s", [0.0, 0.5, 1.0, 2.2, 3.7, 10.0])
+def test_the_rest_of_a_path_picks_up_where_its_prefix_stops(path: Path, s: float) -> None:
+    from fatswarm.agent.path import Arc
+
+    arcs = Path((*path.segments, Arc((0.0, 2.0), math.pi / 2)))
+    start: Point = (0.0, 0.0)
+    for p in (path, arcs):
+        whole = path_length(start, p)
+        head = truncate(start, p, s)
+        mid = point_at(start, p, s)
+        rest = remainder(start, p, s)
+        assert path_length(start, head) + path_length(mid, rest) == pytest.approx(whole)
+        for u in (0.0, 0.3, 1.1):
+            assert np.allclose(point_at(mid, rest, u), point_at(start, p, s + u), atol=1e-12)
+
+
+def _drive(world: AsyncWorld, plans: dict[int, Path], compute: dict[int, float],
+           until: float) -> tuple[list[CycleDone], dict[int, Any]]:
+    """Each robot moves once by its plan (world-frame, from where it Looks) after its compute
+    delay, then waits for good; returns the ended cycles and what each robot saw."""
+    done: list[CycleDone] = []
+    seen: dict[int, Any] = {}
+    while world.now < until:
+        t = world.next_time()
+        if t <= world.now and not world.looking() and not any(
+                world.phase(r) is Phase.COMPUTING for r in range(world.n)):
+            break
+        world.advance(min(t, until))
+        done += world.end_moves()
+        world.start_moves()
+        for robot in world.looking():
+            seen[robot] = world.look(robot)
+            here = world.positions[robot]
+            plan = plans.get(robot, Path())
+            moved = Path(tuple(Line((here[0] + s.end[0], here[1] + s.end[1]))  # type: ignore[union-attr]
+                               for s in plan.segments))
+            stayed = world.submit(robot, moved, compute.get(robot, 0.0), 1e6)
+            if stayed is not None:
+                done.append(stayed)
+    return done, seen
+
+
+def test_a_look_sees_a_robot_in_the_middle_of_its_move() -> None:
+    world = AsyncWorld(np.array([[0.0, 0.0], [0.0, 10.0]]), 0, [0.0, 1.5])
+    _, seen = _drive(world, {0: Path((Line((8.0, 0.0)),))}, {}, until=3.0)
+    assert np.allclose(seen[1], [[1.5, -10.0]], atol=1e-8)  # robot 0, 1.5 along its 8
+
+
+def _min_gap(cycles: list[CycleDone], initial: np.ndarray, times: np.ndarray) -> float:
+    """The least distance between two centres over `times`, rebuilt from the ended cycles."""
+    worst = math.inf
+    for t in times:
+        pos = _positions_at(cycles, initial, float(t))
+        d = np.hypot(*(pos[:, None, :] - pos[None, :, :]).transpose(2, 0, 1))
+        d[np.diag_indices(len(pos))] = np.inf
+        worst = min(worst, float(d.min()))
+    return worst
+
+
+def _positions_at(cycles: list[CycleDone] | list[dict[str, Any]], initial: np.ndarray,
+                  t: float) -> np.ndarray:
+    """Every robot at virtual time t from the moves alone: its last move started by t, followed
+    for (t - start) up to the arc length it covered (docs/record.md, "Async runs")."""
+    pos = np.array(initial, dtype=np.float64)
+    latest: dict[int, tuple[float, Point, Path, float]] = {}
+    for c in cycles:
+        if isinstance(c, CycleDone):
+            robot, start, origin, path, covered = c.robot, c.start, c.origin, c.path, c.traveled
+        else:
+            robot, start, origin, path, covered = c["robot"], c["start"], c["origin"], \
+                c["path"], c["traveled"]
+        if path and start <= t and (robot not in latest or latest[robot][0] <= start):
+            latest[robot] = (start, origin, path, covered)
+    for robot, (start, origin, path, covered) in latest.items():
+        pos[robot] = point_at(origin, path, min(t - start, covered))
+    return pos
+
+
+@pytest.mark.parametrize(("delay", "meets"), [(0.0, True), (2.0, True), (12.0, False)])
+def test_moves_that_start_at_different_times_are_checked_along_their_paths(
+        delay: float, meets: bool) -> None:
+    # robot 0 crosses x = 5 at t = 5; robot 1 crosses y = 0 at t = delay + 5
+    initial = np.array([[0.0, 0.0], [5.0, -5.0]])
+    world = AsyncWorld(initial, 0, [0.0, 0.0])
+    cycles, _ = _drive(world, {0: Path((Line((10.0, 0.0)),)), 1: Path((Line((0.0, 10.0)),))},
+                       {1: delay}, until=40.0)
+    contacts = [c for cycle in cycles for c in cycle.collisions]
+    assert bool(contacts) is meets
+    gap = _min_gap(cycles, initial, np.linspace(0.0, 40.0, 4001))
+    assert gap >= 2.0 - 1e-6  # discs never overlap, at any instant
+    if meets:
+        assert gap <= 2.0 + 1e-6  # they touched: contact, not a near miss
+        starts = {c.robot: c.start for c in cycles}
+        assert starts[1] - starts[0] == pytest.approx(delay)
+
+
+def test_the_adversary_draws_are_pure_functions_of_seed_robot_and_cycle() -> None:
+    model = make_async("async", 6, 7)
+    draws = {(r, k): model.cycle(r, k) for r in range(6) for k in range(1, 5)}
+    assert draws == {key: make_async("async", 6, 7).cycle(*key) for key in reversed(draws)}
+    assert all(0.0 <= d.compute < RANDOM_MAX and 0.0 <= d.wait < RANDOM_MAX
+               for d in draws.values())
+    assert len({d.compute for d in draws.values()}) == len(draws)
+    slow = make_async("async-slowest", 6, 7)
+    assert sorted(slow.rank(r) for r in range(6)) == list(range(6))
+    assert {slow.cycle(r, 1).compute for r in range(6)} == {STALE_STEP * k for k in range(6)}
+    assert all(slow.cycle(r, 3).wait == STALE_WAIT for r in range(6))
+    assert set(ASYNC_NAMES) == {d.value for d in Delays}
+
+
+def test_an_async_model_refuses_to_pick_rounds() -> None:
+    with pytest.raises(NotRoundBasedError, match="no rounds"):
+        make_scheduler("async", 4, 0).active(1, [0, 1, 2, 3])
+
+
+def _record(tmp_path: FsPath, name: str, n: int, seed: int, **kw: Any) -> tuple[Any, Any]:
+    path = tmp_path / f"{name}-{n}-{seed}.jsonl"
+    with RecordWriter(path) as journal:
+        result = run_lockstep(random_start(n, seed), Params(n), make_scheduler(name, n, seed),
+                              seed=seed, record=journal, **kw)
+    return result, read_record(path)
+
+
+@pytest.mark.parametrize("name", ASYNC_NAMES)
+@pytest.mark.parametrize("seed", [1, 2])
+def test_the_paper_algorithm_forms_under_async_and_the_record_rebuilds_every_instant(
+        name: str, seed: int, tmp_path: FsPath) -> None:
+    result, record = _record(tmp_path, name, 5, seed)
+    assert (result.status, result.collisions) == ("formed", 0)
+    assert record.header.scheduler == name
+    assert record.result is not None and record.result.extra["time"] == result.time
+    cycles = []
+    for entry in record.rounds:
+        (robot,) = entry.active
+        assert entry.extra["look"] <= entry.extra["start"] <= entry.extra["end"]
+        for move in entry.moves:
+            cycles.append({"robot": robot, "start": entry.extra["start"],
+                           "origin": tuple(entry.extra["origin"]), "path": move.path,
+                           "traveled": move.traveled})
+    for entry in record.rounds:  # each line's positions, rebuilt at its end from the moves
+        rebuilt = _positions_at(cycles, record.header.initial, entry.extra["end"])
+        assert np.allclose(rebuilt, entry.positions, atol=1e-6)
+    ends = [entry.extra["end"] for entry in record.rounds]
+    assert ends == sorted(ends)  # one line per ended cycle, in the order they end
+
+
+@pytest.mark.parametrize("name", ASYNC_NAMES)
+def test_every_live_robot_looks_again_within_the_stated_bound(name: str,
+                                                              tmp_path: FsPath) -> None:
+    _, record = _record(tmp_path, name, 6, 3)
+    bound = record.header.extra["fairness_time"]
+    assert bound == make_async(name, 6, 3).bound()
+    last_end: dict[int, float] = {}
+    for entry in sorted(record.rounds, key=lambda e: e.extra["look"]):
+        (robot,) = entry.active
+        if robot in last_end:
+            assert entry.extra["look"] - last_end[robot] <= bound + 1e-9
+        last_end[robot] = entry.extra["end"]
+    assert set(last_end) == set(range(6))
+
+
+def test_an_async_run_repeats_exactly_from_its_seed(tmp_path: FsPath) -> None:
+    a = tmp_path / "a.jsonl"
+    b = tmp_path / "b.jsonl"
+    for path in (a, b):
+        with RecordWriter(path) as journal:
+            run_lockstep(random_start(6, 4), Params(6), make_scheduler("async", 6, 4), seed=4,
+                         record=journal)
+    assert a.read_bytes() == b.read_bytes()
+
+
+@pytest.mark.parametrize("name", ASYNC_NAMES)
+def test_async_decisions_do_not_depend_on_frames_or_view_order(
+        name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    n, seed = 6, 5
+
+    def final(flips: Callable[[int], bool]) -> tuple[int, list[list[float]]]:
+        run = AsyncRun(random_start(n, seed), configured(Params(n)),
+                       make_async(name, n, seed), seed=seed, max_rounds=2000)
+        run.flips = [flips(r) for r in range(n)]
+        run.run()
+        return run.tracker.snapshot().rounds, run.world.positions.tolist()
+
+    base = final(lambda r: False)
+    assert final(lambda r: True) == base
+    assert final(lambda r: r % 2 == 1) == base
+    original = asynchrony.view_order
+    monkeypatch.setattr(asynchrony, "view_order",
+                        lambda *a: original(*a)[::-1].copy())  # type: ignore[no-untyped-call]
+    assert final(lambda r: False) == base
+
+
+def test_a_colliding_algorithm_collides_under_async_but_discs_never_overlap() -> None:
+    def right(view: Any, params: Any) -> Path:
+        del view, params
+        return Path((Line((3.0, 0.0)),))
+
+    start = np.array([[0.0, 0.0], [2.5, 0.3], [5.0, 0.0], [-2.2, 0.0]])
+    result = run_lockstep(start, Params(4), make_scheduler("async", 4, 1), seed=1,
+                          compute=right, max_rounds=60)
+    assert result.collisions > 0
+    d = np.hypot(*(result.positions[:, None] - result.positions[None]).transpose(2, 0, 1))
+    d[np.diag_indices(4)] = np.inf
+    assert d.min() >= 2.0 - 1e-9
+
+
+def test_a_crashed_robot_never_looks_again_and_the_goal_is_the_live_robots(
+        tmp_path: FsPath) -> None:
+    result, record = _record(tmp_path, "async", 6, 2, crash=1)
+    ((robot, at),) = crash_plan(2, 6, 1).items()
+    cycles = [e for e in record.rounds if e.active == (robot,)]
+    assert len(cycles) == at - 1  # it crashed instead of its Look number `at`
+    assert len(record.rounds) > 4 * at  # the others went on well past it
+    assert result.status in ("formed", "stalled", "max_rounds")
+    assert record.header.extra["crash"] == 1
+
+
+def test_run_lockstep_async_from_the_command_line_and_refusals(
+        tmp_path: FsPath, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "r.jsonl"
+    code = cli.main(["run", "--lockstep", "--scheduler", "async-slowest", "-n", "5", "--seed",
+                     "1", "--record", str(out), "-q"])
+    assert code == 0
+    lines = [json.loads(line) for line in out.read_text().splitlines()]
+    assert lines[0]["scheduler"] == "async-slowest"
+    assert {"look", "start", "end", "origin"} <= set(lines[1])
+    capsys.readouterr()
+    out.write_text("".join(line + "\n" for line in out.read_text().splitlines()[:5]))
+    assert cli.main(["run", "--lockstep", "--record", str(out),
+                     "--resume", "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "cannot be resumed" in err and "\n" not in err
+    assert cli.main(["run", "--scheduler", "async", "-n", "5", "--no-dashboard", "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--lockstep" in err and "\n" not in err

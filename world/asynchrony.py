@@ -1,0 +1,220 @@
+"""The asynchronous world: robots Look, Compute, Move and Wait each on its own clock, in virtual
+time, and moves that start at different times run through the same continuous collision
+detection as a round's.
+
+Time is virtual, in robot radii travelled at unit speed. A Look sees every robot where it is at
+that instant, those in the middle of a move included. Between two events (a Look, the start or
+the end of a move) the set of movers is fixed, so the world applies each such window as a round
+of `world.physics.apply_round`: every mover covers its path for the window's length, from where
+it is, and a mover that would overlap another stops at contact. A stopped mover's move ends with
+the window (the adversary's wait may be longer than it chose: the wait is any finite delay).
+A Look that asks to stay ends its cycle at once. Each ended cycle is one `CycleDone`: the run
+record keeps one line per cycle, in the order they end (docs/record.md).
+
+No I/O, clock or global random state: the delays come from the caller (the adversary,
+coordinator/adversary.py), so the same core serves lock step and a networked run.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Final
+
+import numpy as np
+
+from fatswarm.agent.path import Path, Point, Points, path_length, remainder, truncate
+from fatswarm.agent.tolerance import snap
+from fatswarm.world.core import view_order
+from fatswarm.world.physics import Collision, apply_round
+
+ENDED: Final = 1e-9
+"""A move with less than this left (robot radii) has ended: far below any planned move, far above
+the rounding of virtual times of a few thousand."""
+
+
+class Phase(enum.Enum):
+    """Where a robot is in its cycle."""
+
+    WAITING = "waiting"  # until its next Look
+    COMPUTING = "computing"  # Looked; its move starts at `at`
+    MOVING = "moving"
+
+
+@dataclass(slots=True)
+class _Robot:
+    """One robot's cycle in progress (the core's own mutable bookkeeping)."""
+
+    at: float  # WAITING: its next Look; COMPUTING: its move's start
+    phase: Phase = Phase.WAITING
+    cycle: int = 0  # cycles begun (its Looks)
+    look: float = 0.0
+    start: float = 0.0
+    origin: Point = (0.0, 0.0)  # where the move starts (where it Looked: it stays while computing)
+    path: Path = field(default_factory=Path)  # the whole move, world frame
+    rest: Path = field(default_factory=Path)  # what is left of it, from where the robot is
+    left: float = 0.0
+    traveled: float = 0.0
+    wait: float = 0.0
+    cut: bool = False
+    stopped: bool = False
+    collisions: list[Collision] = field(default_factory=list)
+
+
+@dataclass(frozen=True, slots=True)
+class CycleDone:
+    """One robot's ended cycle: its Look, the start and end of its move (virtual times; a cycle
+    that asked to stay has start = end = look and an empty path), the world-frame path from
+    `origin`, the arc length covered, every robot's position at `end`, the contacts that stopped
+    it (`t`: arc length along its path) and whether the non-rigid adversary cut it."""
+
+    robot: int
+    cycle: int
+    look: float
+    start: float
+    end: float
+    origin: Point
+    path: Path
+    traveled: float
+    positions: Points
+    collisions: tuple[Collision, ...]
+    cut: bool
+
+
+class AsyncWorld:
+    """The positions of n unit discs in virtual time and every robot's cycle.
+
+    Drive it event by event: `next_time`, `advance` to it, `end_moves`, `start_moves`, then Look
+    (`looking`, `look`) and `submit` each due robot's path with its delays.
+    """
+
+    def __init__(self, positions: Points, seed: int, first_looks: Sequence[float]) -> None:
+        self.positions: Points = snap(np.array(positions, dtype=np.float64))
+        self.n = len(self.positions)
+        if len(first_looks) != self.n:
+            raise ValueError(f"{len(first_looks)} first Looks for {self.n} robots")
+        self.seed = seed
+        self.now = 0.0
+        self.crashed: set[int] = set()
+        self._robots = [_Robot(at=float(t)) for t in first_looks]
+        self.cycles = 0  # cycles ended so far
+
+    def next_time(self) -> float:
+        """The next event: a Look, the start or the natural end of a move (never before now)."""
+        times = []
+        for r, robot in enumerate(self._robots):
+            if r in self.crashed and robot.phase is not Phase.MOVING:
+                continue
+            times.append(self.now + robot.left if robot.phase is Phase.MOVING else robot.at)
+        return max(self.now, min(times)) if times else self.now
+
+    def phase(self, robot: int) -> Phase:
+        return self._robots[robot].phase
+
+    def moving(self) -> list[int]:
+        return [r for r, robot in enumerate(self._robots) if robot.phase is Phase.MOVING]
+
+    def advance(self, t: float) -> None:
+        """Move every mover on to virtual time `t` (one window of physics; contacts stop)."""
+        dt = t - self.now
+        if dt < 0:
+            raise ValueError(f"time runs forward: {t} is before {self.now}")
+        movers = self.moving()
+        if dt > 0 and movers:
+            here = {r: (float(self.positions[r, 0]), float(self.positions[r, 1])) for r in movers}
+            window = {r: truncate(here[r], self._robots[r].rest, dt) for r in movers}
+            outcome = apply_round(self.positions, window)
+            for r in movers:
+                robot = self._robots[r]
+                covered = float(outcome.traveled.get(r, 0.0))
+                for c in outcome.collisions:
+                    if c.robot == r:
+                        robot.collisions.append(
+                            Collision(r, c.other, robot.traveled + c.t, c.point))
+                        robot.stopped = True
+                robot.traveled += covered
+                robot.rest = remainder(here[r], robot.rest, covered)
+            self.positions = np.asarray(outcome.positions, dtype=np.float64)
+            for r in movers:  # what is left, measured from where the robot is (on the grid)
+                robot = self._robots[r]
+                there = (float(self.positions[r, 0]), float(self.positions[r, 1]))
+                robot.left = path_length(there, robot.rest) if robot.rest else 0.0
+        self.now = max(self.now, t)
+
+    def end_moves(self) -> list[CycleDone]:
+        """The moves that ended by now (their whole path, or stopped by contact), robots in
+        order; each robot then waits its cycle's wait before its next Look."""
+        done = []
+        for r, robot in enumerate(self._robots):
+            if robot.phase is Phase.MOVING and (robot.left <= ENDED or robot.stopped):
+                robot.phase, robot.at = Phase.WAITING, self.now + robot.wait
+                done.append(self._done(r, self.now))
+        return done
+
+    def start_moves(self) -> None:
+        """The computed moves whose start has come begin (robots in order)."""
+        for robot in self._robots:
+            if robot.phase is Phase.COMPUTING and robot.at <= self.now:
+                robot.phase, robot.start = Phase.MOVING, self.now  # from where it Looked
+
+    def looking(self) -> list[int]:
+        """The live robots whose Look is due now, in order."""
+        return [r for r, robot in enumerate(self._robots)
+                if robot.phase is Phase.WAITING and robot.at <= self.now and r not in self.crashed]
+
+    def look(self, robot: int) -> Points:
+        """Robot `robot`'s Look now: the others relative to it (world axes), moving or not, in the
+        order `view_order` draws for its cycle (compute must not depend on it)."""
+        state = self._robots[robot]
+        state.cycle += 1
+        state.look = self.now
+        pos = self.positions
+        others = np.concatenate((pos[:robot], pos[robot + 1:])) - pos[robot]
+        order = view_order(self.seed, state.cycle, robot, len(others))
+        return np.asarray(others[order], dtype=np.float64)
+
+    def cycle_of(self, robot: int) -> int:
+        """Robot `robot`'s cycles begun (the one in progress counted)."""
+        return self._robots[robot].cycle
+
+    def submit(self, robot: int, path: Path, compute: float, wait: float, *,
+               cut: bool = False) -> CycleDone | None:
+        """Robot `robot`'s move (world frame, from where it is) after its Look now, starting after
+        `compute`, then `wait` before its next Look. A path of length zero ends the cycle at once
+        (returned); the next Look then comes after compute + wait."""
+        state = self._robots[robot]
+        origin = (float(self.positions[robot, 0]), float(self.positions[robot, 1]))
+        length = path_length(origin, path) if path else 0.0
+        state.origin, state.path, state.rest, state.left = origin, path, path, length
+        state.traveled, state.wait, state.cut, state.stopped = 0.0, wait, cut, False
+        state.collisions = []
+        if length <= ENDED:
+            state.start = self.now
+            state.phase, state.at = Phase.WAITING, self.now + compute + wait
+            return self._done(robot, self.now)
+        state.phase, state.at = Phase.COMPUTING, self.now + compute
+        return None
+
+    def crash(self, robot: int) -> None:
+        """Robot `robot` crashes instead of Looking (it is waiting): it never Looks again and
+        stays where it is, a still obstacle."""
+        if self._robots[robot].phase is not Phase.WAITING:
+            raise ValueError(f"robot {robot} crashes only between cycles")
+        self.crashed.add(robot)
+
+    def quiet(self) -> bool:
+        """No move is under way or about to start."""
+        return all(robot.phase is Phase.WAITING for robot in self._robots)
+
+    def _done(self, r: int, end: float) -> CycleDone:
+        robot = self._robots[r]
+        self.cycles += 1
+        return CycleDone(
+            robot=r, cycle=robot.cycle, look=robot.look, start=robot.start, end=end,
+            origin=robot.origin, path=robot.path, traveled=robot.traveled,
+            positions=self.positions.copy(), collisions=tuple(robot.collisions), cut=robot.cut,
+        )
+
+
+__all__ = ["ENDED", "AsyncWorld", "CycleDone", "Phase"]
