@@ -14,7 +14,13 @@ import numpy as np
 
 from fatswarm.agent.path import Points, sample, truncate
 from fatswarm.deploy.run import ExitCode
-from fatswarm.world.record import RecordFormatError, RunRecord, read_record, torn_end_note
+from fatswarm.world.record import (
+    RecordFormatError,
+    RunRecord,
+    move_origin,
+    read_record,
+    torn_end_note,
+)
 
 EXIT_OK, EXIT_BAD_INPUT = ExitCode.OK, ExitCode.BAD_INPUT
 FORMATS = (".svg", ".png")
@@ -32,7 +38,7 @@ def trajectories(record: RunRecord) -> list[Points]:
     routes: list[list[Points]] = [[here[i : i + 1].copy()] for i in range(n)]
     for rr in record.rounds:
         for move in rr.moves:
-            start = (float(here[move.robot, 0]), float(here[move.robot, 1]))
+            start = move_origin(rr, move.robot, here)
             covered = truncate(start, move.path, move.traveled)
             if covered:
                 routes[move.robot].append(sample(start, covered, TRAIL_STEP)[1:])

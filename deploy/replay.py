@@ -22,7 +22,14 @@ from fatswarm.agent.registry import load_algorithm
 from fatswarm.agent.seam import AlgorithmError, AlgorithmFailure, AlgorithmParamsError, Configured
 from fatswarm.deploy.dashboard import Frame, print_frame, render_frame, save_svg
 from fatswarm.deploy.run import ExitCode
-from fatswarm.world.record import Header, RecordFormatError, RunRecord, read_record, torn_end_note
+from fatswarm.world.record import (
+    Header,
+    RecordFormatError,
+    RunRecord,
+    move_origin,
+    read_record,
+    torn_end_note,
+)
 
 EXIT_OK, EXIT_BAD_INPUT = ExitCode.OK, ExitCode.BAD_INPUT
 TRAIL_STEP = 0.25  # world units between samples of a drawn path (a quarter of a robot radius)
@@ -54,7 +61,7 @@ def build_frames(record: RunRecord, source: str = "replay") -> list[Frame]:
         trails = []
         for move in rr.moves:
             robot, path, traveled = move.robot, move.path, move.traveled
-            start = (float(positions[robot][0]), float(positions[robot][1]))
+            start = move_origin(rr, robot, positions)
             covered = truncate(start, path, traveled) if math.isfinite(traveled) else path
             if covered:
                 trails.append(sample(start, covered, TRAIL_STEP))

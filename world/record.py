@@ -101,6 +101,15 @@ class RunRecord:
     torn_line: int | None = None
 
 
+def move_origin(entry: RoundEntry, robot: int, before: Points) -> tuple[float, float]:
+    """Where robot `robot`'s move of `entry` starts: the positions `before` the round, or, in an
+    async run's cycle line, its `origin` (the robot's position at its Look: docs/record.md)."""
+    origin = entry.extra.get("origin")
+    if isinstance(origin, list) and len(origin) == 2:
+        return (float(origin[0]), float(origin[1]))
+    return (float(before[robot][0]), float(before[robot][1]))
+
+
 def _positions_list(positions: Points) -> list[list[float]]:
     arr = np.asarray(positions, dtype=np.float64)
     return [[float(x), float(y)] for x, y in arr]
@@ -510,6 +519,7 @@ __all__ = [
     "RunRecord",
     "collision_to_record",
     "iter_record",
+    "move_origin",
     "read_record",
     "torn_end_note",
 ]

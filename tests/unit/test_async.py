@@ -277,3 +277,22 @@ def test_run_lockstep_async_from_the_command_line_and_refusals(
     assert cli.main(["run", "--scheduler", "async", "-n", "5", "--no-dashboard", "-q"]) == 2
     err = capsys.readouterr().err.strip()
     assert "--lockstep" in err and "\n" not in err
+
+
+@pytest.mark.parametrize("name", ASYNC_NAMES)
+def test_plot_and_replay_draw_each_async_move_from_where_it_started(name: str,
+                                                                    tmp_path: FsPath) -> None:
+    from fatswarm.deploy.plot import TRAIL_STEP, trajectories
+    from fatswarm.deploy.replay import build_frames
+
+    _, record = _record(tmp_path, name, 6, 1)
+    final = record.rounds[-1].positions
+    for robot, route in enumerate(trajectories(record)):
+        assert np.allclose(route[-1], final[robot], atol=1e-6)
+        steps = np.hypot(*np.diff(route, axis=0).T)
+        assert steps.max(initial=0.0) <= TRAIL_STEP + 1e-6  # no jump: each move from its origin
+    frames = build_frames(record, source="test")
+    trails = [trail for frame in frames for trail in frame.trails]
+    assert trails and all(
+        any(np.allclose(trail[0], e.extra["origin"], atol=1e-12) for e in record.rounds)
+        for trail in trails)
