@@ -17,6 +17,7 @@ from typing import Any
 
 from fatswarm.agent.protocol import alive_any_key, robot_of_alive_key
 from fatswarm.coordinator.protocol import alive_key
+from fatswarm.coordinator.async_rounds import coordinator_core
 from fatswarm.coordinator.rounds import (
     Action,
     CoordinatorCore,
@@ -57,6 +58,7 @@ class CoordinatorConfig:
     resume_live: Sequence[int] | None = None  # live set assumed when replaying the scheduler
     resume_grace_s: float = _TIMES.resume_grace_s  # a restarted coordinator waits this long
     retry_s: float = _TIMES.retry_s  # before asking a silent world again
+    scheduler: str = ""  # its name: an async model gets the async core (coordinator/async_rounds)
 
     @property
     def times(self) -> RoundTimes:
@@ -81,7 +83,7 @@ class Coordinator:
     ) -> None:
         self.cfg = cfg
         self.stop = stop
-        self.core = CoordinatorCore(make_scheduler, cfg.times, cfg.resume_live)
+        self.core = coordinator_core(cfg.scheduler, make_scheduler, cfg.times, cfg.resume_live)
         self.events: Inbox[tuple[str, Any]] = Inbox()
         self.rejected = 0
         self._began = 0.0  # perf_counter mark of the round's opening (debug timings)

@@ -213,9 +213,9 @@ def check_inputs(args: argparse.Namespace) -> tuple[str | None, int, RunSetup | 
             check_seconds("--pace", args.pace, zero_ok=True)
         setup = resolve_run(args, seed)
         seed = setup.seed
-        if setup.scheduler.name in ASYNC_NAMES:
-            raise RunInputError(f"--scheduler {setup.scheduler.name} runs in lock step only (for "
-                                "now: the networked async clock is not built): add --lockstep")
+        if setup.resumed is not None and setup.scheduler.name in ASYNC_NAMES:
+            raise RunInputError(f"--resume: a {setup.scheduler.name} run cannot be resumed yet; "
+                                "run it again with its --seed")
         if args.swarm is not None:
             from fatswarm.world.protocol import check_swarm
 
@@ -230,7 +230,8 @@ def write_header(setup: RunSetup, record: str, swarm: str) -> None:
     """Start the record of a new run with its header: the world then runs exactly this run (it
     resumes the record, with no round yet), so none of it travels as flags to the world.
     Raises RecordWriteError (a full disk, a permission)."""
-    from fatswarm.world.core import WorldCore, WorldSetup
+    from fatswarm.world.async_core import make_world
+    from fatswarm.world.core import WorldSetup
 
     assert setup.config is not None
     extra = setup.config.header_extra(networked=True, n=setup.params.n)
@@ -239,7 +240,7 @@ def write_header(setup: RunSetup, record: str, swarm: str) -> None:
                        params=dict(setup.params.values), extra=extra,
                        non_rigid=setup.non_rigid, crash=setup.crash)
     with RecordWriter(record, fsync=True) as journal:
-        WorldCore(world, journal, algorithm=setup.params)
+        make_world(world, journal, algorithm=setup.params)
 
 
 class StopSignal:

@@ -26,19 +26,14 @@ from fatswarm.agent.protocol import MoveSubmitted
 from fatswarm.agent.seam import Configured, checked
 from fatswarm.agent.uniform_circle import ALGORITHM as UNIFORM_CIRCLE
 from fatswarm.coordinator.adversary import AsyncModel
+from fatswarm.coordinator.async_rounds import coordinator_core
 from fatswarm.coordinator.rounds import Ask, CoordinatorCore, Finished, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
-from fatswarm.deploy.lockstep_async import AsyncRun
-from fatswarm.world.core import (
-    Committed,
-    Journal,
-    NullJournal,
-    WorldCore,
-    WorldSetup,
-    crash_plan,
-)
+from fatswarm.world.async_core import AsyncWorldCore, make_world
+from fatswarm.world.asynchrony import CycleDone
+from fatswarm.world.core import Committed, Journal, WorldCore, WorldSetup
 from fatswarm.world.outcome import Status
-from fatswarm.world.physics import validate_configuration
+from fatswarm.world.physics import RoundOutcome, validate_configuration
 from fatswarm.world.progress import Progress
 from fatswarm.world.protocol import Commit, ProtocolError
 from fatswarm.world.record import Header, RoundEntry, RunRecord
@@ -136,13 +131,8 @@ def run_lockstep(
     if n != setting.n:
         raise ValueError(f"the start has {n} robots but params say n={setting.n}")
     cap = default_max_rounds(n, scheduler.name) if max_rounds is None else max_rounds
-    if isinstance(scheduler, AsyncModel):
-        if history is not None:
-            raise HistoryMismatchError(f"a {scheduler.name} run cannot be resumed (yet)")
-        return _run_async(positions, setting, scheduler, seed=seed, max_rounds=cap,
-                          record=record, on_round=on_round, compute=compute,
-                          algorithm_ref=algorithm_ref, header_extra=header_extra,
-                          non_rigid=non_rigid, crash=crash)
+    if isinstance(scheduler, AsyncModel) and history is not None:
+        raise HistoryMismatchError(f"a {scheduler.name} run cannot be resumed (yet)")
     setup = WorldSetup(
         swarm=LOCKSTEP_SWARM, n=n, seed=seed, scheduler=scheduler.name, initial=positions,
         max_rounds=cap, algorithm=algorithm_ref or setting.name, params=dict(setting.values),
@@ -150,7 +140,7 @@ def run_lockstep(
     )
     if history is None:
         setting.check_start(positions)
-        world = WorldCore(setup, record, algorithm=setting)
+        world = make_world(setup, record, algorithm=setting)
         checked = scheduler
     else:
         _check_history(history)
@@ -166,7 +156,8 @@ def run_lockstep(
     for robot in range(n):  # every robot's "agent" lives here, for the whole run
         world.set_alive(robot, True)
     bus = _Bus(world, setting, compute, [draw_flip(seed, robot) for robot in range(n)], on_round)
-    coordinator = CoordinatorCore(lambda _n: checked, RoundTimes(), resume_live=range(n))
+    coordinator = coordinator_core(scheduler.name, lambda _n: checked, RoundTimes(),
+                                   resume_live=range(n))
     for robot in range(n):
         coordinator.on_alive(robot, True, 0.0)
     finished = bus.run(coordinator)
@@ -183,57 +174,7 @@ def run_lockstep(
         initial=np.array(positions),
         positions=world.positions,
         moves_by_robot=progress.moves_by_robot,
-    )
-
-
-def _run_async(
-    positions: Points,
-    setting: Configured,
-    model: AsyncModel,
-    *,
-    seed: int,
-    max_rounds: int,
-    record: Journal | None,
-    on_round: Callable[[RoundReport], None] | None,
-    compute: ComputeFn | None,
-    algorithm_ref: str | None,
-    header_extra: dict[str, Any] | None,
-    non_rigid: float | None,
-    crash: int | None,
-) -> RunResult:
-    """`run_lockstep` under an async model: one record line per ended cycle."""
-    setting.check_start(positions)
-    if crash is not None:
-        crash_plan(seed, len(positions), crash)  # refuses a bad f before anything is written
-    journal = NullJournal() if record is None else record
-    journal.header(
-        len(positions), seed, model.name, positions, algorithm=setting.name,
-        params=setting.values, algorithm_ref=algorithm_ref or setting.name,
-        max_rounds=max_rounds, swarm=LOCKSTEP_SWARM, fairness_time=model.bound(),
-        **({} if non_rigid is None else {"non_rigid": non_rigid}),
-        **({} if crash is None else {"crash": crash}),
-        **dict(header_extra or {}),
-    )
-    own = setting.params
-    user = None if compute is None else (lambda view: compute(view, own))
-
-    def report(committed: Committed, _done: object) -> None:
-        if on_round is not None:
-            on_round(RoundReport(committed.round, committed.active, committed.paths,
-                                 committed.outcome, run.tracker.snapshot()))
-
-    run = AsyncRun(positions, setting, model, seed=seed, max_rounds=max_rounds,
-                   journal=journal, compute=user, non_rigid=non_rigid, crash=crash,
-                   on_cycle=report)
-    run.run()
-    progress = run.tracker.snapshot()
-    assert progress.status is not None
-    return RunResult(
-        status=progress.status, rounds=progress.rounds, epochs=progress.epochs,
-        moves=progress.moves, total_distance=progress.total_distance,
-        collisions=progress.collisions, looks=run.looks, initial=np.array(positions),
-        positions=run.world.positions.copy(), moves_by_robot=progress.moves_by_robot,
-        time=run.world.now,
+        time=world.clock.now if isinstance(world, AsyncWorldCore) else None,
     )
 
 
@@ -253,6 +194,7 @@ class _Bus:
         self.setting = setting
         self.flips = flips
         self.on_round = on_round
+        self.on_round_cycles: Callable[[RoundReport], None] | None = None
         self.looks = 0
         self.faults = 0  # computes that raised or gave no valid path (the robot stayed)
         self.compute: Callable[[Points], Path]
@@ -261,6 +203,9 @@ class _Bus:
             self.compute = lambda view: user(view, own)
         else:
             self.compute = setting.compute
+        if isinstance(world, AsyncWorldCore) and on_round is not None:
+            world.on_cycle = self._cycle_report  # progress by ended cycle, not by instant
+            self.on_round_cycles, self.on_round = on_round, None
         make_planner = getattr(setting.algorithm, "round_planner", None)
         self.planner = (make_planner(setting.params)
                         if compute is None and make_planner is not None else None)
@@ -301,6 +246,8 @@ class _Bus:
         if self.planner is not None:
             planned = self.planner.paths(world.positions, active, self.flips)
         for robot in active:
+            if not world.may_look(robot):
+                continue  # its Look stays held (a robot the async adversary crashed)
             if planned is not None:
                 if not world.admit_look(robot):
                     continue
@@ -338,6 +285,16 @@ class _Bus:
                         problem, "; further faults are only counted"
                         if self.faults == SHOWN_FAULTS else "")
         return None
+
+    def _cycle_report(self, done: CycleDone) -> None:
+        callback = self.on_round_cycles
+        if callback is None:
+            return
+        moved = {done.robot: done.path} if done.path else {}
+        traveled = {done.robot: done.traveled} if done.path else {}
+        outcome = RoundOutcome(done.positions, traveled, list(done.collisions))
+        k = self.world.tracker.snapshot().rounds
+        callback(RoundReport(k, (done.robot,), moved, outcome, self.world.tracker.snapshot()))
 
     def _report(self) -> None:
         done = self.world.last_commit

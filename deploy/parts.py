@@ -173,7 +173,7 @@ def main_router(args: argparse.Namespace) -> int:
 
 def add_world_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm world` (the start flags matter only for a new state file)."""
-    from fatswarm.coordinator.schedule import ROUND_NAMES
+    from fatswarm.coordinator.schedule import NAMES
     from fatswarm.world.starts import KINDS
 
     _add_common(p, GIVES_UP)
@@ -186,7 +186,7 @@ def add_world_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0, metavar="S", help="seed of the random start")
     p.add_argument("--init", metavar="PATH", help='JSON {"positions": [[x, y], ...], "a": 4.0}')
     p.add_argument("--start", choices=KINDS, default="clustered", help="kind of random start")
-    p.add_argument("--scheduler", choices=ROUND_NAMES, default="ssync",
+    p.add_argument("--scheduler", choices=NAMES, default="ssync",
                    help="scheduler name written to the record (the coordinator runs it)")
     p.add_argument("--max-rounds", type=int, default=None, metavar="R",
                    help="end as max_rounds after R rounds (default: as lockstep)")
@@ -270,11 +270,11 @@ def _header_fields(text: str | None) -> dict[str, Any]:
 
 def add_coordinator_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm coordinator` (n comes from the world)."""
-    from fatswarm.coordinator.schedule import ROUND_NAMES
+    from fatswarm.coordinator.schedule import NAMES
 
     _add_common(p, GIVES_UP)
     p.add_argument("--seed", type=int, default=0, metavar="S", help="seed of the scheduler")
-    p.add_argument("--scheduler", choices=ROUND_NAMES, default="ssync",
+    p.add_argument("--scheduler", choices=NAMES, default="ssync",
                    help="who is active each round")
     p.add_argument("--schedule", metavar="PATH", help="scripted scheduler's JSON or run record")
     p.add_argument("--fairness", type=int, default=None, metavar="K",
@@ -303,7 +303,8 @@ def main_coordinator(args: argparse.Namespace) -> int:
         conf = _client_config(args)
         if args.move_timeout <= 0 or args.start_timeout < 0 or args.pace < 0:
             raise ValueError("--move-timeout must be > 0, --start-timeout and --pace >= 0")
-        cfg = CoordinatorConfig(args.swarm, args.move_timeout, args.start_timeout, args.pace)
+        cfg = CoordinatorConfig(args.swarm, args.move_timeout, args.start_timeout, args.pace,
+                                scheduler=args.scheduler)
         token = alive_key(args.swarm)  # a bad --swarm is said before any wait
         session = open_client(conf, stop)
         if session is None:

@@ -122,7 +122,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scheduler", choices=NAMES, default=DEFAULT_SCHEDULER, action=_StoreGiven,
                    help=f"who is active each round (default {DEFAULT_SCHEDULER}); async, "
                    "async-slowest: no rounds, robots on their own clocks in virtual time, the "
-                   "adversary's delays random or slowest robot last (--lockstep only)")
+                   "adversary's delays random or slowest robot last")
     p.add_argument("--schedule", metavar="PATH",
                    help='scripted scheduler: JSON {"rounds": [[0, 2], [1], ...]} or a run record')
     p.add_argument("--fairness", type=int, default=None, metavar="K",

@@ -18,6 +18,7 @@ coordinator/adversary.py), so the same core serves lock step and a networked run
 from __future__ import annotations
 
 import enum
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Final
@@ -90,6 +91,8 @@ class AsyncWorld:
     """
 
     def __init__(self, positions: Points, seed: int, first_looks: Sequence[float]) -> None:
+        """`first_looks`: each robot's first Look time; math.inf for one the adversary sets
+        later (`set_look`)."""
         self.positions: Points = snap(np.array(positions, dtype=np.float64))
         self.n = len(self.positions)
         if len(first_looks) != self.n:
@@ -163,12 +166,39 @@ class AsyncWorld:
         return [r for r, robot in enumerate(self._robots)
                 if robot.phase is Phase.WAITING and robot.at <= self.now and r not in self.crashed]
 
-    def look(self, robot: int) -> Points:
-        """Robot `robot`'s Look now: the others relative to it (world axes), moving or not, in the
-        order `view_order` draws for its cycle (compute must not depend on it)."""
+    def set_look(self, robot: int, t: float) -> None:
+        """Robot `robot`'s first Look comes at `t` (the adversary's choice); only for a robot
+        waiting with no Look time yet. Raises ValueError otherwise, or for a time in the past."""
+        state = self._robots[robot]
+        if state.phase is not Phase.WAITING or math.isfinite(state.at):
+            raise ValueError(f"robot {robot} already has its next Look at {state.at}")
+        if not math.isfinite(t) or t < self.now:
+            raise ValueError(f"robot {robot}'s Look at {t} is not a time from now ({self.now}) on")
+        state.at = float(t)
+
+    def looks(self) -> tuple[list[tuple[int, float]], list[int]]:
+        """(each live waiting robot's next Look time, the live waiting robots without one)."""
+        known, unset = [], []
+        for r, state in enumerate(self._robots):
+            if state.phase is Phase.WAITING and r not in self.crashed:
+                if math.isfinite(state.at):
+                    known.append((r, state.at))
+                else:
+                    unset.append(r)
+        return known, unset
+
+    def begin_cycle(self, robot: int) -> None:
+        """Robot `robot` Looks now: its next cycle begins (it must be due)."""
         state = self._robots[robot]
         state.cycle += 1
         state.look = self.now
+
+    def look(self, robot: int) -> Points:
+        """Robot `robot`'s Look now (`begin_cycle`) and its view: the others relative to it (world
+        axes), moving or not, in the order `view_order` draws for its cycle (compute must not
+        depend on it)."""
+        self.begin_cycle(robot)
+        state = self._robots[robot]
         pos = self.positions
         others = np.concatenate((pos[:robot], pos[robot + 1:])) - pos[robot]
         order = view_order(self.seed, state.cycle, robot, len(others))

@@ -678,12 +678,13 @@ def open_world(
 
     Raises RecordFormatError (a file that is not a run record) or what `make_setup` raises.
     """
+    from fatswarm.world.async_core import make_world  # it builds on this module
     if os.path.exists(state_path) and os.path.getsize(state_path) > 0:
         cut_torn_line(state_path)
         record = read_record(state_path)
         setup = setup_from_header(record.header, swarm, max_rounds)
-        return WorldCore(setup, RecordWriter(state_path, fsync=fsync, append=True), record,
-                         epoch=epoch)
-    return WorldCore(make_setup(), RecordWriter(state_path, fsync=fsync), epoch=epoch)
+        return make_world(setup, RecordWriter(state_path, fsync=fsync, append=True), record,
+                          epoch=epoch)
+    return make_world(make_setup(), RecordWriter(state_path, fsync=fsync), epoch=epoch)
 
 

@@ -21,11 +21,13 @@ from numpy.typing import NDArray
 from fatswarm.agent.seam import MAX_PARAMS, MAX_TEXT, ParamValue
 from fatswarm.world.outcome import Status
 
-PROTOCOL_VERSION = 3  # 3: the held Look is the activation; one moves notice a round; no seed
+PROTOCOL_VERSION = 4  # 3: the held Look is the activation; one moves notice a round; no seed;
+# 4: async models' virtual times (Begin.at, Begin.looks, Commit.delays, ControlReply.now/looks)
 ROOT = "fatswarm"
 MAX_ROBOTS = 4096  # bounds every list and array a peer can make us allocate
 MAX_MESSAGE_BYTES = 1 << 20  # 1 MiB: a 4096-robot state is ~130 KB
-MAX_CONTROL_BYTES = 64 << 10  # a Begin naming 4096 robots is ~20 KB: larger is dropped unread
+MAX_CONTROL_BYTES = 160 << 10  # a Commit with 4096 robots' async delays is ~100 KB, a Begin with
+# their first Looks ~65 KB, a reply with their next Looks ~77 KB: larger is dropped unread
 MAX_LOOK_BYTES = 256  # a LookRequest is two integers: larger is refused unread
 MAX_NOTICE_BYTES = 64 << 10  # a MovesHeld naming 4096 robots is ~12 KB: larger is dropped unread
 MAX_COORD = 1e9  # coordinates beyond this are nonsense for unit discs and risk overflow
@@ -427,16 +429,51 @@ class Hello:
         return pack("hello", {})
 
 
+MAX_TIME = 1e15  # virtual times (async models) are finite and below this
+
+
+def _times(pairs: Sequence[tuple[int, float]]) -> list[list[float]]:
+    return [[int(r), float(t)] for r, t in pairs]
+
+
+def get_times(obj: dict[str, Any], key: str, width: int = 2) -> tuple[tuple[Any, ...], ...]:
+    """An optional list of [robot, t, ...] rows (robot an int, then `width` - 1 finite times in
+    [0, MAX_TIME]); () when absent."""
+    rows = obj.get(key, [])
+    if not isinstance(rows, list) or len(rows) > MAX_ROBOTS:
+        raise ProtocolError(f"{key!r} must be a list of at most {MAX_ROBOTS} rows")
+    out = []
+    for row in rows:
+        if not isinstance(row, list) or len(row) != width:
+            raise ProtocolError(f"{key!r} rows must be [robot, {width - 1} times], got {row!r}")
+        cells = {"robot": row[0], **{f"t{k}": v for k, v in enumerate(row[1:])}}
+        robot = get_int(cells, "robot", 0, MAX_ROBOTS - 1)
+        out.append((robot, *(get_float(cells, f"t{k}", 0.0, MAX_TIME)
+                             for k in range(width - 1))))
+    return tuple(out)
+
+
 @dataclass(frozen=True, slots=True)
 class Begin:
-    """Coordinator opens round `round` with active set `active` (before activating the agents)."""
+    """Coordinator opens round `round` with active set `active` (before activating the agents).
+
+    Async models: the round is the instant `at` (virtual time) at which `active` Look; `looks`
+    gives robots their first Look's time (the adversary's choice, coordinator/adversary.py).
+    """
 
     round: int
     active: tuple[int, ...]
+    at: float | None = None
+    looks: tuple[tuple[int, float], ...] = ()
 
     def encode(self) -> bytes:
         """msgpack bytes."""
-        return pack("begin", {"round": int(self.round), "active": _robot_list(self.active)})
+        fields: dict[str, Any] = {"round": int(self.round), "active": _robot_list(self.active)}
+        if self.at is not None:
+            fields["at"] = float(self.at)
+        if self.looks:
+            fields["looks"] = _times(self.looks)
+        return pack("begin", fields)
 
 
 @dataclass(frozen=True, slots=True)
@@ -448,11 +485,17 @@ class Commit:
     round: int
     timed_out: tuple[int, ...] = ()  # active robots that sent no move before the deadline
     then_active: tuple[int, ...] = ()  # the next round's active set; () opens nothing
+    delays: tuple[tuple[int, float, float], ...] = ()  # async: (robot, compute, wait) for each
+    # active robot: the adversary's delays of the cycle it began in this round
 
     def encode(self) -> bytes:
         """msgpack bytes."""
-        return pack("commit", {"round": int(self.round), "timed_out": _robot_list(self.timed_out),
-                               "then_active": _robot_list(self.then_active)})
+        fields: dict[str, Any] = {"round": int(self.round),
+                                  "timed_out": _robot_list(self.timed_out),
+                                  "then_active": _robot_list(self.then_active)}
+        if self.delays:
+            fields["delays"] = [[int(r), float(c), float(w)] for r, c, w in self.delays]
+        return pack("commit", fields)
 
     @property
     def then(self) -> Begin | None:
@@ -469,9 +512,13 @@ def decode_control(data: bytes | bytearray | memoryview) -> ControlRequest:
     if kind == "hello":
         return Hello()
     if kind == "begin":
-        return Begin(round=get_int(obj, "round", 1, 2**62), active=get_robots(obj, "active"))
+        at = obj.get("at")
+        return Begin(round=get_int(obj, "round", 1, 2**62), active=get_robots(obj, "active"),
+                     at=None if at is None else get_float(obj, "at", 0.0, MAX_TIME),
+                     looks=get_times(obj, "looks"))
     return Commit(round=get_int(obj, "round", 1, 2**62), timed_out=get_robots(obj, "timed_out"),
-                  then_active=get_robots(obj, "then_active"))
+                  then_active=get_robots(obj, "then_active"),
+                  delays=get_times(obj, "delays", 3))
 
 
 @dataclass(frozen=True, slots=True)
@@ -487,6 +534,9 @@ class ControlReply:
     collisions: int = 0  # robots stopped at contact so far (a formation with any is not clean)
     held: tuple[int, ...] = ()  # robots whose moves it holds for `open_round` (a restarted
     # coordinator need not wait for their notices again)
+    now: float = 0.0  # async: the world's virtual time
+    looks: tuple[tuple[int, float], ...] = ()  # async: each waiting live robot's next Look
+    unset: tuple[int, ...] = ()  # async: waiting live robots with no Look time yet (first Looks)
 
     def encode(self) -> bytes:
         """msgpack bytes."""
@@ -501,6 +551,9 @@ class ControlReply:
                 "status": self.status,
                 "collisions": int(self.collisions),
                 "held": _robot_list(self.held),
+                **({} if not (self.now or self.looks or self.unset) else {
+                    "now": float(self.now), "looks": _times(self.looks),
+                    "unset": _robot_list(self.unset)}),
             },
         )
 
@@ -520,6 +573,9 @@ class ControlReply:
             status=status,
             collisions=get_int(obj, "collisions", 0, 2**62),
             held=get_robots(obj, "held"),
+            now=get_float(obj, "now", 0.0, MAX_TIME) if "now" in obj else 0.0,
+            looks=get_times(obj, "looks"),
+            unset=get_robots(obj, "unset") if "unset" in obj else (),
         )
 
 

@@ -384,3 +384,33 @@ def test_a_crash_run_records_the_lockstep_run_with_the_same_crashes(tmp_path: Pa
         run_lockstep(random_start(6, SEED, "clustered", 4.0), Params(6, 4.0),
                      make_scheduler("fsync", 6, SEED), seed=SEED, record=rec, crash=1)
     assert_same_run(net, read_record(str(lock)))
+
+
+@pytest.mark.parametrize(("scheduler", "flags"), [
+    ("async", []), ("async-slowest", []), ("async", ["--crash", "1", "--non-rigid", "0.5"]),
+])
+def test_an_async_run_records_the_lockstep_run_instant_by_instant(
+        tmp_path: Path, scheduler: str, flags: list[str]) -> None:
+    # the coordinator is the adversary and the clock, the world runs the moves between instants:
+    # the same cores as the lock step, so the same cycles, virtual times and positions
+    record = tmp_path / "net.jsonl"
+    code, out = _fatswarm_run(["-n", "5", "--seed", "2", "--scheduler", scheduler, *flags,
+                               "--record", str(record), "-q"])
+    net = read_record(str(record))
+    assert net.header.scheduler == scheduler
+    assert all({"look", "start", "end", "origin"} <= set(e.extra) for e in net.rounds)
+    assert net.result is not None and code == (0 if net.result.status == "formed" else 1), out
+    from fatswarm.agent.params import Params
+    from fatswarm.coordinator.schedule import make_scheduler
+    from fatswarm.deploy.lockstep import run_lockstep
+    from fatswarm.world.record import RecordWriter
+    from fatswarm.world.starts import random_start
+
+    lock = tmp_path / "lock.jsonl"
+    crash = 1 if "--crash" in flags else None
+    non_rigid = 0.5 if "--non-rigid" in flags else None
+    with RecordWriter(lock) as rec:
+        run_lockstep(random_start(5, 2, "clustered", 4.0), Params(5, 4.0),
+                     make_scheduler(scheduler, 5, 2), seed=2, record=rec, crash=crash,
+                     non_rigid=non_rigid)
+    assert_same_run(net, read_record(str(lock)))

@@ -5,6 +5,7 @@ reader rebuild every robot's position at any time."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from collections.abc import Callable
@@ -26,10 +27,9 @@ from fatswarm.coordinator.adversary import (
     make_async,
 )
 from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy import cli
+from fatswarm.deploy import cli, lockstep
 from fatswarm.deploy.lockstep import configured, run_lockstep
-from fatswarm.deploy.lockstep_async import AsyncRun
-from fatswarm.world import asynchrony
+from fatswarm.world import core
 from fatswarm.world.asynchrony import AsyncWorld, CycleDone, Phase
 from fatswarm.world.core import crash_plan
 from fatswarm.world.record import RecordWriter, read_record
@@ -214,23 +214,24 @@ def test_an_async_run_repeats_exactly_from_its_seed(tmp_path: FsPath) -> None:
 
 
 @pytest.mark.parametrize("name", ASYNC_NAMES)
+@pytest.mark.parametrize("planner", [True, False])
 def test_async_decisions_do_not_depend_on_frames_or_view_order(
-        name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+        name: str, planner: bool, monkeypatch: pytest.MonkeyPatch) -> None:
     n, seed = 6, 5
+    setting = configured(Params(n))
+    compute = None if planner else (lambda view, params: setting.compute(view))
 
     def final(flips: Callable[[int], bool]) -> tuple[int, list[list[float]]]:
-        run = AsyncRun(random_start(n, seed), configured(Params(n)),
-                       make_async(name, n, seed), seed=seed, max_rounds=2000)
-        run.flips = [flips(r) for r in range(n)]
-        run.run()
-        return run.tracker.snapshot().rounds, run.world.positions.tolist()
+        monkeypatch.setattr(lockstep, "draw_flip", lambda _seed, robot: flips(robot))
+        result = run_lockstep(random_start(n, seed), setting, make_async(name, n, seed),
+                              seed=seed, compute=compute)
+        return result.rounds, result.positions.tolist()
 
     base = final(lambda r: False)
     assert final(lambda r: True) == base
     assert final(lambda r: r % 2 == 1) == base
-    original = asynchrony.view_order
-    monkeypatch.setattr(asynchrony, "view_order",
-                        lambda *a: original(*a)[::-1].copy())  # type: ignore[no-untyped-call]
+    original = core.view_order
+    monkeypatch.setattr(core, "view_order", lambda *a: original(*a)[::-1].copy())
     assert final(lambda r: False) == base
 
 
@@ -274,9 +275,9 @@ def test_run_lockstep_async_from_the_command_line_and_refusals(
                      "--resume", "-q"]) == 2
     err = capsys.readouterr().err.strip()
     assert "cannot be resumed" in err and "\n" not in err
-    assert cli.main(["run", "--scheduler", "async", "-n", "5", "--no-dashboard", "-q"]) == 2
-    err = capsys.readouterr().err.strip()
-    assert "--lockstep" in err and "\n" not in err
+    assert cli.main(["run", "--record", str(out), "--resume", "--no-dashboard", "-q"]) == 2
+    err = capsys.readouterr().err.strip()  # networked: refused before any process starts
+    assert "cannot be resumed" in err and "\n" not in err
 
 
 @pytest.mark.parametrize("name", ASYNC_NAMES)
@@ -296,3 +297,73 @@ def test_plot_and_replay_draw_each_async_move_from_where_it_started(name: str,
     assert trails and all(
         any(np.allclose(trail[0], e.extra["origin"], atol=1e-12) for e in record.rounds)
         for trail in trails)
+
+
+def _async_world(n: int = 3) -> Any:
+    from fatswarm.world.async_core import AsyncWorldCore
+    from fatswarm.world.core import WorldSetup
+
+    start = np.array([[3.0 * i, 0.0] for i in range(n)])
+    core_ = AsyncWorldCore(WorldSetup("t", n, 0, "async", start, 100))
+    for robot in range(n):
+        core_.set_alive(robot, True)
+    return core_
+
+
+def test_a_begin_the_world_cannot_open_yet_is_answered_with_what_is_due_and_when() -> None:
+    from fatswarm.world.protocol import Begin, Commit
+
+    world = _async_world()
+    first = ((0, 5.0), (1, 1.0), (2, 9.0))
+    reply, _ = world.control(Begin(1, (0,), at=5.0, looks=first))
+    assert reply.ok and reply.open_round == 0  # robot 1 Looks first, at 1.0
+    assert (reply.now, dict(reply.looks), reply.unset) == (1.0, dict(first), ())
+    reply, _ = world.control(Begin(1, (1,), at=1.0))
+    assert reply.ok and reply.open_round == 1 and world.may_look(1) and not world.may_look(0)
+    refused, _ = world.control(Commit(1))
+    assert not refused.ok and "delays" in refused.reason
+    reply, _ = world.control(Commit(1, (1,), delays=((1, 0.5, 2.0),)))  # it stays: no move
+    assert reply.ok and reply.committed == 1
+    assert dict(reply.looks)[1] == 1.0 + 0.5 + 2.0  # its next Look: after compute and wait
+    assert world.tracker.snapshot().rounds == 1  # one ended cycle, recorded
+
+
+def test_the_async_coordinator_plans_the_first_looks_then_follows_the_world() -> None:
+    from fatswarm.agent.protocol import MoveSubmitted
+    from fatswarm.coordinator.async_rounds import AsyncCoordinatorCore
+    from fatswarm.coordinator.rounds import Ask, Finished, RoundTimes
+    from fatswarm.world.protocol import Begin, Commit
+
+    world = _async_world()
+    model = make_async("async", 3, 0)
+    coordinator = AsyncCoordinatorCore(lambda n: model, RoundTimes(), resume_live=range(3))
+    for robot in range(3):
+        coordinator.on_alive(robot, True, 0.0)
+    actions = coordinator.start(0.0)
+    begins: list[Begin] = []
+    while not any(isinstance(a, Finished) for a in actions):
+        (ask,) = actions
+        assert isinstance(ask, Ask)
+        request = ask.request
+        known = dict(world.clock.looks()[0])
+        reply, _ = world.control(request)
+        if isinstance(request, Begin):
+            begins.append(request)
+            looks = {**known, **dict(request.looks)}
+            assert request.at == min(looks.values())  # the earliest Look the world had said
+        if isinstance(request, Commit):  # the adversary's delays, for the instant's robots
+            assert [(r, c, w) for r, c, w in request.delays] == [
+                (r, *dataclasses.astuple(model.cycle(r, 1))) for r in world.last_commit.active]
+        actions = coordinator.on_reply(reply, 0.0)
+        if world.open_round:
+            for robot in world.active:  # every Look answered; everyone asks to stay
+                assert world.look(robot) is not None
+                world.move(robot, MoveSubmitted(robot, world.open_round, Path()))
+            notice = world.moves_notice()
+            assert notice is not None
+            actions += coordinator.on_held(notice, 0.0)
+            actions = [a for a in actions if isinstance(a, (Ask, Finished))]
+    assert dict(begins[0].looks) == {r: model.first_look(r) for r in range(3)}
+    assert all(not b.looks for b in begins[1:])
+    assert world.status == "stalled" and world.tracker.snapshot().rounds == 3
+    assert len(begins) == 3  # one instant per robot: random first Looks never tie

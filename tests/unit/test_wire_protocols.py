@@ -100,6 +100,30 @@ def test_move_round_trips(robot: int, round_no: int, pts: list[tuple[float, floa
     assert MoveSubmitted.decode(msg.encode()) == msg
 
 
+def test_async_control_fields_round_trip_and_stay_optional() -> None:
+    begin = Begin(3, (0, 4), at=12.5, looks=((0, 1.25), (4, 12.5)))
+    assert decode_control(begin.encode()) == begin
+    commit = Commit(3, (4,), delays=((0, 0.5, 1.75), (4, 0.0, 2.0)))
+    assert decode_control(commit.encode()) == commit
+    reply = ControlReply(True, "", 5, 2, 0, "running", now=7.5, looks=((1, 8.0),), unset=(2, 3))
+    assert ControlReply.decode(reply.encode()) == reply
+    assert "at" not in msgpack.unpackb(Begin(3, (0,)).encode())  # round models send none
+    assert "delays" not in msgpack.unpackb(Commit(3, ()).encode())
+    assert "now" not in msgpack.unpackb(ControlReply(True, "", 5, 2, 3, "running").encode())
+
+
+@pytest.mark.parametrize(("fields", "reason"), [
+    ({"at": -1.0}, "'at'"), ({"at": float("nan")}, "'at'"), ({"at": "soon"}, "'at'"),
+    ({"looks": [[0]]}, "rows"), ({"looks": [[0, -1.0]]}, "'t0'"), ({"looks": "all"}, "'looks'"),
+    ({"looks": [[MAX_ROBOTS, 1.0]]}, "'robot'"), ({"looks": [[True, 1.0]]}, "'robot'"),
+])
+def test_an_async_begin_with_bad_times_is_refused(fields: dict[str, object], reason: str
+                                                  ) -> None:
+    good = {"v": PROTOCOL_VERSION, "t": "begin", "round": 2, "active": [0]}
+    with pytest.raises(ProtocolError, match=reason):
+        decode_control(_raw(**good, **fields))
+
+
 def test_control_messages_round_trip() -> None:
     assert decode_control(Hello().encode()) == Hello()
     assert decode_control(Begin(3, (0, 4)).encode()) == Begin(3, (0, 4))
@@ -138,6 +162,14 @@ def test_a_commit_carries_the_begin_of_the_next_round_only_with_an_active_set() 
 def test_the_largest_commit_and_moves_notice_fit_under_their_size_limits() -> None:
     everyone = tuple(range(MAX_ROBOTS))
     assert len(Commit(2**62, everyone, everyone).encode()) <= MAX_CONTROL_BYTES
+    late = 1e14 + 0.123456789  # the longest msgpack floats
+    delays = tuple((r, late, late) for r in everyone)
+    assert len(Commit(2**62, everyone, (), delays).encode()) <= MAX_CONTROL_BYTES
+    looks = tuple((r, late) for r in everyone)
+    assert len(Begin(2**62, everyone, late, looks).encode()) <= MAX_CONTROL_BYTES
+    reply = ControlReply(True, "x" * 200, MAX_ROBOTS, 2**62, 2**62, "running", 2**62, everyone,
+                         late, looks, everyone)
+    assert len(reply.encode()) <= MAX_CONTROL_BYTES
     assert len(MovesHeld(2**62, everyone).encode()) <= MAX_NOTICE_BYTES
 
 
