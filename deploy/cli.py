@@ -42,6 +42,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "plot": ("fatswarm.deploy.plot", "draw a record's trajectories to SVG or PNG (fatswarm[plot])"),
     "sweep": ("fatswarm.deploy.sweep_cli", "run a grid of lock-step runs on every core into a CSV "
               "(resumable)"),
+    "hunt": ("fatswarm.deploy.hunt_cli", "search for counterexamples on every core, shrink them "
+             "and save each as a replayable start and schedule"),
 }
 
 
