@@ -15,7 +15,7 @@ import sys
 import threading
 import time
 from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from types import FrameType
 from typing import TYPE_CHECKING, Final, TextIO
 
@@ -28,8 +28,11 @@ from fatswarm.deploy.sweep import (
     SweepInputError,
     is_clean,
     make_row,
+    markdown_table,
     params_text,
+    parse_crash,
     parse_ints,
+    parse_non_rigid,
     parse_seeds,
     row_key,
     split_values,
@@ -57,11 +60,12 @@ MISSING_SCIPY: Final = (
     "(`pip install 'fatswarm[sweep]'` fills them)"
 )
 DESCRIPTION: Final = (
-    "Run a grid of lock-step runs (algorithm x n x start kind x scheduler x seeds) on every "
-    "core, appending one CSV row per run (outcome, cost, the distance's ratio to the "
-    "optimal-assignment bound, wall time, the configuration and the `fatswarm run --lockstep` "
-    "command that repeats it). Resumable: interrupted (Ctrl-C), the same command goes on where it "
-    "stopped, as rows already in the CSV are skipped. Docs: docs/sweep.md."
+    "Run a grid of lock-step runs (algorithm x n x start kind x scheduler x non-rigid delta x "
+    "crash count x seeds) on every core, appending one CSV row per run (outcome, cost, the "
+    "distance's ratio to the optimal-assignment bound, the virtual time of async runs, wall "
+    "time, the configuration and the `fatswarm run --lockstep` command that repeats it). "
+    "Resumable: interrupted (Ctrl-C), the same command goes on where it stopped, as rows already "
+    "in the CSV are skipped. Docs: docs/sweep.md."
 )
 EPILOG: Final = (
     "Lists: a flag takes a comma list and can be repeated; numbers also take inclusive ranges "
@@ -90,6 +94,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"random start kinds: {', '.join(KINDS)} (default {DEFAULT_START})")
     p.add_argument("--scheduler", action="append", default=[], metavar="NAMES",
                    help=f"schedulers (models) to run under: {usable} (default: all of them)")
+    p.add_argument("--non-rigid", action="append", default=[], metavar="DELTAS",
+                   help="non-rigid adversaries' deltas (> 0, robot radii) and/or 'rigid', e.g. "
+                   "rigid,1,0.1 (default rigid: rigid moves only)")
+    p.add_argument("--crash", action="append", default=[], metavar="COUNTS",
+                   help="crash counts F (F robots crash for good, 0 < F < n; a cell with F >= n "
+                   "is left out) and/or 0 or 'none', e.g. 0,1,2 (default none)")
     p.add_argument("--seeds", action="append", default=[], metavar="SEEDS",
                    help="seeds: a count K (seeds 0..K-1), a range 100..119 or a list 3,7 "
                    f"(default {DEFAULT_SEEDS}: seeds 0..9)")
@@ -103,6 +113,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="worker processes (default: one per core)")
     p.add_argument("--plot", metavar="DIR",
                    help="write summary figures to DIR (created if missing; needs matplotlib)")
+    p.add_argument("--summary-md", metavar="PATH",
+                   help="write the summary over every n as a Markdown table to PATH (replaced "
+                   "if it exists), a line per algorithm, scheduler, non-rigid delta and crash "
+                   "count")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="no progress while running (the summary is still printed)")
 
@@ -131,6 +145,8 @@ def build_grid(args: argparse.Namespace) -> Grid:
             raise SweepInputError(f"--scheduler {name} {why}; a sweep takes {', '.join(usable)}")
     if args.max_rounds is not None and args.max_rounds < 1:
         raise SweepInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
+    non_rigids = parse_non_rigid(args.non_rigid)
+    crashes = parse_crash(args.crash)
     algorithms = []
     for ref in split_values(args.algorithm) or (DEFAULT,):
         algorithm = load_algorithm(ref)
@@ -138,7 +154,8 @@ def build_grid(args: argparse.Namespace) -> Grid:
         for n in sizes:  # refuse an n the algorithm refuses now, not once per run
             Configured.of(algorithm, n, dict(texts))
         algorithms.append((ref, texts))
-    return Grid(tuple(algorithms), sizes, starts, schedulers, seeds, args.max_rounds)
+    return Grid(tuple(algorithms), sizes, starts, schedulers, seeds, args.max_rounds, non_rigids,
+                crashes)
 
 
 def main(args: argparse.Namespace) -> int:
@@ -151,6 +168,7 @@ def main(args: argparse.Namespace) -> int:
         grid = build_grid(args)
         jobs = _jobs(args.jobs)
         _check_plot(args.plot)
+        _check_summary_md(args.summary_md)
         table = RunTable.open(args.out)
     except refused as exc:
         return _fail(str(exc))
@@ -173,6 +191,9 @@ def _sweep(args: argparse.Namespace, grid: Grid, jobs: int, table: RunTable) -> 
         _say(f"{args.out}: cut a torn last row ({table.cut} bytes); that run is done again")
     if not args.quiet:
         _say(_plan_text(args.out, len(runs), len(runs) - len(todo), other, jobs))
+        if grid.left_out:
+            _say(f"sweep: {grid.left_out} runs left out, whose --crash F is >= their n "
+                 "(0 < F < n)")
     if todo and importlib.util.find_spec("scipy") is None:
         _say(MISSING_SCIPY)
 
@@ -202,6 +223,12 @@ def _sweep(args: argparse.Namespace, grid: Grid, jobs: int, table: RunTable) -> 
     cells = summarize(rows, grid)
     print_summary(cells, sys.stdout)
     _show_failures(rows, args.out)
+    if args.summary_md:
+        try:
+            _write_text(args.summary_md, markdown_table(summarize(rows, grid, by_n=False)))
+        except OSError as exc:
+            return _fail(f"cannot write {args.summary_md}: {exc.strerror or exc}")
+        _say(f"summary table: {args.summary_md}")
     if args.plot:
         return _plot(cells, args.plot)
     return ExitCode.OK
@@ -235,6 +262,32 @@ def _check_plot(folder: str | None) -> None:
     parent = os.path.dirname(os.path.abspath(folder))
     if not os.path.isdir(parent):
         raise SweepInputError(f"--plot {folder}: the directory {parent} does not exist")
+
+
+def _check_summary_md(path: str | None) -> None:
+    """Refuse a --summary-md PATH that cannot be written, before anything runs."""
+    if path is None:
+        return
+    if os.path.isdir(path):
+        raise SweepInputError(f"--summary-md {path} is a directory; name a file")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise SweepInputError(f"--summary-md {path}: the directory {folder} does not exist; "
+                              "create it first")
+
+
+def _write_text(path: str, text: str) -> None:
+    """Write `text` to `path` whole: a temporary file beside it, renamed over it, so a reader
+    (or a crash) never sees half a table."""
+    partial = f"{path}.partial"
+    try:
+        with open(partial, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(partial, path)
+    except OSError:
+        with suppress(OSError):
+            os.remove(partial)
+        raise
 
 
 def _plot(cells: Sequence[Cell], folder: str) -> int:
@@ -373,10 +426,12 @@ def _duration(seconds: float) -> str:
 
 
 def summary_table(cells: Sequence[Cell]) -> Table:
-    """The sweep's summary, one line per (algorithm, start, scheduler, n): how many runs formed,
-    collided and stalled (hit the round cap or raised, when any did), and the median rounds and
-    distance ratio of the formed ones. Algorithm and start columns only when the grid has several,
-    so that the common table fits 80 columns."""
+    """The sweep's summary, one line per (algorithm, start, model, n) (`sweep.summarize`, the
+    groups of the Markdown table split by n): how many runs formed, collided and stalled (hit the
+    round cap or raised, when any did), and the median rounds, distance ratio and (async models,
+    when any) virtual time of the formed ones. The model is `sweep.model_label`'s (`fsync`,
+    `ssync+nr1`, `async+crash2`). Algorithm and start columns only when the grid has several, so
+    that the common table fits 80 columns."""
     from rich import box
     from rich.table import Table
 
@@ -384,26 +439,30 @@ def summary_table(cells: Sequence[Cell]) -> Table:
     several_start = len({c.start for c in cells}) > 1
     any_capped = any(c.capped for c in cells)
     any_errors = any(c.errors for c in cells)
+    any_time = any(c.time is not None for c in cells)
     table = Table(box=box.SIMPLE_HEAD, pad_edge=False, show_edge=False)
     if several_alg:
         table.add_column("algorithm")
     if several_start:
         table.add_column("start")
-    table.add_column("scheduler")
+    table.add_column("model")
     counts = ["n", "runs", "formed", "collided", "stalled"]
     counts += ["capped"] if any_capped else []
     counts += ["errors"] if any_errors else []
-    for name in [*counts, "median\nrounds", "median\nratio"]:
+    medians = ["median\nrounds", "median\nratio"] + (["median\ntime"] if any_time else [])
+    for name in [*counts, *medians]:
         table.add_column(name, justify="right")
     for c in cells:
         lead = ([c.algorithm] if several_alg else []) + ([c.start] if several_start else [])
         figures = [c.n, c.runs, c.formed, c.collided, c.stalled]
         figures += [c.capped] if any_capped else []
         figures += [c.errors] if any_errors else []
+        times = ["-" if c.time is None else f"{c.time[1]:.1f}"] if any_time else []
         table.add_row(
-            *lead, c.scheduler, *map(str, figures),
+            *lead, c.model, *map(str, figures),
             "-" if c.rounds is None else f"{c.rounds[1]:g}",
             "-" if c.ratio is None else f"{c.ratio[1]:.3f}",
+            *times,
         )
     return table
 

@@ -23,6 +23,7 @@ from fatswarm.deploy.sweep import (
     SweepInputError,
     TableError,
     assignment_bound,
+    header_error,
     header_line,
     kept_length,
     parse_table,
@@ -90,10 +91,12 @@ def run_spec(spec: RunSpec) -> RunFigures:
         cap = spec.max_rounds or default_max_rounds(spec.n, spec.scheduler)
         setup = RunConfig(n=spec.n, algorithm=spec.algorithm, params=dict(spec.params),
                           seed=spec.seed, start=spec.start, scheduler=spec.scheduler,
-                          max_rounds=spec.max_rounds).resolve()
+                          max_rounds=spec.max_rounds, non_rigid=spec.non_rigid,
+                          crash=spec.crash).resolve()
         values, cap = values_text(setup.params.values), setup.max_rounds
         result = run_lockstep(setup.initial, setup.params, setup.scheduler, seed=setup.seed,
-                              max_rounds=setup.max_rounds, algorithm_ref=setup.algorithm_ref)
+                              max_rounds=setup.max_rounds, algorithm_ref=setup.algorithm_ref,
+                              non_rigid=setup.non_rigid, crash=setup.crash)
         wall = time.perf_counter() - t0
         try:
             bound: float | None = assignment_bound(result.initial, result.positions)
@@ -108,7 +111,7 @@ def run_spec(spec: RunSpec) -> RunFigures:
         status=str(result.status), rounds=result.rounds, epochs=result.epochs,
         looks=result.looks, moves=result.moves, collisions=result.collisions,
         total_distance=result.total_distance, bound=bound, wall_s=wall, values=values,
-        round_cap=cap, warning=warnings.text(),
+        round_cap=cap, warning=warnings.text(), time=result.time,
     )
 
 
@@ -230,8 +233,8 @@ class RunTable:
             data = _read_all(fd)
             header = header_line().encode()
             if not (data.startswith(header) or header.startswith(data)):  # ours, or torn header
-                raise TableError(f"{path} has other columns than a fatswarm sweep table (another "
-                                 "file, or another fatswarm version); name a new --out")
+                first = data.split(b"\n", 1)[0].decode("utf-8", errors="replace")
+                raise header_error(first, path)
             keep = kept_length(data)
             if keep < len(data):
                 os.ftruncate(fd, keep)

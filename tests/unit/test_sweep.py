@@ -10,6 +10,7 @@ import math
 import os
 import shlex
 import signal
+import statistics
 import subprocess
 import sys
 import time
@@ -26,6 +27,7 @@ from fatswarm.deploy.sweep import (
     COLUMNS,
     ERROR,
     KEY_COLUMNS,
+    PRE_MODEL_COLUMNS,
     Grid,
     RunFigures,
     RunSpec,
@@ -33,13 +35,20 @@ from fatswarm.deploy.sweep import (
     TableError,
     assignment_bound,
     distance_ratio,
+    format_line,
     header_line,
     make_row,
+    markdown_table,
+    model_label,
     params_text,
+    parse_crash,
     parse_ints,
+    parse_non_rigid,
     parse_seeds,
     parse_table,
+    row_key,
     row_line,
+    success_rates,
     summarize,
     sweep_schedulers,
 )
@@ -106,6 +115,55 @@ def test_a_huge_grid_is_refused() -> None:
              tuple(range(1001)))
 
 
+def test_non_rigid_and_crash_take_lists_words_and_default_to_the_plain_model() -> None:
+    assert parse_non_rigid([]) == (None,)
+    assert parse_non_rigid(["rigid,1", "1.0,0.1", "RIGID"]) == (None, 1.0, 0.1)
+    assert parse_crash([]) == (None,)
+    assert parse_crash(["0,2", "none", "1..2"]) == (None, 2, 1)
+    assert parse_crash(["0..1"]) == (None, 1)  # 0 in a range is no crash as well
+
+
+@pytest.mark.parametrize("text", ["0", "-1", "inf", "nan", "x", "1e400"])
+def test_a_non_rigid_delta_must_be_a_finite_distance_above_zero(text: str) -> None:
+    with pytest.raises(SweepInputError, match="--non-rigid takes distances > 0"):
+        parse_non_rigid([text])
+
+
+@pytest.mark.parametrize(("text", "says"), [("-1", ">= 0"), ("x", "whole numbers"),
+                                            ("2..1", "LOW <= HIGH")])
+def test_a_crash_count_must_be_a_whole_number(text: str, says: str) -> None:
+    with pytest.raises(SweepInputError, match=says):
+        parse_crash([text])
+
+
+def test_the_model_label_names_the_scheduler_then_non_rigid_then_crash() -> None:
+    assert model_label("fsync", None, None) == "fsync"
+    assert model_label("fsync", 1.0, None) == "fsync+nr1"
+    assert model_label("ssync", None, 2) == "ssync+crash2"
+    assert model_label("async-slowest", 0.1, 1) == "async-slowest+nr0.1+crash1"
+
+
+def test_the_grid_crosses_non_rigid_and_crash_and_leaves_out_crashes_of_n_or_more() -> None:
+    grid = Grid((("uniform-circle", ()),), (2, 3, 4), ("clustered",), ("fsync", "async"),
+                (0, 1), None, (None, 1.0), (None, 2, 3))
+    runs = grid.runs()
+    # (f, n) cells: no crash with n = 2, 3, 4; f = 2 with n = 3, 4; f = 3 with n = 4
+    assert len(runs) == grid.size == 2 * 2 * 2 * 6
+    assert grid.left_out == 2 * 2 * 2 * 3
+    assert len({spec.key() for spec in runs}) == len(runs)
+    assert all(spec.crash is None or spec.crash < spec.n for spec in runs)
+    assert {(spec.non_rigid, spec.crash) for spec in runs} == {
+        (d, f) for d in (None, 1.0) for f in (None, 2, 3)}
+    assert [spec.seed for spec in runs] == sorted(spec.seed for spec in runs)
+    assert runs[0] == RunSpec("uniform-circle", 2, "clustered", "fsync", 0)
+    assert {spec.model for spec in runs if spec.n == 4 and spec.scheduler == "fsync"} == {
+        "fsync", "fsync+crash2", "fsync+crash3", "fsync+nr1", "fsync+nr1+crash2",
+        "fsync+nr1+crash3"}
+    with pytest.raises(SweepInputError, match="the grid has no run"):
+        Grid((("uniform-circle", ()),), (3, 4), ("clustered",), ("fsync",), (0,), None,
+             (None,), (4,))
+
+
 def test_the_schedulers_are_the_ones_the_code_names_less_the_scripted_one() -> None:
     assert sweep_schedulers() == tuple(name for name in NAMES if name != "scripted")
 
@@ -118,13 +176,37 @@ def test_parameters_are_canonical_so_one_run_is_one_key() -> None:
 
 def test_key_cells_are_the_first_columns_and_the_command_repeats_the_run() -> None:
     spec = RunSpec("gathering", 6, "dense", "ssync", 3, (("tolerance", "0.01"),), 50)
-    assert spec.key() == ("gathering", "6", "dense", "ssync", "3", "tolerance=0.01", "50")
+    assert spec.key() == ("gathering", "6", "dense", "ssync", "3", "tolerance=0.01", "50", "",
+                          "")
     assert COLUMNS[: len(KEY_COLUMNS)] == KEY_COLUMNS
     assert shlex.split(spec.command()) == [
         "fatswarm", "run", "--lockstep", "-n", "6", "--seed", "3", "--start", "dense",
         "--scheduler", "ssync", "--algorithm", "gathering", "--param", "tolerance=0.01",
         "--max-rounds", "50"]
     assert "--algorithm" not in RunSpec("uniform-circle", 4, "clustered", "fsync", 0).command()
+
+
+def test_non_rigid_and_crash_are_key_cells_and_in_the_command() -> None:
+    plain = RunSpec("uniform-circle", 5, "clustered", "async", 2)
+    both = RunSpec("uniform-circle", 5, "clustered", "async", 2, non_rigid=0.1, crash=2)
+    assert dict(zip(KEY_COLUMNS, both.key(), strict=True))["non_rigid"] == "0.1"
+    assert dict(zip(KEY_COLUMNS, both.key(), strict=True))["crash"] == "2"
+    assert plain.key()[-2:] == ("", "")
+    assert shlex.split(both.command())[-4:] == ["--non-rigid", "0.1", "--crash", "2"]
+    assert "--non-rigid" not in plain.command() and "--crash" not in plain.command()
+    # resume tells rows apart by them: one more delta or crash count is another run
+    keys = {row_key(make_row(spec, RunFigures("formed"), "0.1.0")) for spec in (
+        plain, both, RunSpec("uniform-circle", 5, "clustered", "async", 2, non_rigid=0.1),
+        RunSpec("uniform-circle", 5, "clustered", "async", 2, crash=2))}
+    assert len(keys) == 4
+
+
+def test_the_time_column_is_the_virtual_time_and_empty_for_round_models() -> None:
+    spec = RunSpec("uniform-circle", 4, "clustered", "async", 0)
+    assert make_row(spec, RunFigures("formed", rounds=30, time=20.25), "0.1.0")["time"] == (
+        "20.250000")
+    assert make_row(spec, RunFigures("formed", rounds=6), "0.1.0")["time"] == ""
+    assert make_row(spec, RunFigures(ERROR, time=3.0), "0.1.0")["time"] == ""
 
 
 # -- the bound --------------------------------------------------------------------------------
@@ -190,6 +272,18 @@ def test_opening_cuts_a_torn_last_row(tmp_path: Path) -> None:
     assert out.read_text() == whole
 
 
+def test_a_table_of_the_earlier_schema_is_refused_with_its_own_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "runs.csv"
+    old = format_line(PRE_MODEL_COLUMNS) + format_line(["x"] * len(PRE_MODEL_COLUMNS))
+    out.write_text(old)
+    assert sweep(["-n", "4", "--seeds", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "an earlier fatswarm" in err and "new --out" in err, err
+    assert out.read_text() == old
+
+
 def test_a_torn_header_is_written_again(tmp_path: Path) -> None:
     out = tmp_path / "runs.csv"
     out.write_text(header_line()[:10])
@@ -228,10 +322,12 @@ def test_a_run_that_raises_is_an_error_row() -> None:
 
 
 def _row(scheduler: str, n: int, seed: int, status: str, rounds: int, collisions: int,
-         ratio: str) -> dict[str, str]:
-    spec = RunSpec("uniform-circle", n, "clustered", scheduler, seed)
-    row = make_row(spec, RunFigures(status, rounds=rounds, collisions=collisions), "0.1.0")
-    return {**row, "ratio": ratio}
+         ratio: str, *, non_rigid: float | None = None, crash: int | None = None,
+         time: float | None = None) -> dict[str, str]:
+    spec = RunSpec("uniform-circle", n, "clustered", scheduler, seed, non_rigid=non_rigid,
+                   crash=crash)
+    figures = RunFigures(status, rounds=rounds, collisions=collisions, time=time)
+    return {**make_row(spec, figures, "0.1.0"), "ratio": ratio}
 
 
 def test_the_summary_counts_and_takes_medians_of_formed_runs() -> None:
@@ -256,6 +352,41 @@ def test_the_summary_counts_and_takes_medians_of_formed_runs() -> None:
     assert any(line.split()[:4] == ["fsync", "4", "3", "2"] for line in text.splitlines())
 
 
+def test_the_markdown_summary_groups_every_n_by_model() -> None:
+    grid = Grid((("uniform-circle", ()),), (4, 8), ("clustered",), ("fsync", "async"), (0, 1),
+                None, (None, 1.0), (None, 2))
+    rows = [
+        _row("fsync", 4, 0, "formed", 6, 0, "1.1"),
+        _row("fsync", 8, 0, "formed", 10, 1, "1.2"),
+        _row("fsync", 8, 1, "max_rounds", 900, 0, ""),
+        _row("fsync", 4, 0, "formed", 12, 0, "1.1", non_rigid=1.0),
+        _row("fsync", 4, 0, "stalled", 3, 0, "", crash=2),
+        _row("async", 4, 0, "formed", 30, 0, "1.1", time=20.0),
+        _row("async", 8, 0, "formed", 50, 0, "1.1", time=31.0),
+        _row("async", 8, 1, ERROR, 0, 0, "", time=None),
+    ]
+    cells = summarize(rows, grid, by_n=False)
+    assert [(c.model, c.n, c.sizes, c.runs) for c in cells] == [  # in the grid's order
+        ("fsync", None, (4, 8), 3), ("fsync+crash2", None, (4,), 1),
+        ("fsync+nr1", None, (4,), 1), ("async", None, (4, 8), 3)]
+    lines = markdown_table(cells).splitlines()
+    assert lines[0].split(" | ")[1:5] == ["scheduler", "non-rigid", "crash", "n"]
+    assert lines[0].endswith("| median rounds | median time |")
+    assert lines[1].startswith("|---|") and lines[1].count("|") == lines[0].count("|")
+    body = [[cell.strip() for cell in line.strip("|").split("|")] for line in lines[2:]]
+    assert body == [
+        ["uniform-circle", "fsync", "rigid", "none", "4,8", "3", "2", "1", "0", "1", "0", "8",
+         "-"],
+        ["uniform-circle", "fsync", "rigid", "2", "4", "1", "0", "0", "1", "0", "0", "-", "-"],
+        ["uniform-circle", "fsync", "1", "none", "4", "1", "1", "0", "0", "0", "0", "12", "-"],
+        ["uniform-circle", "async", "rigid", "none", "4,8", "3", "2", "0", "0", "0", "1", "40",
+         "25.5"],
+    ]
+    # the figures take the same groups, as model labels
+    assert [label for label, *_ in success_rates(summarize(rows, grid))] == [
+        "fsync", "fsync+crash2", "fsync+nr1", "async"]
+
+
 # -- the command ------------------------------------------------------------------------------
 
 
@@ -274,6 +405,11 @@ def test_the_summary_counts_and_takes_medians_of_formed_runs() -> None:
     (["--jobs", "0"], "--jobs must be at least 1"),
     (["--jobs", "two"], "invalid int value"),
     (["--max-rounds", "0"], "--max-rounds must be at least 1"),
+    (["--non-rigid", "0"], "--non-rigid takes distances > 0"),
+    (["--non-rigid", "rigid,soft"], "--non-rigid takes distances > 0"),
+    (["--crash", "-1"], "--crash values must be >= 0"),
+    (["--crash", "two"], "--crash takes whole numbers"),
+    (["-n", "3,4", "--crash", "4"], "the grid has no run"),
 ])
 def test_bad_input_is_one_line_and_exit_two(
     argv: list[str], says: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
@@ -296,6 +432,9 @@ def test_bad_outputs_are_one_line_and_exit_two(
         (["--out", str(tmp_path / "missing" / "runs.csv")], "does not exist"),
         (["--out", str(other)], "other columns"),
         (["--out", str(tmp_path / "r.csv"), "--plot", str(other)], "not a directory"),
+        (["--out", str(tmp_path / "r.csv"), "--summary-md", str(tmp_path)], "is a directory"),
+        (["--out", str(tmp_path / "r.csv"), "--summary-md", str(tmp_path / "no" / "s.md")],
+         "does not exist"),
     ]
     for argv, says in cases:
         assert sweep(argv) == 2
@@ -307,7 +446,8 @@ def test_help_explains_the_grid(capsys: pytest.CaptureFixture[str]) -> None:
     assert sweep(["--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())
     for word in ("--scheduler", "--seeds", "LOW..HIGH", "Resumable", "docs/sweep.md",
-                 "130 interrupted"):
+                 "130 interrupted", "--non-rigid DELTAS", "--crash COUNTS",
+                 "--summary-md PATH"):
         assert word in text
 
 
@@ -346,6 +486,64 @@ def test_a_small_sweep_writes_one_row_per_run_and_a_second_one_adds_none(
     assert (again["status"], str(again["rounds"]), str(again["collisions"])) == (
         row["status"], row["rounds"], row["collisions"])
     assert f"{again['total_distance']:.6f}" == row["total_distance"]
+
+
+def test_a_sweep_over_models_has_their_rows_summary_and_commands_and_resumes_by_them(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out, md = tmp_path / "runs.csv", tmp_path / "summary.md"
+    argv = ["-n", "3,4", "--scheduler", "fsync,async", "--non-rigid", "rigid,1", "--crash",
+            "0,3", "--seeds", "1", "--jobs", "2", "--out", str(out)]
+    assert sweep([*argv, "--summary-md", str(md)]) == 0
+    captured = capsys.readouterr()
+    assert "4 runs left out" in captured.err  # crash 3 of 3 robots
+    assert "fsync+nr1" in captured.out and "async+nr1+crash3" in captured.out
+    rows = rows_of(out)
+    assert sorted((r["scheduler"], r["non_rigid"], r["crash"], r["n"]) for r in rows) == sorted(
+        (s, d, f, n) for s in ("fsync", "async") for d in ("", "1.0")
+        for f, n in (("", "3"), ("", "4"), ("3", "4")))
+    for row in rows:  # virtual time: async runs only
+        assert (row["time"] != "") == (row["scheduler"] == "async"), row
+    assert all(float(r["time"]) > 0 for r in rows if r["time"])
+    # the Markdown table: one line per model over every n, its figures as the rows say
+    groups: dict[tuple[str, str, str], list[dict[str, str]]] = {}
+    for row in rows:
+        delta = f"{float(row['non_rigid']):g}" if row["non_rigid"] else "rigid"
+        groups.setdefault((row["scheduler"], delta, row["crash"] or "none"), []).append(row)
+    lines = md.read_text().splitlines()
+    assert len(lines) == 2 + len(groups) == 10
+    for line in lines[2:]:
+        cells = [cell.strip() for cell in line.strip("|").split("|")]
+        group = groups[(cells[1], cells[2], cells[3])]
+        formed = [r for r in group if r["status"] == "formed"]
+        stalled = sum(r["status"] == "stalled" for r in group)
+        assert cells[4] == ",".join(sorted({r["n"] for r in group}))
+        assert [int(c) for c in (cells[5], cells[6], cells[8])] == [len(group), len(formed),
+                                                                   stalled]
+        rounds = [float(r["rounds"]) for r in formed]
+        times = [float(r["time"]) for r in formed if r["time"]]
+        assert cells[11] == (f"{statistics.median(rounds):g}" if rounds else "-")
+        assert cells[12] == (f"{statistics.median(times):.1f}" if times else "-")
+    # the command column repeats an async, a non-rigid and a crash run exactly
+    for pick in (("async", "", ""), ("fsync", "1.0", ""), ("fsync", "", "3"),
+                 ("async", "1.0", "3")):
+        row = next(r for r in rows if (r["scheduler"], r["non_rigid"], r["crash"]) == pick)
+        assert cli.main([*shlex.split(row["command"])[1:], "-q", "--json"]) in (0, 1)
+        again = json.loads(capsys.readouterr().out)
+        assert (again["status"], str(again["rounds"]), str(again["collisions"])) == (
+            row["status"], row["rounds"], row["collisions"]), row["command"]
+        assert f"{again['total_distance']:.6f}" == row["total_distance"]
+    # resume: a run is the same run only with the same non_rigid and crash
+    before = out.read_bytes()
+    assert sweep(argv) == 0
+    assert "nothing to run" in capsys.readouterr().err
+    assert out.read_bytes() == before
+    assert sweep(["-n", "4", "--scheduler", "fsync", "--non-rigid", "1,0.5", "--crash", "3,2",
+                  "--seeds", "1", "--out", str(out)]) == 0
+    assert "1 already in" in capsys.readouterr().err
+    added = rows_of(out)[len(rows):]
+    assert sorted((r["non_rigid"], r["crash"]) for r in added) == [
+        ("0.5", "2"), ("0.5", "3"), ("1.0", "2")]
 
 
 def test_an_interrupted_sweep_resumes_to_the_rows_of_an_uninterrupted_one(
