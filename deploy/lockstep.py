@@ -25,7 +25,7 @@ from fatswarm.agent.path import Path, Points
 from fatswarm.agent.protocol import MoveSubmitted
 from fatswarm.agent.seam import Configured, checked
 from fatswarm.agent.uniform_circle import ALGORITHM as UNIFORM_CIRCLE
-from fatswarm.coordinator.adversary import AsyncModel
+from fatswarm.coordinator.adversary import ASYNC_NAMES, AsyncModel
 from fatswarm.coordinator.async_rounds import coordinator_core
 from fatswarm.coordinator.rounds import Ask, CoordinatorCore, Finished, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
@@ -41,8 +41,12 @@ from fatswarm.world.record import Header, RoundEntry, RunRecord
 # Default round cap = ROUNDS_PER_STEP[scheduler] * (n + STEP_SLACK). The algorithm needs about
 # n + 2 sequential steps (one mover or one mirror pair each); a step costs 1 round under fsync,
 # about 2 under ssync (p = 1/2), about n under centralized; the caps leave a factor 10 or more.
+# Under the async models a "round" is an ended cycle: every robot cycles while one moves, and the
+# fastest ones cycle up to 2n - 1 times as often under async-slowest (non-rigid 0.1 at n = 12
+# took 2733 cycles), hence 40 n.
 STEP_SLACK: Final = 10
 ROUNDS_PER_STEP: Final = {"fsync": 10, "ssync": 40}  # others (centralized, scripted): 10 n
+CYCLES_PER_STEP_PER_ROBOT: Final = 40  # the async models: 40 n
 LOCKSTEP_SWARM: Final = "lockstep"
 SHOWN_FAULTS: Final = 3  # an algorithm's failing computes logged in full; the rest are counted
 
@@ -57,7 +61,8 @@ class HistoryMismatchError(ValueError):
 
 def default_max_rounds(n: int, scheduler: str) -> int:
     """A round cap far above what a correct run needs under `scheduler` (see ROUNDS_PER_STEP)."""
-    per_step = ROUNDS_PER_STEP.get(scheduler, 10 * max(1, n))
+    per_robot = CYCLES_PER_STEP_PER_ROBOT if scheduler in ASYNC_NAMES else 10
+    per_step = ROUNDS_PER_STEP.get(scheduler, per_robot * max(1, n))
     return per_step * (n + STEP_SLACK)
 
 

@@ -130,7 +130,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "(default 2n)")
     p.add_argument("--max-rounds", type=int, default=None, metavar="R",
                    help="stop after R rounds (default: 10 (n + 10) for fsync, 40 (n + 10) for "
-                   "ssync, 10 n (n + 10) otherwise)")
+                   "ssync, 40 n (n + 10) ended cycles for the async models, 10 n (n + 10) "
+                   "otherwise)")
     p.add_argument("--non-rigid", type=float, default=None, metavar="DELTA",
                    help="non-rigid moves: the adversary may stop a move anywhere after the robot "
                    "has travelled DELTA (> 0, robot radii; e.g. 1) or at its end, drawn from the "

@@ -149,6 +149,7 @@ def test_start_and_params_must_agree() -> None:
 def test_default_round_cap_grows_with_n_and_scheduler() -> None:
     assert default_max_rounds(8, "fsync") < default_max_rounds(8, "ssync")
     assert default_max_rounds(8, "ssync") < default_max_rounds(8, "centralized")
+    assert default_max_rounds(8, "centralized") < default_max_rounds(8, "async-slowest")
     assert default_max_rounds(16, "fsync") > default_max_rounds(8, "fsync")
 
 
