@@ -37,6 +37,10 @@ class Circle:
 # --- smallest enclosing circle -----------------------------------------------------------------
 
 
+FAR_FROM_ORIGIN = 64.0
+"""`sec` works about the points' box centre when they lie farther than this many spans away."""
+
+
 def _circle2(p: Point, q: Point) -> Circle:
     cx, cy = (p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0
     return Circle((cx, cy), math.hypot(p[0] - cx, p[1] - cy))
@@ -109,6 +113,14 @@ def sec(points: Points) -> Circle:
     xs, ys = pts[:, 0], pts[:, 1]
     if len(pts) == 1:
         return Circle((float(xs[0]), float(ys[0])), 0.0)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    if float(np.abs(pts).max()) > FAR_FROM_ORIGIN * max(1.0, float((hi - lo).max())):
+        # Far from the origin (a world frame at a large offset), the centre's rounding exceeds the
+        # relative enclosure slack and the true SEC was refused: work about the box's centre, a
+        # point no order or numbering of the points changes. A robot's own frame never gets here.
+        mid = (lo + hi) / 2.0
+        c = sec(pts - mid)
+        return Circle((c.center[0] + float(mid[0]), c.center[1] + float(mid[1])), c.radius)
     # Seed with an approximate diameter: the point farthest from robot 0, then farthest from that.
     i0 = int(np.argmax((xs - xs[0]) ** 2 + (ys - ys[0]) ** 2))
     i1 = int(np.argmax((xs - xs[i0]) ** 2 + (ys - ys[i0]) ** 2))

@@ -30,6 +30,7 @@ from fatswarm.world.core import (
 )
 from fatswarm.world.outcome import Status
 from fatswarm.world.physics import RoundOutcome
+from fatswarm.world.progress import MOVE_TOLERANCE
 from fatswarm.world.protocol import Begin, Commit, ControlReply
 from fatswarm.world.record import RunRecord
 
@@ -204,8 +205,10 @@ class AsyncWorldCore(WorldCore):
             extra["cut"] = [done.robot]
         self.journal.round(k, (done.robot,), moves, done.positions, done.collisions, **extra)
         traveled = {done.robot: done.traveled} if done.path else {}
+        # its move changed the configuration even when the line before is of the same instant
+        moved = done.traveled > MOVE_TOLERANCE or None
         self.tracker.observe([done.robot], traveled.keys(), self._last, done.positions,
-                             traveled, len(done.collisions))
+                             traveled, len(done.collisions), changed=moved)
         self._last = done.positions
         self.positions = done.positions
         self.collisions_total += len(done.collisions)

@@ -106,11 +106,14 @@ class ProgressTracker:
         after: Points,
         traveled: Mapping[int, float] | None = None,
         collisions: int = 0,
+        changed: bool | None = None,
     ) -> str | None:
         """Account one committed round; returns the status (None while the run goes on).
 
         `movers`: the active robots that asked for a non-empty path; `before`/`after`: (n, 2)
-        positions around the round; `traveled`: arc length each mover covered.
+        positions around the round; `traveled`: arc length each mover covered. `changed`: whether
+        the configuration changed, if the caller knows better than `before`/`after` (an async
+        cycle whose move ended at the instant of the previous line moved all the same).
         """
         if self._status is not None:
             raise RuntimeError(f"the run already ended ({self._status}); no more rounds")
@@ -133,7 +136,7 @@ class ProgressTracker:
 
         before_arr = np.asarray(before, dtype=np.float64)
         after_arr = np.asarray(after, dtype=np.float64)
-        if configuration_changed(before_arr, after_arr):
+        if changed if changed is not None else configuration_changed(before_arr, after_arr):
             # The robots active this round looked at the old configuration: start counting afresh.
             self._seen_since_change = set()
             self._wanting_since_change = set()

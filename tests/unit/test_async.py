@@ -367,3 +367,28 @@ def test_the_async_coordinator_plans_the_first_looks_then_follows_the_world() ->
     assert all(not b.looks for b in begins[1:])
     assert world.status == "stalled" and world.tracker.snapshot().rounds == 3
     assert len(begins) == 3  # one instant per robot: random first Looks never tie
+
+
+def test_a_move_ending_at_the_instant_of_another_cycle_still_counts_as_a_change() -> None:
+    # found by `fatswarm hunt` (async-slowest, offset family): robot 0's move ends at the very
+    # instant robot 1 Looks again (their moves are of one length and its waits are whole), so the
+    # line before robot 0's shows the same positions; counted as "wanting to move but unchanged",
+    # the run was judged stalled although the goal held.
+    start = np.array([[-703732.7838699885, 389743.93924828107],
+                      [-703734.7838705648, 389743.9392482138],
+                      [-703733.7838705629, 389749.74798139185]])
+    result = run_lockstep(start, Params(3), make_async("async-slowest", 3, 2), seed=2)
+    assert (result.status, result.rounds) == ("formed", 13)
+
+
+def test_the_smallest_enclosing_circle_is_right_far_from_the_origin() -> None:
+    # found by `fatswarm hunt`: at 7e5 the circumcentre's rounding (1e-10) exceeded the relative
+    # enclosure slack, and `sec` fell back to a circle through two points that missed the third
+    from fatswarm.agent.geometry import sec
+
+    side = 5.17960098
+    triangle = np.array([[0.0, 0.0], [side, 0.0], [side / 2, side * math.sqrt(3) / 2]])
+    for offset in ([0.0, 0.0], [-703733.78, 389745.26], [1.9e6, -1.9e6]):
+        circle = sec(triangle + offset)
+        assert circle.radius == pytest.approx(side / math.sqrt(3), rel=1e-9)
+        assert np.allclose(circle.center, triangle.mean(axis=0) + offset, atol=1e-8)
