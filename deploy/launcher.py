@@ -448,6 +448,7 @@ def read_outcome(record: str) -> Outcome | None:
         total_distance=float(x.get("total_distance", 0.0)),
         algorithm=h.algorithm,
         params=dict(h.params),
+        time=float(x["time"]) if isinstance(x.get("time"), (int, float)) else None,
     )
 
 

@@ -343,6 +343,7 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
         total_distance=result.total_distance,
         algorithm=params.name,
         params=dict(params.values),
+        time=result.time,
     )
     code = exit_code(outcome)
     svg: str | None = getattr(args, "svg", None)  # the dashboard's flag, when it is there
@@ -410,6 +411,7 @@ class Outcome:
     total_distance: float
     algorithm: str = "uniform-circle"
     params: dict[str, Any] = dataclasses.field(default_factory=dict)
+    time: float | None = None  # async models: the virtual time the run ended at
 
 
 def side_of(values: Any) -> float | None:
@@ -455,6 +457,7 @@ def summary(outcome: Outcome) -> str:
         f"scheduler={o.scheduler}\n"
         f"rounds {o.rounds}  epochs {epochs}  moves {o.moves} ({o.moves / o.n:.2f} per robot)  "
         f"total distance {o.total_distance:.3f}  collisions {o.collisions}"
+        + ("" if o.time is None else f"  virtual time {o.time:.3f}")
     )
 
 

@@ -268,6 +268,7 @@ def test_run_lockstep_async_from_the_command_line_and_refusals(
     assert code == 0
     lines = [json.loads(line) for line in out.read_text().splitlines()]
     assert lines[0]["scheduler"] == "async-slowest"
+    assert f"virtual time {lines[-1]['time']:.3f}" in capsys.readouterr().out
     assert {"look", "start", "end", "origin"} <= set(lines[1])
     capsys.readouterr()
     out.write_text("".join(line + "\n" for line in out.read_text().splitlines()[:5]))
