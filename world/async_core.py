@@ -166,7 +166,7 @@ class AsyncWorldCore(WorldCore):
                 self.timeouts[robot] += 1
             self.last_active[robot] = round_no
             done = self.clock.submit(robot, world, compute, wait, cut=cut)
-            if done is not None and self._cycle(done):
+            if done is not None and self._cycle(done, timed_out=robot not in self.held):
                 break
         self.committed, self.moved = round_no, tuple(moved)
         self.open_round, self.looked, self.held, self._missing = 0, set(), {}, set()
@@ -195,14 +195,17 @@ class AsyncWorldCore(WorldCore):
         self.positions = clock.positions
         return changed
 
-    def _cycle(self, done: CycleDone) -> bool:
-        """Record and account one ended cycle; True once the run has ended."""
+    def _cycle(self, done: CycleDone, timed_out: bool = False) -> bool:
+        """Record and account one ended cycle (`timed_out`: no move came for it in time, so the
+        robot stayed); True once the run has ended."""
         k = self.tracker.snapshot().rounds + 1
         moves = {done.robot: (done.path, done.traveled)} if done.path else {}
         extra: dict[str, Any] = {"look": done.look, "start": done.start, "end": done.end,
                                  "origin": [done.origin[0], done.origin[1]]}
         if done.cut:
             extra["cut"] = [done.robot]
+        if timed_out:
+            extra["timed_out"] = [done.robot]
         self.journal.round(k, (done.robot,), moves, done.positions, done.collisions, **extra)
         traveled = {done.robot: done.traveled} if done.path else {}
         # its move changed the configuration even when the line before is of the same instant

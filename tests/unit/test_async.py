@@ -393,3 +393,24 @@ def test_the_smallest_enclosing_circle_is_right_far_from_the_origin() -> None:
         circle = sec(triangle + offset)
         assert circle.radius == pytest.approx(side / math.sqrt(3), rel=1e-9)
         assert np.allclose(circle.center, triangle.mean(axis=0) + offset, atol=1e-8)
+
+
+def test_a_cycle_with_no_move_in_time_is_marked_timed_out() -> None:
+    from fatswarm.world.core import NullJournal
+    from fatswarm.world.protocol import Begin, Commit
+
+    lines: list[dict[str, Any]] = []
+
+    class Keep(NullJournal):
+        def round(self, round_no: int, active: Any, moves: Any, positions: Any,
+                  collisions: Any = (), **extra: Any) -> None:
+            lines.append({"active": tuple(active), **extra})
+
+    world = _async_world()
+    world.journal = Keep()
+    world.control(Begin(1, (1,), at=1.0, looks=((0, 5.0), (1, 1.0), (2, 9.0))))
+    reply, _ = world.control(Commit(1, (1,), delays=((1, 0.5, 2.0),)))  # robot 1 sent nothing
+    assert reply.ok
+    assert lines == [{"active": (1,), "look": 1.0, "start": 1.0, "end": 1.0,
+                      "origin": [3.0, 0.0], "timed_out": [1]}]
+    assert world.timeouts[1] == 1
