@@ -13,7 +13,18 @@ RECORD_BYTES_PER_ROBOT_ROUND: Final = 45  # one position per robot and round, pl
 # Rounds a correct run takes, per sequential step of the algorithm (about n + 2 steps: one mover
 # or one mirror pair each): 1 under fsync, about 2 under ssync, about n when one robot moves at
 # a time (centralized; scripted is anyone's guess). deploy/lockstep.py sets its caps 10x higher.
+# Under the async models a "round" is an ended cycle: about 3n a step (2.3n to 3.9n measured at
+# n = 5, 8, 12 in docs/results.md's sweep).
 EXPECTED_ROUNDS_PER_STEP: Final = {"fsync": 1, "ssync": 2}
+ASYNC_CYCLES_PER_STEP_PER_ROBOT: Final = 3
+
+
+def expected_rounds_per_step(n: int, scheduler: str) -> int:
+    """Rounds (ended cycles under an async model) a correct run takes per step of the algorithm."""
+    from fatswarm.coordinator.adversary import ASYNC_NAMES
+
+    per_robot = ASYNC_CYCLES_PER_STEP_PER_ROBOT if scheduler in ASYNC_NAMES else 1
+    return EXPECTED_ROUNDS_PER_STEP.get(scheduler, per_robot * max(1, n))
 ESTIMATE_FROM_N: Final = 200  # a lockstep run this large says what it will cost before it starts
 ESTIMATE_FROM_S: Final = 5.0  # ... as does one expected to take this long
 
@@ -32,8 +43,7 @@ class Estimate:
 
 def estimate_lockstep(n: int, scheduler: str, max_rounds: int) -> Estimate:
     """The forecast of an n-robot lockstep run under `scheduler`, capped at `max_rounds`."""
-    per_step = EXPECTED_ROUNDS_PER_STEP.get(scheduler, max(1, n))
-    rounds = min(max_rounds, per_step * (n + 2))
+    rounds = min(max_rounds, expected_rounds_per_step(n, scheduler) * (n + 2))
     round_s = SECONDS_PER_ROUND + SECONDS_PER_ROBOT_ROUND * n
     round_bytes = RECORD_BYTES_PER_ROUND + RECORD_BYTES_PER_ROBOT_ROUND * n
     return Estimate(rounds, rounds * round_s, rounds * round_bytes,

@@ -149,9 +149,9 @@ def add_network_arguments(p: argparse.ArgumentParser) -> None:
 def watchable_pace(n: int, scheduler: str) -> float:
     """Seconds per round that make a typical run last about WATCH_S, so a person can follow it
     (the algorithm's steps times the rounds a step takes under `scheduler`), within bounds."""
-    from fatswarm.deploy.estimate import EXPECTED_ROUNDS_PER_STEP
+    from fatswarm.deploy.estimate import expected_rounds_per_step
 
-    rounds = EXPECTED_ROUNDS_PER_STEP.get(scheduler, max(1, n)) * (n + 2)
+    rounds = expected_rounds_per_step(n, scheduler) * (n + 2)
     return min(MAX_WATCH_PACE_S, max(MIN_WATCH_PACE_S, WATCH_S / rounds))
 
 

@@ -293,6 +293,7 @@ def test_a_watched_run_paces_itself_to_about_fifteen_seconds() -> None:
     assert watchable_pace(20, "fsync") == pytest.approx(WATCH_S / 22)
     assert watchable_pace(2000, "centralized") == MIN_WATCH_PACE_S
     assert watchable_pace(1, "fsync") == MAX_WATCH_PACE_S
+    assert watchable_pace(8, "async") == pytest.approx(WATCH_S / (3 * 8 * 10))  # ~3n cycles a step
 
 
 @pytest.mark.parametrize(("tty", "flags", "paced"), [
