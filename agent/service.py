@@ -32,7 +32,9 @@ from fatswarm.world.protocol import LookRequest, ProtocolError, Snapshot, snapsh
 
 log = logging.getLogger("fatswarm.agent")
 
-LOOK_WAIT_S = 30.0  # a Look waits this long for its answer; the world lets it go sooner (20 s)
+LOOK_WAIT_S = 3.0  # a Look waits this long for its answer, then asks again (the world keeps the
+# newest per robot): a query routed to a world that had just died is never answered, and must not
+# keep its robot out of the rounds of the new world for longer than a move timeout (5 s)
 RELOOK_S = 0.05  # after a Look that came back empty at once (no world yet), wait this long
 OPEN_RETRY_S = 0.2  # a client cannot open a session before its router is up: retry
 WAIT_NOTICE_S = 5.0  # meanwhile, say this often that the robot still waits for its router
@@ -220,8 +222,8 @@ def _look(querier: Any, last: LookRequest, wait: _LookWait) -> Snapshot | None:
         if wait.stop.is_set():  # a stop that came before the wait
             raise Stopped
         for reply in querier.get(payload=last.encode()):
-            if reply.ok is None:
-                log.info("the world refused the look")
+            if reply.ok is None:  # the query's timeout, or the world's refusal
+                log.debug("no snapshot: %s", _err_text(reply))
                 continue
             try:
                 snapshot = Snapshot.decode(reply.ok.payload.to_bytes())
@@ -230,6 +232,14 @@ def _look(querier: Any, last: LookRequest, wait: _LookWait) -> Snapshot | None:
     finally:
         wait.waiting = False
     return snapshot
+
+
+def _err_text(reply: Any) -> str:
+    """What an error reply says (Zenoh's timeout, or the world's reason), for the debug log."""
+    try:
+        return str(reply.err.payload.to_string())[:200]
+    except Exception:  # a reply without a readable error payload
+        return "(no reason given)"
 
 
 def _move(cfg: AgentConfig, snapshot: Snapshot, robot: Robot, mover: Any) -> None:

@@ -56,8 +56,8 @@ __all__ = [
 log = logging.getLogger("fatswarm.world")
 
 REPUBLISH_S = 1.0  # the state is re-published this often when nothing happens, for late observers
-HOLD_LOOK_S = 20.0  # a held Look is let go (answered with nothing) after this: the agent asks
-# again well before its own query timeout (agent.service.LOOK_WAIT_S), so none is answered late
+HOLD_LOOK_S = 20.0  # a held Look is let go (answered with nothing) after this, if its agent has
+# not asked again first (it does after agent.service.LOOK_WAIT_S): Looks of agents that are gone
 DROPPED_EVERY_S = 5.0  # dropped messages are counted in one log line at most this often
 
 # --- the Zenoh shell --------------------------------------------------------------------------
@@ -203,8 +203,8 @@ def _say_dropped(events: Inbox[Any], said: Counter[str], said_at: float) -> floa
 class HeldLooks:
     """Looks waiting for their robot's activation: the newest query per robot, and when it came.
 
-    A query is always finalised: answered, let go when a newer one replaces it, or let go after
-    HOLD_LOOK_S (the agent then asks again).
+    A query is always finalised: answered, let go when a newer one replaces it (an agent asks
+    again every agent.service.LOOK_WAIT_S), or let go after HOLD_LOOK_S.
     """
 
     def __init__(self) -> None:
