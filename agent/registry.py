@@ -23,6 +23,7 @@ DEFAULT = "uniform-circle"
 BUILTIN = {
     "uniform-circle": "fatswarm.agent.uniform_circle:ALGORITHM",
     "gathering": "fatswarm.agent.gathering:ALGORITHM",
+    "uniform-circle-stepped": "fatswarm.agent.stepped:ALGORITHM",
 }
 _NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
 
