@@ -40,6 +40,7 @@ def test_the_installed_package_registers_its_algorithms_as_entry_points(tmp_path
     assert done.stdout.strip() == str([
         ("gathering", "fatswarm.agent.gathering:ALGORITHM"),
         ("uniform-circle", "fatswarm.agent.uniform_circle:ALGORITHM"),
+        ("uniform-circle-stepped", "fatswarm.agent.stepped:ALGORITHM"),
     ])
 
 
