@@ -10,6 +10,7 @@ robot, cycle), so lock step, a networked run and a resumed run see the same adve
 from __future__ import annotations
 
 import enum
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
@@ -83,8 +84,7 @@ class AsyncModel:
 
     def rank(self, robot: int) -> int:
         """Robot `robot`'s place from fastest (0) to slowest (n - 1), drawn from the seed."""
-        keys = [keyed_fraction(DELAY_STREAM, self.seed, r, 0, 3) for r in range(self.n)]
-        return sorted(range(self.n), key=lambda r: (keys[r], r)).index(robot)
+        return _ranks(self.seed, self.n)[robot]
 
     def bound(self) -> float:
         """The fairness bound: a live robot's next Look comes at most this long after the end of
@@ -92,6 +92,17 @@ class AsyncModel:
         if self.policy is Delays.SLOWEST_LAST:
             return STALE_STEP * (self.n - 1) + STALE_WAIT
         return 2 * RANDOM_MAX
+
+
+@functools.lru_cache(maxsize=8)
+def _ranks(seed: int, n: int) -> tuple[int, ...]:
+    """Every robot's rank (`AsyncModel.rank`), drawn once per run rather than once per cycle."""
+    keys = [keyed_fraction(DELAY_STREAM, seed, r, 0, 3) for r in range(n)]
+    order = sorted(range(n), key=lambda r: (keys[r], r))
+    ranks = [0] * n
+    for place, robot in enumerate(order):
+        ranks[robot] = place
+    return tuple(ranks)
 
 
 def make_async(name: str, n: int, seed: int) -> AsyncModel:

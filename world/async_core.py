@@ -74,7 +74,7 @@ class AsyncWorldCore(WorldCore):
         model = make_async(setup.scheduler, setup.n, setup.seed)
         setup = dataclasses.replace(setup, extra={"fairness_time": model.bound(), **setup.extra})
         super().__init__(setup, journal, history, algorithm, epoch)
-        self.clock = AsyncWorld(self.positions, setup.seed, [math.inf] * setup.n)
+        self.clock = AsyncWorld(self.positions, [math.inf] * setup.n)
         self._last = self.positions.copy()
         self._delays: dict[int, tuple[float, float]] = {}
         self.last_cycle: CycleDone | None = None

@@ -27,7 +27,6 @@ import numpy as np
 
 from fatswarm.agent.path import Path, Point, Points, path_length, remainder, truncate
 from fatswarm.agent.tolerance import snap
-from fatswarm.world.core import view_order
 from fatswarm.world.physics import Collision, apply_round
 
 ENDED: Final = 1e-9
@@ -86,22 +85,21 @@ class CycleDone:
 class AsyncWorld:
     """The positions of n unit discs in virtual time and every robot's cycle.
 
-    Drive it event by event: `next_time`, `advance` to it, `end_moves`, `start_moves`, then Look
-    (`looking`, `look`) and `submit` each due robot's path with its delays.
+    Drive it event by event: `next_time`, `advance` to it, `end_moves`, `start_moves`, then begin
+    the cycle of each due robot (`looking`, `begin_cycle`) and `submit` its path with its delays
+    (the world core serves the Looks themselves from `positions`).
     """
 
-    def __init__(self, positions: Points, seed: int, first_looks: Sequence[float]) -> None:
+    def __init__(self, positions: Points, first_looks: Sequence[float]) -> None:
         """`first_looks`: each robot's first Look time; math.inf for one the adversary sets
         later (`set_look`)."""
         self.positions: Points = snap(np.array(positions, dtype=np.float64))
         self.n = len(self.positions)
         if len(first_looks) != self.n:
             raise ValueError(f"{len(first_looks)} first Looks for {self.n} robots")
-        self.seed = seed
         self.now = 0.0
         self.crashed: set[int] = set()
         self._robots = [_Robot(at=float(t)) for t in first_looks]
-        self.cycles = 0  # cycles ended so far
 
     def next_time(self) -> float:
         """The next event: a Look, the start or the natural end of a move (never before now)."""
@@ -193,17 +191,6 @@ class AsyncWorld:
         state.cycle += 1
         state.look = self.now
 
-    def look(self, robot: int) -> Points:
-        """Robot `robot`'s Look now (`begin_cycle`) and its view: the others relative to it (world
-        axes), moving or not, in the order `view_order` draws for its cycle (compute must not
-        depend on it)."""
-        self.begin_cycle(robot)
-        state = self._robots[robot]
-        pos = self.positions
-        others = np.concatenate((pos[:robot], pos[robot + 1:])) - pos[robot]
-        order = view_order(self.seed, state.cycle, robot, len(others))
-        return np.asarray(others[order], dtype=np.float64)
-
     def cycle_of(self, robot: int) -> int:
         """Robot `robot`'s cycles begun (the one in progress counted)."""
         return self._robots[robot].cycle
@@ -233,13 +220,8 @@ class AsyncWorld:
             raise ValueError(f"robot {robot} crashes only between cycles")
         self.crashed.add(robot)
 
-    def quiet(self) -> bool:
-        """No move is under way or about to start."""
-        return all(robot.phase is Phase.WAITING for robot in self._robots)
-
     def _done(self, r: int, end: float) -> CycleDone:
         robot = self._robots[r]
-        self.cycles += 1
         return CycleDone(
             robot=r, cycle=robot.cycle, look=robot.look, start=robot.start, end=end,
             origin=robot.origin, path=robot.path, traveled=robot.traveled,

@@ -73,7 +73,8 @@ def _drive(world: AsyncWorld, plans: dict[int, Path], compute: dict[int, float],
         done += world.end_moves()
         world.start_moves()
         for robot in world.looking():
-            seen[robot] = world.look(robot)
+            world.begin_cycle(robot)
+            seen[robot] = np.delete(world.positions, robot, axis=0) - world.positions[robot]
             here = world.positions[robot]
             plan = plans.get(robot, Path())
             moved = Path(tuple(Line((here[0] + s.end[0], here[1] + s.end[1]))  # type: ignore[union-attr]
@@ -85,7 +86,7 @@ def _drive(world: AsyncWorld, plans: dict[int, Path], compute: dict[int, float],
 
 
 def test_a_look_sees_a_robot_in_the_middle_of_its_move() -> None:
-    world = AsyncWorld(np.array([[0.0, 0.0], [0.0, 10.0]]), 0, [0.0, 1.5])
+    world = AsyncWorld(np.array([[0.0, 0.0], [0.0, 10.0]]), [0.0, 1.5])
     _, seen = _drive(world, {0: Path((Line((8.0, 0.0)),))}, {}, until=3.0)
     assert np.allclose(seen[1], [[1.5, -10.0]], atol=1e-8)  # robot 0, 1.5 along its 8
 
@@ -125,7 +126,7 @@ def test_moves_that_start_at_different_times_are_checked_along_their_paths(
         delay: float, meets: bool) -> None:
     # robot 0 crosses x = 5 at t = 5; robot 1 crosses y = 0 at t = delay + 5
     initial = np.array([[0.0, 0.0], [5.0, -5.0]])
-    world = AsyncWorld(initial, 0, [0.0, 0.0])
+    world = AsyncWorld(initial, [0.0, 0.0])
     cycles, _ = _drive(world, {0: Path((Line((10.0, 0.0)),)), 1: Path((Line((0.0, 10.0)),))},
                        {1: delay}, until=40.0)
     contacts = [c for cycle in cycles for c in cycle.collisions]
