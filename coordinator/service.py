@@ -16,11 +16,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from fatswarm.agent.protocol import alive_any_key, robot_of_alive_key
-from fatswarm.coordinator.protocol import alive_key
 from fatswarm.coordinator.async_rounds import coordinator_core
+from fatswarm.coordinator.protocol import alive_key
 from fatswarm.coordinator.rounds import (
     Action,
-    CoordinatorCore,
     Finished,
     RoundTimes,
 )

@@ -321,8 +321,8 @@ def _progress(budget: Budget, *, quiet: bool) -> _Progress:
 
 def summary_table(saved: Sequence[Saved]) -> Table:
     """One line per saved failure: its folder (index and kind), where the hunt found it (family,
-    scheduler, n) and what shrinking left (n, script rounds, decimals), the runs shrinking took, and whether
-    the saved files replay to the same kind."""
+    scheduler, n) and what shrinking left (n, script rounds, decimals), the runs shrinking took,
+    and whether the saved files replay to the same kind."""
     from rich import box
     from rich.table import Table
 
