@@ -1,16 +1,18 @@
 """Networked emulator benchmark (a script that prints figures, not a test).
 
-Prints: the Zenoh get/reply round-trip floor on the router the runs use; per size N (fsync, one OS
+Prints: the Zenoh get/reply round-trip floor in the layout the runs use; per size N (fsync, one OS
 process per robot, world fsyncing every round): round latency (median, p95), rounds/s and Looks/s
 networked vs lockstep, resident memory per agent process, time to start N agents.
 
     /work/venv/bin/python bench/bench_net.py [--sizes 8,64,128,256,512] [--seed 1]
         [--algorithm gathering]  # a cheap compute shows the emulator's own cost per Look
+        [--router-in separate]  # a router process of its own, as across hosts (default: world)
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import itertools
 import os
 import statistics
@@ -36,7 +38,9 @@ from fatswarm.world.starts import random_start
 REPLIER = """
 import sys, threading, zenoh
 from fatswarm.deploy.zconf import make_config
-conf = make_config("client", [sys.argv[1]])
+hosted = sys.argv[3] == "world"
+endpoints = {"listen": [sys.argv[1]]} if hosted else {"connect": [sys.argv[1]]}
+conf = make_config("router" if hosted else "client", **endpoints)
 with zenoh.open(conf) as s:
     q = s.declare_queryable("bench/rtt", lambda q: (q.reply(q.key_expr, b"x" * 100), q.drop()))
     t = s.liveliness().declare_token("bench/replier")
@@ -48,14 +52,17 @@ def pct(values: list[float], p: float) -> float:
     return float(np.percentile(values, p)) if values else float("nan")
 
 
-def rtt_floor(endpoint: str, samples: int) -> list[float]:
-    """Bare get/reply round trips (seconds) between two client processes over the same router."""
-    import zenoh
+def rtt_floor(endpoint: str, samples: int, router_in: str) -> list[float]:
+    """Bare get/reply round trips (seconds) between two processes: clients of the router on
+    `endpoint` (`separate`), or a client of the router that the replier hosts (`world`)."""
+
+    from fatswarm.deploy.zconf import open_client
 
     env = dict(os.environ, PYTHONPATH=os.getcwd())
-    replier = subprocess.Popen([sys.executable, "-c", REPLIER, endpoint, "120"], env=env)
+    replier = subprocess.Popen([sys.executable, "-c", REPLIER, endpoint, "120", router_in],
+                               env=env)
     try:
-        with zenoh.open(make_config("client", [endpoint])) as s:
+        with open_client(make_config("client", [endpoint]), deadline_s=30) as s:
             deadline = time.monotonic() + 30
             while not list(s.liveliness().get("bench/replier", timeout=1.0)):
                 if time.monotonic() > deadline:
@@ -136,9 +143,10 @@ def _cpu_s(pids: list[int]) -> float:
 
 def networked(
     session: Any, endpoint: str, n: int, seed: int, tmp: str, spawn: str = "fork",
-    algorithm: str = "uniform-circle",
+    algorithm: str = "uniform-circle", router_in: str = "world",
 ) -> NetRun:
-    """One fsync run with N agent processes; timings seen from a client in this process."""
+    """One fsync run with N agent processes; timings seen from a client in this process (`session`
+    on the separate router; None: a session of its own on the router the world hosts)."""
     swarm = f"bench-{n}-{seed}-{time.monotonic_ns() % 10**6}"
     alive: set[int] = set()
     commits: list[tuple[float, int]] = []
@@ -168,16 +176,24 @@ def networked(
                 final.append(st)
                 done.set()
 
-    subs = [
-        session.liveliness().declare_subscriber(alive_any_key(swarm), on_alive, history=True),
-        session.declare_subscriber(state_key(swarm), on_state),
-    ]
     net = ["--connect", endpoint, "--swarm", swarm, "--log-level", "error"]
+    world_net = (["--router", "--listen", endpoint, *net[2:]] if router_in == "world" else net)
     state = os.path.join(tmp, f"{swarm}.jsonl")
+    own = None
     with Children() as children:
         part = [sys.executable, "-m", "fatswarm.deploy.parts"]
-        children.start("world", [*part, "world", *net, "--state", state, "-n", str(n), "--seed",
-                                 str(seed), "--scheduler", "fsync", "--algorithm", algorithm])
+        children.start("world", [*part, "world", *world_net, "--state", state, "-n", str(n),
+                                 "--seed", str(seed), "--scheduler", "fsync", "--algorithm",
+                                 algorithm])
+        if session is None:
+            from fatswarm.deploy.zconf import open_client
+
+            session = own = open_client(make_config("client", [endpoint]), deadline_s=60)
+        subs = [
+            session.liveliness().declare_subscriber(alive_any_key(swarm), on_alive,
+                                                    history=True),
+            session.declare_subscriber(state_key(swarm), on_state),
+        ]
         children.start("coordinator", [*part, "coordinator", *net,
                                        "--seed", str(seed), "--scheduler", "fsync",
                                        "--start-timeout", "600", "--move-timeout", "30"])
@@ -204,8 +220,10 @@ def networked(
         cpu1 = {role: _cpu_s(pids) for role, pids in roles.items()}
         if not rss:
             rss = [_memory_mb(pid) for pid in _agent_pids(children)]
-    for sub in subs:
-        sub.undeclare()
+        for sub in subs:
+            sub.undeclare()
+        if own is not None:
+            own.close()
     times = [t for t, _ in commits]
     return NetRun(
         n=n,
@@ -220,7 +238,8 @@ def networked(
 
 
 def _roles(children: Children) -> dict[str, list[int]]:
-    """The processes of each role; the router runs in this process (with the observer)."""
+    """The processes of each role; "router" is this process: the observer, and the router when it
+    runs separately (else the world's process hosts it)."""
     host = children.procs.get("agents")
     return {
         "agents": _agent_pids(children) + ([host.pid] if host is not None else []),
@@ -244,6 +263,10 @@ def lockstep(n: int, seed: int, algorithm: str) -> tuple[str, int, int, float, f
     return res.status, res.rounds, res.looks, time.perf_counter() - t0, time.process_time() - c0
 
 
+def _nothing() -> contextlib.nullcontext[None]:
+    return contextlib.nullcontext()
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--sizes", default="8,64,128,256,512")
@@ -255,28 +278,36 @@ def main() -> int:
                    help="agents forked from one preloaded host (as fatswarm run) or one exec each")
     p.add_argument("--latency-runs", type=int, default=3,
                    help="runs at the smallest N pooled for the round-latency figure")
+    p.add_argument("--router-in", choices=("world", "separate"), default="world",
+                   help="the router in the world's process, as `fatswarm run` (default), or in "
+                   "a process of its own (here, this one), as across hosts")
     args = p.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
 
     import zenoh
 
     endpoint = loopback_endpoint()
+    separate = args.router_in == "separate"
     with (
         tempfile.TemporaryDirectory() as tmp,
-        zenoh.open(make_config("router", listen=[endpoint])),
-        zenoh.open(make_config("client", [endpoint])) as session,
+        zenoh.open(make_config("router", listen=[endpoint])) if separate else _nothing(),
+        zenoh.open(make_config("client", [endpoint])) if separate else _nothing() as session,
     ):
-        rtt = rtt_floor(endpoint, args.rtt_samples)
+        rtt = rtt_floor(endpoint, args.rtt_samples, args.router_in)
         floor = statistics.median(rtt)
-        print(f"agents started by: {args.spawn}; algorithm: {args.algorithm}; fsync")
-        print(f"zenoh get/reply round trip (2 client processes, 1 router): median "
+        print(f"agents started by: {args.spawn}; algorithm: {args.algorithm}; fsync; router in "
+              f"{'a process of its own' if separate else 'the world process'}")
+        layout = ("2 client processes, 1 router" if separate
+                  else "a client and the process hosting the router")
+        print(f"zenoh get/reply round trip ({layout}): median "
               f"{floor * 1e3:.3f} ms  p95 {pct(rtt, 95) * 1e3:.3f} ms  ({len(rtt)} samples)")
         print(f"{'N':>4} {'status':>8} {'rounds':>6} {'round ms med':>12} {'p95':>7} "
               f"{'x floor':>7} {'net rounds/s':>12} {'net Looks/s':>11} {'lock rounds/s':>13} "
               f"{'lock Looks/s':>12} {'agent MB RSS/PSS/priv':>21} {'start s':>7} "
               f"{'CPU ms/Look net':>15} {'lock':>5}  CPU ms/Look by role")
         for n in sizes:
-            runs = [networked(session, endpoint, n, args.seed + k, tmp, args.spawn, args.algorithm)
+            runs = [networked(session, endpoint, n, args.seed + k, tmp, args.spawn, args.algorithm,
+                              args.router_in)
                     for k in range(args.latency_runs if n == sizes[0] else 1)]
             run = runs[0]
             intervals = [x for r in runs for x in r.intervals]

@@ -35,8 +35,10 @@ from fatswarm.deploy.run import (
 from fatswarm.deploy.zconf import (
     DEFAULT_SWARM,
     ROUTER_ENDPOINT_HELP,
+    ZenohSetupError,
     check_network,
     loopback_endpoint,
+    make_config,
 )
 from fatswarm.world.record import RecordWriteError, RecordWriter
 
@@ -263,43 +265,45 @@ class StopSignal:
 def _launch(
     args: argparse.Namespace, setup: RunSetup, record: str, pace: float, swarm: str
 ) -> int:
-    """Start the router (unless --connect), the world, the coordinator and the agents for the
-    resolved run `setup`; follow it; the exit code."""
+    """Start the world (hosting the router, unless --connect), the coordinator and the agents for
+    the resolved run `setup`; follow it; the exit code."""
     stop = StopSignal()
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)}
-    router = None
+    listen: list[str] = []  # where the world hosts the router; none with --connect
+    if args.connect:
+        endpoints = list(args.connect)
+    else:
+        listen = list(args.listen) or [loopback_endpoint()]
+        endpoints = [_child_endpoint(listen[0])]
+    watcher = session = None
+    followed = False  # a display followed the run (it saves --svg)
     try:
-        if args.connect:
-            endpoints = list(args.connect)
-        else:
-            from fatswarm.deploy.router import open_router
-
-            listen = list(args.listen) or [loopback_endpoint()]
-            try:
-                router = open_router(listen)
-            except ValueError as exc:  # taken since check_inputs looked, say: one line all the same
-                print(f"fatswarm run: {exc}", file=sys.stderr)
-                return EXIT_BAD_INPUT
-            endpoints = [_child_endpoint(listen[0])]
         if not args.quiet:
             print(f"swarm {swarm!r} on {endpoints[0]} (watch from elsewhere: fatswarm dashboard "
                   f"--connect {endpoints[0]} --swarm {swarm})", file=sys.stderr)
-        watcher = _follow(args, swarm, router, endpoints[0])
-        try:
-            # the agents host needs its own grace first, to stop its agents one by one
-            with Children(stop_grace_s(setup.params.n) + STOP_GRACE_S) as children:
-                code = _run_children(args, setup, pace, record, swarm, endpoints, children,
-                                     stop)
-                world_gone = "world" in children.exited()  # no final state will come
-                if watcher is not None and code in (EXIT_FORMED, EXIT_NOT_FORMED) \
-                        and not world_gone:
-                    _await_final_state(watcher, FINAL_STATE_WAIT_S)
-        finally:
+        # the agents host needs its own grace first, to stop its agents one by one
+        with Children(stop_grace_s(setup.params.n) + STOP_GRACE_S) as children:
+            _start_world(setup, record, swarm, endpoints, listen, children)
+            if listen:
+                session = _await_router(endpoints[0], children, stop)
+            if session is not None or not listen:
+                watcher = _follow(args, swarm, session, endpoints[0])
+                followed = watcher is not None
+                code = _run_children(args, setup, pace, swarm, endpoints, children, stop)
+            else:
+                code = _world_gone(children) if "world" in children.exited() else \
+                    stop.exit_code()
+            world_gone = "world" in children.exited()  # no final state will come
+            if watcher is not None and code in (EXIT_FORMED, EXIT_NOT_FORMED) and not world_gone:
+                _await_final_state(watcher, FINAL_STATE_WAIT_S)
             if watcher is not None:
-                watcher.stop()
+                watcher.stop()  # before the world (and with it the router) goes
+                watcher = None
     finally:
-        if router is not None:
-            router.close()
+        if watcher is not None:
+            watcher.stop()
+        if session is not None:
+            session.close()
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     if code in (EXIT_FORMED, EXIT_NOT_FORMED):
@@ -308,19 +312,32 @@ def _launch(
         if outcome is not None:
             code = exit_code(outcome)
         print_outcome(outcome, code, sys.stdout, as_json=args.json, record=args.record,
-                      svg=getattr(args, "svg", None) if watcher is not None else None)
+                      svg=getattr(args, "svg", None) if followed else None)
     return code
 
 
-def _follow(args: argparse.Namespace, swarm: str, router: Any, endpoint: str) -> Any:
+def _await_router(endpoint: str, children: Children, stop: StopSignal) -> Any:
+    """A client session to the router the world hosts, once it listens; None if the world exited
+    or a signal came first (a world that loads a large record may take a while)."""
+    from fatswarm.deploy.zconf import open_client
+
+    while not stop.event.is_set() and "world" not in children.exited():
+        try:
+            return open_client(make_config("client", [endpoint]), stop.event, deadline_s=0.5)
+        except ZenohSetupError:  # not listening yet: look again
+            continue
+    return None
+
+
+def _follow(args: argparse.Namespace, swarm: str, session: Any, endpoint: str) -> Any:
     """The dashboard (on a terminal, not with --json) or progress lines on stderr, from the
     world's state stream: standard output carries only the summary."""
     try:
         from fatswarm.deploy.dashboard import follow
     except ImportError:
         return None
-    if router is not None:
-        return follow(args, swarm, session=router, progress=_to_stderr)
+    if session is not None:
+        return follow(args, swarm, session=session, progress=_to_stderr)
     return follow(args, swarm, connect=endpoint, progress=_to_stderr)
 
 
@@ -346,25 +363,41 @@ def _part(name: str, *flags: str) -> list[str]:
     return [sys.executable, "-m", "fatswarm.deploy.parts", name, *flags]
 
 
+def _start_world(setup: RunSetup, record: str, swarm: str, endpoints: Sequence[str],
+                 listen: Sequence[str], children: Children) -> None:
+    """Start the world from the record's header; with `listen`, hosting the router there."""
+    net = ["--swarm", swarm, *_quiet()]
+    if listen:
+        net.append("--router")
+        for ep in listen:
+            net += ["--listen", ep]
+    else:
+        for ep in endpoints:
+            net += ["--connect", ep]
+    # the parts' standard output joins ours on stderr (fd 2): stdout carries only the summary
+    children.start("world", _part("world", *net, "--state", record), stdout=STDERR_FD)
+
+
+def _quiet() -> list[str]:
+    return ["--log-level", "warning", "--exit-with-parent", str(os.getpid())]
+
+
 def _run_children(
     args: argparse.Namespace,
     setup: RunSetup,
     pace: float,
-    record: str,
     swarm: str,
     endpoints: Sequence[str],
     children: Children,
     stop: StopSignal,
 ) -> int:
-    """Start the parts, configured from the resolved run (the world from the record's header),
-    and wait until the coordinator or the world ends or a signal comes."""
+    """Start the coordinator and the agents, configured from the resolved run, and wait until the
+    coordinator or the world ends or a signal comes."""
     from fatswarm.deploy.parts import agents_command
 
     net = ["--swarm", swarm]
     for ep in endpoints:
         net += ["--connect", ep]
-    quiet = ["--log-level", "warning", "--exit-with-parent", str(os.getpid())]
-    world = ["--state", record]  # the header there says the whole run
     seed, scheduler = setup.seed, setup.scheduler
     coord = ["--seed", str(seed), "--scheduler", scheduler.name,
              "--move-timeout", repr(args.move_timeout), "--pace", repr(pace)]
@@ -374,9 +407,8 @@ def _run_children(
     fairness = getattr(scheduler, "fairness", None)
     if isinstance(fairness, int):
         coord += ["--fairness", str(fairness)]
-    # the parts' standard output joins ours on stderr (fd 2): stdout carries only the summary
-    children.start("world", _part("world", *net, *quiet, *world), stdout=STDERR_FD)
-    children.start("coordinator", _part("coordinator", *net, *quiet, *coord), stdout=STDERR_FD)
+    children.start("coordinator", _part("coordinator", *net, *_quiet(), *coord),
+                   stdout=STDERR_FD)
     n = setup.params.n
     children.start("agents", [*agents_command(n, seed, swarm, endpoints, "warning", args.spawn,
                                               algorithm=setup.algorithm_ref),
@@ -388,14 +420,19 @@ def _run_children(
             known = (EXIT_FORMED, EXIT_NOT_FORMED, EXIT_BAD_INPUT, ExitCode.FORMED_WITH_COLLISIONS)
             return ExitCode(ended) if ended in known else EXIT_NOT_FORMED
         if "world" in gone:
-            print(f"fatswarm run: the world process exited with code {gone['world']}",
-                  file=sys.stderr)
-            said = (EXIT_BAD_INPUT, ExitCode.RECORD_FAILED)  # its own line says why
-            return ExitCode(gone["world"]) if gone["world"] in said else EXIT_NOT_FORMED
+            return _world_gone(children)
     code = stop.exit_code()
     print(f"{'terminated' if code == ExitCode.TERMINATED else 'interrupted'}: stopping every "
           "process started", file=sys.stderr)
     return code
+
+
+def _world_gone(children: Children) -> ExitCode:
+    """The run's exit code once the world process has exited (it says why on its own)."""
+    code = children.exited()["world"]
+    print(f"fatswarm run: the world process exited with code {code}", file=sys.stderr)
+    said = (EXIT_BAD_INPUT, ExitCode.RECORD_FAILED)  # its own line says why
+    return ExitCode(code) if code in said else EXIT_NOT_FORMED
 
 
 def _schedule_of(setup: RunSetup) -> str | None:

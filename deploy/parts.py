@@ -194,6 +194,12 @@ def add_world_arguments(p: argparse.ArgumentParser) -> None:
                    help=argparse.SUPPRESS)  # the launcher's extra header fields (a JSON object)
     p.add_argument("--no-fsync", action="store_true",
                    help="do not fsync each round (faster; a crash may lose announced rounds)")
+    p.add_argument("--router", action="store_true",
+                   help="host the Zenoh router in the world process: it listens on --listen "
+                   f"(default {DEFAULT_ROUTER_LISTEN}) and links to the routers given with "
+                   "--connect; the other parts connect to it, so every message to or from the "
+                   "world crosses one hop less (what `fatswarm run` does). No access control: "
+                   "not with --config (a secured swarm uses `fatswarm router --config`)")
 
 
 def main_world(args: argparse.Namespace) -> int:
@@ -201,6 +207,7 @@ def main_world(args: argparse.Namespace) -> int:
     from fatswarm.agent.seam import AlgorithmFailure
     from fatswarm.deploy.config import input_errors, resolve_start
     from fatswarm.deploy.lockstep import default_max_rounds
+    from fatswarm.deploy.router import open_router
     from fatswarm.world.protocol import alive_key
     from fatswarm.world.record import RecordFormatError, read_record
     from fatswarm.world.service import WorldCore, WorldSetup, open_world, serve
@@ -225,7 +232,11 @@ def main_world(args: argparse.Namespace) -> int:
 
     bad_input: tuple[type[Exception], ...] = (ValueError, RecordFormatError, *input_errors())
     try:
-        conf = _client_config(args)
+        if args.router and args.config is not None:
+            raise ValueError("--router hosts a router without access control: for a secured "
+                             "swarm run `fatswarm router --config FILE` and connect the world "
+                             "to it with --config")
+        conf = None if args.router else _client_config(args)
         token = alive_key(args.swarm)  # a bad --swarm is said before any wait
         fresh: WorldSetup | None = None
         if os.path.exists(args.state) and os.path.getsize(args.state) > 0:
@@ -233,7 +244,11 @@ def main_world(args: argparse.Namespace) -> int:
             read_record(args.state, allow_torn_end=True)
         else:
             fresh = make_setup()  # a bad start is said before any wait
-        session = open_client(conf, stop)
+        if args.router:  # listening fails at once (port taken): nothing to wait for
+            session = open_router(args.listen, args.connect, None, [DEFAULT_ROUTER_LISTEN])
+        else:
+            assert conf is not None
+            session = open_client(conf, stop)
     except bad_input as exc:
         return _fail("world", str(exc))
     if session is None:

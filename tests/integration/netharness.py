@@ -68,12 +68,20 @@ class Swarm:
         self._start(name or f"agent {robot}", "agent", *self._net(), "--robot", str(robot),
                     "--seed", str(self.seed), "--log-level", "info")
 
-    def start_all(self, pace: float, router: bool = True) -> None:
-        """Every part (`router=False`: on another swarm's router, given as `endpoint`)."""
-        if router:
-            self.start_router()
-        self.observe()
-        self.start_world()
+    def start_all(self, pace: float, router: bool = True, in_world: bool = False) -> None:
+        """Every part (`router=False`: on another swarm's router, given as `endpoint`;
+        `in_world`: the world hosts the router, as in `fatswarm run`)."""
+        if in_world:
+            flags = self.world_flags()
+            at = flags.index("--connect")
+            del flags[at : at + 2]  # it listens there instead
+            self._start("world", "world", *flags, "--router", "--listen", self.endpoint)
+            self.observe()
+        else:
+            if router:
+                self.start_router()
+            self.observe()
+            self.start_world()
         self.start_coordinator(pace)
         for robot in range(self.n):
             self.start_agent(robot)

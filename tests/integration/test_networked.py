@@ -83,6 +83,17 @@ def test_agents_form_the_circle_with_the_lockstep_record(tmp_path: Path, n: int)
     assert_same_run(net, lockstep_record(tmp_path / "lock.jsonl", n, SEED))
 
 
+def test_parts_connected_to_a_world_hosting_the_router_record_the_lockstep_run(
+    make_swarm: Callable[..., Swarm],
+) -> None:
+    sw = make_swarm(6, SEED)
+    sw.start_all(pace=0.0, in_world=True)
+    done = sw.wait_done()
+    assert done.status == "formed", sw.logs()
+    assert_same_run(read_record(sw.state_path),
+                    lockstep_record(sw.tmp / "lock.jsonl", 6, SEED, sw.scheduler))
+
+
 def test_a_killed_agent_stays_an_obstacle_and_a_restarted_one_rejoins(
     make_swarm: Callable[..., Swarm],
 ) -> None:

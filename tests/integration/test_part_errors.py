@@ -80,6 +80,26 @@ def test_a_router_on_a_port_in_use_exits_2_in_one_line(busy_port: int) -> None:
                     "address already in use")
 
 
+def test_a_world_hosting_the_router_on_a_port_in_use_exits_2_in_one_line(
+    tmp_path: Path, busy_port: int
+) -> None:
+    state = tmp_path / "state.jsonl"
+    (done,) = run_all(part("world", "--router", "--listen", f"tcp/127.0.0.1:{busy_port}",
+                           "--state", str(state), "-n", "4"))
+    assert_one_line(done, f"fatswarm world: cannot listen on tcp/127.0.0.1:{busy_port}: "
+                    "address already in use")
+    assert not state.exists()  # no run record for a world that never served
+
+
+def test_a_world_hosting_the_router_refuses_a_config_file_in_one_line(tmp_path: Path) -> None:
+    config = tmp_path / "world.json5"
+    config.write_text("{}\n")
+    (done,) = run_all(part("world", "--router", "--config", str(config),
+                           "--state", str(tmp_path / "unused.jsonl")))
+    assert_one_line(done, "fatswarm world: --router hosts a router without access control")
+    assert not (tmp_path / "unused.jsonl").exists()
+
+
 def test_the_run_gives_up_on_a_dead_router_in_one_line() -> None:
     dead = f"tcp/127.0.0.1:{free_port()}"
     started = time.monotonic()
