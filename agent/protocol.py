@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 from fatswarm.agent.path import Arc, Path, PathFormatError, from_record, to_record, vertices
 from fatswarm.world.protocol import (
+    MAX_CARRIED_MOVE_BYTES,
     MAX_COORD,
     MAX_ROBOTS,
     ProtocolError,
@@ -23,11 +24,13 @@ from fatswarm.world.protocol import (
 )
 
 MAX_SWEEP = 8 * math.pi  # an arc never needs more than a few turns; bounds physics work
-MAX_MOVE_BYTES = 16 << 10  # a move of MAX_SEGMENTS segments is ~3 KB: larger is dropped unread
+MAX_MOVE_BYTES = MAX_CARRIED_MOVE_BYTES  # a move of MAX_SEGMENTS segments is ~3 KB: larger is
+# dropped unread
 
 
 def move_key(swarm: str, robot: int) -> str:
-    """Agent -> world: `MoveSubmitted` (BLOCK, express)."""
+    """Any client -> world: `MoveSubmitted` (BLOCK, express). Our agents send their moves inside
+    their next Look instead (`LookRequest.move`): one message a round less."""
     return f"{prefix(swarm)}/robot/{robot}/move"
 
 

@@ -1,13 +1,14 @@
 """The agent process: one robot. It Looks, Computes in its private frame, Moves, and Looks again.
 
 Its Look is a query the world holds until the robot is activated: the answer is both the activation
-and the snapshot, so a round reaches an agent in one message. The Look names the last round it moved
-in (and at which world process), all it keeps between rounds besides its frame; compute stays a
-pure function of the snapshot. It keeps only its identity and its
-frame (an X mirroring drawn at start-up, never sent). The world sends the others' positions
-relative to this robot with world axes; the agent mirrors them into its own frame, computes,
-mirrors the path back and sends it relative to itself, so no global coordinate ever reaches it or
-leaves it.
+and the snapshot, so a round reaches an agent in one message. Its Move rides in its next Look
+(`LookRequest.move`): the robot still sends its own move, in one message a round instead of two.
+The Look names the last round it moved in (and at which world process), all it keeps between
+rounds besides its frame and that move until it is sent; compute stays a pure function of the
+snapshot. It keeps only its identity and its frame (an X mirroring drawn at start-up, never
+sent). The world sends the others' positions relative to this robot with world axes; the agent
+mirrors them into its own frame, computes, mirrors the path back and sends it relative to itself,
+so no global coordinate ever reaches it or leaves it.
 """
 
 from __future__ import annotations
@@ -20,12 +21,12 @@ import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from fatswarm.agent.frames import compute_in_frame, draw_flip
 from fatswarm.agent.path import Path
-from fatswarm.agent.protocol import MoveSubmitted, alive_key, move_key
+from fatswarm.agent.protocol import MoveSubmitted, alive_key
 from fatswarm.agent.registry import DEFAULT
 from fatswarm.agent.seam import Algorithm, AlgorithmParamsError, Configured, checked
 from fatswarm.world.protocol import LookRequest, ProtocolError, Snapshot, snapshot_key
@@ -144,11 +145,6 @@ def serve(
     if session is None:
         return 0
     with session:
-        mover = session.declare_publisher(
-            move_key(cfg.swarm, cfg.robot),
-            congestion_control=zenoh.CongestionControl.BLOCK,
-            express=True,
-        )
         querier = session.declare_querier(
             snapshot_key(cfg.swarm, cfg.robot),
             target=zenoh.QueryTarget.ALL,
@@ -157,27 +153,27 @@ def serve(
         )
         _token = session.liveliness().declare_token(alive_key(cfg.swarm, cfg.robot))
         log.info("robot %d up", cfg.robot)
-        last = LookRequest()  # the world process and round it last answered
+        # The world process and round it last answered, and the move for that round: the Move
+        # travels in the next Look, once (a Look asked again carries none).
+        request = LookRequest()
         look_wait = _LookWait(stop)
         with look_wait.install():
             while not stop.is_set():
                 asked = time.monotonic()
                 try:
-                    snapshot = _look(querier, last, look_wait)
+                    snapshot = _look(querier, request, look_wait)
                 except Stopped:
                     break
-                except zenoh.ZError as exc:  # the router is away: look again once it is back
+                except zenoh.ZError as exc:  # the router is away: this round goes without us
                     log.warning("look failed: %s", exc)
                     snapshot = None
+                request = replace(request, move=b"")
                 if snapshot is None:
                     if time.monotonic() - asked < RELOOK_S:  # no world to hold it: do not spin
                         stop.wait(RELOOK_S)
                     continue
-                last = LookRequest(epoch=snapshot.epoch, after=snapshot.round)
-                try:
-                    _move(cfg, snapshot, robot, mover)
-                except zenoh.ZError as exc:  # the router is away: this round goes without us
-                    log.warning("round %d: %s", snapshot.round, exc)
+                request = LookRequest(epoch=snapshot.epoch, after=snapshot.round,
+                                      move=_move(cfg, snapshot, robot))
     return 0
 
 
@@ -242,8 +238,9 @@ def _err_text(reply: Any) -> str:
         return "(no reason given)"
 
 
-def _move(cfg: AgentConfig, snapshot: Snapshot, robot: Robot, mover: Any) -> None:
-    """Compute in the private frame and publish the move for the snapshot's round."""
+def _move(cfg: AgentConfig, snapshot: Snapshot, robot: Robot) -> bytes:
+    """Compute in the private frame: the encoded move for the snapshot's round (b"": it stays out
+    of this round, and says why)."""
     t0, cpu0 = time.perf_counter(), time.thread_time()
     round_no = snapshot.round
     try:
@@ -251,11 +248,11 @@ def _move(cfg: AgentConfig, snapshot: Snapshot, robot: Robot, mover: Any) -> Non
         move = MoveSubmitted(robot=cfg.robot, round=round_no, path=path).encode()
     except (WrongAlgorithmError, AlgorithmParamsError) as exc:
         log.error("round %d: staying put: %s", round_no, exc)
-        return
+        return b""
     except Exception:  # a bug in compute must not kill the robot: it stays put this round
         log.exception("round %d: compute failed, staying put", round_no)
-        return
+        return b""
     if log.isEnabledFor(logging.DEBUG):
         log.debug("round %d: compute %.2f ms (CPU %.2f ms)", round_no,
                   1e3 * (time.perf_counter() - t0), 1e3 * (time.thread_time() - cpu0))
-    mover.put(move)
+    return move

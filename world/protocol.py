@@ -21,14 +21,16 @@ from numpy.typing import NDArray
 from fatswarm.agent.seam import MAX_PARAMS, MAX_TEXT, ParamValue
 from fatswarm.world.outcome import Status
 
-PROTOCOL_VERSION = 4  # 3: the held Look is the activation; one moves notice a round; no seed;
-# 4: async models' virtual times (Begin.at, Begin.looks, Commit.delays, ControlReply.now/looks)
+PROTOCOL_VERSION = 5  # 3: the held Look is the activation; one moves notice a round; no seed;
+# 4: async models' virtual times (Begin.at, Begin.looks, Commit.delays, ControlReply.now/looks);
+# 5: a Look carries the robot's move of the round it last saw (LookRequest.move)
 ROOT = "fatswarm"
 MAX_ROBOTS = 4096  # bounds every list and array a peer can make us allocate
 MAX_MESSAGE_BYTES = 1 << 20  # 1 MiB: a 4096-robot state is ~130 KB
 MAX_CONTROL_BYTES = 160 << 10  # a Commit with 4096 robots' async delays is ~100 KB, a Begin with
 # their first Looks ~65 KB, a reply with their next Looks ~77 KB: larger is dropped unread
-MAX_LOOK_BYTES = 256  # a LookRequest is two integers: larger is refused unread
+MAX_CARRIED_MOVE_BYTES = 16 << 10  # agent.protocol.MAX_MOVE_BYTES: a Look's move, at most
+MAX_LOOK_BYTES = MAX_CARRIED_MOVE_BYTES + 256  # two integers and a move: larger is refused unread
 MAX_NOTICE_BYTES = 64 << 10  # a MovesHeld naming 4096 robots is ~12 KB: larger is dropped unread
 MAX_COORD = 1e9  # coordinates beyond this are nonsense for unit discs and risk overflow
 STATUSES = tuple(Status)
@@ -400,21 +402,32 @@ class LookRequest:
     """An agent's Look (the query's payload): the snapshot of a round after `after`, the last
     round it moved in at the world process `epoch`. The world holds the query until then, so a
     Look that overtakes the agent's own move is not answered twice; a new world process (another
-    epoch) may reopen a round it lost, so it ignores `after` from another epoch."""
+    epoch) may reopen a round it lost, so it ignores `after` from another epoch.
+
+    `move`: the robot's encoded `MoveSubmitted` for round `after`, if it has one to send: the
+    Move and the next Look travel as one message (b"": none; the world decodes it as a move
+    that came from the robot of the query's key)."""
 
     epoch: int = 0
     after: int = 0
+    move: bytes = b""
 
     def encode(self) -> bytes:
         """msgpack bytes."""
-        return pack("look", {"epoch": int(self.epoch), "after": int(self.after)})
+        fields: dict[str, Any] = {"epoch": int(self.epoch), "after": int(self.after)}
+        if self.move:
+            fields["move"] = bytes(self.move)
+        return pack("look", fields)
 
     @staticmethod
     def decode(data: bytes | bytearray | memoryview) -> LookRequest:
         """Parse and validate; raises ProtocolError."""
         obj = unpack(data, "look")
+        move = obj.get("move", b"")
+        if not isinstance(move, bytes) or len(move) > MAX_CARRIED_MOVE_BYTES:
+            raise ProtocolError(f"'move' must be at most {MAX_CARRIED_MOVE_BYTES} bytes")
         return LookRequest(epoch=get_int(obj, "epoch", 0, 2**63 - 1),
-                           after=get_int(obj, "after", 0, 2**62))
+                           after=get_int(obj, "after", 0, 2**62), move=move)
 
 
 # --- coordinator <-> world: control queries ---------------------------------------------------

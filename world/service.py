@@ -244,7 +244,7 @@ class HeldLooks:
 def _handle(core: WorldCore, kind: str, item: Any, held_pub: Any, looks: HeldLooks) -> bool:
     """Apply one event; True when the observers' state changed enough to publish at once."""
     if kind == "look":
-        _take_look(core, item, looks)
+        _take_look(core, item, looks, held_pub)
     elif kind == "move":
         if move_bytes(core, *item):
             _notify(core, held_pub)
@@ -264,10 +264,11 @@ def _notify(core: WorldCore, held_pub: Any) -> None:
         held_pub.put(notice.encode())
 
 
-def _take_look(core: WorldCore, query: Any, looks: HeldLooks) -> None:
-    """Answer a Look now, hold it until its robot is activated, or refuse it (a key with no robot
-    of this run, or garbage)."""
-    robot = robot_of_key(str(query.key_expr))
+def _take_look(core: WorldCore, query: Any, looks: HeldLooks, held_pub: Any) -> None:
+    """Take the move a Look carries, then answer the Look now, hold it until its robot is
+    activated, or refuse it (a key with no robot of this run, or garbage)."""
+    key = str(query.key_expr)
+    robot = robot_of_key(key)
     try:
         request = LookRequest.decode(query.payload.to_bytes() if query.payload is not None
                                      else LookRequest().encode())
@@ -278,6 +279,8 @@ def _take_look(core: WorldCore, query: Any, looks: HeldLooks) -> None:
         finally:
             query.drop()
         return
+    if request.move and move_bytes(core, key, request.move):
+        _notify(core, held_pub)
     if robot is None or not 0 <= robot < core.setup.n or core.may_look(robot, request):
         _answer_look(core, query)
     else:

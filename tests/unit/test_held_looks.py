@@ -127,3 +127,42 @@ def test_every_held_look_is_dropped_exactly_once(world: WorldCore) -> None:
     looks.let_go_all()
     assert [q.drops for q in queries] == [1] * 5 and len(looks) == 0
     assert [q.answered_round for q in queries] == [None, 1, None, None, None]
+
+
+class FakePublisher:
+    def __init__(self) -> None:
+        self.sent: list[bytes] = []
+
+    def put(self, data: bytes) -> None:
+        self.sent.append(data)
+
+
+def _look_with(robot: int, request: LookRequest) -> FakeQuery:
+    query = FakeQuery(robot)
+    query.payload = zenoh.ZBytes(request.encode())  # type: ignore[assignment]
+    return query
+
+
+def test_a_look_that_carries_the_robots_move_delivers_it_and_is_held_for_the_next_round(
+    world: WorldCore,
+) -> None:
+    from fatswarm.world.service import _take_look
+
+    looks, notices = HeldLooks(), FakePublisher()
+    _open(world, 0, 1)
+    for robot in (0, 1):
+        first = _look_with(robot, FIRST)
+        _take_look(world, first, looks, notices)
+        assert first.answered_round == 1
+    move = MoveSubmitted(0, 1, STAY).encode()
+    carrying = _look_with(0, LookRequest(world.epoch, 1, move))
+    _take_look(world, carrying, looks, notices)
+    assert world.held == {0: STAY} and carrying.replies == [] and len(looks) == 1
+    assert notices.sent == []  # robot 1 has not moved yet
+    _take_look(world, _look_with(1, LookRequest(world.epoch, 1, MoveSubmitted(1, 1, STAY)
+                                                .encode())), looks, notices)
+    assert len(notices.sent) == 1  # every active robot moved: one notice
+    # another robot's move in robot 1's Look is refused
+    _take_look(world, _look_with(1, LookRequest(world.epoch, 1, move)), looks, notices)
+    assert world.held == {0: STAY, 1: STAY}
+    assert world.rejected["move-wrong-robot"] == 1

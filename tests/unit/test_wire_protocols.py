@@ -13,7 +13,9 @@ from hypothesis import strategies as st
 from fatswarm.agent.path import Arc, Line, Path
 from fatswarm.agent.protocol import MoveSubmitted, move_key, robot_of_alive_key
 from fatswarm.world.protocol import (
+    MAX_CARRIED_MOVE_BYTES,
     MAX_CONTROL_BYTES,
+    MAX_LOOK_BYTES,
     MAX_NOTICE_BYTES,
     MAX_ROBOTS,
     PROTOCOL_VERSION,
@@ -184,12 +186,18 @@ def test_snapshot_round_trips_and_checks_its_size() -> None:
 
 
 def test_look_request_round_trips_and_refuses_garbage() -> None:
-    for request in (LookRequest(), LookRequest(epoch=2**63 - 1, after=2**62)):
+    move = MoveSubmitted(3, 2, Path((Line((1.0, 0.5)),))).encode()
+    for request in (LookRequest(), LookRequest(epoch=2**63 - 1, after=2**62),
+                    LookRequest(epoch=1, after=2, move=move)):
         assert LookRequest.decode(request.encode()) == request
+    assert "move" not in msgpack.unpackb(LookRequest(1, 2).encode())  # none: no key at all
     good = {"v": PROTOCOL_VERSION, "t": "look", "epoch": 1, "after": 2}
-    for change in ({"after": -1}, {"epoch": -1}, {"after": "2"}, {"t": "snapshot"}):
+    too_big = b"x" * (MAX_CARRIED_MOVE_BYTES + 1)
+    for change in ({"after": -1}, {"epoch": -1}, {"after": "2"}, {"t": "snapshot"},
+                   {"move": "text"}, {"move": 7}, {"move": too_big}):
         with pytest.raises(ProtocolError):
             LookRequest.decode(_raw(**{**good, **change}))
+    assert len(LookRequest(1, 2, b"x" * MAX_CARRIED_MOVE_BYTES).encode()) <= MAX_LOOK_BYTES
 
 
 def _raw(**fields: object) -> bytes:
