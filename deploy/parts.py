@@ -236,7 +236,9 @@ def main_world(args: argparse.Namespace) -> int:
             raise ValueError("--router hosts a router without access control: for a secured "
                              "swarm run `fatswarm router --config FILE` and connect the world "
                              "to it with --config")
-        conf = None if args.router else _client_config(args)
+        # No shared memory: the world's messages are small, and Zenoh maps a 16 MB segment into
+        # it on the first large one a peer sends (measured: 55 -> 75 MB at once, for good)
+        conf = None if args.router else _client_config(args, shared_memory=False)
         token = alive_key(args.swarm)  # a bad --swarm is said before any wait
         fresh: WorldSetup | None = None
         if os.path.exists(args.state) and os.path.getsize(args.state) > 0:
@@ -245,7 +247,8 @@ def main_world(args: argparse.Namespace) -> int:
         else:
             fresh = make_setup()  # a bad start is said before any wait
         if args.router:  # listening fails at once (port taken): nothing to wait for
-            session = open_router(args.listen, args.connect, None, [DEFAULT_ROUTER_LISTEN])
+            session = open_router(args.listen, args.connect, None, [DEFAULT_ROUTER_LISTEN],
+                                  shared_memory=False)
         else:
             assert conf is not None
             session = open_client(conf, stop)

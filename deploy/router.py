@@ -18,7 +18,8 @@ log = logging.getLogger("fatswarm.router")
 
 
 def router_config(listen: Sequence[str], connect: Sequence[str] = (),
-                  config: str | None = None, default_listen: Sequence[str] = ()) -> Any:
+                  config: str | None = None, default_listen: Sequence[str] = (),
+                  shared_memory: bool = True) -> Any:
     """The router's Zenoh config: listening on `listen`, linked to the routers in `connect`.
 
     `config`: Zenoh's configuration file to start from (`--config`, see `zconf.make_config`); its
@@ -27,20 +28,21 @@ def router_config(listen: Sequence[str], connect: Sequence[str] = (),
     listen nowhere.
     """
     conf = make_config("router", connect=connect, listen=listen, config_file=config,
-                       default_listen=default_listen)
+                       default_listen=default_listen, shared_memory=shared_memory)
     if not listen_endpoints(conf):
         raise ValueError("a router needs at least one --listen endpoint, e.g. tcp/127.0.0.1:7447")
     return conf
 
 
 def open_router(listen: Sequence[str], connect: Sequence[str] = (),
-                config: str | None = None, default_listen: Sequence[str] = ()) -> Any:
+                config: str | None = None, default_listen: Sequence[str] = (),
+                shared_memory: bool = True) -> Any:
     """An open router session (see `router_config`).
 
     Raises ZenohSetupError (a ValueError) for a malformed endpoint or one it cannot listen on, and
     for access control that the file sets up wrong.
     """
-    return _open(router_config(listen, connect, config, default_listen), config)
+    return _open(router_config(listen, connect, config, default_listen, shared_memory), config)
 
 
 def _open(conf: Any, config: str | None) -> Any:
