@@ -369,8 +369,6 @@ class CoordinatorCore:
         if self._waiting and now < self._deadline:
             return []
         timed_out = tuple(r for r in self.active if r not in self._held)
-        if timed_out:
-            self._note(f"round {self._round}: no move from {list(timed_out)}")
         self._phase, self._deadline = Phase.COMMIT, None
         paced = self._began_at is not None and now < self._began_at + self.times.pace_s
         self._chained = bool(self._live) and not paced
@@ -385,6 +383,8 @@ class CoordinatorCore:
             why = "no answer" if reply is None else reply.reason
             self._note(f"commit of round {self._round} failed: {why}", warning=True)
             return self._ask_hello()
+        if reply.timed_out:  # the world's record, not what this core heard (one notice a round)
+            self._note(f"round {self._round}: no move from {list(reply.timed_out)}")
         if reply.status != Status.RUNNING:
             return self._finish(Status(reply.status))
         if self._chained and reply.open_round == reply.committed + 1 == self._round + 1:

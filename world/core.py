@@ -13,7 +13,7 @@ import logging
 import os
 from collections import Counter
 from collections.abc import Callable, Collection, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Final, Protocol
 
 import numpy as np
@@ -313,6 +313,7 @@ class WorldCore:
         self._agents: tuple[AgentInfo, ...] | None = None  # cache of state().agents
         self._figures: dict[str, float] | None = None  # cache of state().figures
         self.last_commit: Committed | None = None
+        self.last_timed_out: tuple[int, ...] = ()  # of the round committed last (its reply says)
         self._figures_failed = False
         if history is None:
             self.journal.header(
@@ -479,7 +480,9 @@ class WorldCore:
         reply, changed = self._commit(req)
         then = req.then
         if reply.ok and changed and then is not None and self.status == Status.RUNNING:
-            return self._begin(then)[0], True
+            reply = self._begin(then)[0]
+        if reply.ok and changed:
+            reply = replace(reply, timed_out=self.last_timed_out)
         return reply, changed
 
     def reply(self, ok: bool, reason: str = "") -> ControlReply:
@@ -531,6 +534,7 @@ class WorldCore:
         after = np.asarray(outcome.positions, dtype=np.float64)
         traveled = {r: float(outcome.traveled.get(r, 0.0)) for r in paths}
         timed_out = [r for r in self.active if r not in self.held]
+        self.last_timed_out = tuple(timed_out)
         down, back = self._crashes(round_no)
         extra: dict[str, list[int]] = {}
         for key, robots in (("timed_out", timed_out), ("crashed", down), ("recovered", back),

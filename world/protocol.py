@@ -496,7 +496,8 @@ class Commit:
     (one request instead of two on the round's critical path)."""
 
     round: int
-    timed_out: tuple[int, ...] = ()  # active robots that sent no move before the deadline
+    timed_out: tuple[int, ...] = ()  # active robots the coordinator heard no move from (the
+    # world records its own: see ControlReply.timed_out)
     then_active: tuple[int, ...] = ()  # the next round's active set; () opens nothing
     delays: tuple[tuple[int, float, float], ...] = ()  # async: (robot, compute, wait) for each
     # active robot: the adversary's delays of the cycle it began in this round
@@ -550,6 +551,9 @@ class ControlReply:
     now: float = 0.0  # async: the world's virtual time
     looks: tuple[tuple[int, float], ...] = ()  # async: each waiting live robot's next Look
     unset: tuple[int, ...] = ()  # async: waiting live robots with no Look time yet (first Looks)
+    timed_out: tuple[int, ...] = ()  # the reply to a Commit: the robots of the round it committed
+    # that sent no move in time, as the world records them (the coordinator hears of moves only
+    # through the round's one notice, so it cannot tell them itself at a deadline)
 
     def encode(self) -> bytes:
         """msgpack bytes."""
@@ -567,6 +571,7 @@ class ControlReply:
                 **({} if not (self.now or self.looks or self.unset) else {
                     "now": float(self.now), "looks": _times(self.looks),
                     "unset": _robot_list(self.unset)}),
+                **({"timed_out": _robot_list(self.timed_out)} if self.timed_out else {}),
             },
         )
 
@@ -589,6 +594,7 @@ class ControlReply:
             now=get_float(obj, "now", 0.0, MAX_TIME) if "now" in obj else 0.0,
             looks=get_times(obj, "looks"),
             unset=get_robots(obj, "unset") if "unset" in obj else (),
+            timed_out=get_robots(obj, "timed_out") if "timed_out" in obj else (),
         )
 
 

@@ -7,6 +7,7 @@ import inspect
 import itertools
 from collections import deque
 from collections.abc import Sequence
+from dataclasses import replace
 
 import pytest
 from hypothesis import given, settings
@@ -115,14 +116,15 @@ class FakeWorld:
             return self.reply(True)  # the answer to a commit was lost: it is durable
         if req.round != self.open_round:
             return self.reply(False, f"round {req.round} is not open")
-        self.applied.append((req, tuple(r for r in self.active if r not in self.held)))
+        missed = tuple(r for r in self.active if r not in self.held)
+        self.applied.append((req, missed))
         self.committed, self.open_round, self.active, self.held = req.round, 0, (), set()
         if self.committed >= self.end_after:
             self.status = self.end_status
         then = req.then
         if then is not None and self.status == Status.RUNNING:
-            return self._begin(then)
-        return self.reply(True)
+            return replace(self._begin(then), timed_out=missed)
+        return replace(self.reply(True), timed_out=missed)
 
     def _begin(self, req: Begin) -> ControlReply:
         if req.round != self.committed + 1:
@@ -449,6 +451,18 @@ def test_a_robot_that_never_moves_is_timed_out_at_exactly_move_timeout() -> None
     drive.tick(15.0)
     (commit, timed_out), *_ = drive.world.applied
     assert commit.round == 1 and 2 in commit.timed_out and timed_out == (2,)
+
+
+def test_the_note_of_a_round_ended_at_its_deadline_names_only_the_robots_the_world_missed(
+) -> None:
+    drive = Drive(FakeWorld(3))
+    drive.silent = {2}
+    drive.perform(drive.core.start(drive.now))
+    drive.alive(0, 1, 2, world_first=True)  # the world knows robot 2 is up when 0 and 1 move
+    drive.core.pop_notes()
+    drive.tick(5.0)  # robots 0 and 1 moved, but no notice comes while robot 2 is missing
+    assert drive.world.applied[0][1] == (2,)
+    assert Note("round 1: no move from [2]") in drive.core.pop_notes()
 
 
 @pytest.mark.parametrize("world_first", [False, True])

@@ -114,6 +114,12 @@ def test_async_control_fields_round_trip_and_stay_optional() -> None:
     assert "now" not in msgpack.unpackb(ControlReply(True, "", 5, 2, 3, "running").encode())
 
 
+def test_a_commits_reply_names_the_robots_that_timed_out_and_only_then_carries_the_key() -> None:
+    reply = ControlReply(True, "", 5, 2, 3, "running", timed_out=(1, 4))
+    assert ControlReply.decode(reply.encode()) == reply
+    assert "timed_out" not in msgpack.unpackb(ControlReply(True, "", 5, 2, 3, "running").encode())
+
+
 @pytest.mark.parametrize(("fields", "reason"), [
     ({"at": -1.0}, "'at'"), ({"at": float("nan")}, "'at'"), ({"at": "soon"}, "'at'"),
     ({"looks": [[0]]}, "rows"), ({"looks": [[0, -1.0]]}, "'t0'"), ({"looks": "all"}, "'looks'"),

@@ -226,13 +226,15 @@ def test_a_commit_with_the_next_active_set_commits_and_opens_the_next_round(
     reply, changed = control_bytes(w, Commit(1, (1,), then_active=(1, 2)).encode())
     assert changed and reply.ok and (reply.committed, reply.open_round) == (1, 2)
     assert reply.held == () and reply.status == "running"
+    assert reply.timed_out == (1,)  # of the round it committed: robot 1 sent no move
     assert w.positions[0].tolist() == [1.0, 0.0]  # round 1's move applied
     assert (w.open_round, w.active) == (2, (1, 2))
     assert [w.may_look(r) for r in range(3)] == [False, True, True]
     assert _ctl(w, Begin(2, (1, 2)).encode()).ok  # the same Begin again keeps it
     _looked_and_moved(w, 1, 2)
     assert w.moves_notice() == MovesHeld(2, (1, 2))
-    assert _ctl(w, Commit(2).encode()).committed == 2
+    last = _ctl(w, Commit(2).encode())
+    assert last.committed == 2 and last.timed_out == ()
     w.journal.close()
     assert [(r.round, r.active) for r in read_record(tmp_path / "state.jsonl").rounds] == [
         (1, (0, 1)), (2, (1, 2))]
