@@ -111,6 +111,7 @@ class CoordinatorCore:
         self._waiting: set[int] = set()  # COLLECT: live active robots without a held move
         self._began_at: float | None = None  # when the last Begin was asked (pace)
         self._collisions = 0
+        self._epoch = 0  # the world process that answered last (MovesHeld.epoch)
         self._finished: Finished | None = None
         self._notes: deque[Note] = deque(maxlen=MAX_NOTES)
 
@@ -190,6 +191,7 @@ class CoordinatorCore:
             return []
         if reply is not None:
             self._collisions = reply.collisions
+            self._epoch = reply.epoch
         if self._phase is Phase.HELLO:
             return self._on_hello(reply, now)
         if self._phase is Phase.BEGIN:
@@ -226,8 +228,9 @@ class CoordinatorCore:
         return []
 
     def on_held(self, notice: MovesHeld, now: float) -> list[Action]:
-        """The world holds these robots' moves; notices of other rounds (or robots) are ignored."""
-        if notice.round == self._round:
+        """The world holds these robots' moves; notices of other rounds (or robots), or of another
+        world process than the one that answered last (one since restarted), are ignored."""
+        if notice.round == self._round and notice.epoch == self._epoch:
             robots = set(notice.robots) & self.active_set
             self._held |= robots  # kept while the world keeps the round open
             self._waiting -= robots

@@ -85,11 +85,7 @@ class AsyncWorldCore(WorldCore):
     def reply(self, ok: bool, reason: str = "") -> ControlReply:
         base = super().reply(ok, reason)
         known, unset = self.clock.looks()
-        return ControlReply(
-            ok=base.ok, reason=base.reason, n=base.n, committed=base.committed,
-            open_round=base.open_round, status=base.status, collisions=base.collisions,
-            held=base.held, now=self.clock.now, looks=tuple(known), unset=tuple(unset),
-        )
+        return dataclasses.replace(base, now=self.clock.now, looks=tuple(known), unset=tuple(unset))
 
     def _begin(self, req: Begin) -> tuple[ControlReply, bool]:
         """Open the instant `req.at` for the robots due then, once the world has got there."""

@@ -465,7 +465,7 @@ class WorldCore:
         if self._noticed == (self.open_round, robots):
             return None
         self._noticed = (self.open_round, robots)
-        return MovesHeld(self.open_round, robots)
+        return MovesHeld(self.open_round, robots, self.epoch)
 
     def control(self, req: ControlRequest) -> tuple[ControlReply, bool]:
         """Answer a coordinator request; the flag says whether the state changed (publish it)."""
@@ -495,6 +495,7 @@ class WorldCore:
             status=self.status,
             collisions=self.collisions_total,
             held=tuple(sorted(self.held)) if self.open_round else (),
+            epoch=self.epoch,
         )
 
     def _begin(self, req: Begin) -> tuple[ControlReply, bool]:

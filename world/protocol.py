@@ -551,6 +551,7 @@ class ControlReply:
     now: float = 0.0  # async: the world's virtual time
     looks: tuple[tuple[int, float], ...] = ()  # async: each waiting live robot's next Look
     unset: tuple[int, ...] = ()  # async: waiting live robots with no Look time yet (first Looks)
+    epoch: int = 0  # the world process that answers (MovesHeld.epoch)
     timed_out: tuple[int, ...] = ()  # the reply to a Commit: the robots of the round it committed
     # that sent no move in time, as the world records them (the coordinator hears of moves only
     # through the round's one notice, so it cannot tell them itself at a deadline)
@@ -568,6 +569,7 @@ class ControlReply:
                 "status": self.status,
                 "collisions": int(self.collisions),
                 "held": _robot_list(self.held),
+                "epoch": int(self.epoch),
                 **({} if not (self.now or self.looks or self.unset) else {
                     "now": float(self.now), "looks": _times(self.looks),
                     "unset": _robot_list(self.unset)}),
@@ -594,6 +596,7 @@ class ControlReply:
             now=get_float(obj, "now", 0.0, MAX_TIME) if "now" in obj else 0.0,
             looks=get_times(obj, "looks"),
             unset=get_robots(obj, "unset") if "unset" in obj else (),
+            epoch=get_int(obj, "epoch", 0, 2**63 - 1) if "epoch" in obj else 0,
             timed_out=get_robots(obj, "timed_out") if "timed_out" in obj else (),
         )
 
@@ -605,17 +608,21 @@ class ControlReply:
 class MovesHeld:
     """The world holds the moves of `robots` for round `round`, and every active robot whose agent
     is alive is among them: the round can be committed (BLOCK, so none is lost). Sent once a round,
-    again only if a late robot's move joins them."""
+    again only if a late robot's move joins them. `epoch`: the world process that holds them (a
+    notice of a world that has since been restarted is not about the round open now)."""
 
     round: int
     robots: tuple[int, ...]
+    epoch: int = 0
 
     def encode(self) -> bytes:
         """msgpack bytes."""
-        return pack("moves-held", {"round": int(self.round), "robots": _robot_list(self.robots)})
+        return pack("moves-held", {"round": int(self.round), "robots": _robot_list(self.robots),
+                                   "epoch": int(self.epoch)})
 
     @staticmethod
     def decode(data: bytes | bytearray | memoryview) -> MovesHeld:
         """Parse and validate; raises ProtocolError."""
         obj = unpack(data, "moves-held")
-        return MovesHeld(round=get_int(obj, "round", 1, 2**62), robots=get_robots(obj, "robots"))
+        return MovesHeld(round=get_int(obj, "round", 1, 2**62), robots=get_robots(obj, "robots"),
+                         epoch=get_int(obj, "epoch", 0, 2**63 - 1) if "epoch" in obj else 0)

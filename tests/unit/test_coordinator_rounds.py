@@ -54,6 +54,7 @@ class FakeWorld:
         self.held: set[int] = set()
         self.alive: set[int] = set()  # robots whose agent the world knows to be up
         self.noticed: MovesHeld | None = None
+        self.epoch = 1  # the world process (MovesHeld.epoch)
         self.faults: list[tuple[str, str]] = []
         self.requests: list[Request] = []
         self.opened: list[tuple[int, tuple[int, ...]]] = []  # every round opened anew, with its set
@@ -64,6 +65,7 @@ class FakeWorld:
 
     def restart(self) -> None:
         self.open_round, self.active, self.held, self.noticed = 0, (), set(), None
+        self.epoch += 1  # another world process
 
     def set_alive(self, robot: int, up: bool) -> None:
         if 0 <= robot < self.n:
@@ -80,7 +82,7 @@ class FakeWorld:
         """The moves notice due now, if any (never the same one twice)."""
         if not self.open_round or any(r in self.alive - self.held for r in self.active):
             return None
-        notice = MovesHeld(self.open_round, tuple(sorted(self.held)))
+        notice = MovesHeld(self.open_round, tuple(sorted(self.held)), self.epoch)
         if notice == self.noticed:
             return None
         self.noticed = notice
@@ -90,7 +92,8 @@ class FakeWorld:
         return ControlReply(ok=ok, reason=reason, n=self.n, committed=self.committed,
                             open_round=self.open_round, status=str(self.status),
                             collisions=self.collisions,
-                            held=tuple(sorted(self.held)) if self.open_round else ())
+                            held=tuple(sorted(self.held)) if self.open_round else (),
+                            epoch=self.epoch)
 
     def answer(self, req: Request) -> ControlReply | None:
         self.requests.append(req)
@@ -495,7 +498,8 @@ def test_move_notices_of_another_round_or_robot_are_ignored() -> None:
     drive.start(0, 1)
     drive.tick(120.0)  # robot 2 never came: round 1 with 0 and 1
     assert drive.core.round == 1 and drive.core.active == (0, 1)
-    for notice in (MovesHeld(round=2, robots=(0, 1)), MovesHeld(round=1, robots=(2,))):
+    for notice in (MovesHeld(round=2, robots=(0, 1), epoch=1),
+                   MovesHeld(round=1, robots=(2,), epoch=1)):
         assert drive.core.on_held(notice, drive.now) == []
     assert drive.core.held == set()
     drive.move(0)
@@ -509,9 +513,9 @@ def test_a_notice_marks_only_the_robots_active_in_the_round() -> None:
     drive.auto_move = False
     drive.start(0, 1)
     drive.tick(120.0)
-    drive.perform(drive.core.on_held(MovesHeld(round=1, robots=(0, 2)), drive.now))
+    drive.perform(drive.core.on_held(MovesHeld(round=1, robots=(0, 2), epoch=1), drive.now))
     assert drive.core.held == {0} and drive.commits() == []  # robot 1 is still waited for
-    drive.perform(drive.core.on_held(MovesHeld(round=1, robots=(1,)), drive.now))
+    drive.perform(drive.core.on_held(MovesHeld(round=1, robots=(1,), epoch=1), drive.now))
     assert drive.commits() == [Commit(round=1, timed_out=(), then_active=(0, 1))]
 
 
@@ -519,8 +523,8 @@ def test_a_notice_that_comes_after_the_commit_changes_nothing() -> None:
     drive = Drive(FakeWorld(3, end_after=5), times=RoundTimes(pace_s=10.0))
     drive.start(0, 1, 2)
     assert drive.core.phase is Phase.PACE and len(drive.world.requests) == 3
-    assert drive.core.on_held(MovesHeld(round=1, robots=(0, 1, 2)), 1.0) == []
-    assert drive.core.on_held(MovesHeld(round=2, robots=(0, 1, 2)), 1.0) == []
+    assert drive.core.on_held(MovesHeld(round=1, robots=(0, 1, 2), epoch=1), 1.0) == []
+    assert drive.core.on_held(MovesHeld(round=2, robots=(0, 1, 2), epoch=1), 1.0) == []
     assert drive.core.phase is Phase.PACE and len(drive.world.requests) == 3
 
 
@@ -617,6 +621,23 @@ def test_a_world_that_restarts_mid_round_is_asked_at_once_and_the_round_opened_a
     assert world.requests[2:4] == [Hello(), Begin(round=1, active=(0, 1, 2))]
     assert world.applied[0] == (Commit(round=1, timed_out=(), then_active=(0, 1, 2)), ())
     assert drive.opened[:2] == [(0.0, 1, (0, 1, 2)), (0.2, 1, (0, 1, 2))]  # all three moved again
+
+
+def test_a_notice_of_the_world_before_its_restart_does_not_commit_the_reopened_round() -> None:
+    world = FakeWorld(3)
+    drive = Drive(world)
+    drive.silent = {2}
+    drive.perform(drive.core.start(drive.now))
+    drive.alive(0, 1, 2, world_first=True)
+    stale = MovesHeld(1, (0, 1, 2), world.epoch)  # as if on its way when the world died
+    world.restart()
+    drive.silent = {0, 1, 2}  # nobody has moved in the new world yet
+    drive.perform(drive.core.on_world(True, drive.now))
+    assert world.requests[-1] == Begin(round=1, active=(0, 1, 2))  # round 1 opened again
+    drive.notices.append(stale)
+    drive.perform([])
+    assert world.applied == [] and drive.core.phase is Phase.COLLECT
+    assert drive.core.held == set()
 
 
 def test_a_world_that_comes_up_is_asked_at_once_not_at_the_retry_deadline() -> None:
@@ -865,7 +886,8 @@ def _any_events(n: int, scheduler: str, pace: float, up: set[int], quick: set[in
                     drive.alive(robot, up=False, world_first=world_first)
             case ("stray", int(robot), int(offset)):  # never a notice the world could send
                 if drive.core.round + offset >= 1 and (offset or robot not in drive.core.active):
-                    notice = MovesHeld(round=drive.core.round + offset, robots=(robot,))
+                    notice = MovesHeld(round=drive.core.round + offset, robots=(robot,),
+                                       epoch=drive.world.epoch)
                     drive.perform(drive.core.on_held(notice, drive.now))
             case ("wait", float(dt)):
                 drive.wait(dt)

@@ -114,6 +114,12 @@ def test_async_control_fields_round_trip_and_stay_optional() -> None:
     assert "now" not in msgpack.unpackb(ControlReply(True, "", 5, 2, 3, "running").encode())
 
 
+def test_notices_and_replies_name_their_world_process() -> None:
+    assert MovesHeld.decode(MovesHeld(3, (0, 1), 2**63 - 1).encode()).epoch == 2**63 - 1
+    reply = ControlReply(True, "", 5, 2, 3, "running", epoch=42)
+    assert ControlReply.decode(reply.encode()) == reply
+
+
 def test_a_commits_reply_names_the_robots_that_timed_out_and_only_then_carries_the_key() -> None:
     reply = ControlReply(True, "", 5, 2, 3, "running", timed_out=(1, 4))
     assert ControlReply.decode(reply.encode()) == reply
@@ -176,9 +182,9 @@ def test_the_largest_commit_and_moves_notice_fit_under_their_size_limits() -> No
     looks = tuple((r, late) for r in everyone)
     assert len(Begin(2**62, everyone, late, looks).encode()) <= MAX_CONTROL_BYTES
     reply = ControlReply(True, "x" * 200, MAX_ROBOTS, 2**62, 2**62, "running", 2**62, everyone,
-                         late, looks, everyone)
+                         late, looks, everyone, 2**63 - 1, everyone)
     assert len(reply.encode()) <= MAX_CONTROL_BYTES
-    assert len(MovesHeld(2**62, everyone).encode()) <= MAX_NOTICE_BYTES
+    assert len(MovesHeld(2**62, everyone, 2**63 - 1).encode()) <= MAX_NOTICE_BYTES
 
 
 def test_snapshot_round_trips_and_checks_its_size() -> None:
@@ -306,6 +312,8 @@ GOOD_NOTICE = {"v": PROTOCOL_VERSION, "t": "moves-held", "round": 3, "robots": [
         ({"round": 0}, "'round'"),
         ({"round": None}, "'round'"),
         ({"t": "move-held"}, "message type"),  # the old per-move notice
+        ({"epoch": -1}, "'epoch'"),
+        ({"epoch": "7"}, "'epoch'"),
         ({"v": 2}, "protocol version"),
     ],
 )
