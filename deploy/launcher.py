@@ -39,6 +39,7 @@ from fatswarm.deploy.zconf import (
     check_network,
     loopback_endpoint,
     make_config,
+    open_client,
 )
 from fatswarm.world.record import RecordWriteError, RecordWriter
 
@@ -319,13 +320,11 @@ def _launch(
 def _await_router(endpoint: str, children: Children, stop: StopSignal) -> Any:
     """A client session to the router the world hosts, once it listens; None if the world exited
     or a signal came first (a world that loads a large record may take a while)."""
-    from fatswarm.deploy.zconf import open_client
-
     while not stop.event.is_set() and "world" not in children.exited():
         try:
             return open_client(make_config("client", [endpoint]), stop.event, deadline_s=0.5)
         except ZenohSetupError:  # not listening yet: look again
-            continue
+            stop.event.wait(0.05)
     return None
 
 
