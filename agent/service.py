@@ -2,7 +2,8 @@
 
 Its Look is a query the world holds until the robot is activated: the answer is both the activation
 and the snapshot, so a round reaches an agent in one message. Its Move rides in its next Look
-(`LookRequest.move`): the robot still sends its own move, in one message a round instead of two.
+(`LookRequest.move`, sent again with every Look until one is answered): the robot still sends its
+own move, in one message a round instead of two.
 The Look names the last round it moved in (and at which world process), all it keeps between
 rounds besides its frame and that move until it is sent; compute stays a pure function of the
 snapshot. It keeps only its identity and its frame (an X mirroring drawn at start-up, never
@@ -21,7 +22,7 @@ import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 from fatswarm.agent.frames import compute_in_frame, draw_flip
@@ -30,6 +31,7 @@ from fatswarm.agent.protocol import MoveSubmitted, alive_key
 from fatswarm.agent.registry import DEFAULT
 from fatswarm.agent.seam import Algorithm, AlgorithmParamsError, Configured, checked
 from fatswarm.world.protocol import LookRequest, ProtocolError, Snapshot, snapshot_key
+from fatswarm.world.protocol import alive_key as world_alive_key
 
 log = logging.getLogger("fatswarm.agent")
 
@@ -122,6 +124,14 @@ class Stopped(Exception):
     """A stop signal came while the agent waited for its Look's answer."""
 
 
+class Relook(Exception):
+    """A world came up while the agent waited for its Look's answer: the Look may have been lost
+    with a router or world that went away, so it is asked again (with its move, if it had one)."""
+
+
+RELOOK_SIGNAL = signal.SIGUSR1  # how the liveliness callback interrupts the main thread's wait
+
+
 def serve(
     cfg: AgentConfig,
     conf: Any,
@@ -152,11 +162,16 @@ def serve(
             timeout=LOOK_WAIT_S,
         )
         _token = session.liveliness().declare_token(alive_key(cfg.swarm, cfg.robot))
+        look_wait = _LookWait(stop)
+        # A router that restarts can lose a Look on its way (it is then never answered, and the
+        # agent would wait LOOK_WAIT_S): when the world's token (re)appears, ask again at once.
+        _world = session.liveliness().declare_subscriber(
+            world_alive_key(cfg.swarm), look_wait.world_seen, history=True)
         log.info("robot %d up", cfg.robot)
         # The world process and round it last answered, and the move for that round: the Move
-        # travels in the next Look, once (a Look asked again carries none).
+        # travels in every Look until the world answers one (a Look lost with a router that went
+        # away must not lose the move with it; the world takes a move once).
         request = LookRequest()
-        look_wait = _LookWait(stop)
         with look_wait.install():
             while not stop.is_set():
                 asked = time.monotonic()
@@ -164,10 +179,12 @@ def serve(
                     snapshot = _look(querier, request, look_wait)
                 except Stopped:
                     break
+                except Relook:
+                    log.info("robot %d: a world came up; asking again", cfg.robot)
+                    continue
                 except zenoh.ZError as exc:  # the router is away: this round goes without us
                     log.warning("look failed: %s", exc)
                     snapshot = None
-                request = replace(request, move=b"")
                 if snapshot is None:
                     if time.monotonic() - asked < RELOOK_S:  # no world to hold it: do not spin
                         stop.wait(RELOOK_S)
@@ -184,12 +201,26 @@ class _LookWait:
     def __init__(self, stop: threading.Event) -> None:
         self.stop = stop
         self.waiting = False
+        self.installed = False  # the handlers are in place (only in the main thread)
 
     def handle(self, signum: int, frame: object) -> None:
         del signum, frame
         self.stop.set()
         if self.waiting:
             raise Stopped
+
+    def relook(self, signum: int, frame: object) -> None:
+        del signum, frame
+        if self.waiting:
+            raise Relook
+
+    def world_seen(self, sample: Any) -> None:
+        """Liveliness callback on the world's token: a world that (re)appears while a Look waits
+        interrupts the wait (a signal to this process: its handler raises in the main thread)."""
+        import zenoh
+
+        if sample.kind == zenoh.SampleKind.PUT and self.installed and self.waiting:
+            os.kill(os.getpid(), RELOOK_SIGNAL)
 
     @contextmanager
     def install(self) -> Iterator[None]:
@@ -198,14 +229,18 @@ class _LookWait:
         try:
             before = {sig: signal.signal(sig, self.handle)
                       for sig in (signal.SIGTERM, signal.SIGINT)}
+            before[RELOOK_SIGNAL] = signal.signal(RELOOK_SIGNAL, self.relook)
         except ValueError:
             yield
             return
+        self.installed = True
         try:
             yield
         finally:
+            self.installed = False
             for sig, handler in before.items():
-                signal.signal(sig, handler)
+                # a late relook signal must not kill the process (SIGUSR1's default action)
+                signal.signal(sig, signal.SIG_IGN if sig == RELOOK_SIGNAL else handler)
 
 
 def _look(querier: Any, last: LookRequest, wait: _LookWait) -> Snapshot | None:

@@ -182,9 +182,12 @@ def grants(swarm: str, who: Identity) -> tuple[Grant, ...]:
         look = world_wire.snapshot_key(swarm, who.robot)
         return tuple(_both(
             [("put", move), ("query", look),
-             ("liveliness_token", agent_wire.alive_key(swarm, who.robot))],
-            # the world's subscriber and queryable, as declared: no data, only that they exist
-            [("reply", look), ("declare_subscriber", moves), ("declare_queryable", snapshots)],
+             ("liveliness_token", agent_wire.alive_key(swarm, who.robot)),
+             ("declare_liveliness_subscriber", world_alive)],
+            # the world's subscriber and queryable, as declared: no data, only that they exist;
+            # and the world's token (an agent asks again when a world comes up)
+            [("reply", look), ("declare_subscriber", moves), ("declare_queryable", snapshots),
+             ("liveliness_token", world_alive)],
         ))
     if who.role == "world":
         return tuple(_both(

@@ -406,7 +406,8 @@ class LookRequest:
 
     `move`: the robot's encoded `MoveSubmitted` for round `after`, if it has one to send: the
     Move and the next Look travel as one message (b"": none; the world decodes it as a move
-    that came from the robot of the query's key)."""
+    that came from the robot of the query's key). The agent sends it with every Look until one
+    is answered, so a Look lost with a router does not lose the move; the world takes it once."""
 
     epoch: int = 0
     after: int = 0

@@ -279,12 +279,27 @@ def _take_look(core: WorldCore, query: Any, looks: HeldLooks, held_pub: Any) -> 
         finally:
             query.drop()
         return
-    if request.move and move_bytes(core, key, request.move):
-        _notify(core, held_pub)
+    if request.move:
+        _take_carried_move(core, key, request.move, held_pub)
     if robot is None or not 0 <= robot < core.setup.n or core.may_look(robot, request):
         _answer_look(core, query)
     else:
         looks.hold(robot, query, request, time.monotonic())
+
+
+def _take_carried_move(core: WorldCore, key: str, data: bytes, held_pub: Any) -> None:
+    """A move that a Look carries. The agent sends it again with every Look until one is answered
+    (so that a Look lost with a router does not lose the move), so a repeat of a move the world
+    holds, or a move of a round that is no longer open, is no news: dropped without a word."""
+    try:
+        msg = MoveSubmitted.decode(data)
+    except ProtocolError as exc:
+        core.reject("move-garbage", f"in a look on {key}: {exc}")
+        return
+    if msg.round != core.open_round or robot_of_key(key) in core.held:
+        return
+    if core.move(robot_of_key(key), msg):
+        _notify(core, held_pub)
 
 
 def _answer_look(core: WorldCore, query: Any) -> None:

@@ -155,14 +155,20 @@ def test_a_look_that_carries_the_robots_move_delivers_it_and_is_held_for_the_nex
         _take_look(world, first, looks, notices)
         assert first.answered_round == 1
     move = MoveSubmitted(0, 1, STAY).encode()
+    # another robot's move in robot 1's Look is refused
+    _take_look(world, _look_with(1, LookRequest(world.epoch, 1, move)), looks, notices)
+    assert world.held == {} and world.rejected["move-wrong-robot"] == 1
     carrying = _look_with(0, LookRequest(world.epoch, 1, move))
     _take_look(world, carrying, looks, notices)
-    assert world.held == {0: STAY} and carrying.replies == [] and len(looks) == 1
+    assert world.held == {0: STAY} and carrying.replies == [] and len(looks) == 2
     assert notices.sent == []  # robot 1 has not moved yet
+    # the agent sends its move again with every Look until one is answered: no news, no word
+    _take_look(world, _look_with(0, LookRequest(world.epoch, 1, move)), looks, notices)
+    assert world.held == {0: STAY} and sum(world.rejected.values()) == 1
     _take_look(world, _look_with(1, LookRequest(world.epoch, 1, MoveSubmitted(1, 1, STAY)
                                                 .encode())), looks, notices)
     assert len(notices.sent) == 1  # every active robot moved: one notice
-    # another robot's move in robot 1's Look is refused
-    _take_look(world, _look_with(1, LookRequest(world.epoch, 1, move)), looks, notices)
-    assert world.held == {0: STAY, 1: STAY}
-    assert world.rejected["move-wrong-robot"] == 1
+    assert world.control(Commit(1))[0].ok
+    # and a move of a round no longer open, sent again with a Look, is dropped quietly too
+    _take_look(world, _look_with(0, LookRequest(world.epoch, 1, move)), looks, notices)
+    assert sum(world.rejected.values()) == 1

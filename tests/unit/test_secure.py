@@ -80,7 +80,8 @@ def test_an_agent_sends_only_its_own_move_look_and_token() -> None:
     sent = {(g.message, g.key) for g in grants(SWARM, Identity("agent-2", "agent", robot=2))
             if g.flow == "ingress"}
     assert sent == {("put", f"{P}/robot/2/move"), ("query", f"{P}/robot/2/snapshot"),
-                    ("liveliness_token", f"{P}/alive/agent/2")}
+                    ("liveliness_token", f"{P}/alive/agent/2"),
+                    ("declare_liveliness_subscriber", f"{P}/alive/world")}
 
 
 def test_an_agent_receives_only_its_own_snapshot_and_that_the_world_listens() -> None:
@@ -88,7 +89,8 @@ def test_an_agent_receives_only_its_own_snapshot_and_that_the_world_listens() ->
            if g.flow == "egress"}
     assert got == {("reply", f"{P}/robot/2/snapshot"),
                    ("declare_subscriber", f"{P}/robot/*/move"),
-                   ("declare_queryable", f"{P}/robot/*/snapshot")}
+                   ("declare_queryable", f"{P}/robot/*/snapshot"),
+                   ("liveliness_token", f"{P}/alive/world")}  # it asks again when a world is up
 
 
 @pytest.mark.parametrize(("who", "message", "key"), [
