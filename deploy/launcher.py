@@ -126,13 +126,14 @@ def add_network_arguments(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("networked run (default; not with --lockstep)")
     flags = [
         g.add_argument("--connect", action="append", default=[], metavar="ENDPOINT",
-                       help=f"use this router instead of starting one; {ROUTER_ENDPOINT_HELP}"),
+                       help="use this router instead of the one the world process hosts; "
+                       f"{ROUTER_ENDPOINT_HELP}"),
         g.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
-                       help="endpoint(s) of the router started here (default: a free loopback "
-                       "port)"),
+                       help="endpoint(s) of the router that the world process hosts (default: a "
+                       "free loopback port)"),
         g.add_argument("--swarm", default=None,
                        help=f"swarm name, keys under fatswarm/<swarm>/ (default {DEFAULT_SWARM!r} "
-                       "on the router started here, a fresh random name with --connect)"),
+                       "on the world's own router, a fresh random name with --connect)"),
         g.add_argument("--move-timeout", type=float, default=5.0, metavar="SECONDS",
                        help="an active robot that has not moved by then stays put (default 5; "
                        "finite, > 0)"),
@@ -186,8 +187,8 @@ def run_networked(args: argparse.Namespace) -> int:
         pace = watchable_pace(setup.params.n, setup.scheduler.name) if live_dashboard(args) else 0.0
     if setup.resumed is None and args.seed is None and not args.quiet:
         print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
-    # Our own router holds one swarm: the default name lets `fatswarm dashboard` attach as is. On
-    # a shared router (--connect), a fresh name keeps two runs from mixing their messages.
+    # The world's own router holds one swarm: the default name lets `fatswarm dashboard` attach
+    # as is. On a shared router (--connect), a fresh name keeps two runs from mixing messages.
     swarm = args.swarm or (f"run-{secrets.token_hex(4)}" if args.connect else DEFAULT_SWARM)
     with tempfile.TemporaryDirectory(prefix="fatswarm-") as tmp:
         record = args.record or os.path.join(tmp, "record.jsonl")
