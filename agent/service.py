@@ -182,7 +182,7 @@ def serve(
                 except Relook:
                     log.info("robot %d: a world came up; asking again", cfg.robot)
                     continue
-                except zenoh.ZError as exc:  # the router is away: this round goes without us
+                except zenoh.ZError as exc:  # the router is away: ask again (move and all)
                     log.warning("look failed: %s", exc)
                     snapshot = None
                 if snapshot is None:
