@@ -216,7 +216,7 @@ def check_outputs(args: argparse.Namespace) -> None:
     if resume and not record:
         raise RunInputError("--resume continues a run record: name it with --record PATH")
     if record:
-        _check_writable("--record", record)
+        check_writable("--record", record)
         if resume and args.force:
             raise RunInputError("--resume continues the --record file, --force overwrites it: "
                                 "pass one of them")
@@ -227,10 +227,10 @@ def check_outputs(args: argparse.Namespace) -> None:
             raise RunInputError(f"--record {record} exists; pass --force to overwrite it")
     svg: str | None = getattr(args, "svg", None)  # the dashboard's flag
     if svg:
-        _check_writable("--svg", svg)
+        check_writable("--svg", svg)
 
 
-def _check_writable(flag: str, path: str) -> None:
+def check_writable(flag: str, path: str) -> None:
     """Refuse `path` for `flag` if it is a directory or its directory is missing or read-only."""
     if os.path.isdir(path):
         raise RunInputError(f"{flag} {path} is a directory; name a file")
@@ -510,6 +510,7 @@ __all__ = [
     "add_arguments",
     "check_outputs",
     "check_seconds",
+    "check_writable",
     "exit_code",
     "exit_code_for",
     "main",

@@ -266,14 +266,10 @@ def _check_plot(folder: str | None) -> None:
 
 def _check_summary_md(path: str | None) -> None:
     """Refuse a --summary-md PATH that cannot be written, before anything runs."""
-    if path is None:
-        return
-    if os.path.isdir(path):
-        raise SweepInputError(f"--summary-md {path} is a directory; name a file")
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise SweepInputError(f"--summary-md {path}: the directory {folder} does not exist; "
-                              "create it first")
+    from fatswarm.deploy.run import check_writable
+
+    if path is not None:
+        check_writable("--summary-md", path)
 
 
 def _write_text(path: str, text: str) -> None:
