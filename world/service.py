@@ -280,14 +280,15 @@ def _take_look(core: WorldCore, query: Any, looks: HeldLooks, held_pub: Any) -> 
             query.drop()
         return
     if request.move:
-        _take_carried_move(core, key, request.move, held_pub)
+        _take_carried_move(core, robot, key, request.move, held_pub)
     if robot is None or not 0 <= robot < core.setup.n or core.may_look(robot, request):
         _answer_look(core, query)
     else:
         looks.hold(robot, query, request, time.monotonic())
 
 
-def _take_carried_move(core: WorldCore, key: str, data: bytes, held_pub: Any) -> None:
+def _take_carried_move(core: WorldCore, robot: int | None, key: str, data: bytes,
+                       held_pub: Any) -> None:
     """A move that a Look carries. The agent sends it again with every Look until one is answered
     (so that a Look lost with a router does not lose the move), so a repeat of a move the world
     holds, or a move of a round that is no longer open, is no news: dropped without a word."""
@@ -296,9 +297,9 @@ def _take_carried_move(core: WorldCore, key: str, data: bytes, held_pub: Any) ->
     except ProtocolError as exc:
         core.reject("move-garbage", f"in a look on {key}: {exc}")
         return
-    if msg.round != core.open_round or robot_of_key(key) in core.held:
+    if msg.round != core.open_round or robot in core.held:
         return
-    if core.move(robot_of_key(key), msg):
+    if core.move(robot, msg):
         _notify(core, held_pub)
 
 
