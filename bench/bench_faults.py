@@ -5,11 +5,13 @@ it, and print a table (a script that prints figures, not a test; a quick run is 
     python bench/bench_faults.py --roles world --signals kill --trials 10
 
 Roles: agent (one agent process), agents-fork / agents-exec (a host of agents, killed with them
-gone too), world, coordinator, router. A killed part is restarted at once; a stopped one is
-continued after --stop-s seconds. For each trial it records whether the run formed, whether it is
-referee-clean (no collision along any path, a regular polygon at the end), whether a committed or
-announced round was lost or duplicated, the recovery time (fault, or continue, to the second round
-committed after it) and the processes left running once the run is over.
+gone too), world, coordinator, router, and world-router (the world hosting the router, as
+`fatswarm run` lays a swarm out: its fault takes the router down with it). A killed part is
+restarted at once; a stopped one is continued after --stop-s seconds. For each trial it records
+whether the run formed, whether it is referee-clean (no collision along any path, a regular
+polygon at the end), whether a committed or announced round was lost or duplicated, the recovery
+time (fault, or continue, to the second round committed after it) and the processes left running
+once the run is over.
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from netharness import Swarm, descendants_of, running
 from fatswarm.agent.geometry import is_formed
 from fatswarm.world.record import read_record
 
-ROLES = ("agent", "agents-fork", "agents-exec", "world", "coordinator", "router")
+ROLES = ("agent", "agents-fork", "agents-exec", "world", "coordinator", "router", "world-router")
 SIGNALS = ("kill", "stop")
 N, PACE_S = 8, 0.1
 
@@ -53,9 +55,13 @@ class Trial:
 
 def _start(sw: Swarm, role: str) -> None:
     """Router, observer, world, coordinator and the agents (one host of them for agents-*)."""
-    sw.start_router()
-    sw.observe()
-    sw.start_world()
+    if role == "world-router":
+        sw.start_world_router()
+        sw.observe()
+    else:
+        sw.start_router()
+        sw.observe()
+        sw.start_world()
     sw.start_coordinator(PACE_S)
     if role.startswith("agents-"):
         spawn = role.split("-", 1)[1]
@@ -67,7 +73,8 @@ def _start(sw: Swarm, role: str) -> None:
 
 
 def _victim(role: str) -> str:
-    return {"agent": "agent 3", "agents-fork": "agents", "agents-exec": "agents"}.get(role, role)
+    return {"agent": "agent 3", "agents-fork": "agents", "agents-exec": "agents",
+            "world-router": "world"}.get(role, role)
 
 
 def _restart(sw: Swarm, role: str) -> None:
@@ -80,6 +87,8 @@ def _restart(sw: Swarm, role: str) -> None:
                   "--spawn", spawn, "--log-level", "warning")
     elif role == "world":
         sw.start_world(again)
+    elif role == "world-router":
+        sw.start_world_router(again)
     elif role == "coordinator":
         sw.start_coordinator(PACE_S, again)
     else:
@@ -159,13 +168,13 @@ def main() -> int:
             for t in done:
                 if t.error:
                     print(f"  {role} {sig}: {t.error}", file=sys.stderr)
-            print(f"{role:<12} {sig:<5} done", file=sys.stderr, flush=True)
-    print(f"{'role':<12} {'fault':<5} {'trials':>6} {'formed':>6} {'clean':>5} "
+            print(f"{role:<13} {sig:<5} done", file=sys.stderr, flush=True)
+    print(f"{'role':<13} {'fault':<5} {'trials':>6} {'formed':>6} {'clean':>5} "
           f"{'lost/dup':>8} {'recovery s med / max':>20} {'left':>4}")
     for done in rows:
         times = [t.recovery_s for t in done if t.recovery_s == t.recovery_s]
         med = f"{statistics.median(times):.2f} / {max(times):.2f}" if times else "-"
-        print(f"{done[0].role:<12} {done[0].signal:<5} {len(done):>6} "
+        print(f"{done[0].role:<13} {done[0].signal:<5} {len(done):>6} "
               f"{sum(t.formed for t in done):>6} {sum(t.clean for t in done):>5} "
               f"{sum(t.lost_or_duplicated for t in done):>8} {med:>20} "
               f"{sum(t.left for t in done):>4}")

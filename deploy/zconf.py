@@ -150,6 +150,11 @@ MAX_MESSAGE_IN = 512 << 10
 
 RETRY_INIT_MS = 50  # a lost router is tried again after this, then twice as long each time...
 RETRY_MAX_MS = 500  # ...up to this
+# Zenoh's open of a router session waits `scouting/delay` (500 ms by default) for peers to appear,
+# even with scouting off. A router linked to no other router has nobody to wait for: it opens at
+# once (a restarted world that hosts the router is back 0.5 s sooner). One with --connect links
+# keeps the wait, so that its world finds another world on the network before it starts.
+LONE_ROUTER_DELAY_MS = 0
 
 
 def make_config(
@@ -197,6 +202,9 @@ def make_config(
         conf.insert_json5("transport/shared_memory/enabled", "false")
     if lease_ms is not None:
         conf.insert_json5("transport/link/tx/lease", str(int(lease_ms)))
+    if (mode == "router" and not connect_endpoints(conf)
+            and (config_file is None or json.loads(conf.get_json("scouting/delay")) is None)):
+        conf.insert_json5("scouting/delay", str(LONE_ROUTER_DELAY_MS))
     if config_file is None or json.loads(conf.get_json("connect/retry")) is None:
         # A restarted router is found again within RETRY_MAX_MS (Zenoh's default backs off to 4 s)
         conf.insert_json5("connect/retry", json.dumps(

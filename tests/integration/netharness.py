@@ -61,6 +61,13 @@ class Swarm:
     def start_world(self, name: str = "world") -> None:
         self._start(name, "world", *self.world_flags())
 
+    def start_world_router(self, name: str = "world") -> None:
+        """The world hosting the router at `endpoint` (as in `fatswarm run`)."""
+        flags = self.world_flags()
+        at = flags.index("--connect")
+        del flags[at : at + 2]  # it listens there instead
+        self._start(name, "world", *flags, "--router", "--listen", self.endpoint)
+
     def start_coordinator(self, pace: float, name: str = "coordinator") -> None:
         self._start(name, "coordinator", *self.coordinator_flags(pace))
 
@@ -72,10 +79,7 @@ class Swarm:
         """Every part (`router=False`: on another swarm's router, given as `endpoint`;
         `in_world`: the world hosts the router, as in `fatswarm run`)."""
         if in_world:
-            flags = self.world_flags()
-            at = flags.index("--connect")
-            del flags[at : at + 2]  # it listens there instead
-            self._start("world", "world", *flags, "--router", "--listen", self.endpoint)
+            self.start_world_router()
             self.observe()
         else:
             if router:

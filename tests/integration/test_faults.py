@@ -24,7 +24,7 @@ def _campaign() -> ModuleType:
 
 
 @pytest.mark.parametrize("role", ["agent", "agents-fork", "agents-exec", "world", "coordinator",
-                                  "router"])
+                                  "router", "world-router"])
 @pytest.mark.parametrize("fault", ["kill", "stop"])
 def test_a_fault_of_any_role_leaves_a_formed_clean_run_and_nothing_behind(
     role: str, fault: str

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import json
 import socket
 import threading
+from pathlib import Path
 
 import pytest
 import zenoh
@@ -158,3 +160,18 @@ def test_the_run_refuses_a_listen_port_in_use_or_malformed_and_accepts_a_free_on
         check_network(["tcp/notanip:x"], [])
     check_network([], [f"tcp/127.0.0.1:{free_port()}"])
     check_network([], [])  # the launcher picks a free loopback port itself
+
+
+def _delay(conf: zenoh.Config) -> object:
+    return json.loads(conf.get_json("scouting/delay"))
+
+
+def test_a_router_linked_to_no_other_opens_without_zenohs_scouting_wait(tmp_path: Path) -> None:
+    lone = make_config("router", listen=["tcp/127.0.0.1:7447"])
+    linked = make_config("router", connect=["tcp/127.0.0.1:7448"], listen=["tcp/127.0.0.1:7447"])
+    client = make_config("client", connect=["tcp/127.0.0.1:7447"])
+    own = tmp_path / "zenoh.json5"
+    own.write_text('{ scouting: { delay: 250 } }')
+    assert (_delay(lone), _delay(linked), _delay(client)) == (0, None, None)
+    assert _delay(make_config("router", listen=["tcp/127.0.0.1:7447"], config_file=str(own))) == 250
+
