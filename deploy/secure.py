@@ -165,38 +165,40 @@ def grants(swarm: str, who: Identity) -> tuple[Grant, ...]:
     """Everything the routers let `who` do on `swarm`; anything else is denied.
 
     A publisher or querier also receives the declarations of the subscribers or queryables that
-    match its keys, as they were declared (an agent's own move key matches the world's subscriber
-    on every robot's moves): a client sends a put or a query only while it knows of a receiver,
-    so without them its messages would silently not be sent.
+    match its keys, as they were declared (an agent's own snapshot key matches the world's
+    queryable on every robot's snapshots): a client sends a put or a query only while it knows of
+    a receiver, so without them its messages would silently not be sent.
+
+    A robot's move travels only inside its own Look (`LookRequest.move`): the `robot/<i>/move`
+    route, open to any client of an unsecured swarm, is granted to nobody here.
     """
     state, control = world_wire.state_key(swarm), world_wire.control_key(swarm)
     held, snapshots = world_wire.moves_held_key(swarm), world_wire.snapshot_any_key(swarm)
-    moves, agents_alive = agent_wire.move_any_key(swarm), agent_wire.alive_any_key(swarm)
+    agents_alive = agent_wire.alive_any_key(swarm)
     world_alive = world_wire.alive_key(swarm)
     coordinator_alive = coordinator_wire.alive_key(swarm)
     presence = (agents_alive, world_alive, coordinator_alive)
     if who.role == "agent":
         if who.robot is None:
             raise ValueError(f"agent identity {who.name} has no robot")
-        move = agent_wire.move_key(swarm, who.robot)
         look = world_wire.snapshot_key(swarm, who.robot)
         return tuple(_both(
-            [("put", move), ("query", look),
+            [("query", look),
              ("liveliness_token", agent_wire.alive_key(swarm, who.robot)),
              ("declare_liveliness_subscriber", world_alive)],
-            # the world's subscriber and queryable, as declared: no data, only that they exist;
-            # and the world's token (an agent asks again when a world comes up)
-            [("reply", look), ("declare_subscriber", moves), ("declare_queryable", snapshots),
+            # the world's queryable, as declared: no data, only that it exists; and the world's
+            # token (an agent asks again when a world comes up)
+            [("reply", look), ("declare_queryable", snapshots),
              ("liveliness_token", world_alive)],
         ))
     if who.role == "world":
         return tuple(_both(
             [("declare_queryable", snapshots), ("declare_queryable", control),
-             ("reply", snapshots), ("reply", control), ("declare_subscriber", moves),
+             ("reply", snapshots), ("reply", control),
              ("put", state), ("put", held),
              ("declare_liveliness_subscriber", agents_alive),
              ("liveliness_token", world_alive), ("liveliness_query", world_alive)],
-            [("query", snapshots), ("query", control), ("put", moves),
+            [("query", snapshots), ("query", control),
              ("liveliness_token", agents_alive), ("liveliness_token", world_alive),
              ("declare_subscriber", state), ("declare_subscriber", held)],
         ))

@@ -32,6 +32,7 @@ from fatswarm.world.outcome import Status
 from fatswarm.world.protocol import (
     Begin,
     ControlReply,
+    LookRequest,
     MovesHeld,
     Snapshot,
     control_key,
@@ -190,20 +191,35 @@ def synced(net: Net, session: Any, name: str) -> None:
 # --- the rogue list ----------------------------------------------------------------------------
 
 
-def test_a_move_for_another_robot_reaches_nobody(net: Net) -> None:
+def test_a_move_reaches_the_world_only_in_its_own_robots_look(net: Net) -> None:
     swarm = net.plan.swarm
-    world = Inbox()
-    net.client("world").declare_subscriber(move_any_key(swarm), world)
-    rogue, dashboard = net.client("agent-1"), net.client("dashboard-0")
-    owner = net.client("agent-2").declare_publisher(move_key(swarm, 2))  # as an agent does
-    deliver("robot 2's own move", lambda: owner.put(move(2, 1)),
-            lambda: move(2, 1) in world.payloads())
-    rogue.put(move_key(swarm, 2), move(2, 7))
+    looks: list[tuple[str, bytes]] = []
+    world_session = net.client("world")
+
+    def hold(query: Any) -> None:
+        with query:
+            looks.append((str(query.key_expr), LookRequest.decode(query.payload.to_bytes()).move))
+            query.reply(query.key_expr, b"view")
+
+    world_session.declare_queryable(snapshot_any_key(swarm), hold)
+    puts = Inbox()
+    world_session.declare_subscriber(move_any_key(swarm), puts)  # as the world listens
+    owner, rogue = net.client("agent-2"), net.client("agent-1")
+    dashboard = net.client("dashboard-0")
+
+    def look(session: Any, robot: int, carried: bytes) -> list[bytes]:
+        return replies(session, snapshot_key(swarm, robot), LookRequest(move=carried).encode())
+
+    wait_for("robot 2's own Look", lambda: look(owner, 2, move(2, 1)) != [])
+    rogue.put(move_key(swarm, 2), move(2, 7))  # a move for another robot
+    rogue.put(move_key(swarm, 1), move(1, 7))  # its own, but outside its Look
     dashboard.put(move_key(swarm, 2), move(2, 8))
-    owner.put(move(2, 9))
-    wait_for("robot 2's next move", lambda: move(2, 9) in world.payloads())
+    assert look(rogue, 2, move(2, 6)) == [] and look(dashboard, 2, move(2, 5)) == []
+    assert look(owner, 2, move(2, 9)) == [b"view"]
     time.sleep(SETTLE_S)
-    assert set(world.payloads()) == {move(2, 1), move(2, 9)}
+    assert {m for k, m in looks} == {move(2, 1), move(2, 9)}
+    assert {k for k, m in looks} == {snapshot_key(swarm, 2)}
+    assert puts.payloads() == []
 
 
 def test_only_the_coordinator_opens_and_commits_rounds(net: Net) -> None:
@@ -320,14 +336,12 @@ def test_dashboards_and_agents_read_the_state_only_as_allowed(net: Net) -> None:
     dashboard, agent, others, everything = Inbox(), Inbox(), Inbox(), Inbox()
     watcher = net.client("dashboard-0")
     watcher.declare_subscriber(state_key(swarm), dashboard)
-    for key in (move_any_key(swarm), moves_held_key(swarm)):
-        watcher.declare_subscriber(key, others)
+    watcher.declare_subscriber(moves_held_key(swarm), others)
     watcher.declare_subscriber(f"fatswarm/{swarm}/**", everything)  # gets what it may: the state
     reader = net.client("agent-1")
     reader.declare_subscriber(state_key(swarm), agent)  # positions: not an agent's to read
     synced(net, reader, "agent-1")
     net.client("dashboard-0").put(state_key(swarm), b"fake state")
-    net.client("agent-0").declare_publisher(move_key(swarm, 0)).put(move(0))
     world = net.client("world")
     world.put(moves_held_key(swarm), MovesHeld(round=1, robots=(0,)).encode())
     states = world.declare_publisher(state_key(swarm))

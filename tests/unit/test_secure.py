@@ -76,10 +76,10 @@ def may(who: str, flow: str, message: str, key: str, plan: Plan = PLAN) -> bool:
 # --- who may do what -------------------------------------------------------------------------
 
 
-def test_an_agent_sends_only_its_own_move_look_and_token() -> None:
+def test_an_agent_sends_only_its_own_look_which_carries_its_move_and_its_token() -> None:
     sent = {(g.message, g.key) for g in grants(SWARM, Identity("agent-2", "agent", robot=2))
             if g.flow == "ingress"}
-    assert sent == {("put", f"{P}/robot/2/move"), ("query", f"{P}/robot/2/snapshot"),
+    assert sent == {("query", f"{P}/robot/2/snapshot"),
                     ("liveliness_token", f"{P}/alive/agent/2"),
                     ("declare_liveliness_subscriber", f"{P}/alive/world")}
 
@@ -88,13 +88,13 @@ def test_an_agent_receives_only_its_own_snapshot_and_that_the_world_listens() ->
     got = {(g.message, g.key) for g in grants(SWARM, Identity("agent-2", "agent", robot=2))
            if g.flow == "egress"}
     assert got == {("reply", f"{P}/robot/2/snapshot"),
-                   ("declare_subscriber", f"{P}/robot/*/move"),
                    ("declare_queryable", f"{P}/robot/*/snapshot"),
                    ("liveliness_token", f"{P}/alive/world")}  # it asks again when a world is up
 
 
 @pytest.mark.parametrize(("who", "message", "key"), [
     ("agent-1", "put", f"{P}/robot/2/move"),  # a move for another robot
+    ("agent-1", "put", f"{P}/robot/1/move"),  # its own: moves travel in its Look only
     ("agent-1", "query", f"{P}/robot/2/snapshot"),  # another robot's snapshot
     ("agent-1", "query", f"{P}/world/control"),  # Begin/Commit as the coordinator
     ("agent-1", "liveliness_token", f"{P}/alive/agent/2"),  # a fake agent
@@ -134,7 +134,6 @@ def test_every_rogue_try_is_denied(who: str, message: str, key: str) -> None:
 
 
 @pytest.mark.parametrize(("who", "message", "key"), [
-    ("agent-3", "put", f"{P}/robot/3/move"),
     ("agent-3", "query", f"{P}/robot/3/snapshot"),
     ("agent-3", "liveliness_token", f"{P}/alive/agent/3"),
     ("coordinator", "query", f"{P}/world/control"),
@@ -147,7 +146,6 @@ def test_every_rogue_try_is_denied(who: str, message: str, key: str) -> None:
     ("world", "reply", f"{P}/robot/3/snapshot"),
     ("world", "declare_queryable", f"{P}/world/control"),
     ("world", "reply", f"{P}/world/control"),
-    ("world", "declare_subscriber", f"{P}/robot/*/move"),
     ("world", "put", f"{P}/world/state"),
     ("world", "put", f"{P}/world/moves"),
     ("world", "liveliness_token", f"{P}/alive/world"),
@@ -171,7 +169,7 @@ def test_only_the_world_answers_and_only_the_coordinator_asks_control() -> None:
         ("put", f"{P}/world/state", {"world"}),
         ("put", f"{P}/world/moves", {"world"}),
         ("query", f"{P}/world/control", {"coordinator"}),
-        ("put", f"{P}/robot/0/move", {"agent-0"}),
+        ("put", f"{P}/robot/0/move", set()),
         ("query", f"{P}/robot/0/snapshot", {"agent-0"}),
         ("liveliness_token", f"{P}/alive/agent/0", {"agent-0"}),
         ("liveliness_token", f"{P}/alive/coordinator", {"coordinator"}),
@@ -230,11 +228,11 @@ def test_no_message_on_the_wire_carries_a_seed_or_a_frame() -> None:
 
 
 def test_grants_follow_the_protocol_functions(monkeypatch: pytest.MonkeyPatch) -> None:
-    from fatswarm.agent import protocol as agent_wire
+    from fatswarm.world import protocol as world_wire
 
-    monkeypatch.setattr(agent_wire, "move_key", lambda swarm, robot: f"x/{swarm}/m/{robot}")
-    assert Grant("ingress", "put", "x/lab/m/1") in grants(SWARM, Identity("agent-1", "agent",
-                                                                           robot=1))
+    monkeypatch.setattr(world_wire, "snapshot_key", lambda swarm, robot: f"x/{swarm}/s/{robot}")
+    assert Grant("ingress", "query", "x/lab/s/1") in grants(SWARM, Identity("agent-1", "agent",
+                                                                             robot=1))
 
 
 # --- the plan and the configurations ---------------------------------------------------------
