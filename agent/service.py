@@ -129,9 +129,6 @@ class Relook(Exception):
     with a router or world that went away, so it is asked again (with its move, if it had one)."""
 
 
-RELOOK_SIGNAL = signal.SIGUSR1  # how the liveliness callback interrupts the main thread's wait
-
-
 def serve(
     cfg: AgentConfig,
     conf: Any,
@@ -195,13 +192,16 @@ def serve(
 
 
 class _LookWait:
-    """SIGTERM and SIGINT set `stop`, and while a Look waits for its answer they also raise
-    Stopped in the main thread, so that a Look the world holds does not hold up the exit."""
+    """How a Look's wait ends early. SIGTERM and SIGINT set `stop`, and while a Look waits they
+    also raise Stopped in the main thread, so that a Look the world holds does not hold up the
+    exit. A world that comes up cancels the waiting Look's query (its cancellation token)."""
 
     def __init__(self, stop: threading.Event) -> None:
         self.stop = stop
         self.waiting = False
-        self.installed = False  # the handlers are in place (only in the main thread)
+        self.cancel: Any = None  # the waiting Look's zenoh.CancellationToken
+        self.world_up = False  # a world came up while it waited
+        self._lock = threading.Lock()  # the callback's view of (cancel, world_up)
 
     def handle(self, signum: int, frame: object) -> None:
         del signum, frame
@@ -209,18 +209,32 @@ class _LookWait:
         if self.waiting:
             raise Stopped
 
-    def relook(self, signum: int, frame: object) -> None:
-        del signum, frame
-        if self.waiting:
-            raise Relook
-
     def world_seen(self, sample: Any) -> None:
         """Liveliness callback on the world's token: a world that (re)appears while a Look waits
-        interrupts the wait (a signal to this process: its handler raises in the main thread)."""
+        ends the wait, and the Look is asked again."""
         import zenoh
 
-        if sample.kind == zenoh.SampleKind.PUT and self.installed and self.waiting:
-            os.kill(os.getpid(), RELOOK_SIGNAL)
+        if sample.kind != zenoh.SampleKind.PUT:
+            return
+        with self._lock:
+            if self.cancel is None:
+                return
+            self.world_up, cancel = True, self.cancel
+        cancel.cancel()
+
+    def begin(self) -> Any:
+        """A cancellation token for the next Look's query (set as the waiting one)."""
+        import zenoh
+
+        with self._lock:
+            self.cancel, self.world_up = zenoh.CancellationToken(), False
+            return self.cancel
+
+    def end(self) -> bool:
+        """The Look's wait is over; True if a world came up meanwhile."""
+        with self._lock:
+            self.cancel = None
+            return self.world_up
 
     @contextmanager
     def install(self) -> Iterator[None]:
@@ -229,30 +243,30 @@ class _LookWait:
         try:
             before = {sig: signal.signal(sig, self.handle)
                       for sig in (signal.SIGTERM, signal.SIGINT)}
-            before[RELOOK_SIGNAL] = signal.signal(RELOOK_SIGNAL, self.relook)
         except ValueError:
             yield
             return
-        self.installed = True
         try:
             yield
         finally:
-            self.installed = False
             for sig, handler in before.items():
-                # a late relook signal must not kill the process (SIGUSR1's default action)
-                signal.signal(sig, signal.SIG_IGN if sig == RELOOK_SIGNAL else handler)
+                signal.signal(sig, handler)
 
 
 def _look(querier: Any, last: LookRequest, wait: _LookWait) -> Snapshot | None:
     """Ask for this robot's snapshot of a round after `last` and wait until the world answers
     (it holds the query until the robot is activated); None if it let the query go or sent
-    nothing valid."""
+    nothing valid. Raises Relook when a world came up and cut the wait short (no reply came),
+    Stopped on a stop signal."""
     snapshot = None
+    replied = False  # a cancelled query ends with no reply at all, not even its timeout's
     wait.waiting = True
+    cancel = wait.begin()
     try:
         if wait.stop.is_set():  # a stop that came before the wait
             raise Stopped
-        for reply in querier.get(payload=last.encode()):
+        for reply in querier.get(payload=last.encode(), cancellation_token=cancel):
+            replied = True
             if reply.ok is None:  # the query's timeout, or the world's refusal
                 log.debug("no snapshot: %s", _err_text(reply))
                 continue
@@ -262,6 +276,9 @@ def _look(querier: Any, last: LookRequest, wait: _LookWait) -> Snapshot | None:
                 log.warning("rejected snapshot: %s", exc)
     finally:
         wait.waiting = False
+        world_up = wait.end()
+    if world_up and not replied:
+        raise Relook
     return snapshot
 
 
