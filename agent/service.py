@@ -258,6 +258,8 @@ def _look(querier: Any, last: LookRequest, wait: _LookWait) -> Snapshot | None:
     (it holds the query until the robot is activated); None if it let the query go or sent
     nothing valid. Raises Relook when a world came up and cut the wait short (no reply came),
     Stopped on a stop signal."""
+    import zenoh
+
     snapshot = None
     replied = False  # a cancelled query ends with no reply at all, not even its timeout's
     wait.waiting = True
@@ -265,7 +267,13 @@ def _look(querier: Any, last: LookRequest, wait: _LookWait) -> Snapshot | None:
     try:
         if wait.stop.is_set():  # a stop that came before the wait
             raise Stopped
-        for reply in querier.get(payload=last.encode(), cancellation_token=cancel):
+        try:
+            replies = querier.get(payload=last.encode(), cancellation_token=cancel)
+        except zenoh.ZError:
+            if not cancel.is_cancelled:
+                raise
+            replies = []  # a world came up before the query left: it is asked again
+        for reply in replies:
             replied = True
             if reply.ok is None:  # the query's timeout, or the world's refusal
                 log.debug("no snapshot: %s", _err_text(reply))
