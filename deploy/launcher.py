@@ -421,6 +421,10 @@ def _run_children(
             return ExitCode(ended) if ended in known else EXIT_NOT_FORMED
         if "world" in gone:
             return _world_gone(children)
+        if "agents" in gone:  # every robot with it: no round can be run any more
+            print(f"fatswarm run: the agents' process exited with code {gone['agents']}; "
+                  "stopping the run (its record keeps every committed round)", file=sys.stderr)
+            return EXIT_NOT_FORMED
     code = stop.exit_code()
     print(f"{'terminated' if code == ExitCode.TERMINATED else 'interrupted'}: stopping every "
           "process started", file=sys.stderr)

@@ -137,6 +137,33 @@ def test_ctrl_c_to_a_networked_run_exits_130_and_stops_every_process(
     assert not [pid for pid in children if running(pid)]
 
 
+def test_a_networked_run_whose_agents_die_ends_with_1_and_says_so(
+    started: list[subprocess.Popen[bytes]], tmp_path: Path,
+) -> None:
+    n = 3
+    record = tmp_path / "run.jsonl"
+    proc = _start(started, ["run", "-n", str(n), "--seed", "1", "--pace", "0.5", "-q",
+                            "--record", str(record)])
+    assert proc.stderr is not None
+    err = Lines(proc.stderr)
+    children: list[int] = []
+    end = time.monotonic() + DEADLINE_S
+    while len(children) < n + 3:  # world, coordinator, agents host and its n agents
+        assert time.monotonic() < end and proc.poll() is None, err.text()
+        children = descendants_of(proc.pid)
+        time.sleep(0.05)
+    host = next(p for p in children  # the launcher's child (its agents are forked copies)
+                if b"agents" in Path(f"/proc/{p}/cmdline").read_bytes().split(b"\0")
+                and Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1].split()[1]
+                == str(proc.pid))
+    os.kill(host, signal.SIGKILL)
+    assert proc.wait(timeout=DEADLINE_S) == 1, err.text()
+    text = err.text()
+    assert "the agents' process exited with code -9" in text and "Traceback" not in text
+    assert not [pid for pid in children if running(pid)]
+    assert read_record(record).header.n == n
+
+
 # --- a closed standard output ----------------------------------------------------------------
 
 
