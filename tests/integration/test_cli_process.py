@@ -117,6 +117,17 @@ def test_a_signalled_lockstep_run_exits_128_plus_the_signal_with_its_record_clos
     assert record.header.n == 200 and record.result is None
 
 
+def _all_started(proc: subprocess.Popen[bytes], n: int, err: Lines) -> list[int]:
+    """The pids under a networked run once all are up: world, coordinator, agents host, n agents."""
+    children: list[int] = []
+    end = time.monotonic() + DEADLINE_S
+    while len(children) < n + 3:
+        assert time.monotonic() < end and proc.poll() is None, err.text()
+        children = descendants_of(proc.pid)
+        time.sleep(0.05)
+    return children
+
+
 def test_ctrl_c_to_a_networked_run_exits_130_and_stops_every_process(
     started: list[subprocess.Popen[bytes]],
 ) -> None:
@@ -124,12 +135,7 @@ def test_ctrl_c_to_a_networked_run_exits_130_and_stops_every_process(
     proc = _start(started, ["run", "-n", str(n), "--seed", "1", "--pace", "0.5", "-q"])
     assert proc.stderr is not None
     err = Lines(proc.stderr)
-    children: list[int] = []
-    end = time.monotonic() + DEADLINE_S
-    while len(children) < n + 3:  # world, coordinator, agents host and its n agents
-        assert time.monotonic() < end and proc.poll() is None, err.text()
-        children = descendants_of(proc.pid)
-        time.sleep(0.05)
+    children = _all_started(proc, n, err)
     proc.send_signal(signal.SIGINT)
     assert proc.wait(timeout=DEADLINE_S) == 130, err.text()
     text = err.text()
@@ -146,12 +152,7 @@ def test_a_networked_run_whose_agents_die_ends_with_1_and_says_so(
                             "--record", str(record)])
     assert proc.stderr is not None
     err = Lines(proc.stderr)
-    children: list[int] = []
-    end = time.monotonic() + DEADLINE_S
-    while len(children) < n + 3:  # world, coordinator, agents host and its n agents
-        assert time.monotonic() < end and proc.poll() is None, err.text()
-        children = descendants_of(proc.pid)
-        time.sleep(0.05)
+    children = _all_started(proc, n, err)
     host = next(p for p in children  # the launcher's child (its agents are forked copies)
                 if b"agents" in Path(f"/proc/{p}/cmdline").read_bytes().split(b"\0")
                 and Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1].split()[1]
