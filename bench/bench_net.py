@@ -7,6 +7,12 @@ networked vs lockstep, resident memory per agent process, time to start N agents
     /work/venv/bin/python bench/bench_net.py [--sizes 8,64,128,256,512] [--seed 1]
         [--algorithm gathering]  # a cheap compute shows the emulator's own cost per Look
         [--router-in separate]  # a router process of its own, as across hosts (default: world)
+        [--free-rounds 300]  # and the emulator alone: a steady load with no compute at all
+
+`--free-rounds R` adds, under each size, the same fsync swarm running an algorithm that computes
+nothing (`tests/data/always_right.py` with a 1e-4 step from a spread start: every robot moves, none
+collides, the run lasts R rounds): what the emulator costs without the algorithm's compute, the
+ceiling any algorithm can reach on the machine.
 """
 
 from __future__ import annotations
@@ -22,6 +28,7 @@ import tempfile
 import threading
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -34,6 +41,10 @@ from fatswarm.deploy.parts import agent_command, agents_command
 from fatswarm.deploy.zconf import loopback_endpoint, make_config
 from fatswarm.world.protocol import ProtocolError, WorldState, state_key
 from fatswarm.world.starts import random_start
+
+FREE_ALGORITHM = (f"{Path(__file__).resolve().parents[1] / 'tests' / 'data' / 'always_right.py'}"
+                  ":ALGORITHM")
+FREE_WORLD = ["--start", "spread", "--param", "step=0.0001"]  # moves every round, never collides
 
 REPLIER = """
 import sys, threading, zenoh
@@ -143,10 +154,11 @@ def _cpu_s(pids: list[int]) -> float:
 
 def networked(
     session: Any, endpoint: str, n: int, seed: int, tmp: str, spawn: str = "fork",
-    algorithm: str = "uniform-circle", router_in: str = "world",
+    algorithm: str = "uniform-circle", router_in: str = "world", world_extra: tuple[str, ...] = (),
 ) -> NetRun:
     """One fsync run with N agent processes; timings seen from a client in this process (`session`
-    on the separate router; None: a session of its own on the router the world hosts)."""
+    on the separate router; None: a session of its own on the router the world hosts).
+    `world_extra`: more flags for the world (start, parameters, round cap)."""
     swarm = f"bench-{n}-{seed}-{time.monotonic_ns() % 10**6}"
     alive: set[int] = set()
     commits: list[tuple[float, int]] = []
@@ -184,7 +196,7 @@ def networked(
         part = [sys.executable, "-m", "fatswarm.deploy.parts"]
         children.start("world", [*part, "world", *world_net, "--state", state, "-n", str(n),
                                  "--seed", str(seed), "--scheduler", "fsync", "--algorithm",
-                                 algorithm])
+                                 algorithm, *world_extra])
         if session is None:
             from fatswarm.deploy.zconf import open_client
 
@@ -281,6 +293,9 @@ def main() -> int:
     p.add_argument("--router-in", choices=("world", "separate"), default="world",
                    help="the router in the world's process, as `fatswarm run` (default), or in "
                    "a process of its own (here, this one), as across hosts")
+    p.add_argument("--free-rounds", type=int, default=0, metavar="R",
+                   help="also run each size R rounds with an algorithm that computes nothing: "
+                   "the emulator's own cost (default 0: not run)")
     args = p.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
 
@@ -326,7 +341,22 @@ def main() -> int:
                   flush=True)
             if l_status != run.status or l_rounds != run.rounds:
                 print(f"     (lockstep: {l_status} after {l_rounds} rounds)")
+            if args.free_rounds > 0:
+                _print_free(networked(session, endpoint, n, args.seed, tmp, args.spawn,
+                                      FREE_ALGORITHM, args.router_in,
+                                      (*FREE_WORLD, "--max-rounds", str(args.free_rounds))))
     return 0
+
+
+def _print_free(run: NetRun) -> None:
+    """The line of the emulator alone (no compute) under its size's line."""
+    looks = run.rounds * run.n
+    med = statistics.median(run.intervals) if run.intervals else float("nan")
+    print(f"     emulator alone (no compute, {run.rounds} rounds): round med {med * 1e3:.2f} ms, "
+          f"{looks / run.wall_s:.0f} Looks/s, CPU ms/Look "
+          f"{1e3 * sum(run.cpu_s.values()) / looks:.2f}: "
+          + " ".join(f"{role} {1e3 * cpu / looks:.2f}" for role, cpu in run.cpu_s.items()),
+          flush=True)
 
 
 if __name__ == "__main__":
