@@ -54,6 +54,9 @@ STOP_GRACE_PER_AGENT_S = 0.1  # hundreds of agents closing sessions at once shar
 WATCH_S = 15.0  # a watched run (live dashboard, no --pace) lasts about this long
 MIN_WATCH_PACE_S, MAX_WATCH_PACE_S = 0.02, 1.0
 FINAL_STATE_WAIT_S = 5.0  # the dashboard's wait for the final state (re-published every second)
+# How a coordinator that ended the run exits: 0 formed, 1 not formed, 2 bad input, 3 collisions
+COORDINATOR_ENDS = frozenset(
+    {EXIT_FORMED, EXIT_NOT_FORMED, EXIT_BAD_INPUT, ExitCode.FORMED_WITH_COLLISIONS})
 
 
 def stop_grace_s(agents: int) -> float:
@@ -295,8 +298,8 @@ def _launch(
             else:
                 code = _world_gone(children) if "world" in children.exited() else \
                     stop.exit_code()
-            world_gone = "world" in children.exited()  # no final state will come
-            if watcher is not None and code in (EXIT_FORMED, EXIT_NOT_FORMED) and not world_gone:
+            if (watcher is not None and code in (EXIT_FORMED, EXIT_NOT_FORMED)
+                    and not _part_died(children)):
                 _await_final_state(watcher, FINAL_STATE_WAIT_S)
             if watcher is not None:
                 watcher.stop()  # before the world (and with it the router) goes
@@ -417,8 +420,11 @@ def _run_children(
         gone = children.exited()
         if "coordinator" in gone:
             ended = gone["coordinator"]  # 0 formed, 1 not formed, 2 bad input, 3 collisions
-            known = (EXIT_FORMED, EXIT_NOT_FORMED, EXIT_BAD_INPUT, ExitCode.FORMED_WITH_COLLISIONS)
-            return ExitCode(ended) if ended in known else EXIT_NOT_FORMED
+            if ended in COORDINATOR_ENDS:
+                return ExitCode(ended)
+            print(f"fatswarm run: the coordinator process exited with code {ended}; stopping the "
+                  "run (its record keeps every committed round)", file=sys.stderr)
+            return EXIT_NOT_FORMED
         if "world" in gone:
             return _world_gone(children)
         if "agents" in gone:  # every robot with it: no round can be run any more
@@ -429,6 +435,14 @@ def _run_children(
     print(f"{'terminated' if code == ExitCode.TERMINATED else 'interrupted'}: stopping every "
           "process started", file=sys.stderr)
     return code
+
+
+def _part_died(children: Children) -> bool:
+    """Whether the run ended because a part died (no final state will come): the world or the
+    agents exited, or the coordinator exited without ending the run."""
+    gone = children.exited()
+    return ("world" in gone or "agents" in gone
+            or gone.get("coordinator", EXIT_FORMED) not in COORDINATOR_ENDS)
 
 
 def _world_gone(children: Children) -> ExitCode:

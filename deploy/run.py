@@ -53,7 +53,7 @@ EXIT_BROKEN_PIPE: Final = ExitCode.BROKEN_PIPE
 EXIT_TERMINATED: Final = ExitCode.TERMINATED
 EXIT_CODES_HELP: Final = (
     f"exit codes: {EXIT_FORMED:d} formed with no collision; {EXIT_NOT_FORMED:d} not formed "
-    f"(stalled or out of rounds; networked: or the world's or agents' process died); "
+    f"(stalled or out of rounds; networked: or a part's process died, one line says which); "
     f"{EXIT_BAD_INPUT:d} bad input (one line on stderr says what to "
     f"fix); {EXIT_FORMED_WITH_COLLISIONS:d} formed, but with collisions (robots stopped at "
     f"contact: not the collision-free formation the paper guarantees); "

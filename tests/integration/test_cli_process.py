@@ -143,8 +143,10 @@ def test_ctrl_c_to_a_networked_run_exits_130_and_stops_every_process(
     assert not [pid for pid in children if running(pid)]
 
 
-def test_a_networked_run_whose_agents_die_ends_with_1_and_says_so(
-    started: list[subprocess.Popen[bytes]], tmp_path: Path,
+@pytest.mark.parametrize(("part", "said"), [("agents", "the agents' process"),
+                                            ("coordinator", "the coordinator process")])
+def test_a_networked_run_whose_part_dies_ends_with_1_and_says_which(
+    started: list[subprocess.Popen[bytes]], tmp_path: Path, part: str, said: str,
 ) -> None:
     n = 3
     record = tmp_path / "run.jsonl"
@@ -153,14 +155,14 @@ def test_a_networked_run_whose_agents_die_ends_with_1_and_says_so(
     assert proc.stderr is not None
     err = Lines(proc.stderr)
     children = _all_started(proc, n, err)
-    host = next(p for p in children  # the launcher's child (its agents are forked copies)
-                if b"agents" in Path(f"/proc/{p}/cmdline").read_bytes().split(b"\0")
-                and Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1].split()[1]
-                == str(proc.pid))
-    os.kill(host, signal.SIGKILL)
+    victim = next(p for p in children  # the launcher's own child (agents are forked copies)
+                  if part.encode() in Path(f"/proc/{p}/cmdline").read_bytes().split(b"\0")
+                  and Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1].split()[1]
+                  == str(proc.pid))
+    os.kill(victim, signal.SIGKILL)
     assert proc.wait(timeout=DEADLINE_S) == 1, err.text()
     text = err.text()
-    assert "the agents' process exited with code -9" in text and "Traceback" not in text
+    assert f"{said} exited with code -9" in text and "Traceback" not in text
     assert not [pid for pid in children if running(pid)]
     assert read_record(record).header.n == n
 
