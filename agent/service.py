@@ -198,10 +198,14 @@ class _LookWait:
 
     def __init__(self, stop: threading.Event) -> None:
         self.stop = stop
-        self.waiting = False
-        self.cancel: Any = None  # the waiting Look's zenoh.CancellationToken
+        self.cancel: Any = None  # the waiting Look's zenoh.CancellationToken (None: none waits)
         self.world_up = False  # a world came up while it waited
         self._lock = threading.Lock()  # the callback's view of (cancel, world_up)
+
+    @property
+    def waiting(self) -> bool:
+        """A Look waits for its answer."""
+        return self.cancel is not None
 
     def handle(self, signum: int, frame: object) -> None:
         del signum, frame
@@ -262,7 +266,6 @@ def _look(querier: Any, last: LookRequest, wait: _LookWait) -> Snapshot | None:
 
     snapshot = None
     replied = False  # a cancelled query ends with no reply at all, not even its timeout's
-    wait.waiting = True
     cancel = wait.begin()
     try:
         if wait.stop.is_set():  # a stop that came before the wait
@@ -283,7 +286,6 @@ def _look(querier: Any, last: LookRequest, wait: _LookWait) -> Snapshot | None:
             except ProtocolError as exc:
                 log.warning("rejected snapshot: %s", exc)
     finally:
-        wait.waiting = False
         world_up = wait.end()
     if world_up and not replied:
         raise Relook
