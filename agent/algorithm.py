@@ -33,7 +33,7 @@ from fatswarm.agent.geometry import (
     targets_on,
 )
 from fatswarm.agent.params import Params
-from fatswarm.agent.path import (
+from fatswarm.domain.path import (
     MAX_SEGMENTS,
     STAY,
     Arc,
@@ -47,7 +47,7 @@ from fatswarm.agent.path import (
     segment_end,
     transform,
 )
-from fatswarm.agent.tolerance import (
+from fatswarm.domain.tolerance import (
     CLEAR_SLACK,
     CONTACT,
     EPS_AT_REL,

@@ -1,7 +1,7 @@
 """The canonical form of a configuration: the one frame in which every robot decides.
 
 Robots see the swarm in private frames (own origin, X maybe flipped). On grid positions
-(agent/tolerance.py, GRID) every such view is an exact translate, possibly mirrored, of every
+(fatswarm/domain/tolerance.py, GRID) every such view is an exact translate, possibly mirrored, of every
 other, so this module maps each view, exactly, to the same array: translate so that the lowest
 robot (then the leftmost) is at the origin, sort by (y, x), and of the two mirror images take the
 lexicographically smaller. The algorithm then runs on bit-identical numbers in every robot, and
@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from fatswarm.agent.path import Path, Points, transform
+from fatswarm.domain.path import Path, Points, transform
 
 IntArray = NDArray[np.intp]
 

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fatswarm.agent.geometry import path_distances, segment_distances
-from fatswarm.agent.path import Arc, Line, Path, Point, Points, Segment, end_point, segment_end
+from fatswarm.domain.path import Arc, Line, Path, Point, Points, Segment, end_point, segment_end
 
 Floats = NDArray[np.float64]  # (k,)
 Ints = NDArray[np.int64]  # (k,)

@@ -6,15 +6,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from fatswarm.agent.path import Path, Point, Points, transform
-
-FRAME_STREAM = 0xF1A9  # keeps frame draws apart from other seeded streams of the same run
-
-
-def draw_flip(seed: int, robot: int) -> bool:
-    """Robot `robot`'s X mirroring in a run seeded with `seed` (same in lockstep and networked)."""
-    rng = np.random.default_rng([FRAME_STREAM, seed & 0xFFFFFFFF, robot])
-    return bool(rng.random() < 0.5)
+from fatswarm.domain.path import Path, Point, Points, transform
 
 
 def to_local(others_world: Points, me_world: Point, flip_x: bool) -> Points:

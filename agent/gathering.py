@@ -14,9 +14,9 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
-from fatswarm.agent.path import STAY, Line, Path
-from fatswarm.agent.seam import AlgorithmParamsError, ParamSpec, ParamValue, Points
-from fatswarm.agent.tolerance import CONTACT
+from fatswarm.domain.path import STAY, Line, Path, Points
+from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue
+from fatswarm.domain.tolerance import CONTACT
 
 Values = NDArray[np.float64]  # (k,)
 DEFAULT_TOLERANCE: Final = 1e-3

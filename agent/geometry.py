@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from fatswarm.agent.canonical import canonical
-from fatswarm.agent.path import Arc, Line, Path, Point, Points, segment_end
-from fatswarm.agent.tolerance import (
+from fatswarm.domain.path import Arc, Line, Path, Point, Points, segment_end
+from fatswarm.domain.tolerance import (
     CLEAR_SLACK,
     CONTACT,
     EPS_AT_REL,
@@ -23,7 +23,7 @@ from fatswarm.agent.tolerance import (
     snap,
 )
 
-# The tolerance model lives in agent/tolerance.py (one definition for the world and the robots).
+# The tolerance model lives in fatswarm/domain/tolerance.py (one definition for the world and the robots).
 
 
 @dataclass(frozen=True, slots=True)

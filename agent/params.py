@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from fatswarm.agent.seam import AlgorithmParamsError
+from fatswarm.domain.seam import AlgorithmParamsError
 
 MIN_SIDE = 3.0  # the paper requires a > 3 (robots are unit discs, so centres 2 apart touch)
 

@@ -25,12 +25,19 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
-from fatswarm.agent.frames import compute_in_frame, draw_flip
-from fatswarm.agent.path import Path
-from fatswarm.agent.protocol import MoveSubmitted, alive_key
-from fatswarm.agent.registry import DEFAULT
-from fatswarm.agent.seam import Algorithm, AlgorithmParamsError, Configured, checked
-from fatswarm.world.protocol import LookRequest, ProtocolError, Snapshot, snapshot_key
+from fatswarm.agent.frames import compute_in_frame
+from fatswarm.domain.draws import draw_flip
+from fatswarm.domain.path import Path
+from fatswarm.domain.registry import DEFAULT
+from fatswarm.domain.seam import Algorithm, AlgorithmParamsError, Configured, checked
+from fatswarm.domain.wire import ProtocolError
+from fatswarm.world.protocol import (
+    LookRequest,
+    MoveSubmitted,
+    Snapshot,
+    agent_alive_key,
+    snapshot_key,
+)
 from fatswarm.world.protocol import alive_key as world_alive_key
 
 log = logging.getLogger("fatswarm.agent")
@@ -50,7 +57,7 @@ class AgentConfig:
     swarm: str
     robot: int
     seed: int
-    algorithm: str = DEFAULT  # a registered name or module:attribute (agent/registry.py)
+    algorithm: str = DEFAULT  # a registered name or module:attribute (fatswarm/domain/registry.py)
 
 
 class WrongAlgorithmError(ValueError):
@@ -143,7 +150,7 @@ def serve(
     """
     import zenoh
 
-    from fatswarm.agent.registry import load_algorithm
+    from fatswarm.domain.registry import load_algorithm
 
     stop = stop or threading.Event()
     robot = Robot(algorithm or load_algorithm(cfg.algorithm), draw_flip(cfg.seed, cfg.robot))
@@ -158,7 +165,7 @@ def serve(
             consolidation=zenoh.ConsolidationMode.NONE,
             timeout=LOOK_WAIT_S,
         )
-        _token = session.liveliness().declare_token(alive_key(cfg.swarm, cfg.robot))
+        _token = session.liveliness().declare_token(agent_alive_key(cfg.swarm, cfg.robot))
         look_wait = _LookWait(stop)
         # A router that restarts can lose a Look on its way (it is then never answered, and the
         # agent would wait LOOK_WAIT_S): when the world's token (re)appears, ask again at once.

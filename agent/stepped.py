@@ -16,8 +16,8 @@ from typing import Final
 
 from fatswarm.agent import uniform_circle
 from fatswarm.agent.params import Params
-from fatswarm.agent.path import Path, truncate
-from fatswarm.agent.seam import AlgorithmParamsError, ParamSpec, ParamValue, Points
+from fatswarm.domain.path import Path, Points, truncate
+from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue
 
 DEFAULT_STEP: Final = 1.0
 

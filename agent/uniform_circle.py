@@ -14,9 +14,9 @@ from typing import Final
 from fatswarm.agent import algorithm, geometry
 from fatswarm.agent.canonical import SharedForm
 from fatswarm.agent.params import Params
-from fatswarm.agent.path import STAY, Path
-from fatswarm.agent.seam import ParamSpec, ParamValue, Points
-from fatswarm.agent.tolerance import check_supported
+from fatswarm.domain.path import STAY, Path, Points
+from fatswarm.domain.seam import ParamSpec, ParamValue
+from fatswarm.domain.tolerance import check_supported
 
 DEFAULT_A: Final = 4.0
 SHARED_PLANS: Final = 8  # canonical forms remembered: a round has one; ssync revisits a few
@@ -84,7 +84,7 @@ class UniformCircle:
         return geometry.is_formed(positions, params.a)
 
     def check_start(self, positions: Points, params: Params) -> None:
-        """The supported range (agent/tolerance.py): spans and circles small enough for the grid."""
+        """The supported range (fatswarm/domain/tolerance.py): spans and circles small enough for the grid."""
         check_supported(positions, params.a)
 
     def figures(self, positions: Points, params: Params) -> dict[str, float]:

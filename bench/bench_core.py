@@ -27,9 +27,9 @@ import numpy as np
 
 from fatswarm.agent import algorithm
 from fatswarm.agent.params import Params
-from fatswarm.agent.path import Path, Points
 from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy.lockstep import RoundReport, run_lockstep
+from fatswarm.domain.path import Path, Points
 from fatswarm.world.starts import KINDS, degenerate_starts, random_start
 
 SCHEDULERS = ("fsync", "ssync", "centralized")

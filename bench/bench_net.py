@@ -34,12 +34,12 @@ from typing import Any
 import numpy as np
 
 from fatswarm.agent.params import Params
-from fatswarm.agent.protocol import alive_any_key, robot_of_alive_key
 from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy.launcher import Children
 from fatswarm.deploy.parts import agent_command, agents_command
 from fatswarm.deploy.zconf import loopback_endpoint, make_config
-from fatswarm.world.protocol import ProtocolError, WorldState, state_key
+from fatswarm.domain.wire import ProtocolError
+from fatswarm.world.protocol import WorldState, agent_alive_any_key, robot_of_alive_key, state_key
 from fatswarm.world.starts import random_start
 
 FREE_ALGORITHM = (f"{Path(__file__).resolve().parents[1] / 'tests' / 'data' / 'always_right.py'}"
@@ -202,7 +202,7 @@ def networked(
 
             session = own = open_client(make_config("client", [endpoint]), deadline_s=60)
         subs = [
-            session.liveliness().declare_subscriber(alive_any_key(swarm), on_alive,
+            session.liveliness().declare_subscriber(agent_alive_any_key(swarm), on_alive,
                                                     history=True),
             session.declare_subscriber(state_key(swarm), on_state),
         ]
@@ -262,9 +262,9 @@ def _roles(children: Children) -> dict[str, list[int]]:
 
 
 def lockstep(n: int, seed: int, algorithm: str) -> tuple[str, int, int, float, float]:
-    from fatswarm.agent.registry import load_algorithm
-    from fatswarm.agent.seam import Configured
     from fatswarm.deploy.lockstep import run_lockstep
+    from fatswarm.domain.registry import load_algorithm
+    from fatswarm.domain.seam import Configured
 
     initial = random_start(n, seed, "clustered", 4.0)
     setting: Params | Configured = Params(n, 4.0)

@@ -1,4 +1,4 @@
-"""The records of a fixed matrix of runs, hashed: code that moves must leave every one byte for byte.
+"""The records of a fixed matrix of runs, hashed: code that moves must leave each byte for byte.
 
 Runs the installed `fatswarm` command (so the same script measures any version) over a fixed set of
 configurations: every scheduler and async policy, non-rigid moves, crashes, the three algorithms,
@@ -22,7 +22,6 @@ import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,6 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Final
 
-from fatswarm.coordinator.adversary import ASYNC_NAMES, AsyncModel
 from fatswarm.coordinator.rounds import (
     Action,
     Ask,
@@ -24,6 +23,7 @@ from fatswarm.coordinator.rounds import (
     RoundTimes,
 )
 from fatswarm.coordinator.schedule import Scheduler
+from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel
 from fatswarm.world.protocol import Begin, Commit, ControlReply
 
 MAX_REPLANS: Final = 1_000_000  # Begins the world may answer "not yet" in a row (each a move's

@@ -6,7 +6,7 @@ It has no message of its own: it opens and commits rounds through the world's co
 
 from __future__ import annotations
 
-from fatswarm.world.protocol import prefix
+from fatswarm.domain.wire import prefix
 
 
 def alive_key(swarm: str) -> str:

@@ -12,7 +12,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from fatswarm.coordinator.schedule import Scheduler
-from fatswarm.world.outcome import Status
+from fatswarm.domain.outcome import Status
 from fatswarm.world.protocol import Begin, Commit, ControlReply, Hello, MovesHeld
 
 MAX_NOTES = 256  # notes nobody takes are dropped oldest first (a driver may ignore them)

@@ -13,12 +13,12 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from fatswarm.coordinator.adversary import ASYNC_NAMES, make_async
+from fatswarm.domain.adversary import ASYNC_NAMES, make_async
+from fatswarm.domain.draws import SCHEDULE_STREAM
 
-SCHEDULE_STREAM = 0x5CED  # keeps scheduler draws apart from other seeded streams of the same run
 SSYNC_P = 0.5  # each live robot is drawn with this probability: every subset is equally likely
 ROUND_NAMES = ("fsync", "ssync", "centralized", "scripted")
-NAMES = (*ROUND_NAMES, *ASYNC_NAMES)  # the async models have no rounds: coordinator/adversary.py
+NAMES = (*ROUND_NAMES, *ASYNC_NAMES)  # the async models have no rounds: fatswarm/domain/adversary.py
 AFTER_SCRIPT = ("repeat", "fsync")  # what a script does once its rounds are used up
 
 
@@ -235,7 +235,7 @@ def make_scheduler(
     name: str, n: int, seed: int, schedule_path: str | None = None, fairness: int | None = None
 ) -> Scheduler:
     """Build 'fsync', 'ssync', 'centralized' or 'scripted' (the latter reads `schedule_path`), or
-    an async model ('async', 'async-slowest': coordinator/adversary.py), which has no rounds.
+    an async model ('async', 'async-slowest': fatswarm/domain/adversary.py), which has no rounds.
 
     `fairness` is the bound K of ssync and centralized (default `default_fairness(n)`).
     """

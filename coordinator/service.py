@@ -15,7 +15,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from fatswarm.agent.protocol import alive_any_key, robot_of_alive_key
 from fatswarm.coordinator.async_rounds import coordinator_core
 from fatswarm.coordinator.protocol import alive_key
 from fatswarm.coordinator.rounds import (
@@ -24,8 +23,9 @@ from fatswarm.coordinator.rounds import (
     RoundTimes,
 )
 from fatswarm.coordinator.schedule import Scheduler
+from fatswarm.domain.outcome import Status, exit_code_for
+from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.inbox import Inbox
-from fatswarm.world.outcome import Status, exit_code_for
 from fatswarm.world.protocol import (
     MAX_NOTICE_BYTES,
     Begin,
@@ -33,9 +33,10 @@ from fatswarm.world.protocol import (
     ControlReply,
     ControlRequest,
     MovesHeld,
-    ProtocolError,
+    agent_alive_any_key,
     control_key,
     moves_held_key,
+    robot_of_alive_key,
 )
 from fatswarm.world.protocol import alive_key as world_alive_key
 
@@ -114,7 +115,7 @@ class Coordinator:
         with session:
             _token = session.liveliness().declare_token(alive_key(self.cfg.swarm))
             session.liveliness().declare_subscriber(
-                alive_any_key(self.cfg.swarm), self._on_alive, history=True
+                agent_alive_any_key(self.cfg.swarm), self._on_alive, history=True
             )
             session.declare_subscriber(moves_held_key(self.cfg.swarm), self._on_held)
             session.liveliness().declare_subscriber(

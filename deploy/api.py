@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from fatswarm.agent.path import Points
 from fatswarm.deploy.config import DEFAULT_SCHEDULER, DEFAULT_START, RunConfig
 from fatswarm.deploy.lockstep import RoundReport, RunResult, run_lockstep
+from fatswarm.domain.path import Points
 from fatswarm.world.record import RecordWriter, RunRecord, read_record
 
 

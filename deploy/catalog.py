@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from fatswarm.world.outcome import ExitCode
+from fatswarm.domain.outcome import ExitCode
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -17,7 +17,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def describe(ref: str) -> str:
     """An algorithm's name, summary and parameters (name, default, help), one per line."""
-    from fatswarm.agent.registry import load_algorithm
+    from fatswarm.domain.registry import load_algorithm
 
     algorithm = load_algorithm(ref)
     lines = [f"{algorithm.name}: {algorithm.summary}"]
@@ -30,8 +30,8 @@ def describe(ref: str) -> str:
 
 def main(args: argparse.Namespace) -> int:
     """Print the catalogue (or one entry); an algorithm that does not load is one line, exit 2."""
-    from fatswarm.agent.registry import available
-    from fatswarm.agent.seam import AlgorithmError
+    from fatswarm.domain.registry import available
+    from fatswarm.domain.seam import AlgorithmError
 
     refs = [args.algorithm] if args.algorithm else list(available())
     shown = 0

@@ -18,11 +18,11 @@ from typing import TYPE_CHECKING, Any, Final
 
 import numpy as np
 
-from fatswarm.agent.path import Points
+from fatswarm.domain.path import Points
 
 if TYPE_CHECKING:
-    from fatswarm.agent.seam import Configured
     from fatswarm.coordinator.schedule import Scheduler
+    from fatswarm.domain.seam import Configured
     from fatswarm.world.record import RunRecord
 
 DEFAULT_N: Final = 8
@@ -64,7 +64,7 @@ class RunConfig:
     @staticmethod
     def from_args(args: argparse.Namespace, seed: int) -> RunConfig:
         """The configuration `fatswarm run`'s flags ask for (`-a` is `--param a=`)."""
-        from fatswarm.agent.seam import parse_assignments
+        from fatswarm.domain.seam import parse_assignments
 
         params: dict[str, object] = dict(parse_assignments(list(getattr(args, "param", []) or [])))
         if getattr(args, "a", None) is not None:
@@ -163,9 +163,9 @@ def check_crash(f: int | None, n: int) -> None:
 
 def input_errors() -> tuple[type[Exception], ...]:
     """The exceptions `resolve_run` raises for bad input (each message says what to fix)."""
-    from fatswarm.agent.seam import AlgorithmError, AlgorithmParamsError
-    from fatswarm.agent.tolerance import UnsupportedInputError
     from fatswarm.coordinator.schedule import ScheduleError
+    from fatswarm.domain.seam import AlgorithmError, AlgorithmParamsError
+    from fatswarm.domain.tolerance import UnsupportedInputError
     from fatswarm.world.physics import InvalidConfigurationError
     from fatswarm.world.starts import InitFileError
 
@@ -189,9 +189,9 @@ def resolve_start(
     `--algorithm`, `--param` and `-a` ask for, valid and supported by the algorithm; raises one of
     `input_errors()`. Shared by `fatswarm run` and `fatswarm world`, so both refuse the same start
     the same way. Random starts are drawn at the scale of a parameter `a`, if there is one."""
-    from fatswarm.agent.registry import DEFAULT, load_algorithm
-    from fatswarm.agent.seam import Configured, parse_assignments
-    from fatswarm.agent.tolerance import check_supported
+    from fatswarm.domain.registry import DEFAULT, load_algorithm
+    from fatswarm.domain.seam import Configured, parse_assignments
+    from fatswarm.domain.tolerance import check_supported
     from fatswarm.world.physics import validate_configuration
     from fatswarm.world.starts import load_init, random_start
 

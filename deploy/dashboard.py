@@ -28,13 +28,14 @@ from rich.style import Style
 from rich.table import Table
 from rich.text import Text
 
-from fatswarm.agent import geometry, tolerance
-from fatswarm.agent.path import Points
-from fatswarm.agent.registry import DEFAULT as DEFAULT_ALGORITHM
-from fatswarm.agent.seam import ParamValue
+from fatswarm.agent import geometry
 from fatswarm.deploy.canvas import Canvas, Mode, Viewport
 from fatswarm.deploy.run import EXIT_BAD_INPUT, EXIT_NOT_FORMED, exit_code_for
-from fatswarm.world.outcome import ENDED, Status
+from fatswarm.domain import tolerance
+from fatswarm.domain.outcome import ENDED, Status
+from fatswarm.domain.path import Points
+from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
+from fatswarm.domain.seam import ParamValue
 
 if TYPE_CHECKING:
     from fatswarm.world.protocol import WorldState
@@ -574,7 +575,8 @@ class StateWatcher:
     def _run(self) -> None:
         import zenoh
 
-        from fatswarm.world.protocol import ProtocolError, WorldState, state_key
+        from fatswarm.domain.wire import ProtocolError
+        from fatswarm.world.protocol import WorldState, state_key
 
         own = self.session is None
         try:
@@ -751,7 +753,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     """`fatswarm dashboard`: follow a running swarm read-only until Ctrl-C (or its end)."""
-    from fatswarm.world.protocol import check_swarm
+    from fatswarm.domain.wire import check_swarm
 
     try:
         check_swarm(args.swarm)

@@ -21,7 +21,7 @@ ASYNC_CYCLES_PER_STEP_PER_ROBOT: Final = 3
 
 def expected_rounds_per_step(n: int, scheduler: str) -> int:
     """Rounds (ended cycles under an async model) a correct run takes per step of the algorithm."""
-    from fatswarm.coordinator.adversary import ASYNC_NAMES
+    from fatswarm.domain.adversary import ASYNC_NAMES
 
     per_robot = ASYNC_CYCLES_PER_STEP_PER_ROBOT if scheduler in ASYNC_NAMES else 1
     return EXPECTED_ROUNDS_PER_STEP.get(scheduler, per_robot * max(1, n))

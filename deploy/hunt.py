@@ -17,10 +17,10 @@ from typing import Any, Final
 
 import numpy as np
 
-from fatswarm.agent.path import Points
-from fatswarm.agent.registry import DEFAULT as DEFAULT_ALGORITHM
-from fatswarm.agent.seam import Configured
 from fatswarm.deploy.sweep import ParamText, SweepInputError
+from fatswarm.domain.path import Points
+from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
+from fatswarm.domain.seam import Configured
 
 HUNT_STREAM: Final = 0x4B17  # keeps the hunt's draws apart from every other seeded stream
 SEED_MASK: Final = 0xFFFFFFFF
@@ -200,7 +200,7 @@ class _Found(Exception):
 
 @lru_cache(maxsize=8)
 def _algorithm(ref: str) -> Any:
-    from fatswarm.agent.registry import load_algorithm
+    from fatswarm.domain.registry import load_algorithm
 
     return load_algorithm(ref)
 
@@ -236,7 +236,7 @@ def sec_invariant(setting: Configured) -> InvariantCheck:
     never falls back to expansion. Expansion rounds (r_c < r) move leaders out of the SEC on
     purpose and are not checked. The slack adds the world grid's rounding of end points."""
     from fatswarm.agent.geometry import sec, target_radius
-    from fatswarm.agent.tolerance import EPS_AT_REL, EPS_EQ_REL, scale
+    from fatswarm.domain.tolerance import EPS_AT_REL, EPS_EQ_REL, scale
 
     a = setting.values.get("a")
     assert isinstance(a, float)
@@ -305,7 +305,7 @@ def run_case(hunt: Hunt, positions: Points, scheduler: Any, model: str, *, seed:
     """
     from fatswarm.deploy.config import input_errors
     from fatswarm.deploy.lockstep import RoundReport, run_lockstep
-    from fatswarm.world.outcome import Status
+    from fatswarm.domain.outcome import Status
     from fatswarm.world.physics import (
         InvalidConfigurationError,
         PhysicsInvariantError,

@@ -27,7 +27,7 @@ from fatswarm.deploy.hunt import (
     start_families,
 )
 from fatswarm.deploy.sweep import SweepInputError, params_text, parse_ints, split_values
-from fatswarm.world.outcome import ExitCode
+from fatswarm.domain.outcome import ExitCode
 
 if TYPE_CHECKING:
     from rich.table import Table
@@ -57,7 +57,7 @@ EPILOG: Final = (
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm hunt`."""
-    from fatswarm.agent.registry import DEFAULT
+    from fatswarm.domain.registry import DEFAULT
 
     p.description = DESCRIPTION
     p.epilog = EPILOG
@@ -105,10 +105,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def build_hunt(args: argparse.Namespace) -> Hunt:
     """The hunt the flags ask for, checked; raises HuntInputError or one of
     `config.input_errors()` with a line saying what to fix."""
-    from fatswarm.agent.registry import load_algorithm
-    from fatswarm.agent.seam import Configured
     from fatswarm.coordinator.schedule import NAMES
     from fatswarm.deploy.config import check_non_rigid
+    from fatswarm.domain.registry import load_algorithm
+    from fatswarm.domain.seam import Configured
 
     sizes = parse_ints(args.n or [DEFAULT_SIZES], "-n", least=1)
     usable = hunt_models()

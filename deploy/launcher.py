@@ -207,9 +207,9 @@ def run_networked(args: argparse.Namespace) -> int:
 def check_inputs(args: argparse.Namespace) -> tuple[str | None, int, RunSetup | None]:
     """(what to fix or None, the seed, the run): the lockstep run's checks, before any process
     starts; with --resume, the seed and the run are the record's."""
-    from fatswarm.coordinator.adversary import ASYNC_NAMES
     from fatswarm.deploy.config import RunInputError, input_errors
     from fatswarm.deploy.run import check_seconds, resolve_run
+    from fatswarm.domain.adversary import ASYNC_NAMES
 
     seed: int = args.seed if args.seed is not None else secrets.randbelow(2**31)
     bad_input: tuple[type[Exception], ...] = (*input_errors(), ValueError)  # ValueError: swarm
@@ -224,7 +224,7 @@ def check_inputs(args: argparse.Namespace) -> tuple[str | None, int, RunSetup | 
             raise RunInputError(f"--resume: a {setup.scheduler.name} run cannot be resumed yet; "
                                 "run it again with its --seed")
         if args.swarm is not None:
-            from fatswarm.world.protocol import check_swarm
+            from fatswarm.domain.wire import check_swarm
 
             check_swarm(args.swarm)
         check_network(args.connect, args.listen)  # a router answers; --listen well formed, free

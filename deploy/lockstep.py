@@ -19,23 +19,24 @@ from typing import Any, Final
 
 import numpy as np
 
-from fatswarm.agent.frames import compute_in_frame, draw_flip, path_to_world
+from fatswarm.agent.frames import compute_in_frame, path_to_world
 from fatswarm.agent.params import Params
-from fatswarm.agent.path import Path, Points
-from fatswarm.agent.protocol import MoveSubmitted
-from fatswarm.agent.seam import Configured, checked
 from fatswarm.agent.uniform_circle import ALGORITHM as UNIFORM_CIRCLE
-from fatswarm.coordinator.adversary import ASYNC_NAMES, AsyncModel
 from fatswarm.coordinator.async_rounds import coordinator_core
 from fatswarm.coordinator.rounds import Ask, CoordinatorCore, Finished, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
+from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel
+from fatswarm.domain.draws import draw_flip
+from fatswarm.domain.outcome import Status
+from fatswarm.domain.path import Path, Points
+from fatswarm.domain.seam import Configured, checked
+from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.async_core import AsyncWorldCore, make_world
 from fatswarm.world.asynchrony import CycleDone
 from fatswarm.world.core import Committed, Journal, WorldCore, WorldSetup
-from fatswarm.world.outcome import Status
 from fatswarm.world.physics import RoundOutcome, validate_configuration
 from fatswarm.world.progress import Progress
-from fatswarm.world.protocol import Commit, ProtocolError
+from fatswarm.world.protocol import Commit, MoveSubmitted
 from fatswarm.world.record import Header, RoundEntry, RunRecord
 
 # Default round cap = ROUNDS_PER_STEP[scheduler] * (n + STEP_SLACK). The algorithm needs about

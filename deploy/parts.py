@@ -18,7 +18,6 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from fatswarm.agent.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.deploy.run import ExitCode, add_algorithm_arguments
 from fatswarm.deploy.zconf import (
     AGENT_LEASE_MS,
@@ -30,6 +29,7 @@ from fatswarm.deploy.zconf import (
     open_client,
     token_held,
 )
+from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 
 EXIT_BAD_INPUT = ExitCode.BAD_INPUT
 DEFAULT_ROUTER_LISTEN = "tcp/127.0.0.1:7447"
@@ -204,10 +204,10 @@ def add_world_arguments(p: argparse.ArgumentParser) -> None:
 
 def main_world(args: argparse.Namespace) -> int:
     """Run the world until SIGTERM/SIGINT."""
-    from fatswarm.agent.seam import AlgorithmFailure
     from fatswarm.deploy.config import input_errors, resolve_start
     from fatswarm.deploy.lockstep import default_max_rounds
     from fatswarm.deploy.router import open_router
+    from fatswarm.domain.seam import AlgorithmFailure
     from fatswarm.world.protocol import alive_key
     from fatswarm.world.record import RecordFormatError, read_record
     from fatswarm.world.service import WorldCore, WorldSetup, open_world, serve
@@ -354,9 +354,9 @@ def add_agent_arguments(p: argparse.ArgumentParser) -> None:
 
 def main_agent(args: argparse.Namespace) -> int:
     """Run one robot until SIGTERM/SIGINT."""
-    from fatswarm.agent.registry import load_algorithm
-    from fatswarm.agent.seam import AlgorithmError
     from fatswarm.agent.service import AgentConfig, serve
+    from fatswarm.domain.registry import load_algorithm
+    from fatswarm.domain.seam import AlgorithmError
 
     _logging(args, "warning")
     stop = install_stop_signals(args.exit_with_parent)
@@ -447,8 +447,8 @@ def main_agents(args: argparse.Namespace) -> int:
                 _client_config(args, robot=robot)
     except ValueError as exc:
         return _fail("agents", str(exc))
-    from fatswarm.agent.registry import load_algorithm
-    from fatswarm.agent.seam import AlgorithmError
+    from fatswarm.domain.registry import load_algorithm
+    from fatswarm.domain.seam import AlgorithmError
 
     try:  # once here, so that a bad --algorithm is one line, not one per agent
         load_algorithm(args.algorithm)
@@ -485,8 +485,8 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
     """
     import zenoh  # noqa: F401  (the module only: no session, no runtime thread in this process)
 
-    from fatswarm.agent.registry import load_algorithm
     from fatswarm.agent.service import AgentConfig, serve
+    from fatswarm.domain.registry import load_algorithm
 
     algorithm = load_algorithm(args.algorithm)  # loaded once, before the forks share it
     log = logging.getLogger("fatswarm.agents")

@@ -12,8 +12,8 @@ import sys
 
 import numpy as np
 
-from fatswarm.agent.path import Points, sample, truncate
 from fatswarm.deploy.run import ExitCode
+from fatswarm.domain.path import Points, sample, truncate
 from fatswarm.world.record import (
     RecordFormatError,
     RunRecord,

@@ -17,11 +17,11 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import Any
 
-from fatswarm.agent.path import Points, sample, truncate
-from fatswarm.agent.registry import load_algorithm
-from fatswarm.agent.seam import AlgorithmError, AlgorithmFailure, AlgorithmParamsError, Configured
 from fatswarm.deploy.dashboard import Frame, print_frame, render_frame, save_svg
 from fatswarm.deploy.run import ExitCode
+from fatswarm.domain.path import Points, sample, truncate
+from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.seam import AlgorithmError, AlgorithmFailure, AlgorithmParamsError, Configured
 from fatswarm.world.record import (
     Header,
     RecordFormatError,

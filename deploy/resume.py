@@ -9,10 +9,10 @@ from typing import TYPE_CHECKING, Any
 
 from fatswarm.deploy.config import RunInputError, RunSetup, check_crash, check_non_rigid
 from fatswarm.deploy.run import flag_given
-from fatswarm.world.outcome import Status
+from fatswarm.domain.outcome import Status
 
 if TYPE_CHECKING:
-    from fatswarm.agent.path import Points
+    from fatswarm.domain.path import Points
     from fatswarm.world.record import Header, Result, RunRecord
 
 
@@ -20,10 +20,10 @@ def resolve_resume(args: argparse.Namespace) -> RunSetup:
     """The run `--resume` continues: the --record file's header (n, a, seed, scheduler, start,
     round cap) and committed rounds; raises one of `input_errors()` for a record that cannot be
     continued or a flag given that contradicts it (flags that agree with it are fine)."""
-    from fatswarm.agent.registry import load_algorithm
-    from fatswarm.agent.seam import Configured
     from fatswarm.coordinator.schedule import make_scheduler
     from fatswarm.deploy.lockstep import default_max_rounds
+    from fatswarm.domain.registry import load_algorithm
+    from fatswarm.domain.seam import Configured
     from fatswarm.world.physics import validate_configuration
 
     path: str = args.record
@@ -143,7 +143,7 @@ def check_against_header(
     if flag_given(args, "algorithm") and args.algorithm != header.algorithm_ref:
         raise RunInputError(f"--algorithm {args.algorithm} contradicts {path}, whose run has "
                             f"algorithm {header.algorithm_ref}; drop --algorithm to resume it")
-    from fatswarm.agent.seam import parse_assignments
+    from fatswarm.domain.seam import parse_assignments
 
     for name, text in parse_assignments(list(getattr(args, "param", []) or [])).items():
         recorded = header.params.get(name)

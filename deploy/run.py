@@ -38,7 +38,7 @@ from fatswarm.deploy.estimate import (
     estimate_text,
     eta_text,
 )
-from fatswarm.world.outcome import ExitCode, Status, exit_code_for
+from fatswarm.domain.outcome import ExitCode, Status, exit_code_for
 
 if TYPE_CHECKING:
     from fatswarm.deploy.lockstep import RoundReport
@@ -162,7 +162,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def add_algorithm_arguments(p: argparse.ArgumentParser, *, params: bool = True) -> None:
     """`--algorithm` (and `--param`): which algorithm the robots run, with what parameters."""
-    from fatswarm.agent.registry import DEFAULT
+    from fatswarm.domain.registry import DEFAULT
 
     p.add_argument("--algorithm", default=DEFAULT, metavar="NAME", action=_StoreGiven,
                    help=f"the algorithm every robot runs: a registered name (`fatswarm "
@@ -263,9 +263,9 @@ def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
 
 def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """`fatswarm run --lockstep`: build the run from the flags, run it, print the summary."""
-    from fatswarm.agent.seam import AlgorithmFailure
-    from fatswarm.coordinator.adversary import ASYNC_NAMES
     from fatswarm.deploy.lockstep import HistoryMismatchError, run_lockstep
+    from fatswarm.domain.adversary import ASYNC_NAMES
+    from fatswarm.domain.seam import AlgorithmFailure
     from fatswarm.world.physics import InvalidConfigurationError
     from fatswarm.world.record import RecordFormatError, RecordWriteError, RecordWriter
 

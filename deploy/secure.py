@@ -15,8 +15,8 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
-from fatswarm.agent import protocol as agent_wire
 from fatswarm.coordinator import protocol as coordinator_wire
+from fatswarm.domain import wire
 from fatswarm.world import protocol as world_wire
 
 DEFAULT_PORT = 7447
@@ -65,9 +65,9 @@ class Plan:
     dashboards: int = 1
 
     def __post_init__(self) -> None:
-        world_wire.check_swarm(self.swarm)
-        if isinstance(self.n, bool) or not 1 <= self.n <= world_wire.MAX_ROBOTS:
-            raise ValueError(f"-n must be in 1..{world_wire.MAX_ROBOTS}, got {self.n}")
+        wire.check_swarm(self.swarm)
+        if isinstance(self.n, bool) or not 1 <= self.n <= wire.MAX_ROBOTS:
+            raise ValueError(f"-n must be in 1..{wire.MAX_ROBOTS}, got {self.n}")
         if not self.hosts:
             raise ValueError("give at least one router host (--hosts ADDRESS,...)")
         for host in self.hosts:
@@ -174,7 +174,7 @@ def grants(swarm: str, who: Identity) -> tuple[Grant, ...]:
     """
     state, control = world_wire.state_key(swarm), world_wire.control_key(swarm)
     held, snapshots = world_wire.moves_held_key(swarm), world_wire.snapshot_any_key(swarm)
-    agents_alive = agent_wire.alive_any_key(swarm)
+    agents_alive = world_wire.agent_alive_any_key(swarm)
     world_alive = world_wire.alive_key(swarm)
     coordinator_alive = coordinator_wire.alive_key(swarm)
     presence = (agents_alive, world_alive, coordinator_alive)
@@ -184,7 +184,7 @@ def grants(swarm: str, who: Identity) -> tuple[Grant, ...]:
         look = world_wire.snapshot_key(swarm, who.robot)
         return tuple(_both(
             [("query", look),
-             ("liveliness_token", agent_wire.alive_key(swarm, who.robot)),
+             ("liveliness_token", world_wire.agent_alive_key(swarm, who.robot)),
              ("declare_liveliness_subscriber", world_alive)],
             # the world's queryable, as declared: no data, only that it exists; and the world's
             # token (an agent asks again when a world comes up)
@@ -221,7 +221,7 @@ def grants(swarm: str, who: Identity) -> tuple[Grant, ...]:
             [("put", state), *(("liveliness_token", k) for k in presence)],
         ))
     if who.role == "router":  # a router passes on what the other routers let in: all the swarm's
-        everything = f"{world_wire.prefix(swarm)}/**"
+        everything = f"{wire.prefix(swarm)}/**"
         return tuple(Grant(flow, m, everything) for flow in FLOWS for m in MESSAGES)
     raise ValueError(f"unknown role {who.role!r}")
 
@@ -314,7 +314,7 @@ def matrix() -> list[tuple[str, str, str, str]]:
            "agent": Identity("agent-<i>", "agent", robot=0),
            "dashboard": Identity("dashboard-<k>", "dashboard")}
     swarm = "S"
-    root = f"{world_wire.prefix(swarm)}/"
+    root = f"{wire.prefix(swarm)}/"
     rows = []
     for role in ROLES:
         for g in grants(swarm, who[role]):

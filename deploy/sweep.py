@@ -18,10 +18,10 @@ from typing import Any, Final
 
 import numpy as np
 
-from fatswarm.agent.path import Points
-from fatswarm.agent.registry import DEFAULT as DEFAULT_ALGORITHM
-from fatswarm.agent.seam import Algorithm, ParamValue, parse_assignments, resolve_values
-from fatswarm.world.outcome import Status
+from fatswarm.domain.outcome import Status
+from fatswarm.domain.path import Points
+from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
+from fatswarm.domain.seam import Algorithm, ParamValue, parse_assignments, resolve_values
 
 ERROR: Final = "error"  # the status of a run that raised instead of ending (the `error` column)
 MAX_RUNS: Final = 1_000_000  # a larger grid is a typo (`--seeds 0..10000000`), not a sweep

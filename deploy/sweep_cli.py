@@ -39,7 +39,7 @@ from fatswarm.deploy.sweep import (
     summarize,
     sweep_schedulers,
 )
-from fatswarm.world.outcome import ExitCode, Status
+from fatswarm.domain.outcome import ExitCode, Status
 
 if TYPE_CHECKING:
     from rich.table import Table
@@ -78,8 +78,8 @@ EPILOG: Final = (
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm sweep`."""
-    from fatswarm.agent.registry import DEFAULT
     from fatswarm.deploy.config import DEFAULT_START
+    from fatswarm.domain.registry import DEFAULT
     from fatswarm.world.starts import KINDS
 
     p.description = DESCRIPTION
@@ -124,10 +124,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def build_grid(args: argparse.Namespace) -> Grid:
     """The grid the flags ask for, checked; raises SweepInputError or one of
     `config.input_errors()` with a line saying what to fix."""
-    from fatswarm.agent.registry import DEFAULT, load_algorithm
-    from fatswarm.agent.seam import Configured
     from fatswarm.coordinator.schedule import NAMES
     from fatswarm.deploy.config import DEFAULT_START
+    from fatswarm.domain.registry import DEFAULT, load_algorithm
+    from fatswarm.domain.seam import Configured
     from fatswarm.world.starts import KINDS
 
     sizes = parse_ints(args.n or [DEFAULT_SIZES], "-n", least=1)

@@ -75,10 +75,10 @@ def init_worker() -> None:
 
 def run_spec(spec: RunSpec) -> RunFigures:
     """Run `spec` in lock step and measure it; a run that raises is an ERROR row, not a crash."""
-    from fatswarm.agent.registry import load_algorithm
-    from fatswarm.agent.seam import resolve_values
     from fatswarm.deploy.config import RunConfig
     from fatswarm.deploy.lockstep import default_max_rounds, run_lockstep
+    from fatswarm.domain.registry import load_algorithm
+    from fatswarm.domain.seam import resolve_values
 
     logger = logging.getLogger("fatswarm")
     warnings = _FirstWarning()

@@ -13,8 +13,8 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
-from fatswarm.agent.path import STAY, Line, Path
-from fatswarm.agent.seam import AlgorithmParamsError, ParamSpec, ParamValue
+from fatswarm.domain.path import STAY, Line, Path
+from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue
 
 Points = NDArray[np.float64]  # (k, 2)
 CONTACT: Final = 2.0  # unit discs touch when their centres are 2 apart

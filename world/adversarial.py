@@ -17,12 +17,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from fatswarm.agent.geometry import target_radius
-from fatswarm.agent.path import Points
-from fatswarm.agent.tolerance import CONTACT
+from fatswarm.domain.draws import ADVERSARIAL_STREAM, CASES_STREAM
+from fatswarm.domain.path import Points
+from fatswarm.domain.tolerance import CONTACT
 from fatswarm.world.physics import CONTACT_SLACK, validate_configuration
 
-ADVERSARIAL_STREAM: Final = 0xAD5E  # keeps these draws apart from every other seeded stream
-CASES_STREAM: Final = 0xCA5E
 SEED_MASK: Final = 0xFFFFFFFF
 MAX_N: Final = 400  # largest n any family builds (rejection sampling stays fast up to here)
 

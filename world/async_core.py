@@ -16,19 +16,13 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from fatswarm.agent.path import Path, transform
-from fatswarm.agent.seam import Configured
-from fatswarm.coordinator.adversary import ASYNC_NAMES, make_async
+from fatswarm.domain.adversary import ASYNC_NAMES, make_async
+from fatswarm.domain.draws import cut_fraction
+from fatswarm.domain.outcome import Status
+from fatswarm.domain.path import Path, transform
+from fatswarm.domain.seam import Configured
 from fatswarm.world.asynchrony import AsyncWorld, CycleDone
-from fatswarm.world.core import (
-    Committed,
-    Journal,
-    WorldCore,
-    WorldSetup,
-    cut_fraction,
-    cut_path,
-)
-from fatswarm.world.outcome import Status
+from fatswarm.world.core import Committed, Journal, WorldCore, WorldSetup, cut_path
 from fatswarm.world.physics import RoundOutcome
 from fatswarm.world.progress import MOVE_TOLERANCE
 from fatswarm.world.protocol import Begin, Commit, ControlReply

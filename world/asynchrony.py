@@ -12,7 +12,7 @@ A Look that asks to stay ends its cycle at once. Each ended cycle is one `CycleD
 record keeps one line per cycle, in the order they end (docs/record.md).
 
 No I/O, clock or global random state: the delays come from the caller (the adversary,
-coordinator/adversary.py), so the same core serves lock step and a networked run.
+fatswarm/domain/adversary.py), so the same core serves lock step and a networked run.
 """
 
 from __future__ import annotations
@@ -25,8 +25,8 @@ from typing import Final
 
 import numpy as np
 
-from fatswarm.agent.path import Path, Point, Points, path_length, remainder, truncate
-from fatswarm.agent.tolerance import snap
+from fatswarm.domain.path import Path, Point, Points, path_length, remainder, truncate
+from fatswarm.domain.tolerance import snap
 from fatswarm.world.physics import Collision, apply_round
 
 ENDED: Final = 1e-9

@@ -8,7 +8,6 @@ Physics and the end test are the core's (`world.physics.apply_round`, `world.pro
 
 from __future__ import annotations
 
-import functools
 import logging
 import os
 from collections import Counter
@@ -18,12 +17,12 @@ from typing import Any, Final, Protocol
 
 import numpy as np
 
-from fatswarm.agent.path import Path, Point, path_length, transform, truncate
-from fatswarm.agent.protocol import MoveSubmitted
-from fatswarm.agent.registry import DEFAULT, load_algorithm
-from fatswarm.agent.seam import AlgorithmFailure, Configured, ParamValue
-from fatswarm.agent.tolerance import snap
-from fatswarm.world.outcome import Status
+from fatswarm.domain.draws import crash_plan, cut_fraction, view_order
+from fatswarm.domain.outcome import Status
+from fatswarm.domain.path import Path, Point, Points, path_length, transform, truncate
+from fatswarm.domain.registry import DEFAULT, load_algorithm
+from fatswarm.domain.seam import AlgorithmFailure, Configured, ParamValue
+from fatswarm.domain.tolerance import snap
 from fatswarm.world.physics import Collision, RoundOutcome, apply_round
 from fatswarm.world.progress import ProgressTracker
 from fatswarm.world.protocol import (
@@ -35,7 +34,7 @@ from fatswarm.world.protocol import (
     Hello,
     LookRequest,
     MovesHeld,
-    Points,
+    MoveSubmitted,
     Snapshot,
     WorldState,
 )
@@ -52,10 +51,6 @@ def crash_after(n: int) -> int:
     default fairness bound (every live robot is active at least once in 2n rounds), >= 10."""
     return max(CRASH_MIN_ROUNDS, 4 * n)
 
-
-LOOK_STREAM: Final = 0x5A0F  # orders the others in a view; compute must not depend on the order
-CUT_STREAM: Final = 0xC07A  # where the non-rigid adversary stops a move
-CRASH_STREAM: Final = 0xC4A5  # which robots the crash adversary stops for good, and when
 
 
 class Journal(Protocol):
@@ -119,39 +114,6 @@ class Committed:
     outcome: RoundOutcome
 
 
-def view_order(seed: int, round_no: int, robot: int, k: int) -> np.ndarray:
-    """The order in which robot `robot` sees the k others in round `round_no`: drawn from the run's
-    seed, the round and the robot, so it does not depend on who looks first.
-
-    The indices sorted by a keyed splitmix64 hash: 6 microseconds where a seeded numpy generator
-    costs 15 on every Look (the order is no figure of the run: compute must not depend on it, and
-    records do not keep it).
-    """
-    key = _mix64(_mix64(_mix64(LOOK_STREAM ^ (seed & _MASK64)) ^ round_no) ^ robot)
-    z = _spread(k) + np.uint64(key)  # uint64 arrays wrap silently: that is the hash
-    z = (z ^ (z >> _S30)) * _C2
-    z = (z ^ (z >> _S27)) * _C3
-    z ^= z >> _S31
-    return np.argsort(z)
-
-
-def cut_fraction(seed: int, round_no: int, robot: int) -> float:
-    """The non-rigid adversary's draw u in [0, 1) for robot `robot`'s move in round `round_no`:
-    a keyed splitmix64 hash of (seed, round, robot), as `view_order`, so every run mode (and a
-    resumed world) draws the same, and no other draw of the run shifts it."""
-    return keyed_fraction(CUT_STREAM, seed, round_no, robot)
-
-
-def keyed_fraction(stream: int, seed: int, *keys: int) -> float:
-    """A draw u in [0, 1) that is a pure function of (stream, seed, keys): a chain of splitmix64
-    finalisers, its top 53 bits. The adversaries' draws (`cut_fraction`, async delays) use it, so
-    no draw depends on the order or the number of others."""
-    key = _mix64(stream ^ (seed & _MASK64))
-    for k in keys:
-        key = _mix64(key ^ (k & _MASK64))
-    return (key >> 11) * 2.0**-53  # the top 53 bits: a double in [0, 1)
-
-
 def cut_path(start: Point, path: Path, delta: float, u: float) -> Path:
     """`path` (from `start`) as the non-rigid adversary stops it: whole if its length L is at most
     `delta`, else its prefix of length delta + u (L - delta), u in [0, 1) (issue 10's model: the
@@ -160,45 +122,6 @@ def cut_path(start: Point, path: Path, delta: float, u: float) -> Path:
     if length <= delta:
         return path
     return truncate(start, path, delta + u * (length - delta))
-
-
-def crash_plan(seed: int, n: int, f: int) -> dict[int, int]:
-    """The crash adversary's plan: robot -> the round from which it is crashed, for f of n robots.
-
-    Each robot gets a keyed splitmix64 hash of (seed, robot) (its own stream, as `cut_fraction`);
-    the f robots with the smallest hashes crash, each in round 1 + floor(u * 2n), u in [0, 1) the
-    top 53 bits of the hash mixed once more: within the first two default fairness bounds. A pure
-    function of (seed, n, f), so every run mode, a resumed world and a replay agree.
-    Raises ValueError unless 0 < f < n.
-    """
-    if not 0 < f < n:
-        raise ValueError(f"--crash must be between 1 and n - 1 = {n - 1}, got {f}")
-    base = _mix64(CRASH_STREAM ^ (seed & _MASK64))
-    keys = {robot: _mix64(base ^ robot) for robot in range(n)}
-    chosen = sorted(range(n), key=lambda r: (keys[r], r))[:f]
-    return {r: 1 + int(((_mix64(keys[r]) >> 11) * 2.0**-53) * 2 * n) for r in sorted(chosen)}
-
-
-_MASK64: Final = (1 << 64) - 1
-_C1, _C2, _C3 = (np.uint64(c) for c in (0x9E3779B97F4A7C15, 0xBF58476D1CE4E5B9,
-                                          0x94D049BB133111EB))
-_S30, _S27, _S31 = np.uint64(30), np.uint64(27), np.uint64(31)
-
-
-@functools.lru_cache(maxsize=8)
-def _spread(k: int) -> np.ndarray:
-    """(1..k) times splitmix64's increment: the per-index part of view_order's hash (read-only)."""
-    out = np.arange(1, k + 1, dtype=np.uint64) * _C1
-    out.flags.writeable = False
-    return out
-
-
-def _mix64(x: int) -> int:
-    """splitmix64's finaliser on a Python int (64-bit)."""
-    x = (x + 0x9E3779B97F4A7C15) & _MASK64
-    x = ((x ^ (x >> 30)) * 0xBF58476D1CE4E5B9) & _MASK64
-    x = ((x ^ (x >> 27)) * 0x94D049BB133111EB) & _MASK64
-    return x ^ (x >> 31)
 
 
 # --- the durable log: the run record itself, fsynced line by line ----------------------------
@@ -281,7 +204,7 @@ class WorldCore:
         if algorithm is None:
             algorithm = Configured.of(load_algorithm(setup.algorithm), n, setup.params)
         self.algorithm = algorithm
-        # On the grid, so that every robot's view is exact (agent/tolerance.py); a start that came
+        # On the grid, so that every robot's view is exact (fatswarm/domain/tolerance.py); a start that came
         # through validate_configuration is there already.
         self.positions: Points = snap(np.array(setup.initial, dtype=np.float64).reshape(n, 2))
         if history is None:

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from fatswarm.agent.path import (
+from fatswarm.domain.path import (
     MAX_SEGMENTS,
     Arc,
     Line,
@@ -33,7 +33,7 @@ from fatswarm.agent.path import (
     segment_length,
     transform,
 )
-from fatswarm.agent.tolerance import (
+from fatswarm.domain.tolerance import (
     CLEAR_SLACK,
     CONTACT,
     GRID,
@@ -49,7 +49,7 @@ IntArray = NDArray[np.intp]
 BoolArray = NDArray[np.bool_]
 
 CONTACT_SLACK = OVERLAP_SLACK
-"""Two discs overlap iff their centres are closer than 2 - CONTACT_SLACK (agent/tolerance.py)."""
+"""Two discs overlap iff their centres are closer than 2 - CONTACT_SLACK (fatswarm/domain/tolerance.py)."""
 PLAN_ROUNDING = CLEAR_SLACK
 """The algorithm keeps every other centre at >= 2 - PLAN_ROUNDING (or, touching, never brings it
 closer); such a path is never stopped: only overlap, below OVERLAP_DISTANCE, stops a robot."""
@@ -155,7 +155,7 @@ def validate_configuration(positions: Points) -> Points:
     """Return positions on the grid as an (n, 2) float64 copy or raise InvalidConfigurationError.
 
     Positions are snapped to the nearest multiples of GRID (moving each by at most 6.6e-10), so
-    that every robot's view is exact (agent/tolerance.py). Refused: a wrong shape, no robot, NaN or
+    that every robot's view is exact (fatswarm/domain/tolerance.py). Refused: a wrong shape, no robot, NaN or
     infinite coordinates, coordinates beyond +-MAX_COORD, two centres closer than
     2 - CONTACT_SLACK (overlapping unit discs) once on the grid.
     """
@@ -673,7 +673,7 @@ def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
     All movers start at t = 0 and move at unit speed; a robot whose disc would overlap another
     (centres closer than 2 - CONTACT_SLACK) stops at first contact and the contact is recorded
     (both robots if both were moving). An empty path means stay. `positions` is not modified.
-    Movers end on the grid (agent/tolerance.py): `_snap_movers`.
+    Movers end on the grid (fatswarm/domain/tolerance.py): `_snap_movers`.
     Raises InvalidConfigurationError (bad positions, a mover overlapping at the start),
     InvalidRoundError (unknown robot) or PathFormatError (non-finite or oversized path) before
     anything moves; PhysicsInvariantError if discs overlap afterwards (a physics bug).

@@ -12,8 +12,8 @@ from typing import Final
 
 import numpy as np
 
-from fatswarm.agent.path import Points
-from fatswarm.world.outcome import ENDED, Status
+from fatswarm.domain.outcome import ENDED, Status
+from fatswarm.domain.path import Points
 
 FORMED: Final = Status.FORMED
 STALLED: Final = Status.STALLED

@@ -1,9 +1,11 @@
-"""The world's wire protocol: key expressions and msgpack messages (versioned, validated, no zenoh).
+"""The world's wire protocol: its key expressions and every message to or from it (no zenoh).
 
-Every message is a msgpack map with `v` (protocol version) and `t` (message type). Decoders check
-type, shape, size, finiteness and version and raise `ProtocolError` (peer sent garbage) on anything
-else; services log the reason, count it and drop the message. Positions travel as little-endian
-float64 bytes, never as JSON.
+The agents are the world's clients: their moves and liveliness tokens are defined here too. A move
+travels in the robot's translation-only frame: the path starts at the robot's centre (origin), axes
+are the world's (the private mirroring is already undone), so the agent never needs and never
+learns a global coordinate; the world translates it by the robot's position. The coordinator's
+control messages (`Hello`, `Begin`, `Commit`) live here as well: it is the world's client too.
+The codec and field checks are `fatswarm.domain.wire`.
 """
 
 from __future__ import annotations
@@ -14,50 +16,53 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-import msgpack
-import numpy as np
-from numpy.typing import NDArray
+from fatswarm.domain.outcome import Status
+from fatswarm.domain.path import (
+    Arc,
+    Path,
+    PathFormatError,
+    Points,
+    from_record,
+    to_record,
+    vertices,
+)
+from fatswarm.domain.seam import ParamValue
+from fatswarm.domain.wire import (
+    MAX_COORD,
+    MAX_ROBOTS,
+    ProtocolError,
+    get_bool,
+    get_figures,
+    get_float,
+    get_int,
+    get_params,
+    get_points,
+    get_robots,
+    get_str,
+    pack,
+    points_to_bytes,
+    prefix,
+    robot_list,
+    unpack,
+    unpack_any,
+)
 
-from fatswarm.agent.seam import MAX_PARAMS, MAX_TEXT, ParamValue
-from fatswarm.world.outcome import Status
-
-PROTOCOL_VERSION = 5  # 3: the held Look is the activation; one moves notice a round; no seed;
-# 4: async models' virtual times (Begin.at, Begin.looks, Commit.delays, ControlReply.now/looks);
-# 5: a Look carries the robot's move of the round it last saw (LookRequest.move)
-ROOT = "fatswarm"
-MAX_ROBOTS = 4096  # bounds every list and array a peer can make us allocate
-MAX_MESSAGE_BYTES = 1 << 20  # 1 MiB: a 4096-robot state is ~130 KB
 MAX_CONTROL_BYTES = 160 << 10  # a Commit with 4096 robots' async delays is ~100 KB, a Begin with
 # their first Looks ~65 KB, a reply with their next Looks ~77 KB: larger is dropped unread
-MAX_CARRIED_MOVE_BYTES = 16 << 10  # agent.protocol.MAX_MOVE_BYTES: a Look's move, at most
-MAX_LOOK_BYTES = MAX_CARRIED_MOVE_BYTES + 256  # two integers and a move: larger is refused unread
+MAX_MOVE_BYTES = 16 << 10  # a move of MAX_SEGMENTS segments is ~3 KB: larger is dropped unread
+MAX_LOOK_BYTES = MAX_MOVE_BYTES + 256  # two integers and a move: larger is refused unread
 MAX_NOTICE_BYTES = 64 << 10  # a MovesHeld naming 4096 robots is ~12 KB: larger is dropped unread
-MAX_COORD = 1e9  # coordinates beyond this are nonsense for unit discs and risk overflow
 STATUSES = tuple(Status)
-_SWARM_NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
-
-Points = NDArray[np.float64]  # (n, 2)
 
 
-class ProtocolError(ValueError):
-    """A peer sent something that is not a valid message of this protocol (never applied)."""
+
 
 
 # --- key expressions (all under fatswarm/<swarm>/) -------------------------------------------
 
 
-def check_swarm(swarm: str) -> str:
-    """The swarm name, if it is a safe single key chunk; raises ValueError saying what to fix."""
-    if not isinstance(swarm, str) or not _SWARM_NAME.fullmatch(swarm):
-        raise ValueError(
-            f"swarm name must be 1-64 characters of letters, digits, '_', '-', '.', got {swarm!r}"
-        )
-    return swarm
 
 
-def prefix(swarm: str) -> str:
-    """`fatswarm/<swarm>`: every key of one swarm lives below it, so swarms can share a router."""
-    return f"{ROOT}/{check_swarm(swarm)}"
 
 
 def state_key(swarm: str) -> str:
@@ -91,152 +96,113 @@ def snapshot_any_key(swarm: str) -> str:
     return f"{prefix(swarm)}/robot/*/snapshot"
 
 
-_ROBOT_IN_KEY = re.compile(r"^[^/]+/[^/]+/robot/(0|[1-9][0-9]{0,8})/[a-z]+$")
 
 
-def robot_of_key(key: str) -> int | None:
-    """The robot id in `fatswarm/<swarm>/robot/<id>/<leaf>`, or None if the key has no valid id."""
-    m = _ROBOT_IN_KEY.match(key)
-    return int(m.group(1)) if m else None
 
 
 # --- field checks shared by every protocol module ---------------------------------------------
 
 
-def pack(kind: str, fields: dict[str, Any]) -> bytes:
-    """A versioned msgpack map of type `kind`."""
-    out: bytes = msgpack.packb({"v": PROTOCOL_VERSION, "t": kind, **fields}, use_bin_type=True)
-    return out
 
 
-def unpack_any(
-    data: bytes | bytearray | memoryview, kinds: Sequence[str]
-) -> tuple[str, dict[str, Any]]:
-    """The type and fields of a message whose type is one of `kinds`; raises ProtocolError."""
-    if not isinstance(data, (bytes, bytearray, memoryview)):
-        raise ProtocolError(f"payload must be bytes, got {type(data).__name__}")
-    if len(data) > MAX_MESSAGE_BYTES:
-        raise ProtocolError(f"message of {len(data)} bytes exceeds {MAX_MESSAGE_BYTES}")
-    try:
-        obj = msgpack.unpackb(bytes(data), raw=False, strict_map_key=True)
-    except Exception as exc:  # msgpack raises several unrelated types on garbage
-        raise ProtocolError(f"not msgpack: {type(exc).__name__}: {exc}") from None
-    if not isinstance(obj, dict):
-        raise ProtocolError(f"message must be a map, got {type(obj).__name__}")
-    version = obj.get("v")
-    if version != PROTOCOL_VERSION:
-        raise ProtocolError(f"protocol version {version!r}, expected {PROTOCOL_VERSION}")
-    kind = obj.get("t")
-    if kind not in kinds:
-        raise ProtocolError(f"message type {kind!r}, expected one of {tuple(kinds)}")
-    return str(kind), obj
 
 
-def unpack(data: bytes | bytearray | memoryview, kind: str) -> dict[str, Any]:
-    """The fields of a message of type `kind`; raises ProtocolError for anything else."""
-    return unpack_any(data, (kind,))[1]
 
 
-def get_int(obj: dict[str, Any], key: str, lo: int, hi: int) -> int:
-    """An integer field within [lo, hi]."""
-    v = obj.get(key)
-    if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
-        raise ProtocolError(f"{key!r} must be an integer in [{lo}, {hi}], got {v!r}")
-    return v
 
 
-def get_float(
-    obj: dict[str, Any], key: str, lo: float = -MAX_COORD, hi: float = MAX_COORD
-) -> float:
-    """A finite number field within [lo, hi]."""
-    v = obj.get(key)
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise ProtocolError(f"{key!r} must be a number, got {v!r}")
-    f = float(v)
-    if not math.isfinite(f) or not lo <= f <= hi:
-        raise ProtocolError(f"{key!r} must be finite and in [{lo}, {hi}], got {v!r}")
-    return f
 
 
-def get_str(obj: dict[str, Any], key: str, max_len: int = 64) -> str:
-    """A short string field."""
-    v = obj.get(key)
-    if not isinstance(v, str) or len(v) > max_len:
-        raise ProtocolError(f"{key!r} must be a string of at most {max_len} characters")
-    return v
 
 
-def get_bool(obj: dict[str, Any], key: str) -> bool:
-    """A boolean field."""
-    v = obj.get(key)
-    if not isinstance(v, bool):
-        raise ProtocolError(f"{key!r} must be a boolean, got {v!r}")
-    return v
 
 
-def get_robots(obj: dict[str, Any], key: str, n: int = MAX_ROBOTS) -> tuple[int, ...]:
-    """A list of distinct robot ids in [0, n), returned sorted."""
-    v = obj.get(key)
-    if not isinstance(v, list) or len(v) > min(n, MAX_ROBOTS):
-        raise ProtocolError(f"{key!r} must be a list of at most {min(n, MAX_ROBOTS)} robot ids")
-    for r in v:
-        if isinstance(r, bool) or not isinstance(r, int) or not 0 <= r < n:
-            raise ProtocolError(f"{key!r} holds {r!r}, not a robot id in [0, {n})")
-    if len(set(v)) != len(v):
-        raise ProtocolError(f"{key!r} repeats a robot id")
-    return tuple(sorted(v))
 
 
-def get_params(obj: dict[str, Any], key: str) -> dict[str, ParamValue]:
-    """An algorithm's parameters: a short map of plain names to finite scalars or short texts."""
-    v = obj.get(key)
-    if not isinstance(v, dict) or len(v) > MAX_PARAMS:
-        raise ProtocolError(f"{key!r} must be a map of at most {MAX_PARAMS} parameters")
-    out: dict[str, ParamValue] = {}
-    for name, value in v.items():
-        if not isinstance(name, str) or not _SWARM_NAME.fullmatch(name):
-            raise ProtocolError(f"{key!r} holds a parameter name that is not plain: {name!r}")
-        if isinstance(value, float) and not math.isfinite(value):
-            raise ProtocolError(f"{key!r}: parameter {name} is not finite")
-        if isinstance(value, str) and len(value) > MAX_TEXT:
-            raise ProtocolError(f"{key!r}: parameter {name} is longer than {MAX_TEXT} characters")
-        if not isinstance(value, (bool, int, float, str)):
-            raise ProtocolError(f"{key!r}: parameter {name} must be a number, bool or text")
-        out[name] = value
-    return out
 
 
-def get_figures(obj: dict[str, Any], key: str) -> dict[str, float]:
-    """A short map of labels to finite numbers (an algorithm's figures for the dashboard)."""
-    v = obj.get(key)
-    if not isinstance(v, dict) or len(v) > MAX_PARAMS:
-        raise ProtocolError(f"{key!r} must be a map of at most {MAX_PARAMS} figures")
-    out: dict[str, float] = {}
-    for label, value in v.items():
-        if not isinstance(label, str) or len(label) > 64:
-            raise ProtocolError(f"{key!r} holds a label that is not a short text")
-        out[label] = get_float({"x": value}, "x", -MAX_COORD, MAX_COORD)
-    return out
 
 
-def points_to_bytes(points: Points) -> bytes:
-    """(k, 2) float64 positions as little-endian bytes."""
-    return np.ascontiguousarray(points, dtype="<f8").tobytes()
 
 
-def get_points(obj: dict[str, Any], key: str, rows: int) -> Points:
-    """A (rows, 2) array of finite, bounded float64 coordinates sent as bytes."""
-    v = obj.get(key)
-    if not isinstance(v, bytes) or len(v) != rows * 16:
-        raise ProtocolError(f"{key!r} must be {rows * 16} bytes of (x, y) float64 pairs")
-    arr = np.frombuffer(v, dtype="<f8").astype(np.float64).reshape(rows, 2)
-    if not np.all(np.isfinite(arr)) or (rows and float(np.abs(arr).max()) > MAX_COORD):
-        raise ProtocolError(f"{key!r} holds a non-finite or out-of-range coordinate")
-    return arr
 
 
-def _robot_list(values: Sequence[int]) -> list[int]:
-    return [int(r) for r in values]
+
+
+# --- an agent: its move and its liveliness token ----------------------------------------------
+
+
+MAX_SWEEP = 8 * math.pi  # an arc never needs more than a few turns; bounds physics work
+
+
+def move_key(swarm: str, robot: int) -> str:
+    """Any client -> world: `MoveSubmitted` (BLOCK, express). Our agents send their moves inside
+    their next Look instead (`LookRequest.move`): one message a round less."""
+    return f"{prefix(swarm)}/robot/{robot}/move"
+
+
+def move_any_key(swarm: str) -> str:
+    """The world's one subscriber for every robot's moves."""
+    return f"{prefix(swarm)}/robot/*/move"
+
+
+def agent_alive_key(swarm: str, robot: int) -> str:
+    """The agent's liveliness token: present while its process (session) lives."""
+    return f"{prefix(swarm)}/alive/agent/{robot}"
+
+
+def agent_alive_any_key(swarm: str) -> str:
+    """Every agent's liveliness token (coordinator and world subscribe with history)."""
+    return f"{prefix(swarm)}/alive/agent/*"
+
+
+_ALIVE = re.compile(r"^[^/]+/[^/]+/alive/agent/(0|[1-9][0-9]{0,8})$")
+
+
+def robot_of_alive_key(key: str) -> int | None:
+    """The robot id of an agent liveliness key, or None."""
+    m = _ALIVE.match(key)
+    return int(m.group(1)) if m else None
+
+
+@dataclass(frozen=True, slots=True)
+class MoveSubmitted:
+    """Robot `robot` wants to follow `path` in round `round` (relative to itself, world axes)."""
+
+    robot: int
+    round: int
+    path: Path
+
+    def encode(self) -> bytes:
+        """msgpack bytes."""
+        return pack(
+            "move",
+            {"robot": int(self.robot), "round": int(self.round), "path": to_record(self.path)},
+        )
+
+    @staticmethod
+    def decode(data: bytes | bytearray | memoryview) -> MoveSubmitted:
+        """Parse and validate (finite, bounded coordinates); raises ProtocolError."""
+        obj = unpack(data, "move")
+        try:
+            path = from_record(obj.get("path"))
+        except PathFormatError as exc:
+            raise ProtocolError(f"bad path: {exc}") from None
+        for x, y in vertices((0.0, 0.0), path):
+            if not (abs(x) <= MAX_COORD and abs(y) <= MAX_COORD):
+                raise ProtocolError("path leaves the bounded plane")
+        for seg in path.segments:
+            if isinstance(seg, Arc) and not (
+                abs(seg.center[0]) <= MAX_COORD
+                and abs(seg.center[1]) <= MAX_COORD
+                and abs(seg.sweep) <= MAX_SWEEP
+            ):
+                raise ProtocolError("arc centre or sweep out of range")
+        return MoveSubmitted(
+            robot=get_int(obj, "robot", 0, MAX_ROBOTS - 1),
+            round=get_int(obj, "round", 1, 2**62),
+            path=path,
+        )
 
 
 # --- world -> observers -----------------------------------------------------------------------
@@ -291,10 +257,10 @@ class WorldState:
                 "scheduler": self.scheduler,
                 "swarm": self.swarm,
                 "positions": points_to_bytes(self.positions),
-                "active": _robot_list(self.active),
+                "active": robot_list(self.active),
                 "open_round": int(self.open_round),
-                "moved": _robot_list(self.moved),
-                "stopped": _robot_list(self.stopped),
+                "moved": robot_list(self.moved),
+                "stopped": robot_list(self.stopped),
                 "collisions_total": int(self.collisions_total),
                 "status": self.status,
                 "alive": [bool(g.alive) for g in self.agents],
@@ -425,8 +391,8 @@ class LookRequest:
         """Parse and validate; raises ProtocolError."""
         obj = unpack(data, "look")
         move = obj.get("move", b"")
-        if not isinstance(move, bytes) or len(move) > MAX_CARRIED_MOVE_BYTES:
-            raise ProtocolError(f"'move' must be at most {MAX_CARRIED_MOVE_BYTES} bytes")
+        if not isinstance(move, bytes) or len(move) > MAX_MOVE_BYTES:
+            raise ProtocolError(f"'move' must be at most {MAX_MOVE_BYTES} bytes")
         return LookRequest(epoch=get_int(obj, "epoch", 0, 2**63 - 1),
                            after=get_int(obj, "after", 0, 2**62), move=move)
 
@@ -472,7 +438,7 @@ class Begin:
     """Coordinator opens round `round` with active set `active` (before activating the agents).
 
     Async models: the round is the instant `at` (virtual time) at which `active` Look; `looks`
-    gives robots their first Look's time (the adversary's choice, coordinator/adversary.py).
+    gives robots their first Look's time (the adversary's choice, fatswarm/domain/adversary.py).
     """
 
     round: int
@@ -482,7 +448,7 @@ class Begin:
 
     def encode(self) -> bytes:
         """msgpack bytes."""
-        fields: dict[str, Any] = {"round": int(self.round), "active": _robot_list(self.active)}
+        fields: dict[str, Any] = {"round": int(self.round), "active": robot_list(self.active)}
         if self.at is not None:
             fields["at"] = float(self.at)
         if self.looks:
@@ -506,8 +472,8 @@ class Commit:
     def encode(self) -> bytes:
         """msgpack bytes."""
         fields: dict[str, Any] = {"round": int(self.round),
-                                  "timed_out": _robot_list(self.timed_out),
-                                  "then_active": _robot_list(self.then_active)}
+                                  "timed_out": robot_list(self.timed_out),
+                                  "then_active": robot_list(self.then_active)}
         if self.delays:
             fields["delays"] = [[int(r), float(c), float(w)] for r, c, w in self.delays]
         return pack("commit", fields)
@@ -569,12 +535,12 @@ class ControlReply:
                 "open_round": int(self.open_round),
                 "status": self.status,
                 "collisions": int(self.collisions),
-                "held": _robot_list(self.held),
+                "held": robot_list(self.held),
                 "epoch": int(self.epoch),
                 **({} if not (self.now or self.looks or self.unset) else {
                     "now": float(self.now), "looks": _times(self.looks),
-                    "unset": _robot_list(self.unset)}),
-                **({"timed_out": _robot_list(self.timed_out)} if self.timed_out else {}),
+                    "unset": robot_list(self.unset)}),
+                **({"timed_out": robot_list(self.timed_out)} if self.timed_out else {}),
             },
         )
 
@@ -618,7 +584,7 @@ class MovesHeld:
 
     def encode(self) -> bytes:
         """msgpack bytes."""
-        return pack("moves-held", {"round": int(self.round), "robots": _robot_list(self.robots),
+        return pack("moves-held", {"round": int(self.round), "robots": robot_list(self.robots),
                                    "epoch": int(self.epoch)})
 
     @staticmethod

@@ -17,8 +17,8 @@ from typing import IO, Any, Final
 
 import numpy as np
 
-from fatswarm.agent.path import Path, PathFormatError, Points, from_record, to_record
-from fatswarm.agent.seam import ParamValue
+from fatswarm.domain.path import Path, PathFormatError, Points, from_record, to_record
+from fatswarm.domain.seam import ParamValue
 from fatswarm.world.physics import Collision
 from fatswarm.world.progress import STATUSES
 

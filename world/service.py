@@ -15,28 +15,25 @@ from collections import Counter
 from collections.abc import Callable
 from typing import Any
 
-from fatswarm.agent.protocol import (
-    MAX_MOVE_BYTES,
-    MoveSubmitted,
-    alive_any_key,
-    move_any_key,
-    robot_of_alive_key,
-)
-from fatswarm.agent.seam import AlgorithmFailure
+from fatswarm.domain.outcome import ExitCode
+from fatswarm.domain.seam import AlgorithmFailure
+from fatswarm.domain.wire import ProtocolError, robot_of_key
 from fatswarm.world.core import WorldCore, WorldSetup, open_world
 from fatswarm.world.inbox import Inbox
-from fatswarm.world.outcome import ExitCode
 from fatswarm.world.protocol import (
     MAX_CONTROL_BYTES,
     MAX_LOOK_BYTES,
+    MAX_MOVE_BYTES,
     ControlReply,
     LookRequest,
-    ProtocolError,
+    MoveSubmitted,
+    agent_alive_any_key,
     alive_key,
     control_key,
     decode_control,
+    move_any_key,
     moves_held_key,
-    robot_of_key,
+    robot_of_alive_key,
     snapshot_any_key,
     state_key,
 )
@@ -107,7 +104,7 @@ def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) ->
         session.declare_queryable(snapshot_any_key(swarm), on_query("look", MAX_LOOK_BYTES))
         session.declare_queryable(control_key(swarm), on_query("control", MAX_CONTROL_BYTES))
         session.declare_subscriber(move_any_key(swarm), on_move)
-        session.liveliness().declare_subscriber(alive_any_key(swarm), on_alive, history=True)
+        session.liveliness().declare_subscriber(agent_alive_any_key(swarm), on_alive, history=True)
         _token = session.liveliness().declare_token(alive_key(swarm))
         log.info("world of %d robots serving swarm %r", core.setup.n, swarm)
         state_pub.put(core.state().encode())

@@ -22,12 +22,12 @@ from typing import Any, Final
 import numpy as np
 
 from fatswarm.agent.geometry import target_radius
-from fatswarm.agent.path import Points
-from fatswarm.agent.tolerance import CONTACT, snap
+from fatswarm.domain.draws import START_STREAM
+from fatswarm.domain.path import Points
+from fatswarm.domain.tolerance import CONTACT, snap
 from fatswarm.world.physics import CONTACT_SLACK
 
 KINDS: Final = ("clustered", "dense", "spread", "loose", "clumped")
-START_STREAM: Final = 0x57A7  # keeps start draws apart from other seeded streams of the same run
 MAX_OFFSET: Final = 50.0  # starts are translated by up to this much: nothing may rely on the origin
 SEC_MARGIN: Final = 1e-3  # relative margin that keeps "needs expansion" robust to rounding
 
@@ -155,7 +155,7 @@ def random_start(
     n: int, rng_or_seed: np.random.Generator | int, kind: str = "clustered", a: float = 4.0
 ) -> Points:
     """A valid (n, 2) start of the given kind (see the module table), seeded and reproducible,
-    on the world's grid (agent/tolerance.py)."""
+    on the world's grid (fatswarm/domain/tolerance.py)."""
     if kind not in KINDS:
         raise ValueError(f"unknown start kind {kind!r}; choose one of {', '.join(KINDS)}")
     if n < 1:

@@ -11,8 +11,8 @@ import math
 from collections.abc import Mapping
 from typing import Final
 
-from fatswarm.agent.path import Line, Path
-from fatswarm.agent.seam import AlgorithmParamsError, ParamSpec, ParamValue, Points
+from fatswarm.domain.path import Line, Path, Points
+from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue
 
 DEFAULT_STEP: Final = 3.0
 

@@ -14,7 +14,7 @@ import time
 from collections.abc import Mapping
 
 from fatswarm.agent.gathering import Gathering, GatheringParams
-from fatswarm.agent.seam import ParamValue
+from fatswarm.domain.seam import ParamValue
 
 
 class SlowGathering(Gathering):

@@ -16,7 +16,8 @@ import pytest
 
 from fatswarm.deploy.launcher import Children
 from fatswarm.deploy.zconf import loopback_endpoint, make_config
-from fatswarm.world.protocol import ProtocolError, WorldState, state_key
+from fatswarm.domain.wire import ProtocolError
+from fatswarm.world.protocol import WorldState, state_key
 from fatswarm.world.record import RecordWriter, RunRecord, read_record
 
 DEADLINE_S = 120.0  # generous: the machine is shared; tests wait on predicates, never on sleeps

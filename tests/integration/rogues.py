@@ -23,18 +23,19 @@ from typing import Any
 
 import numpy as np
 
-from fatswarm.agent.path import Line, Path
-from fatswarm.agent.protocol import MoveSubmitted, move_key
-from fatswarm.agent.protocol import alive_key as agent_alive_key
-from fatswarm.world.outcome import Status
+from fatswarm.domain.outcome import Status
+from fatswarm.domain.path import Line, Path
 from fatswarm.world.protocol import (
     Begin,
     Commit,
     ControlReply,
     Hello,
     MovesHeld,
+    MoveSubmitted,
     Snapshot,
+    agent_alive_key,
     control_key,
+    move_key,
     moves_held_key,
     snapshot_any_key,
     snapshot_key,

@@ -12,10 +12,9 @@ import numpy as np
 import pytest
 from netharness import part
 
-from fatswarm.agent.protocol import MoveSubmitted
 from fatswarm.deploy.launcher import Children
 from fatswarm.deploy.zconf import loopback_endpoint, make_config
-from fatswarm.world.protocol import LookRequest, Snapshot, alive_key, snapshot_key
+from fatswarm.world.protocol import LookRequest, MoveSubmitted, Snapshot, alive_key, snapshot_key
 
 pytestmark = pytest.mark.integration
 DEADLINE_S = 60.0  # generous: the machine is shared; waits are on predicates

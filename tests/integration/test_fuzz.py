@@ -11,7 +11,8 @@ import pytest
 from netharness import Swarm, assert_same_run, lockstep_record
 
 from fatswarm.deploy.zconf import make_config
-from fatswarm.world.protocol import PROTOCOL_VERSION, Hello
+from fatswarm.domain.wire import PROTOCOL_VERSION
+from fatswarm.world.protocol import Hello
 from fatswarm.world.record import read_record
 
 pytestmark = pytest.mark.integration

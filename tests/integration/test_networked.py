@@ -14,15 +14,16 @@ from typing import Any
 import pytest
 from netharness import Swarm, assert_same_run, descendants_of, lockstep_record, running
 
-from fatswarm.agent.path import Line
-from fatswarm.agent.path import Path as RobotPath
-from fatswarm.agent.protocol import MoveSubmitted, move_key
+from fatswarm.domain.path import Line
+from fatswarm.domain.path import Path as RobotPath
+from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.protocol import (
     Begin,
     Commit,
-    ProtocolError,
+    MoveSubmitted,
     WorldState,
     control_key,
+    move_key,
     snapshot_key,
     state_key,
 )

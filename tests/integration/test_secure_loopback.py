@@ -22,20 +22,23 @@ import pytest
 from netharness import assert_one_line, part, run_all
 from rogues import Rogue
 
-from fatswarm.agent.path import Path as MovePath
-from fatswarm.agent.protocol import MoveSubmitted, alive_any_key, move_any_key, move_key
-from fatswarm.agent.protocol import alive_key as agent_alive_key
 from fatswarm.deploy.launcher import Children
 from fatswarm.deploy.secure import Plan
 from fatswarm.deploy.zconf import free_port, make_config
-from fatswarm.world.outcome import Status
+from fatswarm.domain.outcome import Status
+from fatswarm.domain.path import Path as MovePath
 from fatswarm.world.protocol import (
     Begin,
     ControlReply,
     LookRequest,
     MovesHeld,
+    MoveSubmitted,
     Snapshot,
+    agent_alive_any_key,
+    agent_alive_key,
     control_key,
+    move_any_key,
+    move_key,
     moves_held_key,
     snapshot_any_key,
     snapshot_key,
@@ -255,7 +258,7 @@ def test_a_fake_agent_token_is_not_seen(net: Net) -> None:
     swarm = net.plan.swarm
     seen = Inbox()
     coordinator = net.client("coordinator")
-    coordinator.liveliness().declare_subscriber(alive_any_key(swarm), seen, history=True)
+    coordinator.liveliness().declare_subscriber(agent_alive_any_key(swarm), seen, history=True)
     rogue, dashboard = net.client("agent-1"), net.client("dashboard-0")
     fakes = [rogue.liveliness().declare_token(agent_alive_key(swarm, 2)),  # robot 2 has no agent
              rogue.liveliness().declare_token(agent_alive_key(swarm, 9)),
@@ -263,7 +266,7 @@ def test_a_fake_agent_token_is_not_seen(net: Net) -> None:
     own = rogue.liveliness().declare_token(agent_alive_key(swarm, 1))  # after its fakes
     wait_for("robot 1's own token", lambda: len(seen.items) >= 1)
     synced(net, dashboard, "dashboard-0")  # (its get would see its own token, in the session)
-    live = net.client("dashboard-0").liveliness().get(alive_any_key(swarm), timeout=ASK_S)
+    live = net.client("dashboard-0").liveliness().get(agent_alive_any_key(swarm), timeout=ASK_S)
     time.sleep(SETTLE_S)
     assert [k for k, _ in seen.items] == [agent_alive_key(swarm, 1)]
     assert [str(r.ok.key_expr) for r in live if r.ok is not None] == [agent_alive_key(swarm, 1)]
@@ -430,7 +433,7 @@ def test_an_agents_host_gives_each_agent_its_own_identity(net: Net, tmp_path: Pa
     dashboard = net.client("dashboard-0")  # may ask who is alive (world and coordinator subscribe)
 
     def tokens() -> list[str]:
-        live = dashboard.liveliness().get(alive_any_key(swarm), timeout=ASK_S)
+        live = dashboard.liveliness().get(agent_alive_any_key(swarm), timeout=ASK_S)
         return sorted(str(r.ok.key_expr) for r in live if r.ok is not None)
 
     log = open(tmp_path / "agents.log", "wb")  # noqa: SIM115

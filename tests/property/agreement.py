@@ -9,8 +9,8 @@ from fatswarm.agent.canonical import canonical
 from fatswarm.agent.frames import path_to_world, to_local
 from fatswarm.agent.geometry import sec
 from fatswarm.agent.params import Params
-from fatswarm.agent.path import end_point
-from fatswarm.agent.tolerance import snap
+from fatswarm.domain.path import end_point
+from fatswarm.domain.tolerance import snap
 
 
 def world_end(pts: np.ndarray, robot: int, flip: bool, params: Params, seed: int) -> tuple[

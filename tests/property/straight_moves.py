@@ -9,7 +9,7 @@ import math
 import numpy as np
 from hypothesis import strategies as st
 
-from fatswarm.agent.seam import Points
+from fatswarm.domain.path import Points
 
 
 @st.composite

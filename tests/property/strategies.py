@@ -15,7 +15,7 @@ from hypothesis import assume
 from hypothesis import strategies as st
 from numpy.typing import NDArray
 
-from fatswarm.agent.path import Points
+from fatswarm.domain.path import Points
 from fatswarm.world import adversarial as adv
 
 CELL: Final = 2.5  # grid spacing of jittered cells

@@ -18,8 +18,8 @@ from fatswarm.agent.canonical import SharedForm, canonical
 from fatswarm.agent.frames import to_local
 from fatswarm.agent.geometry import mirror_matched, sec
 from fatswarm.agent.params import Params
-from fatswarm.agent.path import Path, end_point, mirror, path_length
-from fatswarm.agent.tolerance import snap
+from fatswarm.domain.path import Path, end_point, mirror, path_length
+from fatswarm.domain.tolerance import snap
 
 CELL = 2.6  # grid spacing; with jitter <= 0.25 every pair of centres is >= 2.1 apart
 

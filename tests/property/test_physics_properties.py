@@ -9,8 +9,8 @@ import numpy as np
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from fatswarm.agent.path import Arc, Line, Path, Point, Segment, path_length, point_at, transform
-from fatswarm.agent.tolerance import GRID, snap
+from fatswarm.domain.path import Arc, Line, Path, Point, Segment, path_length, point_at, transform
+from fatswarm.domain.tolerance import GRID, snap
 from fatswarm.world.physics import CONTACT_SLACK, PLAN_ROUNDING, apply_round, validate_configuration
 
 OVERLAP = 2.0 - CONTACT_SLACK

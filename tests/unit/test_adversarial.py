@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fatswarm.agent.geometry import is_uniform_circle, sec
-from fatswarm.agent.path import Points
+from fatswarm.domain.path import Points
 from fatswarm.world.adversarial import (
     FAMILIES,
     FAMILY_TABLE,

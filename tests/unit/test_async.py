@@ -16,8 +16,10 @@ import numpy as np
 import pytest
 
 from fatswarm.agent.params import Params
-from fatswarm.agent.path import Line, Path, Point, path_length, point_at, remainder, truncate
-from fatswarm.coordinator.adversary import (
+from fatswarm.coordinator.schedule import make_scheduler
+from fatswarm.deploy import cli, lockstep
+from fatswarm.deploy.lockstep import configured, run_lockstep
+from fatswarm.domain.adversary import (
     ASYNC_NAMES,
     RANDOM_MAX,
     STALE_STEP,
@@ -26,12 +28,10 @@ from fatswarm.coordinator.adversary import (
     NotRoundBasedError,
     make_async,
 )
-from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy import cli, lockstep
-from fatswarm.deploy.lockstep import configured, run_lockstep
+from fatswarm.domain.draws import crash_plan
+from fatswarm.domain.path import Line, Path, Point, path_length, point_at, remainder, truncate
 from fatswarm.world import core
 from fatswarm.world.asynchrony import AsyncWorld, CycleDone, Phase
-from fatswarm.world.core import crash_plan
 from fatswarm.world.record import RecordWriter, read_record
 from fatswarm.world.starts import random_start
 
@@ -44,7 +44,7 @@ PATHS = [
 @pytest.mark.parametrize("path", PATHS)
 @pytest.mark.parametrize("s", [0.0, 0.5, 1.0, 2.2, 3.7, 10.0])
 def test_the_rest_of_a_path_picks_up_where_its_prefix_stops(path: Path, s: float) -> None:
-    from fatswarm.agent.path import Arc
+    from fatswarm.domain.path import Arc
 
     arcs = Path((*path.segments, Arc((0.0, 2.0), math.pi / 2)))
     start: Point = (0.0, 0.0)
@@ -331,10 +331,9 @@ def test_a_begin_the_world_cannot_open_yet_is_answered_with_what_is_due_and_when
 
 
 def test_the_async_coordinator_plans_the_first_looks_then_follows_the_world() -> None:
-    from fatswarm.agent.protocol import MoveSubmitted
     from fatswarm.coordinator.async_rounds import AsyncCoordinatorCore
     from fatswarm.coordinator.rounds import Ask, Finished, RoundTimes
-    from fatswarm.world.protocol import Begin, Commit
+    from fatswarm.world.protocol import Begin, Commit, MoveSubmitted
 
     world = _async_world()
     model = make_async("async", 3, 0)

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from fatswarm.agent.canonical import canonical
-from fatswarm.agent.path import Line, Path, end_point
-from fatswarm.agent.tolerance import GRID, snap
+from fatswarm.domain.path import Line, Path, end_point
+from fatswarm.domain.tolerance import GRID, snap
 
 RNG = np.random.default_rng(7)
 

@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from fatswarm.agent.params import Params
-from fatswarm.agent.path import STAY, Line, Points
-from fatswarm.agent.path import Path as RobotPath
 from fatswarm.deploy import lockstep, run
+from fatswarm.domain.path import STAY, Line, Points
+from fatswarm.domain.path import Path as RobotPath
 from fatswarm.world.record import read_record
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -212,7 +212,7 @@ def test_a_formation_reached_through_collisions_exits_three_and_says_so(
     assert printed.getvalue() == out.split("record: ")[0]
 
 
-# --- the supported range (agent/tolerance.py) -------------------------------------------------
+# --- the supported range (fatswarm/domain/tolerance.py) -------------------------------------------------
 
 
 def unsupported_inputs(tmp_path: Path) -> list[tuple[list[str], str]]:

@@ -25,7 +25,7 @@ from fatswarm.coordinator.rounds import (
     RoundTimes,
 )
 from fatswarm.coordinator.schedule import Scheduler, make_scheduler
-from fatswarm.world.outcome import ExitCode, Status, exit_code_for
+from fatswarm.domain.outcome import ExitCode, Status, exit_code_for
 from fatswarm.world.protocol import Begin, Commit, ControlReply, Hello, MovesHeld
 
 Request = Hello | Begin | Commit

@@ -10,11 +10,11 @@ import pytest
 
 import fatswarm
 from fatswarm.agent.geometry import target_radius
-from fatswarm.agent.registry import load_algorithm
-from fatswarm.agent.seam import Configured
 from fatswarm.deploy import cli
+from fatswarm.domain.draws import crash_plan
+from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.seam import Configured
 from fatswarm.world import core
-from fatswarm.world.core import crash_plan
 from fatswarm.world.record import read_record
 
 

@@ -11,8 +11,6 @@ import numpy as np
 import pytest
 from rich.console import Console
 
-from fatswarm.agent.registry import load_algorithm
-from fatswarm.agent.seam import Configured
 from fatswarm.deploy.dashboard import (
     LAYER_ACTIVE,
     LAYER_ROBOT,
@@ -41,7 +39,9 @@ from fatswarm.deploy.dashboard import (
     run_lines,
     save_svg,
 )
-from fatswarm.world.outcome import ENDED, Status
+from fatswarm.domain.outcome import ENDED, Status
+from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.seam import Configured
 from fatswarm.world.protocol import AgentInfo, WorldState
 
 

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from fatswarm.agent.detour import shortest_free_path
 from fatswarm.agent.geometry import path_distances, segment_distances
-from fatswarm.agent.path import (
+from fatswarm.domain.path import (
     Arc,
     Line,
     Path,

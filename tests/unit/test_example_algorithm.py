@@ -11,10 +11,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fatswarm.agent.path import STAY, Line, end_point, mirror
-from fatswarm.agent.path import Path as RobotPath
-from fatswarm.agent.registry import load_algorithm
-from fatswarm.agent.seam import Algorithm, AlgorithmParamsError, Configured, Points
+from fatswarm.domain.path import STAY, Line, Points, end_point, mirror
+from fatswarm.domain.path import Path as RobotPath
+from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.seam import Algorithm, AlgorithmParamsError, Configured
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "property"))
 from straight_moves import closest_during, grid_starts, view_of
@@ -42,7 +42,7 @@ def test_the_file_imports_only_the_seam_the_path_numpy_and_the_standard_library(
     imports = [line.split()[1] for line in EXAMPLE.read_text().splitlines()
                if line.startswith(("import ", "from "))]
     fatswarm = {name for name in imports if name.startswith("fatswarm")}
-    assert fatswarm <= {"fatswarm.agent.seam", "fatswarm.agent.path"}
+    assert fatswarm <= {"fatswarm.domain.seam", "fatswarm.domain.path"}
 
 
 @SETTINGS

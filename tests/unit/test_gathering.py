@@ -12,9 +12,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fatswarm.agent.gathering import ALGORITHM, GatheringParams
-from fatswarm.agent.path import STAY, Line, Path, end_point, mirror
-from fatswarm.agent.registry import available, load_algorithm
-from fatswarm.agent.seam import AlgorithmParamsError, Configured, Points
+from fatswarm.domain.path import STAY, Line, Path, Points, end_point, mirror
+from fatswarm.domain.registry import available, load_algorithm
+from fatswarm.domain.seam import AlgorithmParamsError, Configured
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "property"))
 from straight_moves import closest_during, grid_starts, min_distance, view_of

@@ -24,7 +24,7 @@ from fatswarm.agent.geometry import (
     target_radius,
     targets_on,
 )
-from fatswarm.agent.path import Arc, Line, Path
+from fatswarm.domain.path import Arc, Line, Path
 
 
 def brute_force_sec(pts: np.ndarray) -> float:

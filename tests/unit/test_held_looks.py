@@ -9,9 +9,15 @@ import numpy as np
 import pytest
 import zenoh
 
-from fatswarm.agent.path import STAY
-from fatswarm.agent.protocol import MoveSubmitted
-from fatswarm.world.protocol import Begin, Commit, LookRequest, Snapshot, snapshot_key
+from fatswarm.domain.path import STAY
+from fatswarm.world.protocol import (
+    Begin,
+    Commit,
+    LookRequest,
+    MoveSubmitted,
+    Snapshot,
+    snapshot_key,
+)
 from fatswarm.world.service import HOLD_LOOK_S, HeldLooks, WorldCore, WorldSetup, open_world
 
 SWARM = "t"

@@ -10,10 +10,7 @@ import numpy as np
 import pytest
 
 from fatswarm.agent import algorithm
-from fatswarm.agent.frames import draw_flip
 from fatswarm.agent.params import Params
-from fatswarm.agent.path import STAY, Line, Path, Points
-from fatswarm.agent.tolerance import GRID, UnsupportedInputError
 from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy.lockstep import (
     HistoryMismatchError,
@@ -22,6 +19,9 @@ from fatswarm.deploy.lockstep import (
     default_max_rounds,
     run_lockstep,
 )
+from fatswarm.domain.draws import draw_flip
+from fatswarm.domain.path import STAY, Line, Path, Points
+from fatswarm.domain.tolerance import GRID, UnsupportedInputError
 from fatswarm.world.physics import InvalidConfigurationError
 from fatswarm.world.record import RecordWriter, RoundEntry, read_record
 from fatswarm.world.starts import degenerate_starts, random_start

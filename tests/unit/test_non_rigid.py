@@ -11,10 +11,11 @@ import numpy as np
 import pytest
 
 import fatswarm
-from fatswarm.agent.path import Arc, Line, Path, Point, end_point, path_length, point_at
 from fatswarm.deploy import cli
+from fatswarm.domain.draws import cut_fraction
+from fatswarm.domain.path import Arc, Line, Path, Point, end_point, path_length, point_at
 from fatswarm.world import core
-from fatswarm.world.core import cut_fraction, cut_path
+from fatswarm.world.core import cut_path
 from fatswarm.world.record import read_record
 
 START: Point = (1.0, 2.0)

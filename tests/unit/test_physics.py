@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from fatswarm.agent.path import Arc, Line, Path, PathFormatError, end_point, path_length, point_at
-from fatswarm.agent.tolerance import GRID
+from fatswarm.domain.path import Arc, Line, Path, PathFormatError, end_point, path_length, point_at
+from fatswarm.domain.tolerance import GRID
 from fatswarm.world.physics import (
     CONTACT_SLACK,
     Collision,

@@ -8,7 +8,7 @@ from pathlib import Path as FsPath
 import numpy as np
 import pytest
 
-from fatswarm.agent.path import Arc, Line, Path
+from fatswarm.domain.path import Arc, Line, Path
 from fatswarm.world.physics import Collision
 from fatswarm.world.record import (
     Header,

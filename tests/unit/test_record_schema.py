@@ -23,14 +23,13 @@ import pytest
 from jsonschema import Draft202012Validator
 
 from fatswarm.agent.params import Params
-from fatswarm.agent.path import STAY, Line, point_at
-from fatswarm.agent.path import Path as RobotPath
-from fatswarm.agent.protocol import MoveSubmitted
 from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy import cli
 from fatswarm.deploy.lockstep import run_lockstep
+from fatswarm.domain.path import STAY, Line, point_at
+from fatswarm.domain.path import Path as RobotPath
 from fatswarm.world.core import WorldCore, WorldSetup, crash_after
-from fatswarm.world.protocol import Begin, Commit
+from fatswarm.world.protocol import Begin, Commit, MoveSubmitted
 from fatswarm.world.record import RecordWriter, read_record
 
 ROOT = Path(__file__).resolve().parents[2]

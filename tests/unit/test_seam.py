@@ -12,8 +12,10 @@ import numpy as np
 import pytest
 
 import fatswarm
-from fatswarm.agent.registry import available, load_algorithm
-from fatswarm.agent.seam import (
+from fatswarm.agent.service import Robot, WrongAlgorithmError
+from fatswarm.deploy import cli
+from fatswarm.domain.registry import available, load_algorithm
+from fatswarm.domain.seam import (
     AlgorithmError,
     AlgorithmParamsError,
     Configured,
@@ -21,8 +23,6 @@ from fatswarm.agent.seam import (
     parse_assignments,
     resolve_values,
 )
-from fatswarm.agent.service import Robot, WrongAlgorithmError
-from fatswarm.deploy import cli
 from fatswarm.world.protocol import Snapshot
 from fatswarm.world.record import read_record
 
@@ -194,8 +194,8 @@ def test_the_api_takes_positions_and_refuses_bad_ones() -> None:
 
 
 FAULTY = '''
-from fatswarm.agent.path import STAY, Line, Path
-from fatswarm.agent.seam import ParamSpec
+from fatswarm.domain.path import STAY, Line, Path
+from fatswarm.domain.seam import ParamSpec
 
 class Faulty:
     name = "faulty"

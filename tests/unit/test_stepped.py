@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 from fatswarm.agent import uniform_circle
-from fatswarm.agent.frames import draw_flip
-from fatswarm.agent.path import path_length, truncate
-from fatswarm.agent.registry import load_algorithm
-from fatswarm.agent.seam import AlgorithmParamsError, Configured
 from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy.lockstep import run_lockstep
+from fatswarm.domain.draws import draw_flip
+from fatswarm.domain.path import path_length, truncate
+from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.seam import AlgorithmParamsError, Configured
 from fatswarm.world.starts import random_start
 
 STEPPED = load_algorithm("uniform-circle-stepped")

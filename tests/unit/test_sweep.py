@@ -20,7 +20,6 @@ import numpy as np
 import pytest
 from rich.console import Console
 
-from fatswarm.agent.registry import load_algorithm
 from fatswarm.coordinator.schedule import NAMES
 from fatswarm.deploy import cli
 from fatswarm.deploy.sweep import (
@@ -54,6 +53,7 @@ from fatswarm.deploy.sweep import (
 )
 from fatswarm.deploy.sweep_cli import summary_table
 from fatswarm.deploy.sweep_run import RunTable, run_spec
+from fatswarm.domain.registry import load_algorithm
 
 ROOT = Path(__file__).resolve().parents[2]
 SLOW = f"{ROOT / 'tests' / 'data' / 'slow_gathering.py'}:ALGORITHM"
@@ -311,7 +311,7 @@ def test_a_second_sweep_on_one_table_is_refused(tmp_path: Path) -> None:
 
 
 def test_a_run_that_raises_is_an_error_row() -> None:
-    # a = 20000 is refused for 4 robots (agent/tolerance.py) only once the start is drawn
+    # a = 20000 is refused for 4 robots (fatswarm/domain/tolerance.py) only once the start is drawn
     figures = run_spec(RunSpec("uniform-circle", 4, "clustered", "fsync", 0, (("a", "20000.0"),)))
     assert figures.status == ERROR
     assert figures.error.startswith("UnsupportedInputError")

@@ -10,15 +10,19 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from fatswarm.agent.path import Arc, Line, Path
-from fatswarm.agent.protocol import MoveSubmitted, move_key, robot_of_alive_key
-from fatswarm.world.protocol import (
-    MAX_CARRIED_MOVE_BYTES,
-    MAX_CONTROL_BYTES,
-    MAX_LOOK_BYTES,
-    MAX_NOTICE_BYTES,
+from fatswarm.domain.path import Arc, Line, Path
+from fatswarm.domain.wire import (
     MAX_ROBOTS,
     PROTOCOL_VERSION,
+    ProtocolError,
+    check_swarm,
+    robot_of_key,
+)
+from fatswarm.world.protocol import (
+    MAX_CONTROL_BYTES,
+    MAX_LOOK_BYTES,
+    MAX_MOVE_BYTES,
+    MAX_NOTICE_BYTES,
     AgentInfo,
     Begin,
     Commit,
@@ -26,13 +30,13 @@ from fatswarm.world.protocol import (
     Hello,
     LookRequest,
     MovesHeld,
-    ProtocolError,
+    MoveSubmitted,
     Snapshot,
     WorldState,
-    check_swarm,
     decode_control,
+    move_key,
     moves_held_key,
-    robot_of_key,
+    robot_of_alive_key,
     snapshot_key,
     state_key,
 )
@@ -204,12 +208,12 @@ def test_look_request_round_trips_and_refuses_garbage() -> None:
         assert LookRequest.decode(request.encode()) == request
     assert "move" not in msgpack.unpackb(LookRequest(1, 2).encode())  # none: no key at all
     good = {"v": PROTOCOL_VERSION, "t": "look", "epoch": 1, "after": 2}
-    too_big = b"x" * (MAX_CARRIED_MOVE_BYTES + 1)
+    too_big = b"x" * (MAX_MOVE_BYTES + 1)
     for change in ({"after": -1}, {"epoch": -1}, {"after": "2"}, {"t": "snapshot"},
                    {"move": "text"}, {"move": 7}, {"move": too_big}):
         with pytest.raises(ProtocolError):
             LookRequest.decode(_raw(**{**good, **change}))
-    assert len(LookRequest(1, 2, b"x" * MAX_CARRIED_MOVE_BYTES).encode()) <= MAX_LOOK_BYTES
+    assert len(LookRequest(1, 2, b"x" * MAX_MOVE_BYTES).encode()) <= MAX_LOOK_BYTES
 
 
 def _raw(**fields: object) -> bytes:

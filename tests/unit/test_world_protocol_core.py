@@ -8,8 +8,7 @@ from pathlib import Path as FsPath
 import numpy as np
 import pytest
 
-from fatswarm.agent.path import STAY, Line, Path
-from fatswarm.agent.protocol import MoveSubmitted, move_key
+from fatswarm.domain.path import STAY, Line, Path
 from fatswarm.world.core import crash_after
 from fatswarm.world.protocol import (
     Begin,
@@ -18,7 +17,9 @@ from fatswarm.world.protocol import (
     Hello,
     LookRequest,
     MovesHeld,
+    MoveSubmitted,
     Snapshot,
+    move_key,
     snapshot_key,
 )
 from fatswarm.world.record import read_record

@@ -15,7 +15,7 @@ import sys
 from importlib.metadata import entry_points
 from typing import Any
 
-from fatswarm.agent.seam import MAX_PARAMS, MAX_TEXT, Algorithm, AlgorithmError, ParamSpec
+from fatswarm.domain.seam import MAX_PARAMS, MAX_TEXT, Algorithm, AlgorithmError, ParamSpec
 
 GROUP = "fatswarm.algorithms"
 DEFAULT = "uniform-circle"

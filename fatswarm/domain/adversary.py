@@ -15,9 +15,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
 
-from fatswarm.world.core import keyed_fraction
+from fatswarm.domain.draws import DELAY_STREAM, keyed_fraction
 
-DELAY_STREAM: Final = 0xA5C0  # the async adversary's draws, apart from the run's other streams
 RANDOM_MAX: Final = 2.0
 """Random delays: compute delay and wait are each uniform on [0, RANDOM_MAX): up to the time a
 robot takes to travel its own diameter."""

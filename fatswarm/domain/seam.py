@@ -1,7 +1,7 @@
 """The algorithm seam: what fatswarm asks of an algorithm, and the parameters that configure it.
 
 An algorithm is any object with the attributes and methods of `Algorithm`. fatswarm finds it by
-name (entry point group `fatswarm.algorithms`) or by `module:attribute` (agent/registry.py); the
+name (entry point group `fatswarm.algorithms`) or by `module:attribute` (fatswarm/domain/registry.py); the
 world asks it whether the goal is reached, every robot asks it where to go. Nothing else in
 fatswarm knows which algorithm runs. docs/algorithms.md shows how to write one.
 """
@@ -15,12 +15,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol, TypeVar, runtime_checkable
 
-import numpy as np
-from numpy.typing import NDArray
+from fatswarm.domain.path import Path, Points
 
-from fatswarm.agent.path import Path
-
-Points = NDArray[np.float64]  # (k, 2)
 ParamValue = bool | int | float | str  # what a parameter can hold: it travels on the wire
 MAX_PARAMS = 32  # parameters an algorithm may declare (bounds what a peer can make us parse)
 MAX_TEXT = 200  # characters of a text parameter or an algorithm name
