@@ -421,7 +421,6 @@ def _keeps_sec(ctx: _Ctx, moves: dict[int, Path]) -> bool:
     return True
 
 
-
 def _free_path(ctx: _Ctx, start: Point, target: Point, others: Points) -> Path | None:
     """Shortest free way to the target: along the SEC, the chord, or sliding over an obstacle."""
     c = ctx.circle

@@ -1,8 +1,8 @@
 """The canonical form of a configuration: the one frame in which every robot decides.
 
 Robots see the swarm in private frames (own origin, X maybe flipped). On grid positions
-(fatswarm/domain/tolerance.py, GRID) every such view is an exact translate, possibly mirrored, of every
-other, so this module maps each view, exactly, to the same array: translate so that the lowest
+(fatswarm/domain/tolerance.py, GRID) every such view is an exact translate, possibly mirrored, of
+every other, so this module maps each view, exactly, to the same array: translate so that the lowest
 robot (then the leftmost) is at the origin, sort by (y, x), and of the two mirror images take the
 lexicographically smaller. The algorithm then runs on bit-identical numbers in every robot, and
 ties are broken by canonical position, which is geometry, never by the order of a view.
@@ -154,8 +154,9 @@ class SharedForm:
         x_ref = f * (float(self.world[ref, 0]) - float(self.world[robot, 0])) + 0.0
         y_ref = (float(self.world[ref, 1]) - float(self.world[robot, 1])) + 0.0
         flip_r = sign * f
-        return Canonical(form.points, int(rank[robot]), (flip_r * x_ref, y_ref), flip_r,
-                         form.symmetric)
+        return Canonical(
+            form.points, int(rank[robot]), (flip_r * x_ref, y_ref), flip_r, form.symmetric
+        )
 
 
 def _ranks(order: IntArray) -> IntArray:

@@ -35,8 +35,10 @@ class GatheringParams:
         if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
             raise AlgorithmParamsError(f"n must be a whole number >= 1, got {self.n!r}")
         tol = self.tolerance
-        if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not (
-            math.isfinite(tol) and tol > 0.0
+        if (
+            isinstance(tol, bool)
+            or not isinstance(tol, (int, float))
+            or not (math.isfinite(tol) and tol > 0.0)
         ):
             raise AlgorithmParamsError(f"tolerance must be finite and > 0, got {tol!r}")
 
@@ -53,11 +55,11 @@ def _nearest(positions: Points) -> Values:
     n = len(positions)
     out = np.empty(n, dtype=np.float64)
     for lo in range(0, n, GOAL_BLOCK):
-        rows = positions[lo:lo + GOAL_BLOCK]
+        rows = positions[lo : lo + GOAL_BLOCK]
         diff = positions[np.newaxis, :, :] - rows[:, np.newaxis, :]
         dist = np.hypot(diff[:, :, 0], diff[:, :, 1])
         dist[np.arange(len(rows)), np.arange(lo, lo + len(rows))] = np.inf
-        out[lo:lo + len(rows)] = dist.min(axis=1)
+        out[lo : lo + len(rows)] = dist.min(axis=1)
     return out
 
 
@@ -79,8 +81,11 @@ class Gathering:
     name: str = "gathering"
     summary: str = "move toward the centre of gravity by at most half the gap to the nearest robot"
     parameters: tuple[ParamSpec, ...] = (
-        ParamSpec("tolerance", DEFAULT_TOLERANCE,
-                  "a robot stays when its step would be at most this (> 0)"),
+        ParamSpec(
+            "tolerance",
+            DEFAULT_TOLERANCE,
+            "a robot stays when its step would be at most this (> 0)",
+        ),
     )
 
     def make_params(self, n: int, values: Mapping[str, ParamValue]) -> GatheringParams:

@@ -23,7 +23,8 @@ from fatswarm.domain.tolerance import (
     snap,
 )
 
-# The tolerance model lives in fatswarm/domain/tolerance.py (one definition for the world and the robots).
+# The tolerance model lives in fatswarm/domain/tolerance.py (one definition for the world and the
+# robots).
 
 
 @dataclass(frozen=True, slots=True)
@@ -308,8 +309,10 @@ def path_distances(start: Point, path: Path, others: Points) -> np.ndarray:
     best = np.hypot(others[:, 0] - start[0], others[:, 1] - start[1])
     here = start
     for seg in path.segments:
-        d = segment_distances(here, seg.end, others) if isinstance(seg, Line) else (
-            arc_distances(here, seg, others)
+        d = (
+            segment_distances(here, seg.end, others)
+            if isinstance(seg, Line)
+            else (arc_distances(here, seg, others))
         )
         best = np.minimum(best, d)
         here = segment_end(here, seg)

@@ -77,8 +77,10 @@ class Robot:
         """The path relative to the robot, world axes; raises WrongAlgorithmError or
         AlgorithmParamsError for a snapshot it cannot act on."""
         if snapshot.algorithm != self.algorithm.name:
-            raise WrongAlgorithmError(f"the world runs algorithm {snapshot.algorithm!r}, this "
-                                      f"agent {self.algorithm.name!r}")
+            raise WrongAlgorithmError(
+                f"the world runs algorithm {snapshot.algorithm!r}, this "
+                f"agent {self.algorithm.name!r}"
+            )
         setting = self._setting
         if setting is None or setting.n != snapshot.n or dict(setting.values) != snapshot.params:
             setting = self._setting = Configured.of(self.algorithm, snapshot.n, snapshot.params)
@@ -103,13 +105,21 @@ def open_session(conf: Any, stop: threading.Event, waiting: str | None = None) -
             waited = time.monotonic() - started
             if waiting and waited >= (noticed + 1) * WAIT_NOTICE_S:
                 noticed = int(waited // WAIT_NOTICE_S)
-                log.warning("%s: still waiting for a Zenoh router at %s (%.0f s so far); retrying",
-                            waiting, _endpoints(conf), waited)
+                log.warning(
+                    "%s: still waiting for a Zenoh router at %s (%.0f s so far); retrying",
+                    waiting,
+                    _endpoints(conf),
+                    waited,
+                )
             stop.wait(OPEN_RETRY_S)
             continue
         if noticed:
-            log.warning("%s: the router at %s answered after %.0f s", waiting, _endpoints(conf),
-                        time.monotonic() - started)
+            log.warning(
+                "%s: the router at %s answered after %.0f s",
+                waiting,
+                _endpoints(conf),
+                time.monotonic() - started,
+            )
         return session
     return None
 
@@ -123,8 +133,10 @@ def _endpoints(conf: Any) -> str:
 # An agent exchanges two small messages a round: one Zenoh worker thread for every runtime of the
 # process (4 threads instead of 8, a fifth less CPU per Look). Read when the process first opens
 # a session, so it is set before; a value the user set wins.
-ONE_WORKER_RUNTIME = ("(app: (worker_threads: 1), rx: (handover: app), tx: (handover: app), "
-                      "net: (handover: app), acc: (handover: app))")
+ONE_WORKER_RUNTIME = (
+    "(app: (worker_threads: 1), rx: (handover: app), tx: (handover: app), "
+    "net: (handover: app), acc: (handover: app))"
+)
 
 
 class Stopped(Exception):
@@ -170,7 +182,8 @@ def serve(
         # A router that restarts can lose a Look on its way (it is then never answered, and the
         # agent would wait LOOK_WAIT_S): when the world's token (re)appears, ask again at once.
         _world = session.liveliness().declare_subscriber(
-            world_alive_key(cfg.swarm), look_wait.world_seen, history=True)
+            world_alive_key(cfg.swarm), look_wait.world_seen, history=True
+        )
         log.info("robot %d up", cfg.robot)
         # The world process and round it last answered, and the move for that round: the Move
         # travels in every Look until the world answers one (a Look lost with a router that went
@@ -193,8 +206,9 @@ def serve(
                     if time.monotonic() - asked < RELOOK_S:  # no world to hold it: do not spin
                         stop.wait(RELOOK_S)
                     continue
-                request = LookRequest(epoch=snapshot.epoch, after=snapshot.round,
-                                      move=_move(cfg, snapshot, robot))
+                request = LookRequest(
+                    epoch=snapshot.epoch, after=snapshot.round, move=_move(cfg, snapshot, robot)
+                )
     return 0
 
 
@@ -252,8 +266,9 @@ class _LookWait:
         """The handlers, for the loop's lifetime (not in the main thread: a Look waits out its
         answer or timeout)."""
         try:
-            before = {sig: signal.signal(sig, self.handle)
-                      for sig in (signal.SIGTERM, signal.SIGINT)}
+            before = {
+                sig: signal.signal(sig, self.handle) for sig in (signal.SIGTERM, signal.SIGINT)
+            }
         except ValueError:
             yield
             return
@@ -322,6 +337,10 @@ def _move(cfg: AgentConfig, snapshot: Snapshot, robot: Robot) -> bytes:
         log.exception("round %d: compute failed, staying put", round_no)
         return b""
     if log.isEnabledFor(logging.DEBUG):
-        log.debug("round %d: compute %.2f ms (CPU %.2f ms)", round_no,
-                  1e3 * (time.perf_counter() - t0), 1e3 * (time.thread_time() - cpu0))
+        log.debug(
+            "round %d: compute %.2f ms (CPU %.2f ms)",
+            round_no,
+            1e3 * (time.perf_counter() - t0),
+            1e3 * (time.thread_time() - cpu0),
+        )
     return move

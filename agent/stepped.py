@@ -41,10 +41,13 @@ class SteppedPlans:
         self.step = params.step
         self.shared = uniform_circle.SharedPlans(params.paper)
 
-    def paths(self, positions: Points, robots: Sequence[int], flips: Sequence[bool]
-              ) -> dict[int, Path]:
-        return {robot: cut(path, self.step)
-                for robot, path in self.shared.paths(positions, robots, flips).items()}
+    def paths(
+        self, positions: Points, robots: Sequence[int], flips: Sequence[bool]
+    ) -> dict[int, Path]:
+        return {
+            robot: cut(path, self.step)
+            for robot, path in self.shared.paths(positions, robots, flips).items()
+        }
 
 
 def cut(path: Path, step: float) -> Path:
@@ -67,7 +70,8 @@ class SteppedUniformCircle:
         if isinstance(step, bool) or not isinstance(step, (int, float)) or not 0 < step < 1e6:
             raise AlgorithmParamsError(f"step must be a distance > 0, got {step!r}")
         paper = uniform_circle.ALGORITHM.make_params(
-            n, {k: v for k, v in values.items() if k != "step"})
+            n, {k: v for k, v in values.items() if k != "step"}
+        )
         return SteppedParams(paper, float(step))
 
     def compute(self, view: Points, params: SteppedParams) -> Path:

@@ -49,8 +49,9 @@ class SharedPlans:
                 self._plans.popitem(last=False)
         return made
 
-    def paths(self, positions: Points, robots: Sequence[int], flips: Sequence[bool]
-              ) -> dict[int, Path]:
+    def paths(
+        self, positions: Points, robots: Sequence[int], flips: Sequence[bool]
+    ) -> dict[int, Path]:
         """Each of `robots`' path in its own frame (flipped per `flips[robot]`)."""
         if not len(robots):
             return {}
@@ -84,7 +85,8 @@ class UniformCircle:
         return geometry.is_formed(positions, params.a)
 
     def check_start(self, positions: Points, params: Params) -> None:
-        """The supported range (fatswarm/domain/tolerance.py): spans and circles small enough for the grid."""
+        """The supported range (fatswarm/domain/tolerance.py): spans and circles small enough for
+        the grid."""
         check_supported(positions, params.a)
 
     def figures(self, positions: Points, params: Params) -> dict[str, float]:

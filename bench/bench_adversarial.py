@@ -1,4 +1,5 @@
-"""Evidence matrix over adversarial starts (world/adversarial.py) under fsync, ssync, centralized.
+"""Evidence matrix over adversarial starts (deploy/scenarios/adversarial.py) under fsync, ssync,
+centralized.
 
     python bench/bench_adversarial.py                    # 2,000 starts x 3 schedulers = 6,000 runs
     python bench/bench_adversarial.py --quick --jobs 2   # 60 cases (n <= 16) x 3 = 180 runs
@@ -35,8 +36,8 @@ from bench_core import PROGRESS_SECONDS, SCHEDULERS, _stats
 
 from fatswarm.agent.params import Params
 from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy.lockstep import run_lockstep
-from fatswarm.world.adversarial import (
+from fatswarm.deploy.engine.lockstep import run_lockstep
+from fatswarm.deploy.scenarios.adversarial import (
     DESCRIPTIONS,
     FAMILIES,
     Case,
@@ -53,8 +54,22 @@ SHOWN: Final = 12  # errors and failures listed in full
 REPO: Final = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MOVE_BUDGET: Final = 2  # the algorithm needs about n + 2 moves (one mover or mirror pair a step)
 CSV_FIELDS: Final = (
-    "family", "variant", "n", "a", "seed", "scheduler", "status", "rounds", "epochs", "moves",
-    "moves_per_n", "max_robot_moves", "within_n_plus_2", "collisions", "distance", "seconds",
+    "family",
+    "variant",
+    "n",
+    "a",
+    "seed",
+    "scheduler",
+    "status",
+    "rounds",
+    "epochs",
+    "moves",
+    "moves_per_n",
+    "max_robot_moves",
+    "within_n_plus_2",
+    "collisions",
+    "distance",
+    "seconds",
     "error",
 )
 
@@ -183,8 +198,14 @@ def run_one(job: tuple[Case, str, float]) -> Outcome:
                 seed=case.seed,
             )
     except Exception as exc:  # a crash is a finding: record it, keep the matrix going
-        return Outcome(case, scheduler, variant, "error", seconds=time.perf_counter() - t0,
-                       error=_describe(exc))
+        return Outcome(
+            case,
+            scheduler,
+            variant,
+            "error",
+            seconds=time.perf_counter() - t0,
+            error=_describe(exc),
+        )
     return Outcome(
         case,
         scheduler,
@@ -248,8 +269,11 @@ def run_all(
                     pool.terminate()
                     raise
     except KeyboardInterrupt:
-        print(f"\ninterrupted after {len(outcomes)} of {len(jobs)} runs; reporting those",
-              file=sys.stderr, flush=True)
+        print(
+            f"\ninterrupted after {len(outcomes)} of {len(jobs)} runs; reporting those",
+            file=sys.stderr,
+            flush=True,
+        )
         return outcomes, True
     return outcomes, False
 
@@ -300,11 +324,16 @@ def report(outcomes: Sequence[Outcome], out: TextIO = sys.stdout) -> None:
         print(f"  {o.case} {o.scheduler} ({o.variant}): {o.error}", file=out)
         print(f"    {replay(o.case, o.scheduler)}", file=out)
     failures = [o for o in outcomes if o.error is None and o.problems()]
-    print(f"\nnot formed, colliding, over n + {MOVE_BUDGET} moves or moving when formed: "
-          f"{len(failures)} runs", file=out)
+    print(
+        f"\nnot formed, colliding, over n + {MOVE_BUDGET} moves or moving when formed: "
+        f"{len(failures)} runs",
+        file=out,
+    )
     for o in sorted(failures, key=lambda o: (o.case.n, o.case.family, o.scheduler))[:SHOWN]:
-        print(f"  {', '.join(o.problems())}; rounds {o.rounds}: {o.case} {o.scheduler} "
-              f"({o.variant})", file=out)
+        print(
+            f"  {', '.join(o.problems())}; rounds {o.rounds}: {o.case} {o.scheduler} ({o.variant})",
+            file=out,
+        )
         print(f"    {replay(o.case, o.scheduler)}", file=out)
     hidden = max(0, len(failures) - SHOWN) + max(0, len(errors) - SHOWN)
     if hidden:
@@ -313,8 +342,15 @@ def report(outcomes: Sequence[Outcome], out: TextIO = sys.stdout) -> None:
 
 def write_csv(path: str, outcomes: Iterable[Outcome]) -> None:
     """One row per run, in matrix order (family, n, seed, scheduler)."""
-    rows = sorted(outcomes, key=lambda o: (FAMILIES.index(o.case.family), o.case.n, o.case.seed,
-                                           SCHEDULERS.index(o.scheduler)))
+    rows = sorted(
+        outcomes,
+        key=lambda o: (
+            FAMILIES.index(o.case.family),
+            o.case.n,
+            o.case.seed,
+            SCHEDULERS.index(o.scheduler),
+        ),
+    )
     with open(path, "w", newline="", encoding="utf-8") as fh:
         writer = csv.DictWriter(fh, fieldnames=CSV_FIELDS)
         writer.writeheader()
@@ -347,25 +383,54 @@ def _families(text: str) -> list[str]:
 
 def _parse(argv: Sequence[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    p.add_argument("--count", type=int, default=None, metavar="K",
-                   help=f"cases (each under {len(SCHEDULERS)} schedulers; default "
-                   f"{DEFAULT_COUNT}, --quick {QUICK_COUNT})")
+    p.add_argument(
+        "--count",
+        type=int,
+        default=None,
+        metavar="K",
+        help=f"cases (each under {len(SCHEDULERS)} schedulers; default "
+        f"{DEFAULT_COUNT}, --quick {QUICK_COUNT})",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the case list (default 0)")
-    p.add_argument("--n-max", type=int, default=None, metavar="N",
-                   help=f"largest n (default {DEFAULT_N_MAX}, --quick {QUICK_N_MAX})")
-    p.add_argument("--families", type=_families, default=list(FAMILIES), metavar="A,B",
-                   help=f"only these families (default all: {', '.join(FAMILIES)})")
-    p.add_argument("--jobs", type=int, default=os.cpu_count() or 1,
-                   help="worker processes (spawn; default: all cores)")
-    p.add_argument("--quick", action="store_true",
-                   help=f"smoke run: {QUICK_COUNT} cases, n <= {QUICK_N_MAX}")
+    p.add_argument(
+        "--n-max",
+        type=int,
+        default=None,
+        metavar="N",
+        help=f"largest n (default {DEFAULT_N_MAX}, --quick {QUICK_N_MAX})",
+    )
+    p.add_argument(
+        "--families",
+        type=_families,
+        default=list(FAMILIES),
+        metavar="A,B",
+        help=f"only these families (default all: {', '.join(FAMILIES)})",
+    )
+    p.add_argument(
+        "--jobs",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="worker processes (spawn; default: all cores)",
+    )
+    p.add_argument(
+        "--quick", action="store_true", help=f"smoke run: {QUICK_COUNT} cases, n <= {QUICK_N_MAX}"
+    )
     p.add_argument("--csv", metavar="PATH", help="write one row per run to PATH")
-    p.add_argument("--run-timeout", type=float, default=DEFAULT_TIMEOUT, metavar="SECONDS",
-                   help=f"a run longer than this counts as an error (default {DEFAULT_TIMEOUT:g};"
-                   " 0: no limit)")
+    p.add_argument(
+        "--run-timeout",
+        type=float,
+        default=DEFAULT_TIMEOUT,
+        metavar="SECONDS",
+        help=f"a run longer than this counts as an error (default {DEFAULT_TIMEOUT:g};"
+        " 0: no limit)",
+    )
     p.add_argument("--list", action="store_true", help="describe the families and exit")
-    p.add_argument("--emit-start", nargs=4, metavar=("FAMILY", "N", "SEED", "A"),
-                   help="print one case's start as a `fatswarm run --init` file and exit")
+    p.add_argument(
+        "--emit-start",
+        nargs=4,
+        metavar=("FAMILY", "N", "SEED", "A"),
+        help="print one case's start as a `fatswarm run --init` file and exit",
+    )
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     args = p.parse_args(argv)
     if args.count is not None and args.count < 0:
@@ -397,10 +462,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     if args.emit_start:
         return emit_start(*args.emit_start)
-    count = args.count if args.count is not None else (QUICK_COUNT if args.quick else
-                                                       DEFAULT_COUNT)
-    n_max = args.n_max if args.n_max is not None else (QUICK_N_MAX if args.quick else
-                                                       DEFAULT_N_MAX)
+    count = args.count if args.count is not None else (QUICK_COUNT if args.quick else DEFAULT_COUNT)
+    n_max = args.n_max if args.n_max is not None else (QUICK_N_MAX if args.quick else DEFAULT_N_MAX)
     try:
         cases = select_cases(count, args.seed, n_max, args.families)
     except ValueError as exc:
@@ -419,8 +482,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     report(outcomes)
     wall = time.monotonic() - t0
     busy = math.fsum(o.seconds for o in outcomes)
-    print(f"\nwall time {wall:.0f}s, {busy:.0f}s of runs"
-          f"{' (interrupted: partial matrix)' if interrupted else ''}")
+    print(
+        f"\nwall time {wall:.0f}s, {busy:.0f}s of runs"
+        f"{' (interrupted: partial matrix)' if interrupted else ''}"
+    )
     if args.csv:
         write_csv(args.csv, outcomes)
         print(f"csv: {args.csv} ({len(outcomes)} rows)")

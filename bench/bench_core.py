@@ -28,9 +28,9 @@ import numpy as np
 from fatswarm.agent import algorithm
 from fatswarm.agent.params import Params
 from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy.lockstep import RoundReport, run_lockstep
+from fatswarm.deploy.engine.lockstep import RoundReport, run_lockstep
+from fatswarm.deploy.scenarios.starts import KINDS, degenerate_starts, random_start
 from fatswarm.domain.path import Path, Points
-from fatswarm.world.starts import KINDS, degenerate_starts, random_start
 
 SCHEDULERS = ("fsync", "ssync", "centralized")
 SIZES = tuple(range(2, 41))  # n from 2 to 40
@@ -133,8 +133,18 @@ def run_case(case: Case) -> Outcome:
             seed=case.seed,
         )
     except Exception as exc:  # a crash is a finding: report it, keep the matrix going
-        return Outcome(case, "error", 0, 0, 0, 0.0, None, 0, time.perf_counter() - t0,
-                       f"{type(exc).__name__}: {exc}")
+        return Outcome(
+            case,
+            "error",
+            0,
+            0,
+            0,
+            0.0,
+            None,
+            0,
+            time.perf_counter() - t0,
+            f"{type(exc).__name__}: {exc}",
+        )
     lb = lower_bound(start, result.positions) if result.status == "formed" else None
     return Outcome(
         case,
@@ -190,8 +200,10 @@ def _stats(values: Sequence[float]) -> str:
     if not values:
         return "-"
     arr = np.asarray(values, dtype=np.float64)
-    return " / ".join(f"{v:.0f}" if v >= 100 else f"{v:.3g}" for v in
-                      (np.median(arr), np.percentile(arr, 95), arr.max()))
+    return " / ".join(
+        f"{v:.0f}" if v >= 100 else f"{v:.3g}"
+        for v in (np.median(arr), np.percentile(arr, 95), arr.max())
+    )
 
 
 def report(outcomes: Sequence[Outcome], out: Any = sys.stdout) -> None:
@@ -259,8 +271,9 @@ def looks_per_second(
             raise _Budget
 
     with contextlib.suppress(_Budget):
-        run_lockstep(start, Params(n), make_scheduler("fsync", n, 0), seed=0, on_round=count,
-                     compute=compute)
+        run_lockstep(
+            start, Params(n), make_scheduler("fsync", n, 0), seed=0, on_round=count, compute=compute
+        )
     return looks, time.perf_counter() - t0
 
 
@@ -290,11 +303,19 @@ def baseline_looks_per_second(checkout: str, n: int, budget: float) -> float | N
 
     env = {**os.environ, "PYTHONPATH": checkout}
     pkg = "fatswarm." if os.path.isdir(os.path.join(checkout, "fatswarm")) else ""
-    done = subprocess.run([sys.executable, "-c", BASELINE_SNIPPET, str(n), str(budget), pkg],
-                          cwd=checkout, env=env, capture_output=True, text=True, check=False)
+    done = subprocess.run(
+        [sys.executable, "-c", BASELINE_SNIPPET, str(n), str(budget), pkg],
+        cwd=checkout,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     if done.returncode != 0:
-        print(f"baseline at {checkout} failed: {done.stderr.strip().splitlines()[-1:]}",
-              file=sys.stderr)
+        print(
+            f"baseline at {checkout} failed: {done.stderr.strip().splitlines()[-1:]}",
+            file=sys.stderr,
+        )
         return None
     looks, secs, where = done.stdout.split()
     if not os.path.realpath(where).startswith(os.path.realpath(checkout)):
@@ -396,8 +417,9 @@ def speed(quick: bool, baseline: str | None = None, out: Any = sys.stdout) -> No
             base = baseline_looks_per_second(baseline, n, budget)
             row += f" {base:>10,.0f}" if base is not None else f" {'failed':>10}"
         print(row, file=out)
-    print("\ncompute per call, microseconds (mean over sampled views; split approximate):",
-          file=out)
+    print(
+        "\ncompute per call, microseconds (mean over sampled views; split approximate):", file=out
+    )
     for n in SPEED_SIZES:
         split = compute_split(n, 60 if quick else 300)
         parts = "  ".join(f"{k} {v:,.0f}" for k, v in split.items())
@@ -408,14 +430,22 @@ def _iter_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--quick", action="store_true", help="a small subset of the matrix")
     p.add_argument("--jobs", type=int, default=2, help="worker processes (spawn; default 2)")
-    p.add_argument("--seeds", type=int, default=None, metavar="K",
-                   help=f"seeds per (kind, n) (default {FULL_SEEDS}; --quick {QUICK_SEEDS})")
+    p.add_argument(
+        "--seeds",
+        type=int,
+        default=None,
+        metavar="K",
+        help=f"seeds per (kind, n) (default {FULL_SEEDS}; --quick {QUICK_SEEDS})",
+    )
     p.add_argument("--speed-only", action="store_true", help="skip the evidence matrix")
     p.add_argument("--evidence-only", action="store_true", help="skip the speed part")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
-    p.add_argument("--baseline", metavar="DIR",
-                   help="also time the lockstep of another checkout (e.g. `git worktree add DIR "
-                   "REV`), in the same run")
+    p.add_argument(
+        "--baseline",
+        metavar="DIR",
+        help="also time the lockstep of another checkout (e.g. `git worktree add DIR "
+        "REV`), in the same run",
+    )
     return p.parse_args(argv)
 
 

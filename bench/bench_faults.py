@@ -65,16 +65,31 @@ def _start(sw: Swarm, role: str) -> None:
     sw.start_coordinator(PACE_S)
     if role.startswith("agents-"):
         spawn = role.split("-", 1)[1]
-        sw._start("agents", "agents", *sw._net(), "-n", str(N), "--seed", str(sw.seed),
-                  "--spawn", spawn, "--log-level", "warning")
+        sw._start(
+            "agents",
+            "agents",
+            *sw._net(),
+            "-n",
+            str(N),
+            "--seed",
+            str(sw.seed),
+            "--spawn",
+            spawn,
+            "--log-level",
+            "warning",
+        )
     else:
         for robot in range(N):
             sw.start_agent(robot)
 
 
 def _victim(role: str) -> str:
-    return {"agent": "agent 3", "agents-fork": "agents", "agents-exec": "agents",
-            "world-router": "world"}.get(role, role)
+    return {
+        "agent": "agent 3",
+        "agents-fork": "agents",
+        "agents-exec": "agents",
+        "world-router": "world",
+    }.get(role, role)
 
 
 def _restart(sw: Swarm, role: str) -> None:
@@ -83,8 +98,19 @@ def _restart(sw: Swarm, role: str) -> None:
         sw.start_agent(3, again)
     elif role.startswith("agents-"):
         spawn = role.split("-", 1)[1]
-        sw._start(again, "agents", *sw._net(), "-n", str(N), "--seed", str(sw.seed),
-                  "--spawn", spawn, "--log-level", "warning")
+        sw._start(
+            again,
+            "agents",
+            *sw._net(),
+            "-n",
+            str(N),
+            "--seed",
+            str(sw.seed),
+            "--spawn",
+            spawn,
+            "--log-level",
+            "warning",
+        )
     elif role == "world":
         sw.start_world(again)
     elif role == "world-router":
@@ -104,8 +130,9 @@ def trial(role: str, sig: str, seed: int, stop_s: float) -> Trial:
         try:
             _start(sw, role)
             at = rng.randint(2, 6)
-            sw.wait_for("the fault's round", lambda: (s := sw.state()) is not None
-                        and s.round >= at)
+            sw.wait_for(
+                "the fault's round", lambda: (s := sw.state()) is not None and s.round >= at
+            )
             time.sleep(rng.uniform(0.0, PACE_S))
             victim = sw.children.procs[_victim(role)]
             hosted = descendants_of(victim.pid) if role.startswith("agents-") else []
@@ -121,15 +148,23 @@ def trial(role: str, sig: str, seed: int, stop_s: float) -> Trial:
                 time.sleep(stop_s)
                 victim.send_signal(signal.SIGCONT)
                 t0 = time.monotonic()
-            sw.wait_for("two rounds after the fault", lambda: (s := sw.state()) is not None
-                        and (s.round >= fault_round + 2 or s.status != "running"))
+            sw.wait_for(
+                "two rounds after the fault",
+                lambda: (
+                    (s := sw.state()) is not None
+                    and (s.round >= fault_round + 2 or s.status != "running")
+                ),
+            )
             recovery = time.monotonic() - t0
             end = sw.wait_done()
             seen_rounds.append(end.round)
             record = read_record(sw.state_path)
             numbers = [r.round for r in record.rounds]
-            lost = len(numbers) - len(set(numbers)) + sum(
-                1 for k, r in enumerate(numbers, start=1) if r != k)
+            lost = (
+                len(numbers)
+                - len(set(numbers))
+                + sum(1 for k, r in enumerate(numbers, start=1) if r != k)
+            )
             lost += max(0, end.round - len(numbers))  # announced but not in the record
             final = record.result.positions if record.result else record.rounds[-1].positions
             clean = sum(len(r.collisions) for r in record.rounds) == 0 and is_formed(final, 4.0)
@@ -157,8 +192,9 @@ def main() -> int:
     p.add_argument("--roles", default=",".join(ROLES))
     p.add_argument("--signals", default=",".join(SIGNALS))
     p.add_argument("--trials", type=int, default=5)
-    p.add_argument("--stop-s", type=float, default=3.0,
-                   help="how long a stopped part stays stopped")
+    p.add_argument(
+        "--stop-s", type=float, default=3.0, help="how long a stopped part stays stopped"
+    )
     args = p.parse_args()
     rows: list[list[Trial]] = []
     for role in args.roles.split(","):
@@ -169,15 +205,19 @@ def main() -> int:
                 if t.error:
                     print(f"  {role} {sig}: {t.error}", file=sys.stderr)
             print(f"{role:<13} {sig:<5} done", file=sys.stderr, flush=True)
-    print(f"{'role':<13} {'fault':<5} {'trials':>6} {'formed':>6} {'clean':>5} "
-          f"{'lost/dup':>8} {'recovery s med / max':>20} {'left':>4}")
+    print(
+        f"{'role':<13} {'fault':<5} {'trials':>6} {'formed':>6} {'clean':>5} "
+        f"{'lost/dup':>8} {'recovery s med / max':>20} {'left':>4}"
+    )
     for done in rows:
         times = [t.recovery_s for t in done if t.recovery_s == t.recovery_s]
         med = f"{statistics.median(times):.2f} / {max(times):.2f}" if times else "-"
-        print(f"{done[0].role:<13} {done[0].signal:<5} {len(done):>6} "
-              f"{sum(t.formed for t in done):>6} {sum(t.clean for t in done):>5} "
-              f"{sum(t.lost_or_duplicated for t in done):>8} {med:>20} "
-              f"{sum(t.left for t in done):>4}")
+        print(
+            f"{done[0].role:<13} {done[0].signal:<5} {len(done):>6} "
+            f"{sum(t.formed for t in done):>6} {sum(t.clean for t in done):>5} "
+            f"{sum(t.lost_or_duplicated for t in done):>8} {med:>20} "
+            f"{sum(t.left for t in done):>4}"
+        )
     return 0
 
 

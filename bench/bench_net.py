@@ -35,20 +35,21 @@ import numpy as np
 
 from fatswarm.agent.params import Params
 from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy.launcher import Children
-from fatswarm.deploy.parts import agent_command, agents_command
-from fatswarm.deploy.zconf import loopback_endpoint, make_config
+from fatswarm.deploy.net.children import Children
+from fatswarm.deploy.net.parts import agent_command, agents_command
+from fatswarm.deploy.net.zconf import loopback_endpoint, make_config
+from fatswarm.deploy.scenarios.starts import random_start
 from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.protocol import WorldState, agent_alive_any_key, robot_of_alive_key, state_key
-from fatswarm.world.starts import random_start
 
-FREE_ALGORITHM = (f"{Path(__file__).resolve().parents[1] / 'tests' / 'data' / 'always_right.py'}"
-                  ":ALGORITHM")
+FREE_ALGORITHM = (
+    f"{Path(__file__).resolve().parents[1] / 'tests' / 'data' / 'always_right.py'}:ALGORITHM"
+)
 FREE_WORLD = ["--start", "spread", "--param", "step=0.0001"]  # moves every round, never collides
 
 REPLIER = """
 import sys, threading, zenoh
-from fatswarm.deploy.zconf import make_config
+from fatswarm.deploy.net.zconf import make_config
 hosted = sys.argv[3] == "world"
 endpoints = {"listen": [sys.argv[1]]} if hosted else {"connect": [sys.argv[1]]}
 conf = make_config("router" if hosted else "client", **endpoints)
@@ -67,11 +68,10 @@ def rtt_floor(endpoint: str, samples: int, router_in: str) -> list[float]:
     """Bare get/reply round trips (seconds) between two processes: clients of the router on
     `endpoint` (`separate`), or a client of the router that the replier hosts (`world`)."""
 
-    from fatswarm.deploy.zconf import open_client
+    from fatswarm.deploy.net.zconf import open_client
 
     env = dict(os.environ, PYTHONPATH=os.getcwd())
-    replier = subprocess.Popen([sys.executable, "-c", REPLIER, endpoint, "120", router_in],
-                               env=env)
+    replier = subprocess.Popen([sys.executable, "-c", REPLIER, endpoint, "120", router_in], env=env)
     try:
         with open_client(make_config("client", [endpoint]), deadline_s=30) as s:
             deadline = time.monotonic() + 30
@@ -153,8 +153,15 @@ def _cpu_s(pids: list[int]) -> float:
 
 
 def networked(
-    session: Any, endpoint: str, n: int, seed: int, tmp: str, spawn: str = "fork",
-    algorithm: str = "uniform-circle", router_in: str = "world", world_extra: tuple[str, ...] = (),
+    session: Any,
+    endpoint: str,
+    n: int,
+    seed: int,
+    tmp: str,
+    spawn: str = "fork",
+    algorithm: str = "uniform-circle",
+    router_in: str = "world",
+    world_extra: tuple[str, ...] = (),
 ) -> NetRun:
     """One fsync run with N agent processes; timings seen from a client in this process (`session`
     on the separate router; None: a session of its own on the router the world hosts).
@@ -189,34 +196,67 @@ def networked(
                 done.set()
 
     net = ["--connect", endpoint, "--swarm", swarm, "--log-level", "error"]
-    world_net = (["--router", "--listen", endpoint, *net[2:]] if router_in == "world" else net)
+    world_net = ["--router", "--listen", endpoint, *net[2:]] if router_in == "world" else net
     state = os.path.join(tmp, f"{swarm}.jsonl")
     own = None
     with Children() as children:
-        part = [sys.executable, "-m", "fatswarm.deploy.parts"]
-        children.start("world", [*part, "world", *world_net, "--state", state, "-n", str(n),
-                                 "--seed", str(seed), "--scheduler", "fsync", "--algorithm",
-                                 algorithm, *world_extra])
+        part = [sys.executable, "-m", "fatswarm.deploy.net.parts"]
+        children.start(
+            "world",
+            [
+                *part,
+                "world",
+                *world_net,
+                "--state",
+                state,
+                "-n",
+                str(n),
+                "--seed",
+                str(seed),
+                "--scheduler",
+                "fsync",
+                "--algorithm",
+                algorithm,
+                *world_extra,
+            ],
+        )
         if session is None:
-            from fatswarm.deploy.zconf import open_client
+            from fatswarm.deploy.net.zconf import open_client
 
             session = own = open_client(make_config("client", [endpoint]), deadline_s=60)
         subs = [
-            session.liveliness().declare_subscriber(agent_alive_any_key(swarm), on_alive,
-                                                    history=True),
+            session.liveliness().declare_subscriber(
+                agent_alive_any_key(swarm), on_alive, history=True
+            ),
             session.declare_subscriber(state_key(swarm), on_state),
         ]
-        children.start("coordinator", [*part, "coordinator", *net,
-                                       "--seed", str(seed), "--scheduler", "fsync",
-                                       "--start-timeout", "600", "--move-timeout", "30"])
+        children.start(
+            "coordinator",
+            [
+                *part,
+                "coordinator",
+                *net,
+                "--seed",
+                str(seed),
+                "--scheduler",
+                "fsync",
+                "--start-timeout",
+                "600",
+                "--move-timeout",
+                "30",
+            ],
+        )
         t0 = time.perf_counter()
         if spawn == "fork":
-            children.start("agents", agents_command(n, seed, swarm, [endpoint], "error",
-                                                    algorithm=algorithm))
+            children.start(
+                "agents", agents_command(n, seed, swarm, [endpoint], "error", algorithm=algorithm)
+            )
         else:
             for robot in range(n):
-                children.start(f"agent {robot}", agent_command(robot, seed, swarm, [endpoint],
-                                                               "error", algorithm=algorithm))
+                children.start(
+                    f"agent {robot}",
+                    agent_command(robot, seed, swarm, [endpoint], "error", algorithm=algorithm),
+                )
         if not all_alive.wait(600):
             raise RuntimeError(f"only {len(alive)} of {n} agents came up")
         t_alive = time.perf_counter()
@@ -262,7 +302,7 @@ def _roles(children: Children) -> dict[str, list[int]]:
 
 
 def lockstep(n: int, seed: int, algorithm: str) -> tuple[str, int, int, float, float]:
-    from fatswarm.deploy.lockstep import run_lockstep
+    from fatswarm.deploy.engine.lockstep import run_lockstep
     from fatswarm.domain.registry import load_algorithm
     from fatswarm.domain.seam import Configured
 
@@ -282,20 +322,40 @@ def _nothing() -> contextlib.nullcontext[None]:
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--sizes", default="8,64,128,256,512")
-    p.add_argument("--algorithm", default="uniform-circle",
-                   help="a registered algorithm (gathering: a cheap compute)")
+    p.add_argument(
+        "--algorithm",
+        default="uniform-circle",
+        help="a registered algorithm (gathering: a cheap compute)",
+    )
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--rtt-samples", type=int, default=2000)
-    p.add_argument("--spawn", choices=("fork", "exec"), default="fork",
-                   help="agents forked from one preloaded host (as fatswarm run) or one exec each")
-    p.add_argument("--latency-runs", type=int, default=3,
-                   help="runs at the smallest N pooled for the round-latency figure")
-    p.add_argument("--router-in", choices=("world", "separate"), default="world",
-                   help="the router in the world's process, as `fatswarm run` (default), or in "
-                   "a process of its own (here, this one), as across hosts")
-    p.add_argument("--free-rounds", type=int, default=0, metavar="R",
-                   help="also run each size R rounds with an algorithm that computes nothing: "
-                   "the emulator's own cost (default 0: not run)")
+    p.add_argument(
+        "--spawn",
+        choices=("fork", "exec"),
+        default="fork",
+        help="agents forked from one preloaded host (as fatswarm run) or one exec each",
+    )
+    p.add_argument(
+        "--latency-runs",
+        type=int,
+        default=3,
+        help="runs at the smallest N pooled for the round-latency figure",
+    )
+    p.add_argument(
+        "--router-in",
+        choices=("world", "separate"),
+        default="world",
+        help="the router in the world's process, as `fatswarm run` (default), or in "
+        "a process of its own (here, this one), as across hosts",
+    )
+    p.add_argument(
+        "--free-rounds",
+        type=int,
+        default=0,
+        metavar="R",
+        help="also run each size R rounds with an algorithm that computes nothing: "
+        "the emulator's own cost (default 0: not run)",
+    )
     args = p.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
 
@@ -310,20 +370,39 @@ def main() -> int:
     ):
         rtt = rtt_floor(endpoint, args.rtt_samples, args.router_in)
         floor = statistics.median(rtt)
-        print(f"agents started by: {args.spawn}; algorithm: {args.algorithm}; fsync; router in "
-              f"{'a process of its own' if separate else 'the world process'}")
-        layout = ("2 client processes, 1 router" if separate
-                  else "a client and the process hosting the router")
-        print(f"zenoh get/reply round trip ({layout}): median "
-              f"{floor * 1e3:.3f} ms  p95 {pct(rtt, 95) * 1e3:.3f} ms  ({len(rtt)} samples)")
-        print(f"{'N':>4} {'status':>8} {'rounds':>6} {'round ms med':>12} {'p95':>7} "
-              f"{'x floor':>7} {'net rounds/s':>12} {'net Looks/s':>11} {'lock rounds/s':>13} "
-              f"{'lock Looks/s':>12} {'agent MB RSS/PSS/priv':>21} {'start s':>7} "
-              f"{'CPU ms/Look net':>15} {'lock':>5}  CPU ms/Look by role")
+        print(
+            f"agents started by: {args.spawn}; algorithm: {args.algorithm}; fsync; router in "
+            f"{'a process of its own' if separate else 'the world process'}"
+        )
+        layout = (
+            "2 client processes, 1 router"
+            if separate
+            else "a client and the process hosting the router"
+        )
+        print(
+            f"zenoh get/reply round trip ({layout}): median "
+            f"{floor * 1e3:.3f} ms  p95 {pct(rtt, 95) * 1e3:.3f} ms  ({len(rtt)} samples)"
+        )
+        print(
+            f"{'N':>4} {'status':>8} {'rounds':>6} {'round ms med':>12} {'p95':>7} "
+            f"{'x floor':>7} {'net rounds/s':>12} {'net Looks/s':>11} {'lock rounds/s':>13} "
+            f"{'lock Looks/s':>12} {'agent MB RSS/PSS/priv':>21} {'start s':>7} "
+            f"{'CPU ms/Look net':>15} {'lock':>5}  CPU ms/Look by role"
+        )
         for n in sizes:
-            runs = [networked(session, endpoint, n, args.seed + k, tmp, args.spawn, args.algorithm,
-                              args.router_in)
-                    for k in range(args.latency_runs if n == sizes[0] else 1)]
+            runs = [
+                networked(
+                    session,
+                    endpoint,
+                    n,
+                    args.seed + k,
+                    tmp,
+                    args.spawn,
+                    args.algorithm,
+                    args.router_in,
+                )
+                for k in range(args.latency_runs if n == sizes[0] else 1)
+            ]
             run = runs[0]
             intervals = [x for r in runs for x in r.intervals]
             med = statistics.median(intervals) if intervals else float("nan")
@@ -331,20 +410,32 @@ def main() -> int:
             mem = [statistics.median(col) for col in zip(*run.memory_mb, strict=True)]
             looks = run.rounds * n
             mem_text = "/".join(f"{m:.1f}" for m in mem) if mem else "?"
-            print(f"{n:>4} {run.status:>8} {run.rounds:>6} {med * 1e3:>12.2f} "
-                  f"{pct(intervals, 95) * 1e3:>7.2f} {med / floor:>7.1f} "
-                  f"{run.rounds / run.wall_s:>12.1f} {run.rounds * n / run.wall_s:>11.0f} "
-                  f"{l_rounds / l_wall:>13.1f} {l_looks / l_wall:>12.0f} {mem_text:>21} "
-                  f"{run.start_s:>7.2f} {1e3 * sum(run.cpu_s.values()) / looks:>15.2f} "
-                  f"{1e3 * l_cpu / l_looks:>5.2f}  "
-                  + " ".join(f"{role} {1e3 * cpu / looks:.2f}" for role, cpu in run.cpu_s.items()),
-                  flush=True)
+            print(
+                f"{n:>4} {run.status:>8} {run.rounds:>6} {med * 1e3:>12.2f} "
+                f"{pct(intervals, 95) * 1e3:>7.2f} {med / floor:>7.1f} "
+                f"{run.rounds / run.wall_s:>12.1f} {run.rounds * n / run.wall_s:>11.0f} "
+                f"{l_rounds / l_wall:>13.1f} {l_looks / l_wall:>12.0f} {mem_text:>21} "
+                f"{run.start_s:>7.2f} {1e3 * sum(run.cpu_s.values()) / looks:>15.2f} "
+                f"{1e3 * l_cpu / l_looks:>5.2f}  "
+                + " ".join(f"{role} {1e3 * cpu / looks:.2f}" for role, cpu in run.cpu_s.items()),
+                flush=True,
+            )
             if l_status != run.status or l_rounds != run.rounds:
                 print(f"     (lockstep: {l_status} after {l_rounds} rounds)")
             if args.free_rounds > 0:
-                _print_free(networked(session, endpoint, n, args.seed, tmp, args.spawn,
-                                      FREE_ALGORITHM, args.router_in,
-                                      (*FREE_WORLD, "--max-rounds", str(args.free_rounds))))
+                _print_free(
+                    networked(
+                        session,
+                        endpoint,
+                        n,
+                        args.seed,
+                        tmp,
+                        args.spawn,
+                        FREE_ALGORITHM,
+                        args.router_in,
+                        (*FREE_WORLD, "--max-rounds", str(args.free_rounds)),
+                    )
+                )
     return 0
 
 
@@ -352,11 +443,13 @@ def _print_free(run: NetRun) -> None:
     """The line of the emulator alone (no compute) under its size's line."""
     looks = run.rounds * run.n
     med = statistics.median(run.intervals) if run.intervals else float("nan")
-    print(f"     emulator alone (no compute, {run.rounds} rounds): round med {med * 1e3:.2f} ms, "
-          f"{looks / run.wall_s:.0f} Looks/s, CPU ms/Look "
-          f"{1e3 * sum(run.cpu_s.values()) / looks:.2f}: "
-          + " ".join(f"{role} {1e3 * cpu / looks:.2f}" for role, cpu in run.cpu_s.items()),
-          flush=True)
+    print(
+        f"     emulator alone (no compute, {run.rounds} rounds): round med {med * 1e3:.2f} ms, "
+        f"{looks / run.wall_s:.0f} Looks/s, CPU ms/Look "
+        f"{1e3 * sum(run.cpu_s.values()) / looks:.2f}: "
+        + " ".join(f"{role} {1e3 * cpu / looks:.2f}" for role, cpu in run.cpu_s.items()),
+        flush=True,
+    )
 
 
 if __name__ == "__main__":

@@ -41,38 +41,116 @@ def _configs() -> list[Config]:
     lock = ("--lockstep",)
     for sched in ("fsync", "ssync", "centralized", "async", "async-slowest"):
         for seed, n in ((1, 6), (2, 9)):
-            add(f"ls-uc-{sched}-s{seed}", *lock, "-n", str(n), "--seed", str(seed),
-                "--scheduler", sched)
+            add(
+                f"ls-uc-{sched}-s{seed}",
+                *lock,
+                "-n",
+                str(n),
+                "--seed",
+                str(seed),
+                "--scheduler",
+                sched,
+            )
     for start in ("dense", "spread", "loose", "clumped"):
         add(f"ls-uc-ssync-{start}", *lock, "-n", "7", "--seed", "4", "--start", start)
     for sched in ("fsync", "ssync", "async", "async-slowest"):
-        add(f"ls-stepped-{sched}", *lock, "-n", "7", "--seed", "5", "--scheduler", sched,
-            "--algorithm", "uniform-circle-stepped")
+        add(
+            f"ls-stepped-{sched}",
+            *lock,
+            "-n",
+            "7",
+            "--seed",
+            "5",
+            "--scheduler",
+            sched,
+            "--algorithm",
+            "uniform-circle-stepped",
+        )
     for sched in ("fsync", "ssync", "centralized", "async"):
-        add(f"ls-gathering-{sched}", *lock, "-n", "6", "--seed", "6", "--scheduler", sched,
-            "--algorithm", "gathering")
+        add(
+            f"ls-gathering-{sched}",
+            *lock,
+            "-n",
+            "6",
+            "--seed",
+            "6",
+            "--scheduler",
+            sched,
+            "--algorithm",
+            "gathering",
+        )
     for sched in ("fsync", "ssync", "centralized", "async"):
-        add(f"ls-nonrigid-{sched}", *lock, "-n", "7", "--seed", "7", "--scheduler", sched,
-            "--non-rigid", "1")
+        add(
+            f"ls-nonrigid-{sched}",
+            *lock,
+            "-n",
+            "7",
+            "--seed",
+            "7",
+            "--scheduler",
+            sched,
+            "--non-rigid",
+            "1",
+        )
     for sched in ("fsync", "ssync", "centralized", "async-slowest"):
-        add(f"ls-crash-{sched}", *lock, "-n", "8", "--seed", "8", "--scheduler", sched,
-            "--crash", "2")
-    add("ls-nonrigid-crash-ssync", *lock, "-n", "8", "--seed", "9", "--non-rigid", "0.5",
-        "--crash", "1")
+        add(
+            f"ls-crash-{sched}",
+            *lock,
+            "-n",
+            "8",
+            "--seed",
+            "8",
+            "--scheduler",
+            sched,
+            "--crash",
+            "2",
+        )
+    add(
+        "ls-nonrigid-crash-ssync",
+        *lock,
+        "-n",
+        "8",
+        "--seed",
+        "9",
+        "--non-rigid",
+        "0.5",
+        "--crash",
+        "1",
+    )
     add("ls-fairness-ssync", *lock, "-n", "6", "--seed", "10", "--fairness", "3")
     add("ls-maxrounds-ssync", *lock, "-n", "8", "--seed", "11", "--max-rounds", "7")
     add("ls-param-a", *lock, "-n", "6", "--seed", "12", "-a", "5.5")
     add("ls-init-ssync", *lock, "--init", "@init", "--seed", "13")
-    add("ls-scripted", *lock, "--scheduler", "scripted", "--schedule", "@ls-uc-ssync-s1",
-        "-n", "6", "--seed", "1")
+    add(
+        "ls-scripted",
+        *lock,
+        "--scheduler",
+        "scripted",
+        "--schedule",
+        "@ls-uc-ssync-s1",
+        "-n",
+        "6",
+        "--seed",
+        "1",
+    )
     net = ("--no-dashboard", "--pace", "0")
     for sched in ("fsync", "ssync", "centralized", "async"):
         add(f"net-uc-{sched}", *net, "-n", "6", "--seed", "1", "--scheduler", sched)
     add("net-nonrigid-ssync", *net, "-n", "6", "--seed", "7", "--non-rigid", "1")
     add("net-crash-ssync", *net, "-n", "6", "--seed", "8", "--crash", "1")
     add("net-gathering-ssync", *net, "-n", "5", "--seed", "6", "--algorithm", "gathering")
-    add("net-stepped-async", *net, "-n", "5", "--seed", "5", "--scheduler", "async",
-        "--algorithm", "uniform-circle-stepped")
+    add(
+        "net-stepped-async",
+        *net,
+        "-n",
+        "5",
+        "--seed",
+        "5",
+        "--scheduler",
+        "async",
+        "--algorithm",
+        "uniform-circle-stepped",
+    )
     return configs
 
 
@@ -82,8 +160,14 @@ def _resolve(flags: tuple[str, ...], out: Path) -> list[str]:
     for flag in flags:
         if flag == "@init":
             init = out / "init.json"
-            init.write_text(json.dumps({"positions": [[0, 0], [2.0, 0], [4.5, 0.5], [1, 3],
-                                                      [-3, 1], [0.5, -2.5]], "a": 4.0}))
+            init.write_text(
+                json.dumps(
+                    {
+                        "positions": [[0, 0], [2.0, 0], [4.5, 0.5], [1, 3], [-3, 1], [0.5, -2.5]],
+                        "a": 4.0,
+                    }
+                )
+            )
             resolved.append(init.name)
         elif flag.startswith("@"):
             resolved.append(f"{flag[1:]}.jsonl")
@@ -100,8 +184,9 @@ def _fatswarm() -> list[str]:
 def _run(argv: list[str], out: Path) -> int:
     """`fatswarm ARGV` run in `out`, so that the command a record's header keeps is the same in
     every folder (paths relative to it)."""
-    done = subprocess.run([*_fatswarm(), *argv], capture_output=True, text=True, timeout=600,
-                          check=False, cwd=out)
+    done = subprocess.run(
+        [*_fatswarm(), *argv], capture_output=True, text=True, timeout=600, check=False, cwd=out
+    )
     if done.returncode not in (0, 1, 3):
         sys.exit(f"record_matrix: {' '.join(argv)} exited {done.returncode}: {done.stderr.strip()}")
     return done.returncode
@@ -132,10 +217,30 @@ def run_matrix(out: Path) -> dict[str, str]:
     # A sweep's CSV, less its wall-clock column.
     csv = out / "sweep.csv"
     csv.unlink(missing_ok=True)
-    _run(["sweep", "-n", "5,7", "--seeds", "2", "--scheduler", "ssync,fsync,async",
-          "--crash", "0,1", "--jobs", "1", "--out", csv.name, "-q"], out)
-    rows = [row[:wall] + row[wall + 1:] for row in csvlib.reader(csv.read_text().splitlines())
-            for wall in [19]]
+    _run(
+        [
+            "sweep",
+            "-n",
+            "5,7",
+            "--seeds",
+            "2",
+            "--scheduler",
+            "ssync,fsync,async",
+            "--crash",
+            "0,1",
+            "--jobs",
+            "1",
+            "--out",
+            csv.name,
+            "-q",
+        ],
+        out,
+    )
+    rows = [
+        row[:wall] + row[wall + 1 :]
+        for row in csvlib.reader(csv.read_text().splitlines())
+        for wall in [19]
+    ]
     if rows[0][19:20] != ["values"]:
         sys.exit("record_matrix: the sweep's columns moved: wall_s is no longer the 20th")
     hashes["sweep"] = hashlib.sha256(json.dumps(rows).encode()).hexdigest()
@@ -156,8 +261,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.compare:
         before = json.loads(args.compare.read_text())
         differ = sorted(k for k in before.keys() | hashes.keys() if before.get(k) != hashes.get(k))
-        print(f"{len(hashes) - len(differ)} of {len(before)} identical"
-              + (f"; differ: {', '.join(differ)}" if differ else ""))
+        print(
+            f"{len(hashes) - len(differ)} of {len(before)} identical"
+            + (f"; differ: {', '.join(differ)}" if differ else "")
+        )
         return 1 if differ else 0
     return 0
 

@@ -33,8 +33,12 @@ MAX_REPLANS: Final = 1_000_000  # Begins the world may answer "not yet" in a row
 class AsyncCoordinatorCore(CoordinatorCore):
     """`CoordinatorCore` driving an async model's instants instead of a scheduler's rounds."""
 
-    def __init__(self, make_model: Callable[[int], Scheduler], times: RoundTimes,
-                 resume_live: Sequence[int] | None = None) -> None:
+    def __init__(
+        self,
+        make_model: Callable[[int], Scheduler],
+        times: RoundTimes,
+        resume_live: Sequence[int] | None = None,
+    ) -> None:
         super().__init__(make_model, times, resume_live)
         self._last: ControlReply | None = None
         self._at: float | None = None
@@ -45,16 +49,24 @@ class AsyncCoordinatorCore(CoordinatorCore):
     def on_reply(self, reply: ControlReply | None, now: float) -> list[Action]:
         if reply is not None and reply.ok:
             self._last = reply
-        if (self.phase is Phase.BEGIN and reply is not None and reply.ok
-                and reply.open_round != self.round and reply.status == "running"
-                and reply.committed + 1 == self.round):
+        if (
+            self.phase is Phase.BEGIN
+            and reply is not None
+            and reply.ok
+            and reply.open_round != self.round
+            and reply.status == "running"
+            and reply.committed + 1 == self.round
+        ):
             return self._replan(now)  # not opened: the world got to another instant first
         return super().on_reply(reply, now)
 
     def _first_hello(self, reply: ControlReply, now: float) -> list[Action]:
         if reply.committed:
-            self._note("an async run's coordinator restarted: the adversary's cycle counts "
-                       "start again (delays stay within the model's bounds)", warning=True)
+            self._note(
+                "an async run's coordinator restarted: the adversary's cycle counts "
+                "start again (delays stay within the model's bounds)",
+                warning=True,
+            )
         return super()._first_hello(reply, now)
 
     @property
@@ -95,8 +107,10 @@ class AsyncCoordinatorCore(CoordinatorCore):
     def _replan(self, now: float) -> list[Action]:
         self._replans += 1
         if self._replans > MAX_REPLANS:
-            self._note(f"the world did not open instant {self.round} after {MAX_REPLANS} plans",
-                       warning=True)
+            self._note(
+                f"the world did not open instant {self.round} after {MAX_REPLANS} plans",
+                warning=True,
+            )
             return self._retry(now)
         return self._begin(now)
 
@@ -109,21 +123,27 @@ class AsyncCoordinatorCore(CoordinatorCore):
 
     def _collected(self, now: float) -> list[Action]:
         actions = super()._collected(now)
-        if not (actions and isinstance(actions[-1], Ask)
-                and isinstance(actions[-1].request, Commit)):
+        if not (
+            actions and isinstance(actions[-1], Ask) and isinstance(actions[-1].request, Commit)
+        ):
             return actions
         self._chained = False  # the next instant depends on what this one commits
         delays = []
         for robot in self.active:
             cycle = self.model.cycle(robot, self._cycles.get(robot, 1))
             delays.append((robot, cycle.compute, cycle.wait))
-        commit = Commit(round=self.round, timed_out=actions[-1].request.timed_out,
-                        delays=tuple(delays))
+        commit = Commit(
+            round=self.round, timed_out=actions[-1].request.timed_out, delays=tuple(delays)
+        )
         return [*actions[:-1], Ask(commit)]
 
 
-def coordinator_core(name: str, make_scheduler: Callable[[int], Scheduler], times: RoundTimes,
-                     resume_live: Sequence[int] | None = None) -> CoordinatorCore:
+def coordinator_core(
+    name: str,
+    make_scheduler: Callable[[int], Scheduler],
+    times: RoundTimes,
+    resume_live: Sequence[int] | None = None,
+) -> CoordinatorCore:
     """The coordinator core for scheduler `name`: `AsyncCoordinatorCore` for an async model."""
     if name in ASYNC_NAMES:
         return AsyncCoordinatorCore(make_scheduler, times, resume_live)

@@ -276,8 +276,10 @@ class CoordinatorCore:
         if self._n is None:
             return self._first_hello(reply, now)
         if reply.n != self._n:
-            self._note(f"the world now says n = {reply.n}; this coordinator keeps n = {self._n}",
-                       warning=True)
+            self._note(
+                f"the world now says n = {reply.n}; this coordinator keeps n = {self._n}",
+                warning=True,
+            )
         if reply.status != Status.RUNNING:
             return self._finish(Status(reply.status))
         if reply.open_round != self._round:
@@ -312,8 +314,11 @@ class CoordinatorCore:
             if now < self._deadline:
                 return []
             self._deadline = None
-            self._note(f"only {len(self._live)} of {self._n} agents after {self._gather_s:.1f} s; "
-                       "going on with them", warning=True)
+            self._note(
+                f"only {len(self._live)} of {self._n} agents after {self._gather_s:.1f} s; "
+                "going on with them",
+                warning=True,
+            )
         return self._begin(now) if self._live else []
 
     def _next_round(self, round_no: int, now: float) -> list[Action]:
@@ -360,8 +365,7 @@ class CoordinatorCore:
             return self._retry(now)  # then Hello, and on from where the world stands
         # What the world holds is what counts: moves of a round it kept (this coordinator restarted,
         # or retried), none of a round it opened anew (it restarted while the core paced).
-        self._held = (set(reply.held) & self.active_set if reply.open_round == self._round
-                      else set())
+        self._held = set(reply.held) & self.active_set if reply.open_round == self._round else set()
         self._phase, self._deadline = Phase.COLLECT, now + self.times.move_timeout_s
         self._waiting = {r for r in self.active if r in self._live and r not in self._held}
         return self._collected(now)

@@ -18,7 +18,10 @@ from fatswarm.domain.draws import SCHEDULE_STREAM
 
 SSYNC_P = 0.5  # each live robot is drawn with this probability: every subset is equally likely
 ROUND_NAMES = ("fsync", "ssync", "centralized", "scripted")
-NAMES = (*ROUND_NAMES, *ASYNC_NAMES)  # the async models have no rounds: fatswarm/domain/adversary.py
+NAMES = (
+    *ROUND_NAMES,
+    *ASYNC_NAMES,
+)  # the async models have no rounds: fatswarm/domain/adversary.py
 AFTER_SCRIPT = ("repeat", "fsync")  # what a script does once its rounds are used up
 
 

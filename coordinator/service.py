@@ -190,8 +190,12 @@ class Coordinator:
         asked = time.perf_counter()
         reply = self._get(session, request.encode())
         if isinstance(request, Commit) and log.isEnabledFor(logging.DEBUG):
-            log.debug("round %d: moves %.2f ms, commit %.2f ms", request.round,
-                      1e3 * (asked - self._began), 1e3 * (time.perf_counter() - asked))
+            log.debug(
+                "round %d: moves %.2f ms, commit %.2f ms",
+                request.round,
+                1e3 * (asked - self._began),
+                1e3 * (time.perf_counter() - asked),
+            )
         if isinstance(request, Begin) or (isinstance(request, Commit) and request.then_active):
             self._began = time.perf_counter()
         return reply

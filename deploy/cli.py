@@ -20,30 +20,49 @@ from types import FrameType
 from typing import TYPE_CHECKING, Any, NoReturn
 
 from fatswarm import __version__
-from fatswarm.deploy.run import ExitCode
+from fatswarm.domain.outcome import ExitCode
 
 if TYPE_CHECKING:
     from _typeshed import SupportsWrite
 
 # name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "run": ("fatswarm.deploy.run", "run a swarm (networked by default, --lockstep: one process)"),
-    "algorithms": ("fatswarm.deploy.catalog", "list the algorithms a run can use, or one's "
-                   "parameters"),
-    "router": ("fatswarm.deploy.parts", "run a Zenoh router alone (for several hosts)"),
-    "world": ("fatswarm.deploy.parts", "run the world process alone"),
-    "coordinator": ("fatswarm.deploy.parts", "run the coordinator process alone"),
-    "agent": ("fatswarm.deploy.parts", "run one agent (robot) process alone"),
-    "agents": ("fatswarm.deploy.parts", "run K agent processes on this host"),
-    "dashboard": ("fatswarm.deploy.dashboard", "attach a read-only dashboard to a running swarm"),
-    "secure": ("fatswarm.deploy.pki", "make a swarm's certificates and Zenoh configurations for "
-               "several hosts: mutual TLS, access control (needs fatswarm[secure])"),
-    "replay": ("fatswarm.deploy.replay", "play a run record in the dashboard"),
-    "plot": ("fatswarm.deploy.plot", "draw a record's trajectories to SVG or PNG (fatswarm[plot])"),
-    "sweep": ("fatswarm.deploy.sweep_cli", "run a grid of lock-step runs on every core into a CSV "
-              "(resumable)"),
-    "hunt": ("fatswarm.deploy.hunt_cli", "search for counterexamples on every core, shrink them "
-             "and save each as a replayable start and schedule"),
+    "run": (
+        "fatswarm.deploy.commands.run",
+        "run a swarm (networked by default, --lockstep: one process)",
+    ),
+    "algorithms": (
+        "fatswarm.deploy.commands.catalog",
+        "list the algorithms a run can use, or one's parameters",
+    ),
+    "router": ("fatswarm.deploy.net.parts", "run a Zenoh router alone (for several hosts)"),
+    "world": ("fatswarm.deploy.net.parts", "run the world process alone"),
+    "coordinator": ("fatswarm.deploy.net.parts", "run the coordinator process alone"),
+    "agent": ("fatswarm.deploy.net.parts", "run one agent (robot) process alone"),
+    "agents": ("fatswarm.deploy.net.parts", "run K agent processes on this host"),
+    "dashboard": (
+        "fatswarm.deploy.net.watch",
+        "attach a read-only dashboard to a running swarm",
+    ),
+    "secure": (
+        "fatswarm.deploy.secure.pki",
+        "make a swarm's certificates and Zenoh configurations for "
+        "several hosts: mutual TLS, access control (needs fatswarm[secure])",
+    ),
+    "replay": ("fatswarm.deploy.view.replay", "play a run record in the dashboard"),
+    "plot": (
+        "fatswarm.deploy.view.plot",
+        "draw a record's trajectories to SVG or PNG (fatswarm[plot])",
+    ),
+    "sweep": (
+        "fatswarm.deploy.sweep.command",
+        "run a grid of lock-step runs on every core into a CSV (resumable)",
+    ),
+    "hunt": (
+        "fatswarm.deploy.hunt.command",
+        "search for counterexamples on every core, shrink them "
+        "and save each as a replayable start and schedule",
+    ),
 }
 
 

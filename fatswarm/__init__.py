@@ -5,8 +5,9 @@ are installed and imported only as fatswarm.agent, fatswarm.coordinator, fatswar
 fatswarm.deploy, so that no generic name is installed and nothing in a working directory can
 shadow them. In the checkout, fatswarm/ links to those folders.
 
-The Python API (fatswarm.deploy.api) is here too: `fatswarm.run(...)`, `fatswarm.read_record(path)`
-and `fatswarm.trajectory(record)`, loaded on first use so that `import fatswarm` stays light.
+The Python API (fatswarm.deploy.engine.api) is here too: `fatswarm.run(...)`,
+`fatswarm.read_record(path)` and `fatswarm.trajectory(record)`, loaded on first use so that `import
+fatswarm` stays light.
 """
 
 from importlib import import_module
@@ -24,7 +25,7 @@ except PackageNotFoundError:  # a checkout that was never installed
 def __getattr__(name: str) -> Any:
     """The API's functions, imported when first asked for."""
     if name in _API:
-        return getattr(import_module("fatswarm.deploy.api"), name)
+        return getattr(import_module("fatswarm.deploy.engine.api"), name)
     raise AttributeError(f"module 'fatswarm' has no attribute {name!r}")
 
 

@@ -63,8 +63,9 @@ class AsyncWorldCore(WorldCore):
         epoch: int = 0,
     ) -> None:
         if history is not None and (history.rounds or history.result is not None):
-            raise AsyncResumeError(f"a {setup.scheduler} run cannot be resumed (yet): run it "
-                                   "again with its seed")
+            raise AsyncResumeError(
+                f"a {setup.scheduler} run cannot be resumed (yet): run it again with its seed"
+            )
         model = make_async(setup.scheduler, setup.n, setup.seed)
         setup = dataclasses.replace(setup, extra={"fairness_time": model.bound(), **setup.extra})
         super().__init__(setup, journal, history, algorithm, epoch)
@@ -100,8 +101,12 @@ class AsyncWorldCore(WorldCore):
                 return self.reply(False, str(exc)), False
         changed = self._settle()
         due = tuple(self.clock.looking())
-        if self.status != Status.RUNNING or not due or due != req.active \
-                or self.clock.now != req.at:
+        if (
+            self.status != Status.RUNNING
+            or not due
+            or due != req.active
+            or self.clock.now != req.at
+        ):
             return self.reply(True), changed  # not opened: the reply says what is due, and when
         crashing = {r for r in due if self.crash_plan.get(r) == self.clock.cycle_of(r) + 1}
         for robot in sorted(crashing):
@@ -147,8 +152,9 @@ class AsyncWorldCore(WorldCore):
             cut = False
             if world and self.setup.non_rigid is not None:
                 cycle = self.clock.cycle_of(robot)
-                short = cut_path(origin, world, self.setup.non_rigid,
-                                 cut_fraction(self.setup.seed, cycle, robot))
+                short = cut_path(
+                    origin, world, self.setup.non_rigid, cut_fraction(self.setup.seed, cycle, robot)
+                )
                 world, cut = short, short is not world
             if world:
                 moved.append(robot)
@@ -190,8 +196,12 @@ class AsyncWorldCore(WorldCore):
         robot stayed); True once the run has ended."""
         k = self.tracker.snapshot().rounds + 1
         moves = {done.robot: (done.path, done.traveled)} if done.path else {}
-        extra: dict[str, Any] = {"look": done.look, "start": done.start, "end": done.end,
-                                 "origin": [done.origin[0], done.origin[1]]}
+        extra: dict[str, Any] = {
+            "look": done.look,
+            "start": done.start,
+            "end": done.end,
+            "origin": [done.origin[0], done.origin[1]],
+        }
         if done.cut:
             extra["cut"] = [done.robot]
         if timed_out:
@@ -200,8 +210,15 @@ class AsyncWorldCore(WorldCore):
         traveled = {done.robot: done.traveled} if done.path else {}
         # its move changed the configuration even when the line before is of the same instant
         moved = done.traveled > MOVE_TOLERANCE or None
-        self.tracker.observe([done.robot], traveled.keys(), self._last, done.positions,
-                             traveled, len(done.collisions), changed=moved)
+        self.tracker.observe(
+            [done.robot],
+            traveled.keys(),
+            self._last,
+            done.positions,
+            traveled,
+            len(done.collisions),
+            changed=moved,
+        )
         self._last = done.positions
         self.positions = done.positions
         self.collisions_total += len(done.collisions)
@@ -219,9 +236,14 @@ class AsyncWorldCore(WorldCore):
         progress = self.tracker.snapshot()
         status = progress.status or Status.STALLED
         self.journal.result(
-            status, progress.rounds, self.positions, epochs=progress.epochs,
-            moves=progress.moves, total_distance=progress.total_distance,
-            collisions=progress.collisions, time=self.clock.now,
+            status,
+            progress.rounds,
+            self.positions,
+            epochs=progress.epochs,
+            moves=progress.moves,
+            total_distance=progress.total_distance,
+            collisions=progress.collisions,
+            time=self.clock.now,
         )
         self.status = status
 

@@ -132,7 +132,8 @@ class AsyncWorld:
                 for c in outcome.collisions:
                     if c.robot == r:
                         robot.collisions.append(
-                            Collision(r, c.other, robot.traveled + c.t, c.point))
+                            Collision(r, c.other, robot.traveled + c.t, c.point)
+                        )
                         robot.stopped = True
                 robot.traveled += covered
                 robot.rest = remainder(here[r], robot.rest, covered)
@@ -161,8 +162,11 @@ class AsyncWorld:
 
     def looking(self) -> list[int]:
         """The live robots whose Look is due now, in order."""
-        return [r for r, robot in enumerate(self._robots)
-                if robot.phase is Phase.WAITING and robot.at <= self.now and r not in self.crashed]
+        return [
+            r
+            for r, robot in enumerate(self._robots)
+            if robot.phase is Phase.WAITING and robot.at <= self.now and r not in self.crashed
+        ]
 
     def set_look(self, robot: int, t: float) -> None:
         """Robot `robot`'s first Look comes at `t` (the adversary's choice); only for a robot
@@ -195,8 +199,9 @@ class AsyncWorld:
         """Robot `robot`'s cycles begun (the one in progress counted)."""
         return self._robots[robot].cycle
 
-    def submit(self, robot: int, path: Path, compute: float, wait: float, *,
-               cut: bool = False) -> CycleDone | None:
+    def submit(
+        self, robot: int, path: Path, compute: float, wait: float, *, cut: bool = False
+    ) -> CycleDone | None:
         """Robot `robot`'s move (world frame, from where it is) after its Look now, starting after
         `compute`, then `wait` before its next Look. A path of length zero ends the cycle at once
         (returned); the next Look then comes after compute + wait."""
@@ -223,9 +228,17 @@ class AsyncWorld:
     def _done(self, r: int, end: float) -> CycleDone:
         robot = self._robots[r]
         return CycleDone(
-            robot=r, cycle=robot.cycle, look=robot.look, start=robot.start, end=end,
-            origin=robot.origin, path=robot.path, traveled=robot.traveled,
-            positions=self.positions.copy(), collisions=tuple(robot.collisions), cut=robot.cut,
+            robot=r,
+            cycle=robot.cycle,
+            look=robot.look,
+            start=robot.start,
+            end=end,
+            origin=robot.origin,
+            path=robot.path,
+            traveled=robot.traveled,
+            positions=self.positions.copy(),
+            collisions=tuple(robot.collisions),
+            cut=robot.cut,
         )
 
 

@@ -1,17 +1,17 @@
 """The world's state machine: looks, moves, control requests and commits, with no I/O but its
 journal (an injected sink: the run record, or nothing).
 
-The Zenoh shell (world/service.py) and the in-process lock step (deploy/lockstep.py) drive this
-very core, so a networked run and a lock-step run of the same configuration are one computation.
-Physics and the end test are the core's (`world.physics.apply_round`, `world.progress`).
+The Zenoh shell (world/service.py) and the in-process lock step (deploy/engine/lockstep.py) drive
+this very core, so a networked run and a lock-step run of the same configuration are one
+computation. Physics and the end test are the core's (`world.physics.apply_round`,
+`world.progress`).
 """
 
 from __future__ import annotations
 
 import logging
-import os
 from collections import Counter
-from collections.abc import Callable, Collection, Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Final, Protocol
 
@@ -38,7 +38,7 @@ from fatswarm.world.protocol import (
     Snapshot,
     WorldState,
 )
-from fatswarm.world.record import Header, RecordWriter, RoundEntry, RunRecord, read_record
+from fatswarm.world.record import Header, RoundEntry, RunRecord
 
 log = logging.getLogger("fatswarm.world")
 
@@ -52,16 +52,30 @@ def crash_after(n: int) -> int:
     return max(CRASH_MIN_ROUNDS, 4 * n)
 
 
-
 class Journal(Protocol):
     """Where committed rounds go: `world.record.RecordWriter`, or `NullJournal`."""
 
-    def header(self, n: int, seed: int | None, scheduler: str, initial: Points, *,
-               algorithm: str, params: Mapping[str, ParamValue], **extra: Any) -> None: ...
+    def header(
+        self,
+        n: int,
+        seed: int | None,
+        scheduler: str,
+        initial: Points,
+        *,
+        algorithm: str,
+        params: Mapping[str, ParamValue],
+        **extra: Any,
+    ) -> None: ...
 
-    def round(self, round_no: int, active: Sequence[int],
-              moves: Mapping[int, tuple[Path, float]], positions: Points,
-              collisions: Sequence[Collision] = (), **extra: Any) -> None: ...
+    def round(
+        self,
+        round_no: int,
+        active: Sequence[int],
+        moves: Mapping[int, tuple[Path, float]],
+        positions: Points,
+        collisions: Sequence[Collision] = (),
+        **extra: Any,
+    ) -> None: ...
 
     def result(self, status: str, rounds: int, positions: Points, **extra: Any) -> None: ...
 
@@ -71,13 +85,28 @@ class Journal(Protocol):
 class NullJournal:
     """A journal that keeps nothing (a lock-step run without a record)."""
 
-    def header(self, n: int, seed: int | None, scheduler: str, initial: Points, *,
-               algorithm: str, params: Mapping[str, ParamValue], **extra: Any) -> None:
+    def header(
+        self,
+        n: int,
+        seed: int | None,
+        scheduler: str,
+        initial: Points,
+        *,
+        algorithm: str,
+        params: Mapping[str, ParamValue],
+        **extra: Any,
+    ) -> None:
         del n, seed, scheduler, initial, algorithm, params, extra
 
-    def round(self, round_no: int, active: Sequence[int],
-              moves: Mapping[int, tuple[Path, float]], positions: Points,
-              collisions: Sequence[Collision] = (), **extra: Any) -> None:
+    def round(
+        self,
+        round_no: int,
+        active: Sequence[int],
+        moves: Mapping[int, tuple[Path, float]],
+        positions: Points,
+        collisions: Sequence[Collision] = (),
+        **extra: Any,
+    ) -> None:
         del round_no, active, moves, positions, collisions, extra
 
     def result(self, status: str, rounds: int, positions: Points, **extra: Any) -> None:
@@ -127,19 +156,6 @@ def cut_path(start: Point, path: Path, delta: float, u: float) -> Path:
 # --- the durable log: the run record itself, fsynced line by line ----------------------------
 
 
-def cut_torn_line(path: str) -> None:
-    """Drop a torn last line (the world died mid-write): it was never committed nor announced."""
-    with open(path, "rb") as f:
-        data = f.read()
-    end = data.rfind(b"\n") + 1
-    if end < len(data):
-        log.warning("state file %s: dropping a torn last line of %d bytes", path, len(data) - end)
-        with open(path, "r+b") as f:
-            f.truncate(end)
-            f.flush()
-            os.fsync(f.fileno())
-
-
 def header_non_rigid(header: Header) -> float | None:
     """The non-rigid adversary's delta a record's header gives (None: rigid moves)."""
     delta = header.extra.get("non_rigid")
@@ -164,8 +180,11 @@ def setup_from_header(header: Header, swarm: str, max_rounds: int | None) -> Wor
         max_rounds=int(saved) if isinstance(saved, int) else max_rounds,
         algorithm=header.algorithm_ref,
         params=dict(header.params),
-        extra={k: v for k, v in header.extra.items()
-               if k not in ("max_rounds", "swarm", "non_rigid", "crash")},
+        extra={
+            k: v
+            for k, v in header.extra.items()
+            if k not in ("max_rounds", "swarm", "non_rigid", "crash")
+        },
         non_rigid=header_non_rigid(header),
         crash=header_crash(header),
     )
@@ -204,8 +223,8 @@ class WorldCore:
         if algorithm is None:
             algorithm = Configured.of(load_algorithm(setup.algorithm), n, setup.params)
         self.algorithm = algorithm
-        # On the grid, so that every robot's view is exact (fatswarm/domain/tolerance.py); a start that came
-        # through validate_configuration is there already.
+        # On the grid, so that every robot's view is exact (fatswarm/domain/tolerance.py); a start
+        # that came through validate_configuration is there already.
         self.positions: Points = snap(np.array(setup.initial, dtype=np.float64).reshape(n, 2))
         if history is None:
             algorithm.check_start(self.positions)
@@ -240,9 +259,15 @@ class WorldCore:
         self._figures_failed = False
         if history is None:
             self.journal.header(
-                n, setup.seed, setup.scheduler, self.positions,
-                algorithm=algorithm.name, params=algorithm.values,
-                algorithm_ref=setup.algorithm, max_rounds=setup.max_rounds, swarm=setup.swarm,
+                n,
+                setup.seed,
+                setup.scheduler,
+                self.positions,
+                algorithm=algorithm.name,
+                params=algorithm.values,
+                algorithm_ref=setup.algorithm,
+                max_rounds=setup.max_rounds,
+                swarm=setup.swarm,
                 **({} if setup.non_rigid is None else {"non_rigid": setup.non_rigid}),
                 **({} if setup.crash is None else {"crash": setup.crash}),
                 **setup.extra,
@@ -261,8 +286,12 @@ class WorldCore:
             self.status = record.result.status
         elif self.tracker.status is not None:
             self._finish()  # died between the last round line and the result line
-        log.info("resumed %s after round %d (%s)", getattr(self.journal, "path", "a run"),
-                 self.committed, self.status)
+        log.info(
+            "resumed %s after round %d (%s)",
+            getattr(self.journal, "path", "a run"),
+            self.committed,
+            self.status,
+        )
 
     def _replay_round(self, entry: RoundEntry) -> None:
         before = self.positions
@@ -270,9 +299,19 @@ class WorldCore:
         timed_out = {int(r) for r in entry.extra.get("timed_out", [])}
         traveled = {m.robot: m.traveled for m in entry.moves}
         paths = {m.robot: m.path for m in entry.moves}
-        self._account(entry.round, entry.active, paths, timed_out, before, after, traveled,
-                      entry.collisions, entry.extra.get("crashed", ()),
-                      entry.extra.get("recovered", ()), self._stuck_in(entry.round))
+        self._account(
+            entry.round,
+            entry.active,
+            paths,
+            timed_out,
+            before,
+            after,
+            traveled,
+            entry.collisions,
+            entry.extra.get("crashed", ()),
+            entry.extra.get("recovered", ()),
+            self._stuck_in(entry.round),
+        )
 
     def _account(
         self,
@@ -291,14 +330,22 @@ class WorldCore:
         """Book one committed round (live or replayed) into the state and the progress tracker.
         `stuck`: the robots the crash adversary crashes in this round (for good)."""
         if stuck:
-            log.info("robots %s crash in round %d (the crash adversary): they stay where they "
-                     "are for good", sorted(stuck), round_no)
+            log.info(
+                "robots %s crash in round %d (the crash adversary): they stay where they "
+                "are for good",
+                sorted(stuck),
+                round_no,
+            )
             self.stuck |= frozenset(stuck)
             self.tracker.crash(stuck)
         if crashed:
-            log.warning("robots %s count as crashed from round %d: their agents have been gone "
-                        "for %d rounds; they stay where they are, and are not waited for",
-                        sorted(crashed), round_no, crash_after(self.setup.n))
+            log.warning(
+                "robots %s count as crashed from round %d: their agents have been gone "
+                "for %d rounds; they stay where they are, and are not waited for",
+                sorted(crashed),
+                round_no,
+                crash_after(self.setup.n),
+            )
         self.tracker.crash(crashed)
         self.tracker.recover(recovered)
         self._agents = None
@@ -308,11 +355,16 @@ class WorldCore:
         for robot in timed_out:
             self.timeouts[robot] += 1
         for robot, path in paths.items():
-            self.last_length[robot] = path_length((float(before[robot, 0]),
-                                                   float(before[robot, 1])), path)
+            self.last_length[robot] = path_length(
+                (float(before[robot, 0]), float(before[robot, 1])), path
+            )
         self.collisions_total += len(collisions)
         self.tracker.observe(
-            [r for r in active if r not in timed_out], paths.keys(), before, after, traveled,
+            [r for r in active if r not in timed_out],
+            paths.keys(),
+            before,
+            after,
+            traveled,
             len(collisions),
         )
         self.positions, self.committed = after, round_no
@@ -333,8 +385,7 @@ class WorldCore:
         moved in it, and asks for a round after the last it moved in (at this world process);
         otherwise the shell holds the Look until this becomes true."""
         after = request.after if request.epoch == self.epoch else 0
-        return (self.open_round > after and robot in self._active_set
-                and robot not in self.held)
+        return self.open_round > after and robot in self._active_set and robot not in self.held
 
     def look(self, robot: int) -> Snapshot | None:
         """Robot `robot`'s snapshot, or None (refused, counted) if it is not active now."""
@@ -348,8 +399,14 @@ class WorldCore:
         pos = self.positions
         others = np.concatenate((pos[:robot], pos[robot + 1 :])) - pos[robot]
         others = others[view_order(self.setup.seed, self.open_round, robot, len(others))]
-        return Snapshot(round=self.open_round, n=self.setup.n, algorithm=self.algorithm.name,
-                        params=dict(self.algorithm.values), view=others, epoch=self.epoch)
+        return Snapshot(
+            round=self.open_round,
+            n=self.setup.n,
+            algorithm=self.algorithm.name,
+            params=dict(self.algorithm.values),
+            view=others,
+            epoch=self.epoch,
+        )
 
     def admit_look(self, robot: int) -> bool:
         """Count robot `robot`'s Look without building its view (a lock step that plans the round
@@ -461,8 +518,13 @@ class WorldCore:
         self.last_timed_out = tuple(timed_out)
         down, back = self._crashes(round_no)
         extra: dict[str, list[int]] = {}
-        for key, robots in (("timed_out", timed_out), ("crashed", down), ("recovered", back),
-                            ("cut", cut), ("crash", stuck)):
+        for key, robots in (
+            ("timed_out", timed_out),
+            ("crashed", down),
+            ("recovered", back),
+            ("cut", cut),
+            ("crash", stuck),
+        ):
             if robots:
                 extra[key] = robots
         self.journal.round(
@@ -473,8 +535,19 @@ class WorldCore:
             outcome.collisions,
             **extra,
         )
-        self._account(round_no, self.active, paths, timed_out, before, after, traveled,
-                      outcome.collisions, down, back, stuck)
+        self._account(
+            round_no,
+            self.active,
+            paths,
+            timed_out,
+            before,
+            after,
+            traveled,
+            outcome.collisions,
+            down,
+            back,
+            stuck,
+        )
         self.last_commit = Committed(round_no, self.active, paths, outcome)
         self.open_round, self.looked, self.held, self._missing = 0, set(), {}, set()
         if self.tracker.status is not None:
@@ -508,8 +581,9 @@ class WorldCore:
         live = [r for r in range(self.setup.n) if r not in self.stuck]
         if len(live) not in self._live_goals:
             try:
-                self._live_goals[len(live)] = Configured.of(self.algorithm.algorithm, len(live),
-                                                            self.algorithm.values)
+                self._live_goals[len(live)] = Configured.of(
+                    self.algorithm.algorithm, len(live), self.algorithm.values
+                )
             except ValueError:  # AlgorithmParamsError, or a refusal of that n
                 self._live_goals[len(live)] = None
         setting = self._live_goals[len(live)]
@@ -547,8 +621,11 @@ class WorldCore:
         the rule of the record's `crashed` and `recovered` round fields (README, "Faults")."""
         limit = crash_after(self.setup.n)
         crashed = self.tracker.crashed
-        down = [r for r, since in enumerate(self.gone_since)
-                if since is not None and round_no - since >= limit and r not in crashed]
+        down = [
+            r
+            for r, since in enumerate(self.gone_since)
+            if since is not None and round_no - since >= limit and r not in crashed
+        ]
         back = sorted(r for r in crashed if self.alive[r] and r not in self.stuck)
         return down, back
 
@@ -592,27 +669,3 @@ class WorldCore:
                 for i in range(self.setup.n)
             )
         return self._agents
-
-
-def open_world(
-    state_path: str,
-    make_setup: Callable[[], WorldSetup],
-    swarm: str,
-    max_rounds: int | None,
-    fsync: bool = True,
-    epoch: int = 0,
-) -> WorldCore:
-    """Resume from `state_path` if it holds a record, else start a new one from `make_setup()`.
-
-    Raises RecordFormatError (a file that is not a run record) or what `make_setup` raises.
-    """
-    from fatswarm.world.async_core import make_world  # it builds on this module
-    if os.path.exists(state_path) and os.path.getsize(state_path) > 0:
-        cut_torn_line(state_path)
-        record = read_record(state_path)
-        setup = setup_from_header(record.header, swarm, max_rounds)
-        return make_world(setup, RecordWriter(state_path, fsync=fsync, append=True), record,
-                          epoch=epoch)
-    return make_world(make_setup(), RecordWriter(state_path, fsync=fsync), epoch=epoch)
-
-

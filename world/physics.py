@@ -49,7 +49,8 @@ IntArray = NDArray[np.intp]
 BoolArray = NDArray[np.bool_]
 
 CONTACT_SLACK = OVERLAP_SLACK
-"""Two discs overlap iff their centres are closer than 2 - CONTACT_SLACK (fatswarm/domain/tolerance.py)."""
+"""Two discs overlap iff their centres are closer than 2 - CONTACT_SLACK
+(fatswarm/domain/tolerance.py)."""
 PLAN_ROUNDING = CLEAR_SLACK
 """The algorithm keeps every other centre at >= 2 - PLAN_ROUNDING (or, touching, never brings it
 closer); such a path is never stopped: only overlap, below OVERLAP_DISTANCE, stops a robot."""
@@ -155,8 +156,8 @@ def validate_configuration(positions: Points) -> Points:
     """Return positions on the grid as an (n, 2) float64 copy or raise InvalidConfigurationError.
 
     Positions are snapped to the nearest multiples of GRID (moving each by at most 6.6e-10), so
-    that every robot's view is exact (fatswarm/domain/tolerance.py). Refused: a wrong shape, no robot, NaN or
-    infinite coordinates, coordinates beyond +-MAX_COORD, two centres closer than
+    that every robot's view is exact (fatswarm/domain/tolerance.py). Refused: a wrong shape, no
+    robot, NaN or infinite coordinates, coordinates beyond +-MAX_COORD, two centres closer than
     2 - CONTACT_SLACK (overlapping unit discs) once on the grid.
     """
     points = _as_points(positions)

@@ -55,14 +55,7 @@ MAX_NOTICE_BYTES = 64 << 10  # a MovesHeld naming 4096 robots is ~12 KB: larger 
 STATUSES = tuple(Status)
 
 
-
-
-
 # --- key expressions (all under fatswarm/<swarm>/) -------------------------------------------
-
-
-
-
 
 
 def state_key(swarm: str) -> str:
@@ -96,37 +89,7 @@ def snapshot_any_key(swarm: str) -> str:
     return f"{prefix(swarm)}/robot/*/snapshot"
 
 
-
-
-
-
 # --- field checks shared by every protocol module ---------------------------------------------
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
 
 
 # --- an agent: its move and its liveliness token ----------------------------------------------
@@ -393,8 +356,11 @@ class LookRequest:
         move = obj.get("move", b"")
         if not isinstance(move, bytes) or len(move) > MAX_MOVE_BYTES:
             raise ProtocolError(f"'move' must be at most {MAX_MOVE_BYTES} bytes")
-        return LookRequest(epoch=get_int(obj, "epoch", 0, 2**63 - 1),
-                           after=get_int(obj, "after", 0, 2**62), move=move)
+        return LookRequest(
+            epoch=get_int(obj, "epoch", 0, 2**63 - 1),
+            after=get_int(obj, "after", 0, 2**62),
+            move=move,
+        )
 
 
 # --- coordinator <-> world: control queries ---------------------------------------------------
@@ -428,8 +394,7 @@ def get_times(obj: dict[str, Any], key: str, width: int = 2) -> tuple[tuple[Any,
             raise ProtocolError(f"{key!r} rows must be [robot, {width - 1} times], got {row!r}")
         cells = {"robot": row[0], **{f"t{k}": v for k, v in enumerate(row[1:])}}
         robot = get_int(cells, "robot", 0, MAX_ROBOTS - 1)
-        out.append((robot, *(get_float(cells, f"t{k}", 0.0, MAX_TIME)
-                             for k in range(width - 1))))
+        out.append((robot, *(get_float(cells, f"t{k}", 0.0, MAX_TIME) for k in range(width - 1))))
     return tuple(out)
 
 
@@ -471,9 +436,11 @@ class Commit:
 
     def encode(self) -> bytes:
         """msgpack bytes."""
-        fields: dict[str, Any] = {"round": int(self.round),
-                                  "timed_out": robot_list(self.timed_out),
-                                  "then_active": robot_list(self.then_active)}
+        fields: dict[str, Any] = {
+            "round": int(self.round),
+            "timed_out": robot_list(self.timed_out),
+            "then_active": robot_list(self.then_active),
+        }
         if self.delays:
             fields["delays"] = [[int(r), float(c), float(w)] for r, c, w in self.delays]
         return pack("commit", fields)
@@ -494,12 +461,18 @@ def decode_control(data: bytes | bytearray | memoryview) -> ControlRequest:
         return Hello()
     if kind == "begin":
         at = obj.get("at")
-        return Begin(round=get_int(obj, "round", 1, 2**62), active=get_robots(obj, "active"),
-                     at=None if at is None else get_float(obj, "at", 0.0, MAX_TIME),
-                     looks=get_times(obj, "looks"))
-    return Commit(round=get_int(obj, "round", 1, 2**62), timed_out=get_robots(obj, "timed_out"),
-                  then_active=get_robots(obj, "then_active"),
-                  delays=get_times(obj, "delays", 3))
+        return Begin(
+            round=get_int(obj, "round", 1, 2**62),
+            active=get_robots(obj, "active"),
+            at=None if at is None else get_float(obj, "at", 0.0, MAX_TIME),
+            looks=get_times(obj, "looks"),
+        )
+    return Commit(
+        round=get_int(obj, "round", 1, 2**62),
+        timed_out=get_robots(obj, "timed_out"),
+        then_active=get_robots(obj, "then_active"),
+        delays=get_times(obj, "delays", 3),
+    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -537,9 +510,15 @@ class ControlReply:
                 "collisions": int(self.collisions),
                 "held": robot_list(self.held),
                 "epoch": int(self.epoch),
-                **({} if not (self.now or self.looks or self.unset) else {
-                    "now": float(self.now), "looks": _times(self.looks),
-                    "unset": robot_list(self.unset)}),
+                **(
+                    {}
+                    if not (self.now or self.looks or self.unset)
+                    else {
+                        "now": float(self.now),
+                        "looks": _times(self.looks),
+                        "unset": robot_list(self.unset),
+                    }
+                ),
                 **({"timed_out": robot_list(self.timed_out)} if self.timed_out else {}),
             },
         )
@@ -584,12 +563,17 @@ class MovesHeld:
 
     def encode(self) -> bytes:
         """msgpack bytes."""
-        return pack("moves-held", {"round": int(self.round), "robots": robot_list(self.robots),
-                                   "epoch": int(self.epoch)})
+        return pack(
+            "moves-held",
+            {"round": int(self.round), "robots": robot_list(self.robots), "epoch": int(self.epoch)},
+        )
 
     @staticmethod
     def decode(data: bytes | bytearray | memoryview) -> MovesHeld:
         """Parse and validate; raises ProtocolError."""
         obj = unpack(data, "moves-held")
-        return MovesHeld(round=get_int(obj, "round", 1, 2**62), robots=get_robots(obj, "robots"),
-                         epoch=get_int(obj, "epoch", 0, 2**63 - 1) if "epoch" in obj else 0)
+        return MovesHeld(
+            round=get_int(obj, "round", 1, 2**62),
+            robots=get_robots(obj, "robots"),
+            epoch=get_int(obj, "epoch", 0, 2**63 - 1) if "epoch" in obj else 0,
+        )

@@ -335,10 +335,19 @@ def _header(entry: Mapping[str, Any]) -> Header:
     if not isinstance(scheduler, str):
         raise _LineError(f"'scheduler' must be a string, got {scheduler!r}")
     initial = _points(entry.get("initial"), n, "initial")
-    known = {"type", "version", "n", "a", "seed", "scheduler", "initial", "algorithm",
-             "algorithm_ref", "params"}
-    return Header(n, seed, scheduler, initial, algorithm, dict(params), ref,
-                  _extra(entry, known))
+    known = {
+        "type",
+        "version",
+        "n",
+        "a",
+        "seed",
+        "scheduler",
+        "initial",
+        "algorithm",
+        "algorithm_ref",
+        "params",
+    }
+    return Header(n, seed, scheduler, initial, algorithm, dict(params), ref, _extra(entry, known))
 
 
 def _collision(value: Any, n: int) -> Collision:
@@ -504,8 +513,10 @@ def torn_end_note(path: str | os.PathLike[str], record: RunRecord) -> str | None
         return None
     count = len(record.rounds)
     shown = f"the {count} complete round{'s' if count != 1 else ''}" if count else "the start only"
-    return (f"note: {os.fspath(path)} ends with a torn line (line {record.torn_line}, a crash "
-            f"mid-write); showing {shown}")
+    return (
+        f"note: {os.fspath(path)} ends with a torn line (line {record.torn_line}, a crash "
+        f"mid-write); showing {shown}"
+    )
 
 
 __all__ = [

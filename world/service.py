@@ -18,7 +18,7 @@ from typing import Any
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.seam import AlgorithmFailure
 from fatswarm.domain.wire import ProtocolError, robot_of_key
-from fatswarm.world.core import WorldCore, WorldSetup, open_world
+from fatswarm.world.core import WorldCore
 from fatswarm.world.inbox import Inbox
 from fatswarm.world.protocol import (
     MAX_CONTROL_BYTES,
@@ -41,12 +41,9 @@ from fatswarm.world.record import RecordWriteError
 
 __all__ = [
     "REPUBLISH_S",
-    "WorldCore",
-    "WorldSetup",
     "control_bytes",
     "look_bytes",
     "move_bytes",
-    "open_world",
     "serve",
 ]
 
@@ -135,13 +132,19 @@ def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) ->
             except zenoh.ZError as exc:  # e.g. the asker left before its reply: not our problem
                 log.warning("zenoh refused a %s reply or notice: %s", kind, exc)
             except RecordWriteError as exc:  # what is in the record stays; resume goes on from it
-                log.error("%s; the world stops at round %d (resume it once this is fixed)", exc,
-                          core.open_round or core.committed)
+                log.error(
+                    "%s; the world stops at round %d (resume it once this is fixed)",
+                    exc,
+                    core.open_round or core.committed,
+                )
                 code = ExitCode.RECORD_FAILED
                 break
             except AlgorithmFailure as exc:  # its round is durable; nobody can say what next
-                log.error("%s; the world stops at round %d (in its record)", exc,
-                          core.open_round or core.committed)
+                log.error(
+                    "%s; the world stops at round %d (in its record)",
+                    exc,
+                    core.open_round or core.committed,
+                )
                 code = ExitCode.NOT_FORMED
                 break
         looks.let_go_all()
@@ -191,8 +194,10 @@ def _say_dropped(events: Inbox[Any], said: Counter[str], said_at: float) -> floa
     if now - said_at < DROPPED_EVERY_S:
         return said_at
     fresh = events.dropped - said
-    log.warning("dropped %s messages (too big, or more than the inbox holds)",
-                ", ".join(f"{k} {v}" for k, v in sorted(fresh.items())))
+    log.warning(
+        "dropped %s messages (too big, or more than the inbox holds)",
+        ", ".join(f"{k} {v}" for k, v in sorted(fresh.items())),
+    )
     said.update(fresh)
     return now
 
@@ -267,8 +272,9 @@ def _take_look(core: WorldCore, query: Any, looks: HeldLooks, held_pub: Any) -> 
     key = str(query.key_expr)
     robot = robot_of_key(key)
     try:
-        request = LookRequest.decode(query.payload.to_bytes() if query.payload is not None
-                                     else LookRequest().encode())
+        request = LookRequest.decode(
+            query.payload.to_bytes() if query.payload is not None else LookRequest().encode()
+        )
     except ProtocolError as exc:
         core.reject("look-garbage", str(exc))
         try:
@@ -284,8 +290,9 @@ def _take_look(core: WorldCore, query: Any, looks: HeldLooks, held_pub: Any) -> 
         looks.hold(robot, query, request, time.monotonic())
 
 
-def _take_carried_move(core: WorldCore, robot: int | None, key: str, data: bytes,
-                       held_pub: Any) -> None:
+def _take_carried_move(
+    core: WorldCore, robot: int | None, key: str, data: bytes, held_pub: Any
+) -> None:
     """A move that a Look carries. The agent sends it again with every Look until one is answered
     (so that a Look lost with a router does not lose the move), so a repeat of a move the world
     holds, or a move of a round that is no longer open, is no news: dropped without a word."""

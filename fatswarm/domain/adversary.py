@@ -78,8 +78,10 @@ class AsyncModel:
         """The delays of robot `robot`'s cycle `cycle` (1 for the cycle of its first Look)."""
         if self.policy is Delays.SLOWEST_LAST:
             return Cycle(STALE_STEP * self.rank(robot), STALE_WAIT)
-        return Cycle(RANDOM_MAX * keyed_fraction(DELAY_STREAM, self.seed, robot, cycle, 0),
-                     RANDOM_MAX * keyed_fraction(DELAY_STREAM, self.seed, robot, cycle, 1))
+        return Cycle(
+            RANDOM_MAX * keyed_fraction(DELAY_STREAM, self.seed, robot, cycle, 0),
+            RANDOM_MAX * keyed_fraction(DELAY_STREAM, self.seed, robot, cycle, 1),
+        )
 
     def rank(self, robot: int) -> int:
         """Robot `robot`'s place from fastest (0) to slowest (n - 1), drawn from the seed."""

@@ -56,7 +56,6 @@ def keyed_fraction(stream: int, seed: int, *keys: int) -> float:
     return (key >> 11) * 2.0**-53  # the top 53 bits: a double in [0, 1)
 
 
-
 def crash_plan(seed: int, n: int, f: int) -> dict[int, int]:
     """The crash adversary's plan: robot -> the round from which it is crashed, for f of n robots.
 
@@ -75,8 +74,7 @@ def crash_plan(seed: int, n: int, f: int) -> dict[int, int]:
 
 
 _MASK64: Final = (1 << 64) - 1
-_C1, _C2, _C3 = (np.uint64(c) for c in (0x9E3779B97F4A7C15, 0xBF58476D1CE4E5B9,
-                                          0x94D049BB133111EB))
+_C1, _C2, _C3 = (np.uint64(c) for c in (0x9E3779B97F4A7C15, 0xBF58476D1CE4E5B9, 0x94D049BB133111EB))
 _S30, _S27, _S31 = np.uint64(30), np.uint64(27), np.uint64(31)
 
 
@@ -94,8 +92,6 @@ def _mix64(x: int) -> int:
     x = ((x ^ (x >> 30)) * 0xBF58476D1CE4E5B9) & _MASK64
     x = ((x ^ (x >> 27)) * 0x94D049BB133111EB) & _MASK64
     return x ^ (x >> 31)
-
-
 
 
 def draw_flip(seed: int, robot: int) -> bool:

@@ -73,8 +73,9 @@ def _load_object(ref: str) -> object:
         try:
             obj = getattr(obj, part)
         except AttributeError:
-            raise AlgorithmError(f"--algorithm {ref!r}: {where} has no attribute {attribute!r}") \
-                from None
+            raise AlgorithmError(
+                f"--algorithm {ref!r}: {where} has no attribute {attribute!r}"
+            ) from None
     return obj
 
 
@@ -106,30 +107,41 @@ def check_algorithm(obj: object, ref: str) -> Algorithm[Any]:
     """`obj` if it has what `Algorithm` asks for; raises AlgorithmError naming what is missing."""
     candidate: Any = obj
     missing = [
-        attr for attr in ("name", "summary", "parameters", "make_params", "compute", "goal")
+        attr
+        for attr in ("name", "summary", "parameters", "make_params", "compute", "goal")
         if not hasattr(obj, attr)
     ]
     if missing:
-        raise AlgorithmError(f"--algorithm {ref}: not an algorithm (missing {', '.join(missing)}; "
-                             "see docs/algorithms.md)")
+        raise AlgorithmError(
+            f"--algorithm {ref}: not an algorithm (missing {', '.join(missing)}; "
+            "see docs/algorithms.md)"
+        )
     name = candidate.name
     if not isinstance(name, str) or not _NAME.fullmatch(name):
-        raise AlgorithmError(f"--algorithm {ref}: its name must be 1-64 letters, digits, '-', "
-                             f"'_' or '.', got {name!r}")
+        raise AlgorithmError(
+            f"--algorithm {ref}: its name must be 1-64 letters, digits, '-', "
+            f"'_' or '.', got {name!r}"
+        )
     params = candidate.parameters
-    if not isinstance(params, tuple) or len(params) > MAX_PARAMS or not all(
-        isinstance(p, ParamSpec) and _NAME.fullmatch(p.name) for p in params
+    if (
+        not isinstance(params, tuple)
+        or len(params) > MAX_PARAMS
+        or not all(isinstance(p, ParamSpec) and _NAME.fullmatch(p.name) for p in params)
     ):
-        raise AlgorithmError(f"--algorithm {ref}: 'parameters' must be a tuple of at most "
-                             f"{MAX_PARAMS} ParamSpec with plain names")
+        raise AlgorithmError(
+            f"--algorithm {ref}: 'parameters' must be a tuple of at most "
+            f"{MAX_PARAMS} ParamSpec with plain names"
+        )
     if len({p.name for p in params}) != len(params):
         raise AlgorithmError(f"--algorithm {ref}: two parameters share a name")
     for p in params:
         if not isinstance(p.default, (bool, int, float, str)) or (
             isinstance(p.default, str) and len(p.default) > MAX_TEXT
         ):
-            raise AlgorithmError(f"--algorithm {ref}: parameter {p.name} needs a bool, int, "
-                                 "float or short str default")
+            raise AlgorithmError(
+                f"--algorithm {ref}: parameter {p.name} needs a bool, int, "
+                "float or short str default"
+            )
     for method in ("make_params", "compute", "goal"):
         if not callable(getattr(obj, method)):
             raise AlgorithmError(f"--algorithm {ref}: {method} is not callable")

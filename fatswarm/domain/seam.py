@@ -1,9 +1,10 @@
 """The algorithm seam: what fatswarm asks of an algorithm, and the parameters that configure it.
 
 An algorithm is any object with the attributes and methods of `Algorithm`. fatswarm finds it by
-name (entry point group `fatswarm.algorithms`) or by `module:attribute` (fatswarm/domain/registry.py); the
-world asks it whether the goal is reached, every robot asks it where to go. Nothing else in
-fatswarm knows which algorithm runs. docs/algorithms.md shows how to write one.
+name (entry point group `fatswarm.algorithms`) or by `module:attribute`
+(fatswarm/domain/registry.py); the world asks it whether the goal is reached, every robot asks it
+where to go. Nothing else in fatswarm knows which algorithm runs. docs/algorithms.md shows how to
+write one.
 """
 
 from __future__ import annotations
@@ -232,8 +233,9 @@ class Configured:
 
     def describe(self) -> str:
         """`name a=4 ...`: the algorithm and its parameters, for summaries."""
-        shown = " ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
-                         for k, v in self.values.items())
+        shown = " ".join(
+            f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in self.values.items()
+        )
         return f"{self.name} {shown}".strip()
 
 

@@ -46,6 +46,8 @@ def check_swarm(swarm: str) -> str:
 def prefix(swarm: str) -> str:
     """`fatswarm/<swarm>`: every key of one swarm lives below it, so swarms can share a router."""
     return f"{ROOT}/{check_swarm(swarm)}"
+
+
 _ROBOT_IN_KEY = re.compile(r"^[^/]+/[^/]+/robot/(0|[1-9][0-9]{0,8})/[a-z]+$")
 
 

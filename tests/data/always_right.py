@@ -28,8 +28,10 @@ class AlwaysRight:
 
     def make_params(self, n: int, values: Mapping[str, ParamValue]) -> float:
         step = values.get("step", DEFAULT_STEP)
-        if isinstance(step, bool) or not isinstance(step, (int, float)) or not (
-            math.isfinite(step) and step > 0.0
+        if (
+            isinstance(step, bool)
+            or not isinstance(step, (int, float))
+            or not (math.isfinite(step) and step > 0.0)
         ):
             raise AlgorithmParamsError(f"step must be finite and > 0, got {step!r}")
         return float(step)

@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from fatswarm.deploy.launcher import Children
-from fatswarm.deploy.zconf import loopback_endpoint, make_config
+from fatswarm.deploy.net.children import Children
+from fatswarm.deploy.net.zconf import loopback_endpoint, make_config
 from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.protocol import WorldState, state_key
 from fatswarm.world.record import RecordWriter, RunRecord, read_record
@@ -26,8 +26,9 @@ DEADLINE_S = 120.0  # generous: the machine is shared; tests wait on predicates,
 class Swarm:
     """Router, world, coordinator and agents as separate processes, plus an observer session."""
 
-    def __init__(self, tmp: Path, n: int, seed: int, scheduler: str = "ssync",
-                 endpoint: str | None = None) -> None:
+    def __init__(
+        self, tmp: Path, n: int, seed: int, scheduler: str = "ssync", endpoint: str | None = None
+    ) -> None:
         self.tmp, self.n, self.seed, self.scheduler = tmp, n, seed, scheduler
         self.endpoint = endpoint or loopback_endpoint()  # another swarm's: share its router
         self.swarm = f"it-{secrets.token_hex(3)}"
@@ -41,7 +42,7 @@ class Swarm:
 
     def _start(self, name: str, part: str, *flags: str) -> None:
         log = open(self.tmp / f"{name.replace(' ', '-')}.log", "ab")  # noqa: SIM115
-        argv = [sys.executable, "-m", "fatswarm.deploy.parts", part, *flags]
+        argv = [sys.executable, "-m", "fatswarm.deploy.net.parts", part, *flags]
         self.children.start(name, argv, stdout=log, stderr=log)
         log.close()
 
@@ -52,12 +53,32 @@ class Swarm:
         self._start(name, "router", "--listen", self.endpoint, "--log-level", "warning")
 
     def world_flags(self, state: Path | None = None) -> list[str]:
-        return [*self._net(), "--state", str(state or self.state_path), "-n", str(self.n),
-                "--seed", str(self.seed), "--scheduler", self.scheduler, "--log-level", "info"]
+        return [
+            *self._net(),
+            "--state",
+            str(state or self.state_path),
+            "-n",
+            str(self.n),
+            "--seed",
+            str(self.seed),
+            "--scheduler",
+            self.scheduler,
+            "--log-level",
+            "info",
+        ]
 
     def coordinator_flags(self, pace: float) -> list[str]:
-        return [*self._net(), "--seed", str(self.seed), "--scheduler", self.scheduler,
-                "--pace", str(pace), "--log-level", "info"]
+        return [
+            *self._net(),
+            "--seed",
+            str(self.seed),
+            "--scheduler",
+            self.scheduler,
+            "--pace",
+            str(pace),
+            "--log-level",
+            "info",
+        ]
 
     def start_world(self, name: str = "world") -> None:
         self._start(name, "world", *self.world_flags())
@@ -73,8 +94,17 @@ class Swarm:
         self._start(name, "coordinator", *self.coordinator_flags(pace))
 
     def start_agent(self, robot: int, name: str | None = None) -> None:
-        self._start(name or f"agent {robot}", "agent", *self._net(), "--robot", str(robot),
-                    "--seed", str(self.seed), "--log-level", "info")
+        self._start(
+            name or f"agent {robot}",
+            "agent",
+            *self._net(),
+            "--robot",
+            str(robot),
+            "--seed",
+            str(self.seed),
+            "--log-level",
+            "info",
+        )
 
     def start_all(self, pace: float, router: bool = True, in_world: bool = False) -> None:
         """Every part (`router=False`: on another swarm's router, given as `endpoint`;
@@ -126,19 +156,24 @@ class Swarm:
 
     def live(self, key: str) -> bool:
         """Whether a liveliness token on `key` is live now (asked from the observer session)."""
-        return any(reply.ok is not None
-                   for reply in self.session.liveliness().get(key, timeout=2.0))
+        return any(
+            reply.ok is not None for reply in self.session.liveliness().get(key, timeout=2.0)
+        )
 
     def log(self, name: str) -> str:
         path = self.tmp / f"{name.replace(' ', '-')}.log"
         return path.read_text(errors="replace") if path.exists() else ""
 
     def logs(self) -> str:
-        return "\n".join(f"--- {p.name}\n{p.read_text(errors='replace')[-3000:]}"
-                         for p in sorted(self.tmp.glob("*.log")) if p.stat().st_size)
+        return "\n".join(
+            f"--- {p.name}\n{p.read_text(errors='replace')[-3000:]}"
+            for p in sorted(self.tmp.glob("*.log"))
+            if p.stat().st_size
+        )
 
-    def wait_for(self, what: str, predicate: Callable[[], bool],
-                 deadline_s: float = DEADLINE_S) -> None:
+    def wait_for(
+        self, what: str, predicate: Callable[[], bool], deadline_s: float = DEADLINE_S
+    ) -> None:
         """Poll `predicate` until true; fail with every process's log tail at the deadline."""
         end = time.monotonic() + deadline_s
         while not predicate():
@@ -150,8 +185,9 @@ class Swarm:
             time.sleep(0.02)
 
     def wait_done(self) -> WorldState:
-        self.wait_for("the run to end", lambda: (s := self.state()) is not None
-                      and s.status != "running")
+        self.wait_for(
+            "the run to end", lambda: (s := self.state()) is not None and s.status != "running"
+        )
         state = self.state()
         assert state is not None
         return state
@@ -166,14 +202,19 @@ class Swarm:
 
 def part(name: str, *flags: str) -> list[str]:
     """The argv of `fatswarm <name> <flags>` (one part alone, as the launcher starts it)."""
-    return [sys.executable, "-m", "fatswarm.deploy.parts", name, *flags]
+    return [sys.executable, "-m", "fatswarm.deploy.net.parts", name, *flags]
 
 
-def run_all(*argvs: list[str],
-            deadline_s: float = DEADLINE_S) -> list[subprocess.CompletedProcess[str]]:
+def run_all(
+    *argvs: list[str], deadline_s: float = DEADLINE_S
+) -> list[subprocess.CompletedProcess[str]]:
     """Run the commands at once (each waits on its own deadline) and collect their outcomes."""
-    procs = [subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                              start_new_session=True) for argv in argvs]
+    procs = [
+        subprocess.Popen(
+            argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
+        )
+        for argv in argvs
+    ]
     try:
         done = []
         for argv, proc in zip(argvs, procs, strict=True):
@@ -198,13 +239,14 @@ def lockstep_record(path: Path, n: int, seed: int, scheduler: str = "ssync") -> 
     """The lockstep run of the same start, seed and scheduler, as a record."""
     from fatswarm.agent.params import Params
     from fatswarm.coordinator.schedule import make_scheduler
-    from fatswarm.deploy.lockstep import run_lockstep
-    from fatswarm.world.starts import random_start
+    from fatswarm.deploy.engine.lockstep import run_lockstep
+    from fatswarm.deploy.scenarios.starts import random_start
 
     initial = random_start(n, seed, "clustered", 4.0)
     with RecordWriter(path) as rec:
-        run_lockstep(initial, Params(n, 4.0), make_scheduler(scheduler, n, seed), seed=seed,
-                     record=rec)
+        run_lockstep(
+            initial, Params(n, 4.0), make_scheduler(scheduler, n, seed), seed=seed, record=rec
+        )
     return read_record(path)
 
 
@@ -216,11 +258,19 @@ def assert_same_run(net: RunRecord, lock: RunRecord) -> None:
     assert len(net.rounds) == len(lock.rounds), (len(net.rounds), len(lock.rounds))
     for a, b in zip(net.rounds, lock.rounds, strict=True):
         assert (a.round, a.active, a.moves, a.collisions, a.extra) == (
-            b.round, b.active, b.moves, b.collisions, b.extra), f"round {a.round}"
+            b.round,
+            b.active,
+            b.moves,
+            b.collisions,
+            b.extra,
+        ), f"round {a.round}"
         assert np.array_equal(a.positions, b.positions), f"round {a.round}"
     assert net.result is not None and lock.result is not None
     assert (net.result.status, net.result.rounds, net.result.extra) == (
-        lock.result.status, lock.result.rounds, lock.result.extra)
+        lock.result.status,
+        lock.result.rounds,
+        lock.result.extra,
+    )
     assert np.array_equal(net.result.positions, lock.result.positions)
 
 

@@ -83,16 +83,27 @@ class Rogue:
             view = np.zeros((self.n - 1, 2))
             view[:, 0] = np.arange(1, self.n) * 3.0  # far from anything real
             with query:
-                query.reply(query.key_expr,
-                            Snapshot(round=1, n=self.n, algorithm="uniform-circle",
-                                     params={"a": 4.0}, view=view).encode())
+                query.reply(
+                    query.key_expr,
+                    Snapshot(
+                        round=1, n=self.n, algorithm="uniform-circle", params={"a": 4.0}, view=view
+                    ).encode(),
+                )
 
         def fake_control(query: Any) -> None:
             self._count("control_queries")
             with query:
-                query.reply(query.key_expr,
-                            ControlReply(ok=True, reason="", n=self.n, committed=1, open_round=0,
-                                         status=Status.FORMED).encode())
+                query.reply(
+                    query.key_expr,
+                    ControlReply(
+                        ok=True,
+                        reason="",
+                        n=self.n,
+                        committed=1,
+                        open_round=0,
+                        status=Status.FORMED,
+                    ).encode(),
+                )
 
         self._keep += [
             s.declare_queryable(snapshot_any_key(swarm), fake_snapshot),
@@ -102,25 +113,30 @@ class Rogue:
             s.liveliness().declare_token(agent_alive_key(swarm, self.victim)),
             s.liveliness().declare_token(agent_alive_key(swarm, self.n + 1)),
         ]
+
         def heard(sample: Any) -> None:
             state = str(sample.key_expr) == state_key(swarm)
             self._count("state_samples" if state else "samples")
 
-        for key in (f"fatswarm/{swarm}/robot/*/move", moves_held_key(swarm),
-                    f"fatswarm/{swarm}/**"):  # one sample counts once per subscriber it reaches
+        for key in (
+            f"fatswarm/{swarm}/robot/*/move",
+            moves_held_key(swarm),
+            f"fatswarm/{swarm}/**",
+        ):  # one sample counts once per subscriber it reaches
             self._keep.append(s.declare_subscriber(key, heard))
 
     def strike(self, round_no: int) -> None:
         """One of each try, for round `round_no` (none waits longer than TRY_TIMEOUT_S)."""
         s, swarm = self.striker, self.swarm
         far = Path((Line((0.0, 25.0)),))
-        s.put(move_key(swarm, self.victim),
-              MoveSubmitted(robot=self.victim, round=round_no, path=far).encode())
+        s.put(
+            move_key(swarm, self.victim),
+            MoveSubmitted(robot=self.victim, round=round_no, path=far).encode(),
+        )
         s.put(moves_held_key(swarm), MovesHeld(round=round_no, robots=(self.victim,)).encode())
         s.put(state_key(swarm), b"not a state")
         for request in (Hello(), Begin(round_no, (self.victim,)), Commit(round_no)):
-            for reply in s.get(control_key(swarm), payload=request.encode(),
-                               timeout=TRY_TIMEOUT_S):
+            for reply in s.get(control_key(swarm), payload=request.encode(), timeout=TRY_TIMEOUT_S):
                 if reply.ok is not None:
                     self._count("control_replies")
         for reply in s.get(snapshot_key(swarm, self.victim), timeout=TRY_TIMEOUT_S):
@@ -137,7 +153,7 @@ def main(argv: list[str] | None = None) -> int:
     """The rogue as a process: try everything until SIGTERM, then write what came back."""
     import zenoh
 
-    from fatswarm.deploy.zconf import make_config
+    from fatswarm.deploy.net.zconf import make_config
 
     p = argparse.ArgumentParser()
     p.add_argument("--config", required=True)

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from netharness import part
 
-from fatswarm.deploy.launcher import Children
-from fatswarm.deploy.zconf import loopback_endpoint, make_config
+from fatswarm.deploy.net.children import Children
+from fatswarm.deploy.net.zconf import loopback_endpoint, make_config
 from fatswarm.world.protocol import LookRequest, MoveSubmitted, Snapshot, alive_key, snapshot_key
 
 pytestmark = pytest.mark.integration
@@ -46,15 +46,31 @@ def test_a_look_held_when_a_world_comes_up_is_asked_again_with_its_move(tmp_path
     ):
         world.declare_queryable(snapshot_key(swarm, 0), take)
         with open(log, "ab") as out:
-            children.start("agent", part("agent", "--connect", endpoint, "--swarm", swarm,
-                                         "--robot", "0", "--seed", "1", "--log-level", "info"),
-                           stdout=out, stderr=out)
+            children.start(
+                "agent",
+                part(
+                    "agent",
+                    "--connect",
+                    endpoint,
+                    "--swarm",
+                    swarm,
+                    "--robot",
+                    "0",
+                    "--seed",
+                    "1",
+                    "--log-level",
+                    "info",
+                ),
+                stdout=out,
+                stderr=out,
+            )
         try:
             first, query = _next(looks, log)
             assert first == LookRequest()
             view = np.array([[6.0, 0.0]])
-            query.reply(query.key_expr, Snapshot(1, 2, "uniform-circle", {"a": 4.0}, view,
-                                                 epoch=5).encode())
+            query.reply(
+                query.key_expr, Snapshot(1, 2, "uniform-circle", {"a": 4.0}, view, epoch=5).encode()
+            )
             query.drop()
             second, query = _next(looks, log)  # the agent moved and Looks again: held here
             held.append(query)

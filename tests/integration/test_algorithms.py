@@ -18,8 +18,17 @@ EXAMPLE = str(Path(__file__).resolve().parents[2] / "examples" / "spread_out.py"
 
 def _networked(tmp_path: Path, *flags: str) -> Path:
     record = tmp_path / "net.jsonl"
-    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", "--no-dashboard", "-q",
-            "--record", str(record), *flags]
+    argv = [
+        sys.executable,
+        "-m",
+        "fatswarm.deploy.cli",
+        "run",
+        "--no-dashboard",
+        "-q",
+        "--record",
+        str(record),
+        *flags,
+    ]
     done = subprocess.run(argv, capture_output=True, text=True, timeout=240, check=False)
     assert done.returncode == 0, done.stdout + done.stderr
     assert "formed in" in done.stdout, done.stdout
@@ -37,11 +46,13 @@ def _networked(tmp_path: Path, *flags: str) -> Path:
 def test_a_networked_run_of_another_algorithm_records_the_lockstep_run(
     tmp_path: Path, algorithm: str, params: dict[str, str], flags: tuple[str, ...]
 ) -> None:
-    net = _networked(tmp_path, "-n", "5", "--seed", "3", "--scheduler", "ssync",
-                     "--algorithm", algorithm, *flags)
+    net = _networked(
+        tmp_path, "-n", "5", "--seed", "3", "--scheduler", "ssync", "--algorithm", algorithm, *flags
+    )
     lock = tmp_path / "lock.jsonl"
-    result = fatswarm.run(5, algorithm=algorithm, params=params, seed=3, scheduler="ssync",
-                          record=lock)
+    result = fatswarm.run(
+        5, algorithm=algorithm, params=params, seed=3, scheduler="ssync", record=lock
+    )
     assert result.status == "formed" and result.collisions == 0
     assert_same_run(read_record(net), read_record(lock))
     header = read_record(net).header

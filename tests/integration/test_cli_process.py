@@ -84,8 +84,14 @@ def started() -> Iterator[list[subprocess.Popen[bytes]]]:
 
 
 def _start(procs: list[subprocess.Popen[bytes]], argv: list[str]) -> subprocess.Popen[bytes]:
-    proc = subprocess.Popen([*FATSWARM, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            cwd=ROOT, start_new_session=True, preexec_fn=_default_sigint)
+    proc = subprocess.Popen(
+        [*FATSWARM, *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        cwd=ROOT,
+        start_new_session=True,
+        preexec_fn=_default_sigint,
+    )
     procs.append(proc)
     return proc
 
@@ -103,8 +109,21 @@ def test_a_signalled_lockstep_run_exits_128_plus_the_signal_with_its_record_clos
 ) -> None:
     target = tmp_path / "run.jsonl"
     # centralized, n = 200: about a minute, long enough to be signalled mid-run
-    proc = _start(started, ["run", "--lockstep", "-n", "200", "--seed", "1", "--scheduler",
-                            "centralized", "--record", str(target)])
+    proc = _start(
+        started,
+        [
+            "run",
+            "--lockstep",
+            "-n",
+            "200",
+            "--seed",
+            "1",
+            "--scheduler",
+            "centralized",
+            "--record",
+            str(target),
+        ],
+    )
     assert proc.stderr is not None and proc.stdout is not None
     err = Lines(proc.stderr)
     assert err.wait_for(lambda line: line.startswith("round ")), err.text()  # a progress line
@@ -143,22 +162,31 @@ def test_ctrl_c_to_a_networked_run_exits_130_and_stops_every_process(
     assert not [pid for pid in children if running(pid)]
 
 
-@pytest.mark.parametrize(("part", "said"), [("agents", "the agents' process"),
-                                            ("coordinator", "the coordinator process")])
+@pytest.mark.parametrize(
+    ("part", "said"),
+    [("agents", "the agents' process"), ("coordinator", "the coordinator process")],
+)
 def test_a_networked_run_whose_part_dies_ends_with_1_and_says_which(
-    started: list[subprocess.Popen[bytes]], tmp_path: Path, part: str, said: str,
+    started: list[subprocess.Popen[bytes]],
+    tmp_path: Path,
+    part: str,
+    said: str,
 ) -> None:
     n = 3
     record = tmp_path / "run.jsonl"
-    proc = _start(started, ["run", "-n", str(n), "--seed", "1", "--pace", "0.5", "-q",
-                            "--record", str(record)])
+    proc = _start(
+        started,
+        ["run", "-n", str(n), "--seed", "1", "--pace", "0.5", "-q", "--record", str(record)],
+    )
     assert proc.stderr is not None
     err = Lines(proc.stderr)
     children = _all_started(proc, n, err)
-    victim = next(p for p in children  # the launcher's own child (agents are forked copies)
-                  if part.encode() in Path(f"/proc/{p}/cmdline").read_bytes().split(b"\0")
-                  and Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1].split()[1]
-                  == str(proc.pid))
+    victim = next(
+        p
+        for p in children  # the launcher's own child (agents are forked copies)
+        if part.encode() in Path(f"/proc/{p}/cmdline").read_bytes().split(b"\0")
+        and Path(f"/proc/{p}/stat").read_text().rsplit(")", 1)[1].split()[1] == str(proc.pid)
+    )
     os.kill(victim, signal.SIGKILL)
     assert proc.wait(timeout=DEADLINE_S) == 1, err.text()
     text = err.text()
@@ -172,16 +200,24 @@ def test_a_networked_run_whose_part_dies_ends_with_1_and_says_which(
 
 @pytest.mark.parametrize(
     "argv",
-    [["--help"], ["run", "--lockstep", "-n", "8", "--seed", "1", "-q"],
-     ["run", "--lockstep", "-n", "8", "--seed", "1", "-q", "--json"]],
+    [
+        ["--help"],
+        ["run", "--lockstep", "-n", "8", "--seed", "1", "-q"],
+        ["run", "--lockstep", "-n", "8", "--seed", "1", "-q", "--json"],
+    ],
     ids=["help", "run", "run-json"],
 )
 def test_a_closed_stdout_ends_quietly_with_141(argv: list[str]) -> None:
     read_end, write_end = os.pipe()
     os.close(read_end)  # as `| head -1` once it has its line: every write fails with EPIPE
     try:
-        done = subprocess.run([*FATSWARM, *argv], stdout=write_end, stderr=subprocess.PIPE,
-                              cwd=ROOT, timeout=DEADLINE_S)
+        done = subprocess.run(
+            [*FATSWARM, *argv],
+            stdout=write_end,
+            stderr=subprocess.PIPE,
+            cwd=ROOT,
+            timeout=DEADLINE_S,
+        )
     finally:
         os.close(write_end)
     assert done.returncode == 141, done.stderr
@@ -190,8 +226,9 @@ def test_a_closed_stdout_ends_quietly_with_141(argv: list[str]) -> None:
 
 def test_a_run_piped_into_head_prints_its_verdict_and_no_traceback() -> None:
     command = " ".join([*FATSWARM, "run", "--lockstep", "-n", "8", "--seed", "1", "-q"])
-    done = subprocess.run(["sh", "-c", f"{command} | head -1"], capture_output=True, cwd=ROOT,
-                          timeout=DEADLINE_S)
+    done = subprocess.run(
+        ["sh", "-c", f"{command} | head -1"], capture_output=True, cwd=ROOT, timeout=DEADLINE_S
+    )
     assert re.fullmatch(rb"formed in \d+ rounds, collision-free\n", done.stdout), done.stdout
     assert done.stderr == b""
 
@@ -203,8 +240,21 @@ def test_a_networked_json_run_prints_one_object_on_stdout_and_progress_on_stderr
     tmp_path: Path, started: list[subprocess.Popen[bytes]]
 ) -> None:
     target = tmp_path / "net.jsonl"
-    proc = _start(started, ["run", "-n", "4", "--seed", "2", "--scheduler", "fsync",
-                            "--record", str(target), "--json"])
+    proc = _start(
+        started,
+        [
+            "run",
+            "-n",
+            "4",
+            "--seed",
+            "2",
+            "--scheduler",
+            "fsync",
+            "--record",
+            str(target),
+            "--json",
+        ],
+    )
     out, err = proc.communicate(timeout=240)
     assert proc.returncode == 0, err.decode(errors="replace")[-3000:]
     (line,) = out.decode().splitlines()

@@ -37,12 +37,12 @@ ANSI = re.compile(
 )
 COMMAND_MAIN = (
     "import argparse, sys\n"
-    "from fatswarm.deploy import {module} as m\n"
+    "from fatswarm.deploy.view import {module} as m\n"
     "p = argparse.ArgumentParser()\n"
     "m.add_arguments(p)\n"
     "sys.exit(m.main(p.parse_args(sys.argv[1:])))\n"
 )
-DASHBOARD_MAIN = COMMAND_MAIN.format(module="dashboard")
+DASHBOARD_MAIN = COMMAND_MAIN.replace("deploy.view", "deploy.net").format(module="watch")
 REPLAY_MAIN = COMMAND_MAIN.format(module="replay")
 
 

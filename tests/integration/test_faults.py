@@ -23,8 +23,10 @@ def _campaign() -> ModuleType:
     return module
 
 
-@pytest.mark.parametrize("role", ["agent", "agents-fork", "agents-exec", "world", "coordinator",
-                                  "router", "world-router"])
+@pytest.mark.parametrize(
+    "role",
+    ["agent", "agents-fork", "agents-exec", "world", "coordinator", "router", "world-router"],
+)
 @pytest.mark.parametrize("fault", ["kill", "stop"])
 def test_a_fault_of_any_role_leaves_a_formed_clean_run_and_nothing_behind(
     role: str, fault: str

@@ -31,9 +31,14 @@ def _limited(size: int) -> Callable[[], None]:
 
 
 def _fatswarm(*argv: str, limit: int | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "fatswarm.deploy.cli", "run", "-q", *argv],
-                          capture_output=True, text=True, timeout=240, check=False,
-                          preexec_fn=None if limit is None else _limited(limit))
+    return subprocess.run(
+        [sys.executable, "-m", "fatswarm.deploy.cli", "run", "-q", *argv],
+        capture_output=True,
+        text=True,
+        timeout=240,
+        check=False,
+        preexec_fn=None if limit is None else _limited(limit),
+    )
 
 
 def test_a_full_disk_stops_the_run_with_one_line_and_resume_finishes_it_identically(

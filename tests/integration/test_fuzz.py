@@ -10,15 +10,24 @@ import msgpack
 import pytest
 from netharness import Swarm, assert_same_run, lockstep_record
 
-from fatswarm.deploy.zconf import make_config
+from fatswarm.deploy.net.zconf import make_config
 from fatswarm.domain.wire import PROTOCOL_VERSION
 from fatswarm.world.protocol import Hello
 from fatswarm.world.record import read_record
 
 pytestmark = pytest.mark.integration
 SEED = 11
-KINDS = ("move", "state", "round-start", "move-held", "snapshot", "hello", "begin", "commit",
-         "control-reply")
+KINDS = (
+    "move",
+    "state",
+    "round-start",
+    "move-held",
+    "snapshot",
+    "hello",
+    "begin",
+    "commit",
+    "control-reply",
+)
 
 
 def _rss_kb(pid: int) -> int:
@@ -36,11 +45,37 @@ def _garbage(rng: random.Random) -> bytes:
         return rng.randbytes(rng.randint(1, 3) << 20)  # megabytes
     if pick < 0.5:
         return rng.randbytes(rng.randint(0, 600))
-    junk: object = rng.choice([None, True, -1, 2**40, 1e308, "x" * rng.randint(0, 900), [1] * 50,
-                               {"a": 1}, b"\x00" * rng.randint(0, 400)])
+    junk: object = rng.choice(
+        [
+            None,
+            True,
+            -1,
+            2**40,
+            1e308,
+            "x" * rng.randint(0, 900),
+            [1] * 50,
+            {"a": 1},
+            b"\x00" * rng.randint(0, 400),
+        ]
+    )
     fields = {"v": rng.choice([PROTOCOL_VERSION, 1, "2"]), "t": rng.choice(KINDS)}
-    for key in rng.sample(["robot", "round", "path", "active", "view", "n", "params", "held",
-                           "status", "positions", "algorithm", "timed_out"], 4):
+    for key in rng.sample(
+        [
+            "robot",
+            "round",
+            "path",
+            "active",
+            "view",
+            "n",
+            "params",
+            "held",
+            "status",
+            "positions",
+            "algorithm",
+            "timed_out",
+        ],
+        4,
+    ):
         fields[key] = junk
     out: bytes = msgpack.packb(fields, use_bin_type=True)
     return out
@@ -54,9 +89,15 @@ def fuzz(sw: Swarm, count: int, seed: int) -> None:
     rng = random.Random(seed)
     rogue = zenoh.open(make_config("client", [sw.endpoint], shared_memory=False))
     root = f"fatswarm/{sw.swarm}"
-    subscribed = [f"{root}/robot/{rng.randint(0, 9)}/move", f"{root}/coordinator/round",
-                  f"{root}/world/moves", f"{root}/world/state", f"{root}/robot/x/move"]
+    subscribed = [
+        f"{root}/robot/{rng.randint(0, 9)}/move",
+        f"{root}/coordinator/round",
+        f"{root}/world/moves",
+        f"{root}/world/state",
+        f"{root}/robot/x/move",
+    ]
     queried = [f"{root}/world/control", f"{root}/robot/3/snapshot", f"{root}/robot/77/snapshot"]
+
     def answered() -> bool:
         replies = rogue.get(f"{root}/world/control", payload=Hello().encode(), timeout=1.0)
         return any(r.ok is not None for r in replies)
@@ -72,8 +113,9 @@ def fuzz(sw: Swarm, count: int, seed: int) -> None:
         sw.wait_for("the world to have taken all in", answered)  # behind them on the link
 
 
-def _fuzzed_run(tmp_path: Path, make_swarm: Callable[..., Swarm], count: int,
-                in_world: bool = False) -> None:
+def _fuzzed_run(
+    tmp_path: Path, make_swarm: Callable[..., Swarm], count: int, in_world: bool = False
+) -> None:
     sw = make_swarm(6, SEED)
     sw.start_all(pace=0.05, in_world=in_world)
     sw.wait_for("round 2", lambda: (s := sw.state()) is not None and s.round >= 2)
@@ -92,8 +134,11 @@ def _fuzzed_run(tmp_path: Path, make_swarm: Callable[..., Swarm], count: int,
     assert ended == {"coordinator": 0}, ended  # nothing else ends, nor crashes
     assert_same_run(read_record(sw.state_path), lockstep_record(tmp_path / "lock.jsonl", 6, SEED))
     assert after <= before * 1.2, f"the floods grew the world from {before} kB to {after} kB"
-    longest = max(len(line) for name in ("world", "coordinator", "agent 0")
-                  for line in sw.log(name).splitlines())
+    longest = max(
+        len(line)
+        for name in ("world", "coordinator", "agent 0")
+        for line in sw.log(name).splitlines()
+    )
     assert longest < 600, f"a log line of {longest} characters"
 
 

@@ -34,20 +34,21 @@ pytestmark = pytest.mark.integration
 SEED = 3  # a start that needs SEC expansion and forms under ssync for n = 8 and n = 24
 
 
-def _run_cli(
-    tmp_path: Path, n: int, seed: int, cwd: Path | None = None
-) -> tuple[int, str, Path]:
+def _run_cli(tmp_path: Path, n: int, seed: int, cwd: Path | None = None) -> tuple[int, str, Path]:
     record = tmp_path / "net.jsonl"
-    code, out = _fatswarm_run(["-n", str(n), "--seed", str(seed), "--scheduler", "ssync",
-                               "--record", str(record), "-q"], cwd)
+    code, out = _fatswarm_run(
+        ["-n", str(n), "--seed", str(seed), "--scheduler", "ssync", "--record", str(record), "-q"],
+        cwd,
+    )
     return code, out, record
 
 
 def _fatswarm_run(flags: list[str], cwd: Path | None = None) -> tuple[int, str]:
     """`fatswarm run FLAGS` in its own process group: exit code and output (killed after 240 s)."""
     argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", *flags]
-    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            start_new_session=True, cwd=cwd)
+    proc = subprocess.Popen(
+        argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True, cwd=cwd
+    )
     try:
         out, _ = proc.communicate(timeout=240)
     finally:
@@ -91,8 +92,9 @@ def test_parts_connected_to_a_world_hosting_the_router_record_the_lockstep_run(
     sw.start_all(pace=0.0, in_world=True)
     done = sw.wait_done()
     assert done.status == "formed", sw.logs()
-    assert_same_run(read_record(sw.state_path),
-                    lockstep_record(sw.tmp / "lock.jsonl", 6, SEED, sw.scheduler))
+    assert_same_run(
+        read_record(sw.state_path), lockstep_record(sw.tmp / "lock.jsonl", 6, SEED, sw.scheduler)
+    )
 
 
 def test_a_killed_agent_stays_an_obstacle_and_a_restarted_one_rejoins(
@@ -104,14 +106,22 @@ def test_a_killed_agent_stays_an_obstacle_and_a_restarted_one_rejoins(
     victim = 5
     sw.kill9(f"agent {victim}")
     killed_at = time.monotonic()
-    sw.wait_for("the coordinator to see the agent gone",
-                lambda: f"agent {victim} is gone" in sw.log("coordinator"), deadline_s=2.0)
+    sw.wait_for(
+        "the coordinator to see the agent gone",
+        lambda: f"agent {victim} is gone" in sw.log("coordinator"),
+        deadline_s=2.0,
+    )
     seen_gone_s = time.monotonic() - killed_at
     state = sw.state()
     assert state is not None
     gone_round = state.round
-    sw.wait_for("three rounds without it", lambda: ((s := sw.state()) is not None
-                and s.round >= gone_round + 3) or (s is not None and s.status != "running"))
+    sw.wait_for(
+        "three rounds without it",
+        lambda: (
+            ((s := sw.state()) is not None and s.round >= gone_round + 3)
+            or (s is not None and s.status != "running")
+        ),
+    )
     sw.start_agent(victim, name="agent again")
     sw.wait_for("it to rejoin", lambda: (s := sw.state()) is not None and s.agents[victim].alive)
     back = sw.state()
@@ -163,6 +173,7 @@ def test_a_restarted_coordinator_continues_from_the_last_committed_round(
     # the scheduler is replayed, so the run is still the lockstep run
     assert_same_run(read_record(sw.state_path), lockstep_record(tmp_path / "lock.jsonl", 8, SEED))
 
+
 def test_a_foreign_client_changes_nothing_and_crashes_nothing(
     tmp_path: Path, make_swarm: Callable[..., Swarm]
 ) -> None:
@@ -202,8 +213,14 @@ def test_a_foreign_client_changes_nothing_and_crashes_nothing(
     end = sw.wait_done()
     assert end.status == "formed"
     log = sw.log("world")
-    for reason in ("move-garbage", "move-wrong-robot", "move-wrong-round", "move-not-active",
-                   "control-garbage", "look-garbage"):
+    for reason in (
+        "move-garbage",
+        "move-wrong-robot",
+        "move-wrong-round",
+        "move-not-active",
+        "control-garbage",
+        "look-garbage",
+    ):
         assert f"rejected ({reason})" in log, reason
     assert sw.children.procs["world"].poll() is None, "the world crashed"
     assert_same_run(read_record(sw.state_path), lockstep_record(tmp_path / "lock.jsonl", 8, SEED))
@@ -242,8 +259,19 @@ def _wait_for_parts(proc: subprocess.Popen[bytes], n: int) -> list[int]:
 
 
 def _paced_launcher(n: int, output: int | None) -> subprocess.Popen[bytes]:
-    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", "-n", str(n), "--seed", "1",
-            "--pace", "0.5", "-q"]
+    argv = [
+        sys.executable,
+        "-m",
+        "fatswarm.deploy.cli",
+        "run",
+        "-n",
+        str(n),
+        "--seed",
+        "1",
+        "--pace",
+        "0.5",
+        "-q",
+    ]
     return subprocess.Popen(argv, stdout=output, stderr=output, start_new_session=True)
 
 
@@ -270,20 +298,38 @@ def test_sigterm_to_the_launcher_stops_every_process_it_started(tmp_path: Path) 
 @pytest.mark.parametrize("n", [64, pytest.param(512, marks=pytest.mark.timeout(2400))])
 def test_n_agent_processes_under_fsync_record_the_lockstep_run(tmp_path: Path, n: int) -> None:
     record = tmp_path / "net.jsonl"
-    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", "-n", str(n), "--seed", "2",
-            "--scheduler", "fsync", "--record", str(record), "-q"]
+    argv = [
+        sys.executable,
+        "-m",
+        "fatswarm.deploy.cli",
+        "run",
+        "-n",
+        str(n),
+        "--seed",
+        "2",
+        "--scheduler",
+        "fsync",
+        "--record",
+        str(record),
+        "-q",
+    ]
     done = subprocess.run(argv, capture_output=True, timeout=60 + 4 * n, check=False)
     assert done.returncode == 0, done.stdout + done.stderr
     lock = tmp_path / "lock.jsonl"
     from fatswarm.agent.params import Params
     from fatswarm.coordinator.schedule import make_scheduler
-    from fatswarm.deploy.lockstep import run_lockstep
+    from fatswarm.deploy.engine.lockstep import run_lockstep
+    from fatswarm.deploy.scenarios.starts import random_start
     from fatswarm.world.record import RecordWriter
-    from fatswarm.world.starts import random_start
 
     with RecordWriter(lock) as rec:
-        run_lockstep(random_start(n, 2, "clustered", 4.0), Params(n, 4.0),
-                     make_scheduler("fsync", n, 2), seed=2, record=rec)
+        run_lockstep(
+            random_start(n, 2, "clustered", 4.0),
+            Params(n, 4.0),
+            make_scheduler("fsync", n, 2),
+            seed=2,
+            record=rec,
+        )
     assert_same_run(read_record(record), read_record(lock))
 
 
@@ -296,11 +342,13 @@ def test_a_hung_agent_is_seen_gone_by_its_lease_and_rejoins_when_it_wakes(
     sw.wait_for("round 3", lambda: (s := sw.state()) is not None and s.round >= 3)
     victim = 2
     sw.children.stop(f"agent {victim}", signal.SIGSTOP)
-    sw.wait_for("the lease to expire", lambda: f"agent {victim} is gone" in sw.log("coordinator"),
-                deadline_s=5.0)
+    sw.wait_for(
+        "the lease to expire",
+        lambda: f"agent {victim} is gone" in sw.log("coordinator"),
+        deadline_s=5.0,
+    )
     sw.children.stop(f"agent {victim}", signal.SIGCONT)
-    sw.wait_for("it to come back", lambda: (s := sw.state()) is not None
-                and s.agents[victim].alive)
+    sw.wait_for("it to come back", lambda: (s := sw.state()) is not None and s.agents[victim].alive)
     assert sw.wait_done().status == "formed"
 
 
@@ -357,72 +405,123 @@ def test_a_robot_dead_for_good_counts_as_crashed_and_the_run_ends(
 def test_a_non_rigid_run_records_the_lockstep_run_with_the_same_delta(tmp_path: Path) -> None:
     # the adversary's cuts are the world core's, drawn from the seed: the same in both modes
     record = tmp_path / "net.jsonl"
-    code, out = _fatswarm_run(["-n", "6", "--seed", str(SEED), "--scheduler", "fsync",
-                               "--non-rigid", "1", "--record", str(record), "-q"])
+    code, out = _fatswarm_run(
+        [
+            "-n",
+            "6",
+            "--seed",
+            str(SEED),
+            "--scheduler",
+            "fsync",
+            "--non-rigid",
+            "1",
+            "--record",
+            str(record),
+            "-q",
+        ]
+    )
     assert code == 0, out
     net = read_record(str(record))
     assert net.header.extra["non_rigid"] == 1.0
     assert any(entry.extra.get("cut") for entry in net.rounds)
     from fatswarm.agent.params import Params
     from fatswarm.coordinator.schedule import make_scheduler
-    from fatswarm.deploy.lockstep import run_lockstep
+    from fatswarm.deploy.engine.lockstep import run_lockstep
+    from fatswarm.deploy.scenarios.starts import random_start
     from fatswarm.world.record import RecordWriter
-    from fatswarm.world.starts import random_start
 
     lock = tmp_path / "lock.jsonl"
     with RecordWriter(lock) as rec:
-        run_lockstep(random_start(6, SEED, "clustered", 4.0), Params(6, 4.0),
-                     make_scheduler("fsync", 6, SEED), seed=SEED, record=rec, non_rigid=1.0)
+        run_lockstep(
+            random_start(6, SEED, "clustered", 4.0),
+            Params(6, 4.0),
+            make_scheduler("fsync", 6, SEED),
+            seed=SEED,
+            record=rec,
+            non_rigid=1.0,
+        )
     assert_same_run(net, read_record(str(lock)))
 
 
 def test_a_crash_run_records_the_lockstep_run_with_the_same_crashes(tmp_path: Path) -> None:
     # the crash adversary's plan is the world core's, drawn from the seed: the same in both modes
     record = tmp_path / "net.jsonl"
-    code, out = _fatswarm_run(["-n", "6", "--seed", str(SEED), "--scheduler", "fsync",
-                               "--crash", "1", "--record", str(record), "-q"])
+    code, out = _fatswarm_run(
+        [
+            "-n",
+            "6",
+            "--seed",
+            str(SEED),
+            "--scheduler",
+            "fsync",
+            "--crash",
+            "1",
+            "--record",
+            str(record),
+            "-q",
+        ]
+    )
     net = read_record(str(record))
     assert net.header.extra["crash"] == 1
     assert any(entry.extra.get("crash") for entry in net.rounds)
     assert net.result is not None and code == (0 if net.result.status == "formed" else 1), out
     from fatswarm.agent.params import Params
     from fatswarm.coordinator.schedule import make_scheduler
-    from fatswarm.deploy.lockstep import run_lockstep
+    from fatswarm.deploy.engine.lockstep import run_lockstep
+    from fatswarm.deploy.scenarios.starts import random_start
     from fatswarm.world.record import RecordWriter
-    from fatswarm.world.starts import random_start
 
     lock = tmp_path / "lock.jsonl"
     with RecordWriter(lock) as rec:
-        run_lockstep(random_start(6, SEED, "clustered", 4.0), Params(6, 4.0),
-                     make_scheduler("fsync", 6, SEED), seed=SEED, record=rec, crash=1)
+        run_lockstep(
+            random_start(6, SEED, "clustered", 4.0),
+            Params(6, 4.0),
+            make_scheduler("fsync", 6, SEED),
+            seed=SEED,
+            record=rec,
+            crash=1,
+        )
     assert_same_run(net, read_record(str(lock)))
 
 
-@pytest.mark.parametrize(("scheduler", "flags"), [
-    ("async", []), ("async-slowest", []), ("async", ["--crash", "1", "--non-rigid", "0.5"]),
-])
+@pytest.mark.parametrize(
+    ("scheduler", "flags"),
+    [
+        ("async", []),
+        ("async-slowest", []),
+        ("async", ["--crash", "1", "--non-rigid", "0.5"]),
+    ],
+)
 def test_an_async_run_records_the_lockstep_run_instant_by_instant(
-        tmp_path: Path, scheduler: str, flags: list[str]) -> None:
+    tmp_path: Path, scheduler: str, flags: list[str]
+) -> None:
     # the coordinator is the adversary and the clock, the world runs the moves between instants:
     # the same cores as the lock step, so the same cycles, virtual times and positions
     record = tmp_path / "net.jsonl"
-    code, out = _fatswarm_run(["-n", "5", "--seed", "2", "--scheduler", scheduler, *flags,
-                               "--record", str(record), "-q"])
+    code, out = _fatswarm_run(
+        ["-n", "5", "--seed", "2", "--scheduler", scheduler, *flags, "--record", str(record), "-q"]
+    )
     net = read_record(str(record))
     assert net.header.scheduler == scheduler
     assert all({"look", "start", "end", "origin"} <= set(e.extra) for e in net.rounds)
     assert net.result is not None and code == (0 if net.result.status == "formed" else 1), out
     from fatswarm.agent.params import Params
     from fatswarm.coordinator.schedule import make_scheduler
-    from fatswarm.deploy.lockstep import run_lockstep
+    from fatswarm.deploy.engine.lockstep import run_lockstep
+    from fatswarm.deploy.scenarios.starts import random_start
     from fatswarm.world.record import RecordWriter
-    from fatswarm.world.starts import random_start
 
     lock = tmp_path / "lock.jsonl"
     crash = 1 if "--crash" in flags else None
     non_rigid = 0.5 if "--non-rigid" in flags else None
     with RecordWriter(lock) as rec:
-        run_lockstep(random_start(5, 2, "clustered", 4.0), Params(5, 4.0),
-                     make_scheduler(scheduler, 5, 2), seed=2, record=rec, crash=crash,
-                     non_rigid=non_rigid)
+        run_lockstep(
+            random_start(5, 2, "clustered", 4.0),
+            Params(5, 4.0),
+            make_scheduler(scheduler, 5, 2),
+            seed=2,
+            record=rec,
+            crash=crash,
+            non_rigid=non_rigid,
+        )
     assert_same_run(net, read_record(str(lock)))

@@ -19,8 +19,10 @@ OTHER_SEED = 7  # another start that forms: a swarm mixed with the first would n
 
 
 def _refusal(part_name: str, swarm: str) -> str:
-    return (f"fatswarm {part_name}: swarm '{swarm}' already has a {part_name} on this router "
-            "network; stop it or pick another --swarm")
+    return (
+        f"fatswarm {part_name}: swarm '{swarm}' already has a {part_name} on this router "
+        "network; stop it or pick another --swarm"
+    )
 
 
 def test_a_second_world_or_coordinator_on_a_swarm_is_refused_in_one_line(
@@ -31,9 +33,10 @@ def test_a_second_world_or_coordinator_on_a_swarm_is_refused_in_one_line(
     sw.observe()
     sw.start_world()
     sw.start_coordinator(pace=0.0)  # no agents yet: it waits for them, so both stay up
-    sw.wait_for("the world's and the coordinator's tokens",
-                lambda: sw.live(world_alive_key(sw.swarm))
-                and sw.live(coordinator_alive_key(sw.swarm)))
+    sw.wait_for(
+        "the world's and the coordinator's tokens",
+        lambda: sw.live(world_alive_key(sw.swarm)) and sw.live(coordinator_alive_key(sw.swarm)),
+    )
     state_before = sw.state_path.read_bytes()
     other_state = tmp_path / "second.jsonl"
     world_new, world_same, coordinator = run_all(
@@ -51,8 +54,9 @@ def test_a_second_world_or_coordinator_on_a_swarm_is_refused_in_one_line(
         sw.start_agent(robot)
     end = sw.wait_done()  # and run as if nothing had happened
     assert end.status == "formed" and end.collisions_total == 0, sw.logs()
-    assert_same_run(read_record(sw.state_path),
-                    lockstep_record(tmp_path / "lock.jsonl", sw.n, SEED))
+    assert_same_run(
+        read_record(sw.state_path), lockstep_record(tmp_path / "lock.jsonl", sw.n, SEED)
+    )
 
 
 def test_a_second_swarm_on_the_same_router_runs_alongside_unmixed(
@@ -60,13 +64,15 @@ def test_a_second_swarm_on_the_same_router_runs_alongside_unmixed(
 ) -> None:
     first = make_swarm(4, SEED)
     first.start_all(pace=0.05)
-    first.wait_for("the first swarm's round 1", lambda: (s := first.state()) is not None
-                   and s.round >= 1)
+    first.wait_for(
+        "the first swarm's round 1", lambda: (s := first.state()) is not None and s.round >= 1
+    )
     second = make_swarm(4, OTHER_SEED, endpoint=first.endpoint)
     second.start_all(pace=0.05, router=False)
     for sw, seed in ((first, SEED), (second, OTHER_SEED)):
         end = sw.wait_done()
         assert end.status == "formed" and end.collisions_total == 0, sw.logs()
-        assert_same_run(read_record(sw.state_path),
-                        lockstep_record(tmp_path / f"lock-{seed}.jsonl", sw.n, seed))
+        assert_same_run(
+            read_record(sw.state_path), lockstep_record(tmp_path / f"lock-{seed}.jsonl", sw.n, seed)
+        )
     assert "already has" not in first.logs() + second.logs()

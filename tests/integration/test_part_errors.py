@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 from netharness import assert_one_line, descendants_of, part, run_all, running
 
-from fatswarm.deploy.launcher import Children
-from fatswarm.deploy.zconf import (
+from fatswarm.deploy.net.children import Children
+from fatswarm.deploy.net.zconf import (
     CONNECT_DEADLINE_S,
     ZenohSetupError,
     check_network,
@@ -26,8 +26,6 @@ from fatswarm.deploy.zconf import (
 pytestmark = pytest.mark.integration
 
 DEADLINE_S = 60.0  # generous: the machine is shared; waits are on predicates
-
-
 
 
 def test_world_and_coordinator_give_up_on_a_dead_router_in_one_line(tmp_path: Path) -> None:
@@ -45,18 +43,25 @@ def test_world_and_coordinator_give_up_on_a_dead_router_in_one_line(tmp_path: Pa
 
 def test_the_help_of_world_and_coordinator_says_how_long_they_wait_for_a_router() -> None:
     for name in ("world", "coordinator"):
-        done = subprocess.run(part(name, "--help"), capture_output=True, text=True,
-                              timeout=DEADLINE_S, check=False)
+        done = subprocess.run(
+            part(name, "--help"), capture_output=True, text=True, timeout=DEADLINE_S, check=False
+        )
         assert re.search(rf"within\s+{CONNECT_DEADLINE_S:g}\s+s", done.stdout), done.stdout
 
 
 @pytest.mark.parametrize(
     ("name", "flags", "said"),
     [
-        ("world", ["--connect", "garbage", "--state", "unused.jsonl"],
-         "bad --connect endpoint 'garbage': write <protocol>/<address>"),
-        ("world", ["--connect", "tcp/notanip:x", "--state", "unused.jsonl"],
-         "bad --connect endpoint 'tcp/notanip:x': the port must be a whole number"),
+        (
+            "world",
+            ["--connect", "garbage", "--state", "unused.jsonl"],
+            "bad --connect endpoint 'garbage': write <protocol>/<address>",
+        ),
+        (
+            "world",
+            ["--connect", "tcp/notanip:x", "--state", "unused.jsonl"],
+            "bad --connect endpoint 'tcp/notanip:x': the port must be a whole number",
+        ),
         ("coordinator", ["--connect", "garbage"], "bad --connect endpoint 'garbage'"),
         ("coordinator", ["--connect", "tcp/notanip:x"], "bad --connect endpoint 'tcp/notanip:x'"),
         ("router", ["--listen", "garbage"], "bad --listen endpoint 'garbage'"),
@@ -68,34 +73,50 @@ def test_the_help_of_world_and_coordinator_says_how_long_they_wait_for_a_router(
 def test_a_malformed_endpoint_exits_2_in_one_line(
     tmp_path: Path, name: str, flags: list[str], said: str
 ) -> None:
-    (done,) = run_all(part(name, *[str(tmp_path / f) if f.endswith(".jsonl") else f
-                                   for f in flags]))
+    (done,) = run_all(
+        part(name, *[str(tmp_path / f) if f.endswith(".jsonl") else f for f in flags])
+    )
     assert_one_line(done, f"fatswarm {name}: {said}")
     assert not (tmp_path / "unused.jsonl").exists()
 
 
 def test_a_router_on_a_port_in_use_exits_2_in_one_line(busy_port: int) -> None:
     (done,) = run_all(part("router", "--listen", f"tcp/127.0.0.1:{busy_port}"))
-    assert_one_line(done, f"fatswarm router: cannot listen on tcp/127.0.0.1:{busy_port}: "
-                    "address already in use")
+    assert_one_line(
+        done, f"fatswarm router: cannot listen on tcp/127.0.0.1:{busy_port}: address already in use"
+    )
 
 
 def test_a_world_hosting_the_router_on_a_port_in_use_exits_2_in_one_line(
     tmp_path: Path, busy_port: int
 ) -> None:
     state = tmp_path / "state.jsonl"
-    (done,) = run_all(part("world", "--router", "--listen", f"tcp/127.0.0.1:{busy_port}",
-                           "--state", str(state), "-n", "4"))
-    assert_one_line(done, f"fatswarm world: cannot listen on tcp/127.0.0.1:{busy_port}: "
-                    "address already in use")
+    (done,) = run_all(
+        part(
+            "world",
+            "--router",
+            "--listen",
+            f"tcp/127.0.0.1:{busy_port}",
+            "--state",
+            str(state),
+            "-n",
+            "4",
+        )
+    )
+    assert_one_line(
+        done, f"fatswarm world: cannot listen on tcp/127.0.0.1:{busy_port}: address already in use"
+    )
     assert not state.exists()  # no run record for a world that never served
 
 
 def test_a_world_hosting_the_router_refuses_a_config_file_in_one_line(tmp_path: Path) -> None:
     config = tmp_path / "world.json5"
     config.write_text("{}\n")
-    (done,) = run_all(part("world", "--router", "--config", str(config),
-                           "--state", str(tmp_path / "unused.jsonl")))
+    (done,) = run_all(
+        part(
+            "world", "--router", "--config", str(config), "--state", str(tmp_path / "unused.jsonl")
+        )
+    )
     assert_one_line(done, "fatswarm world: --router hosts a router without access control")
     assert not (tmp_path / "unused.jsonl").exists()
 
@@ -125,8 +146,10 @@ def test_agents_say_every_few_seconds_that_they_wait_for_a_router_and_where(
     hosts = {  # name -> (argv, who the notice names)
         "agent": (part("agent", *net, "--robot", "7"), "robot 7"),
         "agents": (part("agents", *net, "-n", "3", "--first", "0"), "robots 0..2"),
-        "agents-exec": (part("agents", *net, "-n", "2", "--first", "3", "--spawn", "exec"),
-                        "robots 3..4"),
+        "agents-exec": (
+            part("agents", *net, "-n", "2", "--first", "3", "--spawn", "exec"),
+            "robots 3..4",
+        ),
     }
 
     def log(name: str) -> str:
@@ -142,16 +165,21 @@ def test_agents_say_every_few_seconds_that_they_wait_for_a_router_and_where(
                 children.start(name, argv, stdout=out, stderr=out)
         for name, (_, who) in hosts.items():
             notice = f"{who}: still waiting for a Zenoh router at {endpoint} ("
-            _wait_for(f"{name}'s second notice",
-                      lambda notice=notice, name=name: log(name).count(notice) >= 2, logs)
+            _wait_for(
+                f"{name}'s second notice",
+                lambda notice=notice, name=name: log(name).count(notice) >= 2,
+                logs,
+            )
         assert not children.exited(), logs()  # waiting, by design: not giving up
         with open(tmp_path / "router.log", "wb") as out:
-            children.start("router", part("router", "--listen", endpoint), stdout=out,
-                           stderr=out)
+            children.start("router", part("router", "--listen", endpoint), stdout=out, stderr=out)
         for name, (_, who) in hosts.items():
             answered = f"{who}: the router at {endpoint} answered after"
-            _wait_for(f"{name} to connect", lambda answered=answered, name=name:
-                      answered in log(name), logs)
+            _wait_for(
+                f"{name} to connect",
+                lambda answered=answered, name=name: answered in log(name),
+                logs,
+            )
     for name, (_, who) in hosts.items():
         lines = log(name).splitlines()
         assert all(f"] WARNING {who}: " in line for line in lines), logs()  # one speaks per host
@@ -161,8 +189,20 @@ def test_agents_say_every_few_seconds_that_they_wait_for_a_router_and_where(
 
 @pytest.mark.parametrize("spawn", ["fork", "exec"])
 def test_a_killed_agents_host_leaves_no_agent_behind(spawn: str) -> None:
-    argv = [sys.executable, "-m", "fatswarm.deploy.parts", "agents", "-n", "3", "--spawn", spawn,
-            "--connect", loopback_endpoint(), "--seed", "1"]  # no router: they wait for one
+    argv = [
+        sys.executable,
+        "-m",
+        "fatswarm.deploy.net.parts",
+        "agents",
+        "-n",
+        "3",
+        "--spawn",
+        spawn,
+        "--connect",
+        loopback_endpoint(),
+        "--seed",
+        "1",
+    ]  # no router: they wait for one
     host = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     agents: list[int] = []
     try:

@@ -22,9 +22,9 @@ import pytest
 from netharness import assert_one_line, part, run_all
 from rogues import Rogue
 
-from fatswarm.deploy.launcher import Children
-from fatswarm.deploy.secure import Plan
-from fatswarm.deploy.zconf import free_port, make_config
+from fatswarm.deploy.net.children import Children
+from fatswarm.deploy.net.zconf import free_port, make_config
+from fatswarm.deploy.secure.plan import Plan
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path as MovePath
 from fatswarm.world.protocol import (
@@ -64,8 +64,9 @@ class Net:
         """An open client session with identity `name` (its file of the folder)."""
         import zenoh
 
-        conf = make_config("client", [self.endpoint],
-                           config_file=str(config or self.out / f"{name}.json5"))
+        conf = make_config(
+            "client", [self.endpoint], config_file=str(config or self.out / f"{name}.json5")
+        )
         session = zenoh.open(conf)
         self.sessions.append(session)
         return session
@@ -76,7 +77,7 @@ def router(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Net]:
     """A secured router (its own process, `fatswarm router --config`) on a free loopback port."""
     import zenoh
 
-    from fatswarm.deploy.pki import write_bundle
+    from fatswarm.deploy.secure.pki import write_bundle
 
     tmp = tmp_path_factory.mktemp("secure")
     plan = Plan("sec", N, ("127.0.0.1",), free_port(), 1)
@@ -84,9 +85,12 @@ def router(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Net]:
     probe = Net(tmp / "bundle", plan, plan.endpoint("127.0.0.1"))
     log = open(tmp / "router.log", "wb")  # noqa: SIM115
     with Children() as children:
-        children.start("router", part("router", "--config",
-                                      str(probe.out / "router-127.0.0.1.json5")),
-                       stdout=log, stderr=log)
+        children.start(
+            "router",
+            part("router", "--config", str(probe.out / "router-127.0.0.1.json5")),
+            stdout=log,
+            stderr=log,
+        )
         log.close()
         deadline = time.monotonic() + DEADLINE_S
         while True:
@@ -95,8 +99,9 @@ def router(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Net]:
                 break
             except zenoh.ZError:
                 if time.monotonic() > deadline or children.exited():
-                    pytest.fail(f"secured router did not come up: "
-                                f"{(tmp / 'router.log').read_text()}")
+                    pytest.fail(
+                        f"secured router did not come up: {(tmp / 'router.log').read_text()}"
+                    )
                 time.sleep(0.1)
         yield probe
 
@@ -179,8 +184,10 @@ def synced(net: Net, session: Any, name: str) -> None:
         key = agent_alive_key(swarm, int(name.removeprefix("agent-")))
         token = session.liveliness().declare_token(key)
         watcher = net.client("dashboard-0")
-        wait_for(f"{name}'s token", lambda: any(
-            r.ok is not None for r in watcher.liveliness().get(key, timeout=ASK_S)))
+        wait_for(
+            f"{name}'s token",
+            lambda: any(r.ok is not None for r in watcher.liveliness().get(key, timeout=ASK_S)),
+        )
         token.undeclare()
     elif name.startswith("dashboard-"):
         states = Inbox()
@@ -260,9 +267,11 @@ def test_a_fake_agent_token_is_not_seen(net: Net) -> None:
     coordinator = net.client("coordinator")
     coordinator.liveliness().declare_subscriber(agent_alive_any_key(swarm), seen, history=True)
     rogue, dashboard = net.client("agent-1"), net.client("dashboard-0")
-    fakes = [rogue.liveliness().declare_token(agent_alive_key(swarm, 2)),  # robot 2 has no agent
-             rogue.liveliness().declare_token(agent_alive_key(swarm, 9)),
-             dashboard.liveliness().declare_token(agent_alive_key(swarm, 0))]
+    fakes = [
+        rogue.liveliness().declare_token(agent_alive_key(swarm, 2)),  # robot 2 has no agent
+        rogue.liveliness().declare_token(agent_alive_key(swarm, 9)),
+        dashboard.liveliness().declare_token(agent_alive_key(swarm, 0)),
+    ]
     own = rogue.liveliness().declare_token(agent_alive_key(swarm, 1))  # after its fakes
     wait_for("robot 1's own token", lambda: len(seen.items) >= 1)
     synced(net, dashboard, "dashboard-0")  # (its get would see its own token, in the session)
@@ -315,8 +324,9 @@ def test_fake_moves_held_notices_reach_no_coordinator(net: Net) -> None:
 
 def test_a_fake_control_reply_reaches_no_coordinator(net: Net) -> None:
     swarm = net.plan.swarm
-    formed = ControlReply(ok=True, reason="", n=N, committed=5, open_round=0,
-                          status=Status.FORMED).encode()
+    formed = ControlReply(
+        ok=True, reason="", n=N, committed=5, open_round=0, status=Status.FORMED
+    ).encode()
     fake_asked: list[str] = []
     for name in ("agent-1", "dashboard-0"):
         rogue = net.client(name)
@@ -325,8 +335,9 @@ def test_a_fake_control_reply_reaches_no_coordinator(net: Net) -> None:
     coordinator = net.client("coordinator")
     begin = Begin(1, (0,)).encode()
     assert replies(coordinator, control_key(swarm), begin) == []  # no world: no answer
-    running = ControlReply(ok=True, reason="", n=N, committed=0, open_round=1,
-                           status=Status.RUNNING).encode()
+    running = ControlReply(
+        ok=True, reason="", n=N, committed=0, open_round=1, status=Status.RUNNING
+    ).encode()
     net.client("world").declare_queryable(control_key(swarm), answering(running, []))
     wait_for("the world to answer", lambda: replies(coordinator, control_key(swarm), begin) != [])
     for _ in range(3):
@@ -348,8 +359,9 @@ def test_dashboards_and_agents_read_the_state_only_as_allowed(net: Net) -> None:
     world = net.client("world")
     world.put(moves_held_key(swarm), MovesHeld(round=1, robots=(0,)).encode())
     states = world.declare_publisher(state_key(swarm))
-    deliver("the world's state", lambda: states.put(b"state"),
-            lambda: b"state" in dashboard.payloads())
+    deliver(
+        "the world's state", lambda: states.put(b"state"), lambda: b"state" in dashboard.payloads()
+    )
     time.sleep(SETTLE_S)
     assert set(dashboard.payloads()) == {b"state"} == set(everything.payloads())
     assert agent.payloads() == [] and others.payloads() == []
@@ -380,14 +392,15 @@ def test_the_rogue_of_the_networked_test_sees_nothing_come_back(net: Net) -> Non
 def test_a_client_without_the_swarms_certificate_cannot_connect(net: Net, tmp_path: Path) -> None:
     import zenoh
 
-    from fatswarm.deploy.pki import write_bundle
+    from fatswarm.deploy.secure.pki import write_bundle
 
     tcp = make_config("client", [net.endpoint.replace("tls/", "tcp/")])
     with pytest.raises(zenoh.ZError):  # a TLS port: plain TCP never gets a session
         zenoh.open(tcp)
     no_cert = tmp_path / "no-cert.json5"
-    no_cert.write_text(f'{{ transport: {{ link: {{ tls: {{ root_ca_certificate: '
-                       f'"{net.out / "ca.pem"}" }} }} }} }}')
+    no_cert.write_text(
+        f'{{ transport: {{ link: {{ tls: {{ root_ca_certificate: "{net.out / "ca.pem"}" }} }} }} }}'
+    )
     with pytest.raises(zenoh.ZError):  # the server's CA, but no client certificate
         net.client("anyone", no_cert)
     other = tmp_path / "other"  # the same names, signed by another authority
@@ -400,34 +413,61 @@ def test_parts_refuse_a_plain_endpoint_or_a_bad_file_in_one_line(net: Net, tmp_p
     bad = tmp_path / "bad.json5"
     bad.write_text("{ mode: ")
     acl = tmp_path / "acl.json5"  # well formed, but a policy names a rule that is not there
-    acl.write_text(f'{{ listen: {{ endpoints: ["tcp/127.0.0.1:{free_port()}"] }}, access_control: '
-                   '{ enabled: true, default_permission: "deny", rules: [{ id: "r", permission: '
-                   '"allow", flows: ["ingress"], messages: ["put"], key_exprs: ["a"] }], '
-                   'subjects: [{ id: "s", cert_common_names: ["x"] }], policies: [{ id: "p", '
-                   'rules: ["r2"], subjects: ["s"] }] } }')
+    acl.write_text(
+        f'{{ listen: {{ endpoints: ["tcp/127.0.0.1:{free_port()}"] }}, access_control: '
+        '{ enabled: true, default_permission: "deny", rules: [{ id: "r", permission: '
+        '"allow", flows: ["ingress"], messages: ["put"], key_exprs: ["a"] }], '
+        'subjects: [{ id: "s", cert_common_names: ["x"] }], policies: [{ id: "p", '
+        'rules: ["r2"], subjects: ["s"] }] } }'
+    )
     plain = net.endpoint.replace("tls/", "tcp/")
     agent, router, agents, dashboard, acl_router = run_all(
-        part("agent", "--robot", "0", "--config", str(net.out / "agent-0.json5"),
-             "--connect", plain),
+        part(
+            "agent", "--robot", "0", "--config", str(net.out / "agent-0.json5"), "--connect", plain
+        ),
         part("router", "--config", str(bad)),
-        part("agents", "-n", "2", "--config", str(net.out / "agent-{robot}.json5"),
-             "--first", "2", "--connect", net.endpoint),  # agent-3 has no file
-        [sys.executable, "-m", "fatswarm.deploy.cli", "dashboard", "--config", str(bad),
-         "--connect", net.endpoint],
+        part(
+            "agents",
+            "-n",
+            "2",
+            "--config",
+            str(net.out / "agent-{robot}.json5"),
+            "--first",
+            "2",
+            "--connect",
+            net.endpoint,
+        ),  # agent-3 has no file
+        [
+            sys.executable,
+            "-m",
+            "fatswarm.deploy.cli",
+            "dashboard",
+            "--config",
+            str(bad),
+            "--connect",
+            net.endpoint,
+        ],
         part("router", "--config", str(acl)),
     )
-    assert_one_line(agent, f"fatswarm agent: endpoint {plain} uses a protocol --config "
-                    f"{net.out / 'agent-0.json5'} does not allow (transport/link/protocols: tls)")
+    assert_one_line(
+        agent,
+        f"fatswarm agent: endpoint {plain} uses a protocol --config "
+        f"{net.out / 'agent-0.json5'} does not allow (transport/link/protocols: tls)",
+    )
     assert_one_line(router, f"fatswarm router: --config {bad}: line 1, column 9: expected")
     assert_one_line(agents, f"fatswarm agents: --config {net.out / 'agent-3.json5'}: no such file")
     assert_one_line(dashboard, f"fatswarm dashboard: --config {bad}: line 1, column 9")
-    assert_one_line(acl_router, f"fatswarm router: --config {acl}: access control not enabled "
-                    "due to: Rule 'r2' in policy #0 does not exist in rules list")
+    assert_one_line(
+        acl_router,
+        f"fatswarm router: --config {acl}: access control not enabled "
+        "due to: Rule 'r2' in policy #0 does not exist in rules list",
+    )
 
 
 @pytest.mark.parametrize("spawn", ["fork", "exec"])
-def test_an_agents_host_gives_each_agent_its_own_identity(net: Net, tmp_path: Path,
-                                                          spawn: str) -> None:
+def test_an_agents_host_gives_each_agent_its_own_identity(
+    net: Net, tmp_path: Path, spawn: str
+) -> None:
     """`{robot}` in --config: each agent's token is taken, which only its own identity may do."""
     swarm = net.plan.swarm
     dashboard = net.client("dashboard-0")  # may ask who is alive (world and coordinator subscribe)
@@ -438,10 +478,26 @@ def test_an_agents_host_gives_each_agent_its_own_identity(net: Net, tmp_path: Pa
 
     log = open(tmp_path / "agents.log", "wb")  # noqa: SIM115
     with Children() as children:
-        children.start("agents", part("agents", "-n", "2", "--first", "1", "--spawn", spawn,
-                                      "--config", str(net.out / "agent-{robot}.json5"),
-                                      "--connect", net.endpoint, "--swarm", swarm),
-                       stdout=log, stderr=log)
+        children.start(
+            "agents",
+            part(
+                "agents",
+                "-n",
+                "2",
+                "--first",
+                "1",
+                "--spawn",
+                spawn,
+                "--config",
+                str(net.out / "agent-{robot}.json5"),
+                "--connect",
+                net.endpoint,
+                "--swarm",
+                swarm,
+            ),
+            stdout=log,
+            stderr=log,
+        )
         log.close()
         wanted = [agent_alive_key(swarm, 1), agent_alive_key(swarm, 2)]
         wait_for("both agents' tokens", lambda: tokens() == wanted or bool(children.exited()))

@@ -24,8 +24,8 @@ from pathlib import Path
 import pytest
 from netharness import assert_same_run, lockstep_record, part
 
-from fatswarm.deploy.launcher import Children
-from fatswarm.deploy.secure import Plan
+from fatswarm.deploy.net.children import Children
+from fatswarm.deploy.secure.plan import Plan
 from fatswarm.world.record import RecordFormatError, RunRecord, read_record
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
@@ -67,8 +67,20 @@ class Hosts:
             ns = self.ns(h)
             _ip("netns", "add", ns)
             self.made.append(ns)
-            _ip("link", "add", "eth0", "netns", ns, "type", "veth", "peer", "name", f"p-{h}",
-                "netns", switch)
+            _ip(
+                "link",
+                "add",
+                "eth0",
+                "netns",
+                ns,
+                "type",
+                "veth",
+                "peer",
+                "name",
+                f"p-{h}",
+                "netns",
+                switch,
+            )
             _ip("-n", ns, "addr", "add", f"{self.addr[h]}/24", "dev", "eth0")
             _ip("-n", ns, "link", "set", "eth0", "up")
             _ip("-n", ns, "link", "set", "lo", "up")
@@ -85,15 +97,15 @@ class Hosts:
         """Kill what is left in the namespaces (only processes this test started can be there),
         then remove them (their veth pairs go with them)."""
         for ns in reversed(self.made):
-            pids = subprocess.run(["ip", "netns", "pids", ns], capture_output=True, text=True,
-                                  timeout=30, check=False).stdout.split()
+            pids = subprocess.run(
+                ["ip", "netns", "pids", ns], capture_output=True, text=True, timeout=30, check=False
+            ).stdout.split()
             for pid in pids:
                 try:
                     os.kill(int(pid), 9)
                 except (ProcessLookupError, ValueError):
                     continue
-            subprocess.run(["ip", "netns", "del", ns], capture_output=True, timeout=30,
-                           check=False)
+            subprocess.run(["ip", "netns", "del", ns], capture_output=True, timeout=30, check=False)
 
 
 @contextmanager
@@ -114,8 +126,9 @@ def three_hosts() -> Iterator[Hosts]:
 class Parts:
     """The swarm's processes, each in its host's namespace, logs in `tmp`."""
 
-    def __init__(self, tmp: Path, hosts: Hosts, plan: Plan, folder: Path,
-                 children: Children) -> None:
+    def __init__(
+        self, tmp: Path, hosts: Hosts, plan: Plan, folder: Path, children: Children
+    ) -> None:
         self.tmp, self.hosts, self.plan, self.folder = tmp, hosts, plan, folder
         self.children = children
 
@@ -129,15 +142,40 @@ class Parts:
         self.start(name, host, part(role, "--config", config, *flags))
 
     def client(self, name: str, host: str, role: str, identity: str, *flags: str) -> None:
-        self.fatswarm(name, host, role, identity, "--connect", self.plan.local_endpoint,
-                      "--swarm", self.plan.swarm, *flags)
+        self.fatswarm(
+            name,
+            host,
+            role,
+            identity,
+            "--connect",
+            self.plan.local_endpoint,
+            "--swarm",
+            self.plan.swarm,
+            *flags,
+        )
 
     def rogue(self, name: str, host: str, identity: str) -> Path:
         report = self.tmp / f"{name}.json"
-        self.start(name, host, [sys.executable, str(ROGUE_SRC), "--config",
-                                str(self.folder / f"{identity}.json5"), "--connect",
-                                self.plan.local_endpoint, "--swarm", self.plan.swarm,
-                                "-n", str(N), "--victim", str(LATE), "--report", str(report)])
+        self.start(
+            name,
+            host,
+            [
+                sys.executable,
+                str(ROGUE_SRC),
+                "--config",
+                str(self.folder / f"{identity}.json5"),
+                "--connect",
+                self.plan.local_endpoint,
+                "--swarm",
+                self.plan.swarm,
+                "-n",
+                str(N),
+                "--victim",
+                str(LATE),
+                "--report",
+                str(report),
+            ],
+        )
         return report
 
     def log(self, name: str) -> str:
@@ -145,16 +183,18 @@ class Parts:
         return path.read_text(errors="replace") if path.exists() else ""
 
     def logs(self) -> str:
-        return "\n".join(f"--- {p.name}\n{p.read_text(errors='replace')[-3000:]}"
-                         for p in sorted(self.tmp.glob("*.log")) if p.stat().st_size)
+        return "\n".join(
+            f"--- {p.name}\n{p.read_text(errors='replace')[-3000:]}"
+            for p in sorted(self.tmp.glob("*.log"))
+            if p.stat().st_size
+        )
 
     def wait_for(self, what: str, predicate: Callable[[], bool]) -> None:
         end = time.monotonic() + DEADLINE_S
         while not predicate():
             dead = {k: v for k, v in self.children.exited().items() if v != 0}
             if time.monotonic() > end or dead:
-                pytest.fail(f"waiting for {what}: {dead or 'timed out'}\n"
-                            f"{self.logs()}")
+                pytest.fail(f"waiting for {what}: {dead or 'timed out'}\n{self.logs()}")
             time.sleep(0.05)
 
 
@@ -178,7 +218,7 @@ def ended(path: Path) -> bool:
 def test_a_secured_swarm_on_three_hosts_forms_refuses_rogues_and_survives_a_partition(
     tmp_path: Path,
 ) -> None:
-    from fatswarm.deploy.pki import write_bundle
+    from fatswarm.deploy.secure.pki import write_bundle
 
     with three_hosts() as hosts, Children() as children:
         a, b, c = (hosts.addr[h] for h in "abc")
@@ -187,32 +227,69 @@ def test_a_secured_swarm_on_three_hosts_forms_refuses_rogues_and_survives_a_part
         write_bundle(plan, folder)
         parts = Parts(tmp_path, hosts, plan, folder, children)
         for h in "abc":
-            parts.fatswarm(f"router-{h}", h, "router", f"router-{hosts.addr[h]}",
-                           "--log-level", "info")
+            parts.fatswarm(
+                f"router-{h}", h, "router", f"router-{hosts.addr[h]}", "--log-level", "info"
+            )
         for h in "abc":
             parts.wait_for(f"router {h}", lambda h=h: "listening" in parts.log(f"router-{h}"))
 
         # --- run 1: rogues on B and C while the swarm forms --------------------------------
         first = tmp_path / "run1.jsonl"
         run = ("--seed", str(SEED), "--log-level", "info")
-        parts.client("world", "a", "world", "world", "--state", str(first), "-n", str(N),
-                     "--scheduler", "ssync", *run)
-        parts.client("coordinator", "a", "coordinator", "coordinator", "--scheduler", "ssync",
-                     *run)
-        dashboard = [sys.executable, "-m", "fatswarm.deploy.cli", "dashboard", "--config",
-                     str(folder / "dashboard-0.json5"), "--connect", plan.local_endpoint,
-                     "--swarm", plan.swarm, "--no-dashboard", "--exit-at-end", "--every", "1"]
+        parts.client(
+            "world",
+            "a",
+            "world",
+            "world",
+            "--state",
+            str(first),
+            "-n",
+            str(N),
+            "--scheduler",
+            "ssync",
+            *run,
+        )
+        parts.client("coordinator", "a", "coordinator", "coordinator", "--scheduler", "ssync", *run)
+        dashboard = [
+            sys.executable,
+            "-m",
+            "fatswarm.deploy.cli",
+            "dashboard",
+            "--config",
+            str(folder / "dashboard-0.json5"),
+            "--connect",
+            plan.local_endpoint,
+            "--swarm",
+            plan.swarm,
+            "--no-dashboard",
+            "--exit-at-end",
+            "--every",
+            "1",
+        ]
         parts.start("dashboard", "c", dashboard)  # reads the state through two routers
-        reports = [parts.rogue("rogue-robot", "b", "agent-1"),
-                   parts.rogue("rogue-dashboard", "c", "dashboard-0")]
+        reports = [
+            parts.rogue("rogue-robot", "b", "agent-1"),
+            parts.rogue("rogue-dashboard", "c", "dashboard-0"),
+        ]
         for name in ("rogue-robot", "rogue-dashboard"):
             parts.wait_for(f"{name} armed", lambda name=name: "armed" in parts.log(name))
         for host, robots in (("b", ON_B), ("c", ON_C)):  # each agent its own identity
-            parts.client(f"agents-{host}", host, "agents", "agent-{robot}", "-n",
-                         str(len(robots)), "--first", str(robots[0]), *run)
+            parts.client(
+                f"agents-{host}",
+                host,
+                "agents",
+                "agent-{robot}",
+                "-n",
+                str(len(robots)),
+                "--first",
+                str(robots[0]),
+                *run,
+            )
         up = [f"robot {r} up" for r in (*ON_B, *ON_C)]
-        parts.wait_for("the first agents", lambda: all(
-            line in parts.log("agents-b") + parts.log("agents-c") for line in up))
+        parts.wait_for(
+            "the first agents",
+            lambda: all(line in parts.log("agents-b") + parts.log("agents-c") for line in up),
+        )
         time.sleep(ROGUES_TRIED_S)  # a fake token for robot LATE would start round 1 by now
         assert rounds(first) == 0, "round 1 started without robot 5's agent: a fake token won"
         parts.client("late-agent", "c", "agent", f"agent-{LATE}", "--robot", str(LATE), *run)
@@ -237,10 +314,32 @@ def test_a_secured_swarm_on_three_hosts_forms_refuses_rogues_and_survives_a_part
         children.stop("world")
         assert children.procs["world"].wait(timeout=DEADLINE_S) == 0, parts.log("world")
         second = tmp_path / "run2.jsonl"
-        parts.client("world2", "a", "world", "world", "--state", str(second), "-n", str(N),
-                     "--scheduler", "ssync", *run)
-        parts.client("coordinator2", "a", "coordinator", "coordinator", "--scheduler", "ssync",
-                     "--pace", "0.2", "--move-timeout", "1.5", *run)
+        parts.client(
+            "world2",
+            "a",
+            "world",
+            "world",
+            "--state",
+            str(second),
+            "-n",
+            str(N),
+            "--scheduler",
+            "ssync",
+            *run,
+        )
+        parts.client(
+            "coordinator2",
+            "a",
+            "coordinator",
+            "coordinator",
+            "--scheduler",
+            "ssync",
+            "--pace",
+            "0.2",
+            "--move-timeout",
+            "1.5",
+            *run,
+        )
         parts.wait_for("run 2, round 2", lambda: rounds(second) >= 2)
         hosts.link("c", "down")
         try:
@@ -258,7 +357,10 @@ def test_a_secured_swarm_on_three_hosts_forms_refuses_rogues_and_survives_a_part
         assert healed.result.rounds > healed_at >= down_at, (down_at, healed_at)
         cut = [r.round for r in healed.rounds if set(r.extra.get("timed_out", ())) & on_c]
         assert cut, "no robot on host C timed out: the partition changed nothing"
-        assert any(r.round > cut[-1] and set(r.active) & on_c for r in healed.rounds), \
+        assert any(r.round > cut[-1] and set(r.active) & on_c for r in healed.rounds), (
             "no robot on host C took part again after the partition healed"
-        print(f"run 1: {len(net.rounds)} rounds; run 2: partitioned at round {down_at}, healed at "
-              f"{healed_at}, formed at {healed.result.rounds}")
+        )
+        print(
+            f"run 1: {len(net.rounds)} rounds; run 2: partitioned at round {down_at}, healed at "
+            f"{healed_at}, formed at {healed.result.rounds}"
+        )

@@ -13,9 +13,9 @@ from fatswarm.domain.path import end_point
 from fatswarm.domain.tolerance import snap
 
 
-def world_end(pts: np.ndarray, robot: int, flip: bool, params: Params, seed: int) -> tuple[
-    bytes, tuple[float, float] | None
-]:
+def world_end(
+    pts: np.ndarray, robot: int, flip: bool, params: Params, seed: int
+) -> tuple[bytes, tuple[float, float] | None]:
     """What `robot` decides in its own frame (shuffled view): its canonical key and where its
     path ends in the world frame (None: it stays)."""
     others = np.delete(pts, robot, axis=0)

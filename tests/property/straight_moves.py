@@ -13,17 +13,29 @@ from fatswarm.domain.path import Points
 
 
 @st.composite
-def grid_starts(draw: st.DrawFn, cells: int = 4, pitch_max: float = 8.0,
-                offset: float = 0.0) -> Points:
+def grid_starts(
+    draw: st.DrawFn, cells: int = 4, pitch_max: float = 8.0, offset: float = 0.0
+) -> Points:
     """2..9 robots in distinct cells of a grid of pitch 2..`pitch_max`, jittered (never closer
     than 2), moved by up to `offset` in each coordinate."""
     n = draw(st.integers(2, 9))
-    picked = draw(st.lists(st.tuples(st.integers(0, cells - 1), st.integers(0, cells - 1)),
-                           min_size=n, max_size=n, unique=True))
+    picked = draw(
+        st.lists(
+            st.tuples(st.integers(0, cells - 1), st.integers(0, cells - 1)),
+            min_size=n,
+            max_size=n,
+            unique=True,
+        )
+    )
     pitch = draw(st.floats(2.0, pitch_max))
     jitter = (pitch - 2.0) / 4.0  # two jitters of <= jitter * sqrt(2) each leave >= 2
-    offsets = draw(st.lists(st.tuples(st.floats(-jitter, jitter), st.floats(-jitter, jitter)),
-                            min_size=n, max_size=n))
+    offsets = draw(
+        st.lists(
+            st.tuples(st.floats(-jitter, jitter), st.floats(-jitter, jitter)),
+            min_size=n,
+            max_size=n,
+        )
+    )
     origin = np.array([draw(st.floats(-offset, offset)), draw(st.floats(-offset, offset))])
     return np.asarray(np.asarray(picked, dtype=np.float64) * pitch + np.asarray(offsets) + origin)
 
@@ -42,10 +54,13 @@ def closest_during(positions: Points, moves: Points) -> float:
         for j in range(i + 1, n):
             # relative motion is linear between the times either robot stops
             times = sorted({0.0, float(lengths[i]), float(lengths[j])})
-            rel = [positions[j] - positions[i]
-                   + moves[j] * (min(t, lengths[j]) / lengths[j] if lengths[j] else 0.0)
-                   - moves[i] * (min(t, lengths[i]) / lengths[i] if lengths[i] else 0.0)
-                   for t in times]
+            rel = [
+                positions[j]
+                - positions[i]
+                + moves[j] * (min(t, lengths[j]) / lengths[j] if lengths[j] else 0.0)
+                - moves[i] * (min(t, lengths[i]) / lengths[i] if lengths[i] else 0.0)
+                for t in times
+            ]
             best = min(best, float(np.hypot(*rel[0])))
             for a, b in itertools.pairwise(rel):
                 d = b - a

@@ -1,4 +1,5 @@
-"""Hypothesis strategies for adversarial starts: the classes of world/adversarial.py, drawn here.
+"""Hypothesis strategies for adversarial starts: the classes of deploy/scenarios/adversarial.py,
+drawn here.
 
 Each strategy draws the parameters that define its class (n, cells, perturbations 10**-k with k in
 6..12) so that hypothesis can shrink them, and returns a valid (n, 2) float64 start (no two centres
@@ -15,8 +16,8 @@ from hypothesis import assume
 from hypothesis import strategies as st
 from numpy.typing import NDArray
 
+from fatswarm.deploy.scenarios import adversarial as adv
 from fatswarm.domain.path import Points
-from fatswarm.world import adversarial as adv
 
 CELL: Final = 2.5  # grid spacing of jittered cells
 JITTER: Final = 0.2  # |jitter| of a cell's robot: every pair of cells stays >= 2.1 apart
@@ -46,11 +47,22 @@ def near_symmetric_starts(draw: st.DrawFn) -> Points:
     n = draw(st.integers(3, N_MAX))
     near_axis = draw(st.booleans())
     pair_count = draw(st.integers(int(near_axis), n // 2))
-    axis_rows = draw(st.lists(st.integers(0, ROWS - 1), min_size=n - 2 * pair_count,
-                              max_size=n - 2 * pair_count, unique=True))
-    cells = draw(st.lists(st.tuples(st.integers(0, ROWS - 1), st.integers(1, 3)),
-                          min_size=pair_count - near_axis, max_size=pair_count - near_axis,
-                          unique=True))
+    axis_rows = draw(
+        st.lists(
+            st.integers(0, ROWS - 1),
+            min_size=n - 2 * pair_count,
+            max_size=n - 2 * pair_count,
+            unique=True,
+        )
+    )
+    cells = draw(
+        st.lists(
+            st.tuples(st.integers(0, ROWS - 1), st.integers(1, 3)),
+            min_size=pair_count - near_axis,
+            max_size=pair_count - near_axis,
+            unique=True,
+        )
+    )
     pairs = [(CELL * col + draw(jitters), CELL * row + draw(jitters)) for row, col in cells]
     if near_axis:  # a row of its own above the grid: mirror discs 2 * 10**-k from touching
         pairs.append((1.0 + draw(magnitudes), CELL * ROWS))
@@ -84,11 +96,18 @@ def _chains(draw: st.DrawFn) -> Points:
 def _hex_clusters(draw: st.DrawFn) -> Points:
     """Distinct cells of a 4 x 4 hexagonal patch at spacing 2 +- 10**-k (or exactly 2)."""
     n = draw(st.integers(3, N_MAX))
-    cells = np.asarray(draw(st.lists(st.tuples(st.integers(0, 3), st.integers(0, 3)),
-                                     min_size=n, max_size=n, unique=True)), dtype=np.float64)
+    cells = np.asarray(
+        draw(
+            st.lists(
+                st.tuples(st.integers(0, 3), st.integers(0, 3)), min_size=n, max_size=n, unique=True
+            )
+        ),
+        dtype=np.float64,
+    )
     spacing = draw(_contact_distances())
-    unit = np.column_stack([cells[:, 0] + 0.5 * np.mod(cells[:, 1], 2.0),
-                            cells[:, 1] * 0.5 * math.sqrt(3.0)])
+    unit = np.column_stack(
+        [cells[:, 0] + 0.5 * np.mod(cells[:, 1], 2.0), cells[:, 1] * 0.5 * math.sqrt(3.0)]
+    )
     return spacing * unit + float(draw(st.integers(-20, 20)))
 
 
@@ -104,12 +123,18 @@ def lattice_starts(draw: st.DrawFn) -> Points:
     n = draw(st.integers(3, N_MAX))
     kind = draw(st.sampled_from(adv.LATTICES))
     decimals = draw(st.integers(3, 7))
-    cells = draw(st.lists(st.tuples(st.integers(-3, 3), st.integers(-3, 3)),
-                          min_size=n, max_size=n, unique=True))
+    cells = draw(
+        st.lists(
+            st.tuples(st.integers(-3, 3), st.integers(-3, 3)), min_size=n, max_size=n, unique=True
+        )
+    )
     origin = (draw(st.integers(-2000, 2000)) / 100.0, draw(st.integers(-2000, 2000)) / 100.0)
     # a step written to fewer decimals than it has is no longer 2 long: the discs would overlap
-    step = draw(st.sampled_from([k for k in range(1, len(adv.PYTHAGOREAN_STEPS))
-                                 if adv.STEP_PLACES[k] <= decimals]))
+    step = draw(
+        st.sampled_from(
+            [k for k in range(1, len(adv.PYTHAGOREAN_STEPS)) if adv.STEP_PLACES[k] <= decimals]
+        )
+    )
     pts = adv.lattice_points(kind, cells, decimals, origin, step)
     if draw(st.booleans()):
         k = draw(exponents)
@@ -133,10 +158,10 @@ def rim_starts(draw: st.DrawFn) -> Points:
     shape = draw(st.sampled_from(("circle", "annulus", "polygon")))
     if shape == "polygon":
         pts = adv.regular_polygon(n, 2.0 * radius * math.sin(math.pi / n), phase, center)
-        angles = np.asarray(draw(st.lists(st.floats(0.0, 2.0 * math.pi), min_size=n,
-                                          max_size=n)))
+        angles = np.asarray(draw(st.lists(st.floats(0.0, 2.0 * math.pi), min_size=n, max_size=n)))
         jitter: NDArray[np.float64] = draw(magnitudes) * np.column_stack(
-            [np.cos(angles), np.sin(angles)])
+            [np.cos(angles), np.sin(angles)]
+        )
         return pts + jitter
     weights = np.asarray(draw(st.lists(st.floats(0.0, 1.0), min_size=n, max_size=n)))
     if weights.sum() <= 0.0:
@@ -144,8 +169,7 @@ def rim_starts(draw: st.DrawFn) -> Points:
     radial = None
     if shape == "annulus":
         width = draw(magnitudes) * radius
-        radial = width * np.asarray(draw(st.lists(st.floats(-1.0, 1.0), min_size=n,
-                                                  max_size=n)))
+        radial = width * np.asarray(draw(st.lists(st.floats(-1.0, 1.0), min_size=n, max_size=n)))
     return adv.rim_points(center, radius, weights, phase, radial)
 
 
@@ -171,17 +195,31 @@ def tied_symmetric_starts(draw: st.DrawFn) -> Points:
 @st.composite
 def offset_starts(draw: st.DrawFn) -> Points:
     """Any other adversarial start translated exactly by 1e5..1e6 (either sign) in x and y."""
-    base = draw(st.one_of(near_symmetric_starts(), near_touching_starts(), lattice_starts(),
-                          rim_starts(), tied_symmetric_starts()))
-    offset = [draw(st.floats(*adv.OFFSET_RANGE)) * draw(st.sampled_from((-1.0, 1.0)))
-              for _ in range(2)]
+    base = draw(
+        st.one_of(
+            near_symmetric_starts(),
+            near_touching_starts(),
+            lattice_starts(),
+            rim_starts(),
+            tied_symmetric_starts(),
+        )
+    )
+    offset = [
+        draw(st.floats(*adv.OFFSET_RANGE)) * draw(st.sampled_from((-1.0, 1.0))) for _ in range(2)
+    ]
     return adv.translate_exactly(base, offset)
 
 
 def any_adversarial_start() -> st.SearchStrategy[Points]:
     """One start from any of the strategies above."""
-    return st.one_of(near_symmetric_starts(), near_touching_starts(), lattice_starts(),
-                     offset_starts(), rim_starts(), tied_symmetric_starts())
+    return st.one_of(
+        near_symmetric_starts(),
+        near_touching_starts(),
+        lattice_starts(),
+        offset_starts(),
+        rim_starts(),
+        tied_symmetric_starts(),
+    )
 
 
 __all__ = [

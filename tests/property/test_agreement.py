@@ -15,8 +15,8 @@ from hypothesis import strategies as st
 from fatswarm.agent.geometry import target_radius
 from fatswarm.agent.params import Params
 from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy.lockstep import run_lockstep
-from fatswarm.world.adversarial import adversarial_start
+from fatswarm.deploy.engine.lockstep import run_lockstep
+from fatswarm.deploy.scenarios.adversarial import adversarial_start
 
 
 def polygon(n: int, radius: float, phase: float = 0.0) -> np.ndarray:
@@ -98,8 +98,11 @@ def test_the_circle_forms_without_collision_in_n_plus_2_moves(name: str, schedul
         assert result.moves <= n + 2, (seed, result.moves)
 
 
-ADVERSARIAL = settings(max_examples=40, deadline=None,
-                       suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+ADVERSARIAL = settings(
+    max_examples=40,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much],
+)
 SIDES = st.sampled_from([3.2, 4.0, 6.0])
 
 
@@ -130,14 +133,19 @@ def test_adversarial_starts_form_without_collision(
 # 5. Robots near one circle: after most targets were filled, the last robots sat just inside the
 # rim where the chord and the single slide both hit settled robots: stalled under every
 # scheduler until G14b (any free path). Found by bench/bench_adversarial.py.
-RIM_STALLS = [(40, 1476104628, 4.0), (32, 982055690, 3.2), (59, 498886429, 4.0),
-              (70, 894669965, 6.0)]
+RIM_STALLS = [
+    (40, 1476104628, 4.0),
+    (32, 982055690, 3.2),
+    (59, 498886429, 4.0),
+    (70, 894669965, 6.0),
+]
 
 
 @pytest.mark.parametrize("scheduler", ["fsync", "ssync", "centralized"])
 @pytest.mark.parametrize(("n", "seed", "a"), RIM_STALLS)
-def test_robots_near_one_circle_fill_every_target(n: int, seed: int, a: float,
-                                                  scheduler: str) -> None:
+def test_robots_near_one_circle_fill_every_target(
+    n: int, seed: int, a: float, scheduler: str
+) -> None:
     pts = adversarial_start("rim", n, seed)
     result = run_lockstep(pts, Params(n, a), make_scheduler(scheduler, n, seed), seed=seed)
     assert (result.status, result.collisions) == ("formed", 0)
@@ -148,8 +156,11 @@ def test_robots_near_one_circle_fill_every_target(n: int, seed: int, a: float,
 # bench/bench_adversarial.py on commit 6e5d3b6): an exact tie between a robot on L and a side
 # robot (formed, with 2 collisions, and exit 0), the same tie perturbed, a nudged hexagonal lattice
 # written to 3 decimals.
-OLD_COLLISIONS = [("exact-symmetric", 9, 1049947267, 4.0), ("near-symmetric", 9, 1949635111, 3.2),
-                  ("lattice", 6, 1165938632, 4.0)]
+OLD_COLLISIONS = [
+    ("exact-symmetric", 9, 1049947267, 4.0),
+    ("near-symmetric", 9, 1949635111, 3.2),
+    ("lattice", 6, 1165938632, 4.0),
+]
 
 
 @pytest.mark.parametrize("scheduler", ["fsync", "ssync", "centralized"])

@@ -29,8 +29,14 @@ def configurations(draw: st.DrawFn, symmetric: bool | None = None) -> np.ndarray
     """Valid starts: distinct jittered grid cells, optionally mirror symmetric about x = 0."""
     sym = draw(st.booleans()) if symmetric is None else symmetric
     size = draw(st.integers(2, 7))
-    cells = draw(st.lists(st.tuples(st.integers(0, size), st.integers(-size, size)),
-                          min_size=1, max_size=8, unique=True))
+    cells = draw(
+        st.lists(
+            st.tuples(st.integers(0, size), st.integers(-size, size)),
+            min_size=1,
+            max_size=8,
+            unique=True,
+        )
+    )
     jitter = st.floats(-0.25, 0.25, allow_nan=False)
     pts = []
     for cx, cy in cells:
@@ -55,8 +61,7 @@ def same_path(p: Path, q: Path, start: tuple[float, float] = (0.0, 0.0)) -> bool
         return False
     ep, eq = end_point(start, p), end_point(start, q)
     return bool(
-        np.allclose(ep, eq, atol=1e-7)
-        and abs(path_length(start, p) - path_length(start, q)) < 1e-7
+        np.allclose(ep, eq, atol=1e-7) and abs(path_length(start, p) - path_length(start, q)) < 1e-7
     )
 
 
@@ -89,7 +94,9 @@ def test_result_in_a_mirrored_frame_is_the_mirrored_path(
 
 
 @SETTINGS
-@given(configurations(), side, st.tuples(st.integers(-10**6, 10**6), st.integers(-10**6, 10**6)))
+@given(
+    configurations(), side, st.tuples(st.integers(-(10**6), 10**6), st.integers(-(10**6), 10**6))
+)
 def test_the_canonical_form_ignores_translation_and_mirror(
     pts: np.ndarray, a: float, d: tuple[int, int]
 ) -> None:
@@ -145,15 +152,17 @@ def test_observers_agree_when_a_mirror_pair_is_exactly_one_from_l() -> None:
     # Found by the lockstep matrix (touching rosette, round 3): robots at x = +-1 from L exactly;
     # the origin's rounding decided whether the pair counted as 1 from L, so the robot on L and
     # the pair both moved, and touched.
-    pts = np.array([
-        [0.0, 0.0],
-        [4.727912514773747, 4.092340582224696],
-        [2.1041190169024038, 7.382473562772653],
-        [-2.104119016902402, 7.3824735627726525],
-        [-4.727912514773745, 4.092340582224694],
-        [-1.0000000000000009, -1.7320508075688767],
-        [1.0000000000000002, -1.7320508075688772],
-    ])
+    pts = np.array(
+        [
+            [0.0, 0.0],
+            [4.727912514773747, 4.092340582224696],
+            [2.1041190169024038, 7.382473562772653],
+            [-2.104119016902402, 7.3824735627726525],
+            [-4.727912514773745, 4.092340582224694],
+            [-1.0000000000000009, -1.7320508075688767],
+            [1.0000000000000002, -1.7320508075688772],
+        ]
+    )
     assert_observers_agree(pts, Params(7, 4.0))
 
 
@@ -175,5 +184,8 @@ def test_the_shared_form_gives_every_robot_its_own_canonical_form(
         mine = shared.for_robot(robot, flip)
         assert mine.key() == own.key()
         assert (mine.observer, mine.flip, mine.mirror_symmetric) == (
-            own.observer, own.flip, own.mirror_symmetric)
+            own.observer,
+            own.flip,
+            own.mirror_symmetric,
+        )
         assert np.array(mine.offset).tobytes() == np.array(own.offset).tobytes()

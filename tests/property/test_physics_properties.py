@@ -41,9 +41,7 @@ def rounds(draw: st.DrawFn, max_n: int = 6) -> Round:
     is possible, overlap is not), and a path of 0 to 3 segments for some of them."""
     cells = draw(st.lists(st.integers(0, 15), min_size=1, max_size=max_n, unique=True))
     jitter = st.floats(-0.25, 0.25, allow_nan=False)
-    start = np.array(
-        [[2.5 * (c % 4) + draw(jitter), 2.5 * (c // 4) + draw(jitter)] for c in cells]
-    )
+    start = np.array([[2.5 * (c % 4) + draw(jitter), 2.5 * (c // 4) + draw(jitter)] for c in cells])
     paths: dict[int, Path] = {}
     for i in range(len(cells)):
         if draw(st.booleans()):

@@ -6,7 +6,7 @@ from typing import Any
 
 import pytest
 
-from fatswarm.deploy import launcher
+from fatswarm.deploy.net import launcher
 
 
 @pytest.fixture

@@ -12,8 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fatswarm.agent.geometry import is_uniform_circle, sec
-from fatswarm.domain.path import Points
-from fatswarm.world.adversarial import (
+from fatswarm.deploy.scenarios.adversarial import (
     FAMILIES,
     FAMILY_TABLE,
     NEAR_RANGE,
@@ -29,6 +28,7 @@ from fatswarm.world.adversarial import (
     nudge_extreme,
     translate_exactly,
 )
+from fatswarm.domain.path import Points
 from fatswarm.world.physics import CONTACT_SLACK, validate_configuration
 
 # The strategies live beside the property tests, which import them as `strategies`; make that
@@ -114,7 +114,8 @@ def test_exact_symmetric_starts_are_their_own_mirror_image_bit_for_bit() -> None
 
 def test_axis_touching_variant_has_mirror_discs_exactly_touching_across_the_axis() -> None:
     built = next(
-        b for seed in range(40)
+        b
+        for seed in range(40)
         if (b := build_adversarial("exact-symmetric", 6, seed)).variant == "axis-touching"
     )
     assert built.axis_x is not None

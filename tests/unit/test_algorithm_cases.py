@@ -15,7 +15,7 @@ import pytest
 from fatswarm.agent.algorithm import plan
 from fatswarm.agent.params import Params
 from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy.lockstep import run_lockstep
+from fatswarm.deploy.engine.lockstep import run_lockstep
 from fatswarm.domain.path import end_point, path_length
 
 CASES = json.loads((FsPath(__file__).parents[1] / "data" / "algorithm-cases.json").read_text())

@@ -17,8 +17,10 @@ import pytest
 
 from fatswarm.agent.params import Params
 from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy import cli, lockstep
-from fatswarm.deploy.lockstep import configured, run_lockstep
+from fatswarm.deploy import cli
+from fatswarm.deploy.engine import lockstep
+from fatswarm.deploy.engine.lockstep import configured, run_lockstep
+from fatswarm.deploy.scenarios.starts import random_start
 from fatswarm.domain.adversary import (
     ASYNC_NAMES,
     RANDOM_MAX,
@@ -33,7 +35,6 @@ from fatswarm.domain.path import Line, Path, Point, path_length, point_at, remai
 from fatswarm.world import core
 from fatswarm.world.asynchrony import AsyncWorld, CycleDone, Phase
 from fatswarm.world.record import RecordWriter, read_record
-from fatswarm.world.starts import random_start
 
 PATHS = [
     Path((Line((3.0, 0.0)),)),
@@ -58,16 +59,20 @@ def test_the_rest_of_a_path_picks_up_where_its_prefix_stops(path: Path, s: float
             assert np.allclose(point_at(mid, rest, u), point_at(start, p, s + u), atol=1e-12)
 
 
-def _drive(world: AsyncWorld, plans: dict[int, Path], compute: dict[int, float],
-           until: float) -> tuple[list[CycleDone], dict[int, Any]]:
+def _drive(
+    world: AsyncWorld, plans: dict[int, Path], compute: dict[int, float], until: float
+) -> tuple[list[CycleDone], dict[int, Any]]:
     """Each robot moves once by its plan (world-frame, from where it Looks) after its compute
     delay, then waits for good; returns the ended cycles and what each robot saw."""
     done: list[CycleDone] = []
     seen: dict[int, Any] = {}
     while world.now < until:
         t = world.next_time()
-        if t <= world.now and not world.looking() and not any(
-                world.phase(r) is Phase.COMPUTING for r in range(world.n)):
+        if (
+            t <= world.now
+            and not world.looking()
+            and not any(world.phase(r) is Phase.COMPUTING for r in range(world.n))
+        ):
             break
         world.advance(min(t, until))
         done += world.end_moves()
@@ -77,8 +82,12 @@ def _drive(world: AsyncWorld, plans: dict[int, Path], compute: dict[int, float],
             seen[robot] = np.delete(world.positions, robot, axis=0) - world.positions[robot]
             here = world.positions[robot]
             plan = plans.get(robot, Path())
-            moved = Path(tuple(Line((here[0] + s.end[0], here[1] + s.end[1]))  # type: ignore[union-attr]
-                               for s in plan.segments))
+            moved = Path(
+                tuple(
+                    Line((here[0] + s.end[0], here[1] + s.end[1]))  # type: ignore[union-attr]
+                    for s in plan.segments
+                )
+            )
             stayed = world.submit(robot, moved, compute.get(robot, 0.0), 1e6)
             if stayed is not None:
                 done.append(stayed)
@@ -102,8 +111,9 @@ def _min_gap(cycles: list[CycleDone], initial: np.ndarray, times: np.ndarray) ->
     return worst
 
 
-def _positions_at(cycles: list[CycleDone] | list[dict[str, Any]], initial: np.ndarray,
-                  t: float) -> np.ndarray:
+def _positions_at(
+    cycles: list[CycleDone] | list[dict[str, Any]], initial: np.ndarray, t: float
+) -> np.ndarray:
     """Every robot at virtual time t from the moves alone: its last move started by t, followed
     for (t - start) up to the arc length it covered (docs/record.md, "Async runs")."""
     pos = np.array(initial, dtype=np.float64)
@@ -112,8 +122,13 @@ def _positions_at(cycles: list[CycleDone] | list[dict[str, Any]], initial: np.nd
         if isinstance(c, CycleDone):
             robot, start, origin, path, covered = c.robot, c.start, c.origin, c.path, c.traveled
         else:
-            robot, start, origin, path, covered = c["robot"], c["start"], c["origin"], \
-                c["path"], c["traveled"]
+            robot, start, origin, path, covered = (
+                c["robot"],
+                c["start"],
+                c["origin"],
+                c["path"],
+                c["traveled"],
+            )
         if path and start <= t and (robot not in latest or latest[robot][0] <= start):
             latest[robot] = (start, origin, path, covered)
     for robot, (start, origin, path, covered) in latest.items():
@@ -123,12 +138,17 @@ def _positions_at(cycles: list[CycleDone] | list[dict[str, Any]], initial: np.nd
 
 @pytest.mark.parametrize(("delay", "meets"), [(0.0, True), (2.0, True), (12.0, False)])
 def test_moves_that_start_at_different_times_are_checked_along_their_paths(
-        delay: float, meets: bool) -> None:
+    delay: float, meets: bool
+) -> None:
     # robot 0 crosses x = 5 at t = 5; robot 1 crosses y = 0 at t = delay + 5
     initial = np.array([[0.0, 0.0], [5.0, -5.0]])
     world = AsyncWorld(initial, [0.0, 0.0])
-    cycles, _ = _drive(world, {0: Path((Line((10.0, 0.0)),)), 1: Path((Line((0.0, 10.0)),))},
-                       {1: delay}, until=40.0)
+    cycles, _ = _drive(
+        world,
+        {0: Path((Line((10.0, 0.0)),)), 1: Path((Line((0.0, 10.0)),))},
+        {1: delay},
+        until=40.0,
+    )
     contacts = [c for cycle in cycles for c in cycle.collisions]
     assert bool(contacts) is meets
     gap = _min_gap(cycles, initial, np.linspace(0.0, 40.0, 4001))
@@ -143,8 +163,7 @@ def test_the_adversary_draws_are_pure_functions_of_seed_robot_and_cycle() -> Non
     model = make_async("async", 6, 7)
     draws = {(r, k): model.cycle(r, k) for r in range(6) for k in range(1, 5)}
     assert draws == {key: make_async("async", 6, 7).cycle(*key) for key in reversed(draws)}
-    assert all(0.0 <= d.compute < RANDOM_MAX and 0.0 <= d.wait < RANDOM_MAX
-               for d in draws.values())
+    assert all(0.0 <= d.compute < RANDOM_MAX and 0.0 <= d.wait < RANDOM_MAX for d in draws.values())
     assert len({d.compute for d in draws.values()}) == len(draws)
     slow = make_async("async-slowest", 6, 7)
     assert sorted(slow.rank(r) for r in range(6)) == list(range(6))
@@ -161,15 +180,22 @@ def test_an_async_model_refuses_to_pick_rounds() -> None:
 def _record(tmp_path: FsPath, name: str, n: int, seed: int, **kw: Any) -> tuple[Any, Any]:
     path = tmp_path / f"{name}-{n}-{seed}.jsonl"
     with RecordWriter(path) as journal:
-        result = run_lockstep(random_start(n, seed), Params(n), make_scheduler(name, n, seed),
-                              seed=seed, record=journal, **kw)
+        result = run_lockstep(
+            random_start(n, seed),
+            Params(n),
+            make_scheduler(name, n, seed),
+            seed=seed,
+            record=journal,
+            **kw,
+        )
     return result, read_record(path)
 
 
 @pytest.mark.parametrize("name", ASYNC_NAMES)
 @pytest.mark.parametrize("seed", [1, 2])
 def test_the_paper_algorithm_forms_under_async_and_the_record_rebuilds_every_instant(
-        name: str, seed: int, tmp_path: FsPath) -> None:
+    name: str, seed: int, tmp_path: FsPath
+) -> None:
     result, record = _record(tmp_path, name, 5, seed)
     assert (result.status, result.collisions) == ("formed", 0)
     assert record.header.scheduler == name
@@ -179,9 +205,15 @@ def test_the_paper_algorithm_forms_under_async_and_the_record_rebuilds_every_ins
         (robot,) = entry.active
         assert entry.extra["look"] <= entry.extra["start"] <= entry.extra["end"]
         for move in entry.moves:
-            cycles.append({"robot": robot, "start": entry.extra["start"],
-                           "origin": tuple(entry.extra["origin"]), "path": move.path,
-                           "traveled": move.traveled})
+            cycles.append(
+                {
+                    "robot": robot,
+                    "start": entry.extra["start"],
+                    "origin": tuple(entry.extra["origin"]),
+                    "path": move.path,
+                    "traveled": move.traveled,
+                }
+            )
     for entry in record.rounds:  # each line's positions, rebuilt at its end from the moves
         rebuilt = _positions_at(cycles, record.header.initial, entry.extra["end"])
         assert np.allclose(rebuilt, entry.positions, atol=1e-6)
@@ -190,8 +222,7 @@ def test_the_paper_algorithm_forms_under_async_and_the_record_rebuilds_every_ins
 
 
 @pytest.mark.parametrize("name", ASYNC_NAMES)
-def test_every_live_robot_looks_again_within_the_stated_bound(name: str,
-                                                              tmp_path: FsPath) -> None:
+def test_every_live_robot_looks_again_within_the_stated_bound(name: str, tmp_path: FsPath) -> None:
     _, record = _record(tmp_path, name, 6, 3)
     bound = record.header.extra["fairness_time"]
     assert bound == make_async(name, 6, 3).bound()
@@ -209,23 +240,26 @@ def test_an_async_run_repeats_exactly_from_its_seed(tmp_path: FsPath) -> None:
     b = tmp_path / "b.jsonl"
     for path in (a, b):
         with RecordWriter(path) as journal:
-            run_lockstep(random_start(6, 4), Params(6), make_scheduler("async", 6, 4), seed=4,
-                         record=journal)
+            run_lockstep(
+                random_start(6, 4), Params(6), make_scheduler("async", 6, 4), seed=4, record=journal
+            )
     assert a.read_bytes() == b.read_bytes()
 
 
 @pytest.mark.parametrize("name", ASYNC_NAMES)
 @pytest.mark.parametrize("planner", [True, False])
 def test_async_decisions_do_not_depend_on_frames_or_view_order(
-        name: str, planner: bool, monkeypatch: pytest.MonkeyPatch) -> None:
+    name: str, planner: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
     n, seed = 6, 5
     setting = configured(Params(n))
     compute = None if planner else (lambda view, params: setting.compute(view))
 
     def final(flips: Callable[[int], bool]) -> tuple[int, list[list[float]]]:
         monkeypatch.setattr(lockstep, "draw_flip", lambda _seed, robot: flips(robot))
-        result = run_lockstep(random_start(n, seed), setting, make_async(name, n, seed),
-                              seed=seed, compute=compute)
+        result = run_lockstep(
+            random_start(n, seed), setting, make_async(name, n, seed), seed=seed, compute=compute
+        )
         return result.rounds, result.positions.tolist()
 
     base = final(lambda r: False)
@@ -242,8 +276,9 @@ def test_a_colliding_algorithm_collides_under_async_but_discs_never_overlap() ->
         return Path((Line((3.0, 0.0)),))
 
     start = np.array([[0.0, 0.0], [2.5, 0.3], [5.0, 0.0], [-2.2, 0.0]])
-    result = run_lockstep(start, Params(4), make_scheduler("async", 4, 1), seed=1,
-                          compute=right, max_rounds=60)
+    result = run_lockstep(
+        start, Params(4), make_scheduler("async", 4, 1), seed=1, compute=right, max_rounds=60
+    )
     assert result.collisions > 0
     d = np.hypot(*(result.positions[:, None] - result.positions[None]).transpose(2, 0, 1))
     d[np.diag_indices(4)] = np.inf
@@ -251,7 +286,8 @@ def test_a_colliding_algorithm_collides_under_async_but_discs_never_overlap() ->
 
 
 def test_a_crashed_robot_never_looks_again_and_the_goal_is_the_live_robots(
-        tmp_path: FsPath) -> None:
+    tmp_path: FsPath,
+) -> None:
     result, record = _record(tmp_path, "async", 6, 2, crash=1)
     ((robot, at),) = crash_plan(2, 6, 1).items()
     cycles = [e for e in record.rounds if e.active == (robot,)]
@@ -262,10 +298,24 @@ def test_a_crashed_robot_never_looks_again_and_the_goal_is_the_live_robots(
 
 
 def test_run_lockstep_async_from_the_command_line_and_refusals(
-        tmp_path: FsPath, capsys: pytest.CaptureFixture[str]) -> None:
+    tmp_path: FsPath, capsys: pytest.CaptureFixture[str]
+) -> None:
     out = tmp_path / "r.jsonl"
-    code = cli.main(["run", "--lockstep", "--scheduler", "async-slowest", "-n", "5", "--seed",
-                     "1", "--record", str(out), "-q"])
+    code = cli.main(
+        [
+            "run",
+            "--lockstep",
+            "--scheduler",
+            "async-slowest",
+            "-n",
+            "5",
+            "--seed",
+            "1",
+            "--record",
+            str(out),
+            "-q",
+        ]
+    )
     assert code == 0
     lines = [json.loads(line) for line in out.read_text().splitlines()]
     assert lines[0]["scheduler"] == "async-slowest"
@@ -273,8 +323,7 @@ def test_run_lockstep_async_from_the_command_line_and_refusals(
     assert {"look", "start", "end", "origin"} <= set(lines[1])
     capsys.readouterr()
     out.write_text("".join(line + "\n" for line in out.read_text().splitlines()[:5]))
-    assert cli.main(["run", "--lockstep", "--record", str(out),
-                     "--resume", "-q"]) == 2
+    assert cli.main(["run", "--lockstep", "--record", str(out), "--resume", "-q"]) == 2
     err = capsys.readouterr().err.strip()
     assert "cannot be resumed" in err and "\n" not in err
     assert cli.main(["run", "--record", str(out), "--resume", "--no-dashboard", "-q"]) == 2
@@ -283,10 +332,11 @@ def test_run_lockstep_async_from_the_command_line_and_refusals(
 
 
 @pytest.mark.parametrize("name", ASYNC_NAMES)
-def test_plot_and_replay_draw_each_async_move_from_where_it_started(name: str,
-                                                                    tmp_path: FsPath) -> None:
-    from fatswarm.deploy.plot import TRAIL_STEP, trajectories
-    from fatswarm.deploy.replay import build_frames
+def test_plot_and_replay_draw_each_async_move_from_where_it_started(
+    name: str, tmp_path: FsPath
+) -> None:
+    from fatswarm.deploy.view.plot import TRAIL_STEP, trajectories
+    from fatswarm.deploy.view.replay import build_frames
 
     _, record = _record(tmp_path, name, 6, 1)
     final = record.rounds[-1].positions
@@ -298,7 +348,8 @@ def test_plot_and_replay_draw_each_async_move_from_where_it_started(name: str,
     trails = [trail for frame in frames for trail in frame.trails]
     assert trails and all(
         any(np.allclose(trail[0], e.extra["origin"], atol=1e-12) for e in record.rounds)
-        for trail in trails)
+        for trail in trails
+    )
 
 
 def _async_world(n: int = 3) -> Any:
@@ -354,7 +405,8 @@ def test_the_async_coordinator_plans_the_first_looks_then_follows_the_world() ->
             assert request.at == min(looks.values())  # the earliest Look the world had said
         if isinstance(request, Commit):  # the adversary's delays, for the instant's robots
             assert [(r, c, w) for r, c, w in request.delays] == [
-                (r, *dataclasses.astuple(model.cycle(r, 1))) for r in world.last_commit.active]
+                (r, *dataclasses.astuple(model.cycle(r, 1))) for r in world.last_commit.active
+            ]
         actions = coordinator.on_reply(reply, 0.0)
         if world.open_round:
             for robot in world.active:  # every Look answered; everyone asks to stay
@@ -375,9 +427,13 @@ def test_a_move_ending_at_the_instant_of_another_cycle_still_counts_as_a_change(
     # instant robot 1 Looks again (their moves are of one length and its waits are whole), so the
     # line before robot 0's shows the same positions; counted as "wanting to move but unchanged",
     # the run was judged stalled although the goal held.
-    start = np.array([[-703732.7838699885, 389743.93924828107],
-                      [-703734.7838705648, 389743.9392482138],
-                      [-703733.7838705629, 389749.74798139185]])
+    start = np.array(
+        [
+            [-703732.7838699885, 389743.93924828107],
+            [-703734.7838705648, 389743.9392482138],
+            [-703733.7838705629, 389749.74798139185],
+        ]
+    )
     result = run_lockstep(start, Params(3), make_async("async-slowest", 3, 2), seed=2)
     assert (result.status, result.rounds) == ("formed", 13)
 
@@ -402,8 +458,15 @@ def test_a_cycle_with_no_move_in_time_is_marked_timed_out() -> None:
     lines: list[dict[str, Any]] = []
 
     class Keep(NullJournal):
-        def round(self, round_no: int, active: Any, moves: Any, positions: Any,
-                  collisions: Any = (), **extra: Any) -> None:
+        def round(
+            self,
+            round_no: int,
+            active: Any,
+            moves: Any,
+            positions: Any,
+            collisions: Any = (),
+            **extra: Any,
+        ) -> None:
             lines.append({"active": tuple(active), **extra})
 
     world = _async_world()
@@ -411,6 +474,14 @@ def test_a_cycle_with_no_move_in_time_is_marked_timed_out() -> None:
     world.control(Begin(1, (1,), at=1.0, looks=((0, 5.0), (1, 1.0), (2, 9.0))))
     reply, _ = world.control(Commit(1, (1,), delays=((1, 0.5, 2.0),)))  # robot 1 sent nothing
     assert reply.ok
-    assert lines == [{"active": (1,), "look": 1.0, "start": 1.0, "end": 1.0,
-                      "origin": [3.0, 0.0], "timed_out": [1]}]
+    assert lines == [
+        {
+            "active": (1,),
+            "look": 1.0,
+            "start": 1.0,
+            "end": 1.0,
+            "origin": [3.0, 0.0],
+            "timed_out": [1],
+        }
+    ]
     assert world.timeouts[1] == 1

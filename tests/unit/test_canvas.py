@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fatswarm.deploy.canvas import BRAILLE_BLANK, Canvas, Viewport
+from fatswarm.deploy.view.canvas import BRAILLE_BLANK, Canvas, Viewport
 
 
 def unit_canvas(cols: int = 4, rows: int = 2, mode: str = "braille") -> Canvas:

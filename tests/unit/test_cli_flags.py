@@ -12,7 +12,10 @@ from typing import Any
 import pytest
 
 from fatswarm import __version__
-from fatswarm.deploy import cli, estimate, run
+from fatswarm.deploy import cli
+from fatswarm.deploy.commands import run
+from fatswarm.deploy.engine import estimate
+from fatswarm.deploy.view import summary
 from fatswarm.world.record import read_record
 
 MODES = pytest.mark.parametrize("mode", [["--lockstep"], []], ids=["lockstep", "networked"])
@@ -106,8 +109,9 @@ def test_resume_and_force_together_are_refused(
 ) -> None:
     target = tmp_path / "run.jsonl"
     target.write_text("")
-    code = fatswarm(["run", "-n", "3", "--seed", "1", "--record", str(target), "--resume",
-                     "--force"])
+    code = fatswarm(
+        ["run", "-n", "3", "--seed", "1", "--record", str(target), "--resume", "--force"]
+    )
     assert code == run.ExitCode.BAD_INPUT
     one_line_refusal(capsys, "pass one of them")
 
@@ -185,8 +189,21 @@ def test_lockstep_names_every_networked_only_flag_given(
 def test_lockstep_accepts_networked_flags_left_at_their_defaults(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    code = fatswarm(["run", "--lockstep", "-n", "3", "--seed", "1", "-q", "--spawn", "fork",
-                     "--move-timeout", "5"])
+    code = fatswarm(
+        [
+            "run",
+            "--lockstep",
+            "-n",
+            "3",
+            "--seed",
+            "1",
+            "-q",
+            "--spawn",
+            "fork",
+            "--move-timeout",
+            "5",
+        ]
+    )
     assert code == run.ExitCode.FORMED
     assert capsys.readouterr().err == ""
 
@@ -199,15 +216,32 @@ def test_json_prints_the_summary_as_one_object_and_progress_on_stderr(
 ) -> None:
     monkeypatch.setattr(run, "PROGRESS_SECONDS", 0.0)  # a progress line every round
     target = tmp_path / "run.jsonl"
-    code = fatswarm(["run", "--lockstep", "-n", "5", "--seed", "2", "--scheduler", "fsync",
-                     "--record", str(target), "--json"])
+    code = fatswarm(
+        [
+            "run",
+            "--lockstep",
+            "-n",
+            "5",
+            "--seed",
+            "2",
+            "--scheduler",
+            "fsync",
+            "--record",
+            str(target),
+            "--json",
+        ]
+    )
     captured = capsys.readouterr()
     (line,) = captured.out.splitlines()
     summary = json.loads(line)
     assert summary["exit_code"] == code == 0
     assert summary["status"] == "formed"
     assert (summary["n"], summary["a"], summary["seed"], summary["scheduler"]) == (
-        5, 4.0, 2, "fsync")
+        5,
+        4.0,
+        2,
+        "fsync",
+    )
     assert summary["record"] == str(target)
     assert summary["svg"] is None
     assert summary["verdict"].startswith("formed in")
@@ -219,8 +253,12 @@ def test_json_prints_the_summary_as_one_object_and_progress_on_stderr(
 
 
 def test_json_of_a_run_without_result_says_unfinished() -> None:
-    assert json.loads(run.summary_json(None, 1)) == {
-        "status": "unfinished", "exit_code": 1, "record": None, "svg": None}
+    assert json.loads(summary.summary_json(None, 1)) == {
+        "status": "unfinished",
+        "exit_code": 1,
+        "record": None,
+        "svg": None,
+    }
 
 
 # --- 8. the estimate of a large lockstep run -------------------------------------------------
@@ -242,8 +280,9 @@ def test_a_small_lockstep_run_prints_no_estimate(capsys: pytest.CaptureFixture[s
 
 
 def test_the_estimate_grows_with_n_and_the_scheduler_and_stops_at_the_cap() -> None:
-    fsync, ssync, central = (estimate.estimate_lockstep(100, s, 10**9)
-                             for s in ("fsync", "ssync", "centralized"))
+    fsync, ssync, central = (
+        estimate.estimate_lockstep(100, s, 10**9) for s in ("fsync", "ssync", "centralized")
+    )
     assert fsync.seconds < ssync.seconds < central.seconds
     assert estimate.estimate_lockstep(400, "ssync", 10**9).seconds > ssync.seconds
     capped = estimate.estimate_lockstep(100, "centralized", 50)
@@ -263,7 +302,8 @@ def test_the_progress_line_shows_an_eta(
 def test_eta_counts_to_the_expected_end_and_at_most_to_the_cap() -> None:
     assert estimate.eta_text(100, 10.0, 400, 4000) == "eta ~30 s, at most ~6.5 min (round cap)"
     assert estimate.eta_text(500, 10.0, 400, 4000) == (
-        "eta: longer than estimated, at most ~5.8 min (round cap)")
+        "eta: longer than estimated, at most ~5.8 min (round cap)"
+    )
 
 
 # --- 7. standard output closed early ---------------------------------------------------------
@@ -287,7 +327,12 @@ def test_a_closed_stdout_ends_quietly_with_141(
 
 
 def test_a_watched_run_paces_itself_to_about_fifteen_seconds() -> None:
-    from fatswarm.deploy.launcher import MAX_WATCH_PACE_S, MIN_WATCH_PACE_S, WATCH_S, watchable_pace
+    from fatswarm.deploy.net.launcher import (
+        MAX_WATCH_PACE_S,
+        MIN_WATCH_PACE_S,
+        WATCH_S,
+        watchable_pace,
+    )
 
     assert watchable_pace(8, "ssync") == pytest.approx(WATCH_S / (2 * 10))  # ~2 rounds a step
     assert watchable_pace(20, "fsync") == pytest.approx(WATCH_S / 22)
@@ -296,21 +341,27 @@ def test_a_watched_run_paces_itself_to_about_fifteen_seconds() -> None:
     assert watchable_pace(8, "async") == pytest.approx(WATCH_S / (3 * 8 * 10))  # ~3n cycles a step
 
 
-@pytest.mark.parametrize(("tty", "flags", "paced"), [
-    (True, [], True), (False, [], False), (True, ["--no-dashboard"], False),
-    (True, ["--json"], False), (True, ["--pace", "0"], False),
-])
+@pytest.mark.parametrize(
+    ("tty", "flags", "paced"),
+    [
+        (True, [], True),
+        (False, [], False),
+        (True, ["--no-dashboard"], False),
+        (True, ["--json"], False),
+        (True, ["--pace", "0"], False),
+    ],
+)
 def test_the_default_pace_is_watchable_only_with_the_live_dashboard(
     monkeypatch: pytest.MonkeyPatch, tty: bool, flags: list[str], paced: bool
 ) -> None:
     import sys
 
-    from fatswarm.deploy import cli, launcher
+    from fatswarm.deploy import cli
+    from fatswarm.deploy.net import launcher
 
     seen: list[float] = []
 
-    def launch(args: Any, setup: object, record: str, pace: float,
-               swarm: str) -> int:
+    def launch(args: Any, setup: object, record: str, pace: float, swarm: str) -> int:
         seen.append(pace)
         return 1
 

@@ -10,8 +10,10 @@ from pathlib import Path
 
 import pytest
 
-from fatswarm.deploy import cli, launcher, run
-from fatswarm.deploy.config import RunSetup
+from fatswarm.deploy import cli
+from fatswarm.deploy.commands import run
+from fatswarm.deploy.engine.config import RunSetup
+from fatswarm.deploy.net import launcher
 from fatswarm.world.record import read_record
 
 MODES = pytest.mark.parametrize("mode", [["--lockstep"], []], ids=["lockstep", "networked"])
@@ -36,8 +38,21 @@ def one_line_refusal(capsys: pytest.CaptureFixture[str], *words: str) -> None:
 def whole_run(tmp_path: Path, scheduler: str, *flags: str) -> Path:
     """A finished lockstep run's record (n 8, seed 3)."""
     target = tmp_path / f"whole-{scheduler}.jsonl"
-    code = fatswarm(["--lockstep", "-n", "8", "--seed", "3", "--scheduler", scheduler, "-q",
-                     "--record", str(target), *flags])
+    code = fatswarm(
+        [
+            "--lockstep",
+            "-n",
+            "8",
+            "--seed",
+            "3",
+            "--scheduler",
+            scheduler,
+            "-q",
+            "--record",
+            str(target),
+            *flags,
+        ]
+    )
     assert code == run.ExitCode.FORMED
     return target
 
@@ -86,9 +101,27 @@ def test_lockstep_resume_ends_as_the_uninterrupted_run(
 def test_flags_that_agree_with_the_record_are_fine(
     ssync_cut: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    code = fatswarm(["--lockstep", "--record", str(ssync_cut), "--resume", "-q", "-n", "8",
-                     "-a", "4", "--seed", "3", "--scheduler", "ssync", "--start", "clustered",
-                     "--max-rounds", "720"])
+    code = fatswarm(
+        [
+            "--lockstep",
+            "--record",
+            str(ssync_cut),
+            "--resume",
+            "-q",
+            "-n",
+            "8",
+            "-a",
+            "4",
+            "--seed",
+            "3",
+            "--scheduler",
+            "ssync",
+            "--start",
+            "clustered",
+            "--max-rounds",
+            "720",
+        ]
+    )
     assert code == run.ExitCode.FORMED, capsys.readouterr().err
     assert read_record(ssync_cut).result is not None
 
@@ -224,17 +257,23 @@ def test_networked_resume_runs_the_records_seed_scheduler_and_robots(
 ) -> None:
     launched: list[tuple[RunSetup, str]] = []
 
-    def launch(args: argparse.Namespace, setup: RunSetup, record: str, pace: float,
-               swarm: str) -> int:
+    def launch(
+        args: argparse.Namespace, setup: RunSetup, record: str, pace: float, swarm: str
+    ) -> int:
         launched.append((setup, record))
         return run.ExitCode.NOT_FORMED
 
     monkeypatch.setattr(launcher, "_launch", launch)
     assert fatswarm(["--record", str(ssync_cut), "--resume", "-q"]) == run.ExitCode.NOT_FORMED
     ((setup, record),) = launched
-    assert (setup.seed, setup.params.n, dict(setup.params.values), setup.scheduler.name,
-            setup.max_rounds, setup.algorithm_ref) == (3, 8, {"a": 4.0}, "ssync", 720,
-                                                       "uniform-circle")
+    assert (
+        setup.seed,
+        setup.params.n,
+        dict(setup.params.values),
+        setup.scheduler.name,
+        setup.max_rounds,
+        setup.algorithm_ref,
+    ) == (3, 8, {"a": 4.0}, "ssync", 720, "uniform-circle")
     assert setup.resumed is not None and len(setup.resumed.rounds) > 0
     assert record == str(ssync_cut)
     assert "pass --seed" not in capsys.readouterr().err

@@ -15,7 +15,10 @@ import numpy as np
 import pytest
 
 from fatswarm.agent.params import Params
-from fatswarm.deploy import lockstep, run
+from fatswarm.deploy.commands import run
+from fatswarm.deploy.engine import lockstep
+from fatswarm.deploy.view import summary
+from fatswarm.domain.outcome import exit_code_for
 from fatswarm.domain.path import STAY, Line, Points
 from fatswarm.domain.path import Path as RobotPath
 from fatswarm.world.record import read_record
@@ -45,7 +48,7 @@ def test_record_is_written(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     code = fatswarm_run(["--lockstep", "-n", "4", "--seed", "1", "--record", str(target), "-q"])
     record = read_record(target)
     assert record.result is not None
-    assert code == run.exit_code_for(record.result.status, record.result.extra["collisions"])
+    assert code == exit_code_for(record.result.status, record.result.extra["collisions"])
     assert (record.header.n, record.header.seed, record.header.scheduler) == (4, 1, "ssync")
     assert f"record: {target}" in capsys.readouterr().out
 
@@ -73,8 +76,22 @@ def test_scripted_schedule_is_followed(tmp_path: Path, capsys: pytest.CaptureFix
     schedule = tmp_path / "s.json"
     schedule.write_text(json.dumps({"rounds": [[1], [0, 2]]}))
     target = tmp_path / "run.jsonl"
-    argv = ["--lockstep", "-n", "3", "--seed", "4", "--scheduler", "scripted", "--schedule",
-            str(schedule), "--max-rounds", "3", "--record", str(target), "-q"]
+    argv = [
+        "--lockstep",
+        "-n",
+        "3",
+        "--seed",
+        "4",
+        "--scheduler",
+        "scripted",
+        "--schedule",
+        str(schedule),
+        "--max-rounds",
+        "3",
+        "--record",
+        str(target),
+        "-q",
+    ]
     fatswarm_run(argv)
     actives = [r.active for r in read_record(target).rounds]
     assert actives == [(1,), (0, 2), (1,)][: len(actives)]
@@ -122,7 +139,7 @@ def test_n_disagreeing_with_init_file_is_refused(
 
 
 def test_svg_of_the_final_frame(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    pytest.importorskip("fatswarm.deploy.dashboard")
+    pytest.importorskip("fatswarm.deploy.view.dashboard")
     target = tmp_path / "final.svg"
     assert fatswarm_run(["--lockstep", "-n", "4", "--seed", "3", "-q", "--svg", str(target)]) == 0
     assert target.read_text().lstrip().startswith("<svg")
@@ -131,9 +148,19 @@ def test_svg_of_the_final_frame(tmp_path: Path, capsys: pytest.CaptureFixture[st
 # --- collisions: formed through contact is not the paper's collision-free formation -------------
 
 
-def outcome(status: str, collisions: int, rounds: int = 31) -> run.Outcome:
-    return run.Outcome(status=status, rounds=rounds, collisions=collisions, n=4, a=4.0, seed=1,
-                       scheduler="ssync", epochs=9, moves=12, total_distance=30.0)
+def outcome(status: str, collisions: int, rounds: int = 31) -> summary.Outcome:
+    return summary.Outcome(
+        status=status,
+        rounds=rounds,
+        collisions=collisions,
+        n=4,
+        a=4.0,
+        seed=1,
+        scheduler="ssync",
+        epochs=9,
+        moves=12,
+        total_distance=30.0,
+    )
 
 
 @pytest.mark.parametrize(
@@ -144,36 +171,51 @@ def outcome(status: str, collisions: int, rounds: int = 31) -> run.Outcome:
         ("formed", 2, 3, f"formed in 31 rounds, but with 2 collisions: {NOT_COLLISION_FREE}"),
         ("stalled", 0, 1, "not formed: stalled after 31 rounds"),
         ("stalled", 2, 1, "not formed: stalled after 31 rounds, with 2 collisions"),
-        ("max_rounds", 5, 1,
-         "not formed: stopped at the round limit (31 rounds), with 5 collisions"),
+        (
+            "max_rounds",
+            5,
+            1,
+            "not formed: stopped at the round limit (31 rounds), with 5 collisions",
+        ),
     ],
 )
 def test_exit_code_and_verdict_say_whether_robots_collided(
     status: str, collisions: int, code: int, verdict: str
 ) -> None:
     o = outcome(status, collisions)
-    assert run.exit_code(o) == code
-    assert run.verdict(o) == verdict
-    assert run.summary(o).splitlines()[0] == verdict
-    assert run.summary(o).splitlines()[2].endswith(f"collisions {collisions}")
+    assert summary.exit_code(o) == code
+    assert summary.verdict(o) == verdict
+    assert summary.summary(o).splitlines()[0] == verdict
+    assert summary.summary(o).splitlines()[2].endswith(f"collisions {collisions}")
 
 
 def test_exit_codes_are_listed_in_the_help() -> None:
     parser = argparse.ArgumentParser(prog="fatswarm run")
     run.add_arguments(parser)
     text = " ".join(parser.format_help().split())
-    for listed in ("0 formed with no collision", "1 not formed", "2 bad input",
-                   "3 formed, but with collisions", "130 interrupted (Ctrl-C)",
-                   "141 standard output closed early", "143 terminated (SIGTERM)"):
+    for listed in (
+        "0 formed with no collision",
+        "1 not formed",
+        "2 bad input",
+        "3 formed, but with collisions",
+        "130 interrupted (Ctrl-C)",
+        "141 standard output closed early",
+        "143 terminated (SIGTERM)",
+    ):
         assert listed in text
 
 
 def test_exit_codes_are_one_enum_whose_old_names_still_import() -> None:
     assert [int(c) for c in run.ExitCode] == [0, 1, 2, 3, 4, 130, 141, 143]
     assert str(int(run.ExitCode.RECORD_FAILED)) in run.EXIT_CODES_HELP
-    assert (run.EXIT_FORMED, run.EXIT_NOT_FORMED, run.EXIT_BAD_INPUT,
-            run.EXIT_FORMED_WITH_COLLISIONS, run.EXIT_INTERRUPTED) == (0, 1, 2, 3, 130)
-    assert run.EXIT_TERMINATED is run.ExitCode.TERMINATED
+    assert (
+        run.ExitCode.FORMED,
+        run.ExitCode.NOT_FORMED,
+        run.ExitCode.BAD_INPUT,
+        run.ExitCode.FORMED_WITH_COLLISIONS,
+        run.ExitCode.INTERRUPTED,
+    ) == (0, 1, 2, 3, 130)
+    assert run.ExitCode.TERMINATED is run.ExitCode.TERMINATED
 
 
 def bump(view: Points, params: Params) -> RobotPath:
@@ -193,26 +235,39 @@ def test_a_formation_reached_through_collisions_exits_three_and_says_so(
 ) -> None:
     init = tmp_path / "far-apart.json"
     init.write_text(json.dumps({"positions": [[0, 0], [8, 0]], "a": 4}))
-    monkeypatch.setattr(lockstep, "run_lockstep",
-                        functools.partial(lockstep.run_lockstep, compute=bump))
+    monkeypatch.setattr(
+        lockstep, "run_lockstep", functools.partial(lockstep.run_lockstep, compute=bump)
+    )
     target = tmp_path / "run.jsonl"
-    code = fatswarm_run(["--lockstep", "--init", str(init), "--seed", "0", "--scheduler", "fsync",
-                         "--record", str(target), "-q"])
+    code = fatswarm_run(
+        [
+            "--lockstep",
+            "--init",
+            str(init),
+            "--seed",
+            "0",
+            "--scheduler",
+            "fsync",
+            "--record",
+            str(target),
+            "-q",
+        ]
+    )
     out = capsys.readouterr().out
-    assert code == run.EXIT_FORMED_WITH_COLLISIONS == 3
+    assert code == run.ExitCode.FORMED_WITH_COLLISIONS == 3
     assert re.match(rf"formed in \d+ rounds, but with 2 collisions: {NOT_COLLISION_FREE}\n", out)
     assert "collisions 2" in out
 
     # the networked run reads its summary and exit code back from the same kind of record
-    from fatswarm.deploy.launcher import print_summary
+    from fatswarm.deploy.net.launcher import print_summary
 
     printed = io.StringIO()
     read_back = print_summary(str(target), printed)
-    assert read_back is not None and run.exit_code(read_back) == 3
+    assert read_back is not None and summary.exit_code(read_back) == 3
     assert printed.getvalue() == out.split("record: ")[0]
 
 
-# --- the supported range (fatswarm/domain/tolerance.py) -------------------------------------------------
+# --- the supported range (fatswarm/domain/tolerance.py) -------------------------------------------
 
 
 def unsupported_inputs(tmp_path: Path) -> list[tuple[list[str], str]]:
@@ -256,7 +311,7 @@ def test_the_largest_side_inside_the_supported_range_still_runs(
 def test_world_part_refuses_a_start_outside_the_supported_range(tmp_path: Path) -> None:
     # a process of its own: the part installs signal handlers and logging for its whole process
     proc = subprocess.run(
-        [sys.executable, "-m", "fatswarm.deploy.parts", "world",
+        [sys.executable, "-m", "fatswarm.deploy.net.parts", "world",
          "--state", str(tmp_path / "w.jsonl"), "--connect", "tcp/127.0.0.1:9",
          "-n", "2", "-a", "1e10"],
         capture_output=True, text=True, cwd=ROOT, timeout=60,

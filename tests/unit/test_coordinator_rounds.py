@@ -29,8 +29,9 @@ from fatswarm.domain.outcome import ExitCode, Status, exit_code_for
 from fatswarm.world.protocol import Begin, Commit, ControlReply, Hello, MovesHeld
 
 Request = Hello | Begin | Commit
-TIMES = RoundTimes(move_timeout_s=5.0, start_timeout_s=120.0, resume_grace_s=2.0, pace_s=0.0,
-                   retry_s=0.25)
+TIMES = RoundTimes(
+    move_timeout_s=5.0, start_timeout_s=120.0, resume_grace_s=2.0, pace_s=0.0, retry_s=0.25
+)
 
 
 class FakeWorld:
@@ -44,8 +45,14 @@ class FakeWorld:
     answer) or "lost" (applied, but the answer never arrives). `restart()` loses the open round.
     """
 
-    def __init__(self, n: int, end_after: int = 3, end_status: Status = Status.FORMED,
-                 committed: int = 0, collisions: int = 0) -> None:
+    def __init__(
+        self,
+        n: int,
+        end_after: int = 3,
+        end_status: Status = Status.FORMED,
+        committed: int = 0,
+        collisions: int = 0,
+    ) -> None:
         self.n, self.end_after, self.end_status = n, end_after, end_status
         self.committed, self.collisions = committed, collisions
         self.status = Status.RUNNING if committed < end_after else end_status
@@ -89,11 +96,17 @@ class FakeWorld:
         return notice
 
     def reply(self, ok: bool, reason: str = "") -> ControlReply:
-        return ControlReply(ok=ok, reason=reason, n=self.n, committed=self.committed,
-                            open_round=self.open_round, status=str(self.status),
-                            collisions=self.collisions,
-                            held=tuple(sorted(self.held)) if self.open_round else (),
-                            epoch=self.epoch)
+        return ControlReply(
+            ok=ok,
+            reason=reason,
+            n=self.n,
+            committed=self.committed,
+            open_round=self.open_round,
+            status=str(self.status),
+            collisions=self.collisions,
+            held=tuple(sorted(self.held)) if self.open_round else (),
+            epoch=self.epoch,
+        )
 
     def answer(self, req: Request) -> ControlReply | None:
         self.requests.append(req)
@@ -162,12 +175,19 @@ class Drive:
     world's moves notices reach the core as events, after the actions of the reply in hand.
     """
 
-    def __init__(self, world: FakeWorld, scheduler: str = "fsync", seed: int = 7,
-                 times: RoundTimes = TIMES, resume_live: Sequence[int] | None = None) -> None:
+    def __init__(
+        self,
+        world: FakeWorld,
+        scheduler: str = "fsync",
+        seed: int = 7,
+        times: RoundTimes = TIMES,
+        resume_live: Sequence[int] | None = None,
+    ) -> None:
         self.world, self.times, self.now = world, times, 0.0
         self.schedulers: list[Recording] = []
-        self.core = CoordinatorCore(lambda n: self._recording(make_scheduler(scheduler, n, seed)),
-                                    times, resume_live)
+        self.core = CoordinatorCore(
+            lambda n: self._recording(make_scheduler(scheduler, n, seed)), times, resume_live
+        )
         self.auto_move = True
         self.agents: set[int] = set()  # robots whose agent is up
         self.silent: set[int] = set()
@@ -280,10 +300,17 @@ class Drive:
 
 def test_the_core_imports_no_zenoh_clock_threads_or_logging() -> None:
     tree = ast.parse(inspect.getsource(rounds))
-    imported = {alias.name.split(".")[0] for node in ast.walk(tree)
-                if isinstance(node, ast.Import) for alias in node.names}
-    imported |= {(node.module or "").split(".")[0] for node in ast.walk(tree)
-                 if isinstance(node, ast.ImportFrom)}
+    imported = {
+        alias.name.split(".")[0]
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Import)
+        for alias in node.names
+    }
+    imported |= {
+        (node.module or "").split(".")[0]
+        for node in ast.walk(tree)
+        if isinstance(node, ast.ImportFrom)
+    }
     assert not imported & {"zenoh", "time", "threading", "logging", "asyncio", "random", "socket"}
 
 
@@ -296,8 +323,10 @@ def test_a_full_fsync_run_ends_formed_after_the_worlds_last_commit() -> None:
     drive = Drive(FakeWorld(4, end_after=3)).start(*ALL4)
     assert drive.finished == Finished(Status.FORMED, 0)
     assert drive.world.requests == [
-        Hello(), Begin(round=1, active=ALL4),
-        *(Commit(round=k, timed_out=(), then_active=ALL4) for k in (1, 2, 3))]
+        Hello(),
+        Begin(round=1, active=ALL4),
+        *(Commit(round=k, timed_out=(), then_active=ALL4) for k in (1, 2, 3)),
+    ]
     assert drive.world.opened == [(1, ALL4), (2, ALL4), (3, ALL4)]  # the last commit opens none
     assert [(at, r) for at, r, _ in drive.opened] == [(0.0, 1), (0.0, 2), (0.0, 3)]
     assert drive.now == 0.0  # nobody waited: every move came at once
@@ -311,7 +340,8 @@ def test_finished_carries_the_worlds_status_and_collisions() -> None:
     formed = Drive(FakeWorld(2, end_after=1, collisions=2)).start(0, 1)
     assert formed.finished == Finished(Status.FORMED, 2)
     assert exit_code_for(formed.finished.status, formed.finished.collisions) == (
-        ExitCode.FORMED_WITH_COLLISIONS)
+        ExitCode.FORMED_WITH_COLLISIONS
+    )
 
 
 def test_a_run_that_already_ended_finishes_at_the_first_hello_without_waiting_for_agents() -> None:
@@ -395,8 +425,13 @@ def test_a_lost_reply_to_a_chained_commit_recovers_to_the_same_round_and_set() -
     world.fail("commit", "lost")  # round 1 is committed and round 2 opened; the reply is lost
     drive = Drive(world, scheduler="ssync", seed=9).start(*range(4))
     lost = drive.commits()[0]
-    assert world.requests[:5] == [Hello(), Begin(1, drive.scheduler.said[1]), lost, Hello(),
-                                  Begin(2, lost.then_active)]
+    assert world.requests[:5] == [
+        Hello(),
+        Begin(1, drive.scheduler.said[1]),
+        lost,
+        Hello(),
+        Begin(2, lost.then_active),
+    ]
     # the world kept the moves it held for round 2: its commit came at once, with nobody missing
     assert world.applied[1] == (drive.commits()[1], ())
     assert drive.commits()[1] == Commit(2, (), then_active=drive.scheduler.said[3])
@@ -409,8 +444,14 @@ def test_a_lost_chained_commit_request_is_sent_again_with_the_same_next_set() ->
     world.fail("commit", "none")  # the world never saw it: round 1 is still open
     drive = Drive(world, scheduler="ssync", seed=9).start(*range(4))
     first, again = drive.commits()[:2]
-    assert world.requests[:6] == [Hello(), Begin(1, drive.scheduler.said[1]), first, Hello(),
-                                  Begin(1, drive.scheduler.said[1]), again]
+    assert world.requests[:6] == [
+        Hello(),
+        Begin(1, drive.scheduler.said[1]),
+        first,
+        Hello(),
+        Begin(1, drive.scheduler.said[1]),
+        again,
+    ]
     assert first == again and first.then_active == drive.scheduler.said[2]
     assert drive.scheduler.asked == list(range(1, 8))
     assert drive.finished == Finished(Status.FORMED, 0)
@@ -425,8 +466,7 @@ def test_a_world_that_opens_no_round_with_the_commit_is_sent_a_begin() -> None:
     drive.start(0, 1, 2)
     world.committed, world.open_round, world.active, world.held = 1, 0, (), set()
     drive.tick(5.0)  # round 1 times out: Commit(1, then) finds it committed already
-    assert world.requests[-2:] == [Commit(1, (0, 1, 2), then_active=(0, 1, 2)),
-                                   Begin(2, (0, 1, 2))]
+    assert world.requests[-2:] == [Commit(1, (0, 1, 2), then_active=(0, 1, 2)), Begin(2, (0, 1, 2))]
     assert drive.core.phase is Phase.COLLECT and drive.core.round == 2
 
 
@@ -456,8 +496,7 @@ def test_a_robot_that_never_moves_is_timed_out_at_exactly_move_timeout() -> None
     assert commit.round == 1 and 2 in commit.timed_out and timed_out == (2,)
 
 
-def test_the_note_of_a_round_ended_at_its_deadline_names_only_the_robots_the_world_missed(
-) -> None:
+def test_the_note_of_a_round_ended_at_its_deadline_names_only_the_robots_the_world_missed() -> None:
     drive = Drive(FakeWorld(3))
     drive.silent = {2}
     drive.perform(drive.core.start(drive.now))
@@ -498,8 +537,10 @@ def test_move_notices_of_another_round_or_robot_are_ignored() -> None:
     drive.start(0, 1)
     drive.tick(120.0)  # robot 2 never came: round 1 with 0 and 1
     assert drive.core.round == 1 and drive.core.active == (0, 1)
-    for notice in (MovesHeld(round=2, robots=(0, 1), epoch=1),
-                   MovesHeld(round=1, robots=(2,), epoch=1)):
+    for notice in (
+        MovesHeld(round=2, robots=(0, 1), epoch=1),
+        MovesHeld(round=1, robots=(2,), epoch=1),
+    ):
         assert drive.core.on_held(notice, drive.now) == []
     assert drive.core.held == set()
     drive.move(0)
@@ -713,8 +754,14 @@ def test_a_round_the_world_still_holds_open_keeps_its_held_moves_when_opened_aga
     world.fail("commit", "none")  # the request is lost: the world keeps round 1 and its moves
     drive = Drive(world).start(0, 1, 2)
     commit = Commit(round=1, timed_out=(), then_active=(0, 1, 2))
-    assert world.requests == [Hello(), Begin(round=1, active=(0, 1, 2)), commit, Hello(),
-                              Begin(round=1, active=(0, 1, 2)), commit]
+    assert world.requests == [
+        Hello(),
+        Begin(round=1, active=(0, 1, 2)),
+        commit,
+        Hello(),
+        Begin(round=1, active=(0, 1, 2)),
+        commit,
+    ]
     assert drive.finished == Finished(Status.FORMED, 0) and drive.now == 0.0
 
 
@@ -722,9 +769,13 @@ def test_a_lost_commit_reply_goes_on_from_the_round_the_world_committed() -> Non
     world = FakeWorld(3, end_after=5)
     world.fail("commit", "lost")
     drive = Drive(world).start(0, 1, 2)
-    assert world.requests[:5] == [Hello(), Begin(round=1, active=(0, 1, 2)),
-                                  Commit(round=1, timed_out=(), then_active=(0, 1, 2)), Hello(),
-                                  Begin(round=2, active=(0, 1, 2))]
+    assert world.requests[:5] == [
+        Hello(),
+        Begin(round=1, active=(0, 1, 2)),
+        Commit(round=1, timed_out=(), then_active=(0, 1, 2)),
+        Hello(),
+        Begin(round=2, active=(0, 1, 2)),
+    ]
     assert drive.finished == Finished(Status.FORMED, 0)
 
 
@@ -757,7 +808,8 @@ def test_a_restarted_coordinator_waits_only_the_resume_grace_for_its_agents() ->
     assert drive.begins() == [Begin(round=3, active=(0,))]
     assert drive.core.pop_notes() == [
         Note("resuming after round 2"),
-        Note("only 1 of 4 agents after 2.0 s; going on with them", warning=True)]
+        Note("only 1 of 4 agents after 2.0 s; going on with them", warning=True),
+    ]
     assert drive.core.pop_notes() == []
 
 
@@ -794,8 +846,11 @@ OPS = st.one_of(
     st.tuples(st.just("kill"), st.integers(0, 5), st.booleans()),  # the i-th active robot dies
     st.tuples(st.just("stray"), st.integers(0, 5), st.sampled_from([-2, -1, 0, 1, 2])),
     st.tuples(st.just("wait"), st.floats(0.0, 1.5)),
-    st.tuples(st.just("fault"), st.sampled_from(["hello", "begin", "commit"]),
-              st.sampled_from(["refuse", "none", "lost"])),
+    st.tuples(
+        st.just("fault"),
+        st.sampled_from(["hello", "begin", "commit"]),
+        st.sampled_from(["refuse", "none", "lost"]),
+    ),
     st.tuples(st.just("restart")),
 )
 
@@ -823,9 +878,15 @@ def _check_plans(drive: Drive) -> None:
         assert scheduler.asked == list(range(1, len(scheduler.asked) + 1))
     said = drive.schedulers[-1].said if drive.schedulers else {}
     for req in drive.world.requests:
-        plan = (req.round, req.active) if isinstance(req, Begin) else (
-            (req.round + 1, req.then_active) if isinstance(req, Commit) and req.then_active
-            else None)
+        plan = (
+            (req.round, req.active)
+            if isinstance(req, Begin)
+            else (
+                (req.round + 1, req.then_active)
+                if isinstance(req, Commit) and req.then_active
+                else None
+            )
+        )
         if plan is not None:
             assert plan[1] and plan[1] == tuple(sorted(set(plan[1])))
             assert max(plan[1]) < drive.world.n
@@ -841,7 +902,8 @@ def _check_collecting(drive: Drive) -> None:
     assert core.held <= core.active_set
     if notice is not None and notice.round == core.round:
         assert core.round != drive.world.open_round or (core.live & core.active_set) - set(
-            notice.robots), "a round with every live active robot's move held is not committed"
+            notice.robots
+        ), "a round with every live active robot's move held is not committed"
 
 
 def _check_pace(drive: Drive) -> None:
@@ -850,10 +912,17 @@ def _check_pace(drive: Drive) -> None:
     assert all(b >= a + drive.core.times.pace_s for a, b in itertools.pairwise(times))
 
 
-def _any_events(n: int, scheduler: str, pace: float, up: set[int], quick: set[int],
-                ops: list[tuple[object, ...]]) -> None:
-    times = RoundTimes(move_timeout_s=1.0, start_timeout_s=0.5, resume_grace_s=0.5, pace_s=pace,
-                       retry_s=0.25)
+def _any_events(
+    n: int,
+    scheduler: str,
+    pace: float,
+    up: set[int],
+    quick: set[int],
+    ops: list[tuple[object, ...]],
+) -> None:
+    times = RoundTimes(
+        move_timeout_s=1.0, start_timeout_s=0.5, resume_grace_s=0.5, pace_s=pace, retry_s=0.25
+    )
     world = FakeWorld(n, end_after=1000)
     drive = Drive(world, scheduler=scheduler, times=times)
     drive.silent = set(range(6)) - quick  # the others move as soon as their Look is answered
@@ -886,8 +955,9 @@ def _any_events(n: int, scheduler: str, pace: float, up: set[int], quick: set[in
                     drive.alive(robot, up=False, world_first=world_first)
             case ("stray", int(robot), int(offset)):  # never a notice the world could send
                 if drive.core.round + offset >= 1 and (offset or robot not in drive.core.active):
-                    notice = MovesHeld(round=drive.core.round + offset, robots=(robot,),
-                                       epoch=drive.world.epoch)
+                    notice = MovesHeld(
+                        round=drive.core.round + offset, robots=(robot,), epoch=drive.world.epoch
+                    )
                     drive.perform(drive.core.on_held(notice, drive.now))
             case ("wait", float(dt)):
                 drive.wait(dt)
@@ -930,7 +1000,11 @@ def _any_events(n: int, scheduler: str, pace: float, up: set[int], quick: set[in
     ops=st.lists(OPS, min_size=3, max_size=60),
 )
 def test_under_any_events_rounds_follow_the_schedule_and_commits_wait_for_the_live_robots(
-    n: int, scheduler: str, pace: float, up: set[int], quick: set[int],
+    n: int,
+    scheduler: str,
+    pace: float,
+    up: set[int],
+    quick: set[int],
     ops: list[tuple[object, ...]],
 ) -> None:
     _any_events(n, scheduler, pace, up, quick, ops)

@@ -115,8 +115,9 @@ def test_resuming_a_crash_record_reproduces_it_byte_for_byte(
     scheduler: str, tmp_path: FsPath, capsys: pytest.CaptureFixture[str]
 ) -> None:
     whole = tmp_path / "whole.jsonl"
-    assert _fatswarm("-n", "6", "--seed", "2", "--scheduler", scheduler, "--crash", "1",
-                     "--record", str(whole)) in (0, 1)
+    assert _fatswarm(
+        "-n", "6", "--seed", "2", "--scheduler", scheduler, "--crash", "1", "--record", str(whole)
+    ) in (0, 1)
     lines = whole.read_text().splitlines(keepends=True)
     crash_line = next(i for i, line in enumerate(lines) if '"crash":[' in line)
     cuts = [c for c in (crash_line, crash_line + 1) if c < len(lines) - 1]
@@ -146,8 +147,10 @@ def test_resume_refuses_crash_for_a_record_without(
 def test_a_crash_count_outside_0_n_is_refused(f: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert _fatswarm("-n", "6", f"--crash={f}") == 2
     err = capsys.readouterr().err
-    assert err.startswith("fatswarm run: --crash must be between 1 and n - 1 = 5") and \
-        err.count("\n") == 1
+    assert (
+        err.startswith("fatswarm run: --crash must be between 1 and n - 1 = 5")
+        and err.count("\n") == 1
+    )
 
 
 def test_the_world_reads_f_back_from_the_header_and_a_run_without_says_nothing(

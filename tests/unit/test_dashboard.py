@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 from rich.console import Console
 
-from fatswarm.deploy.dashboard import (
+from fatswarm.deploy.net.watch import StateWatcher, add_arguments, follow
+from fatswarm.deploy.view.dashboard import (
     LAYER_ACTIVE,
     LAYER_ROBOT,
     LAYER_SEC,
@@ -23,15 +24,12 @@ from fatswarm.deploy.dashboard import (
     LiveView,
     ProgressLog,
     RateMeter,
-    StateWatcher,
-    add_arguments,
     add_run_arguments,
     agent_rows,
     build_canvas,
     derive,
     enclosing_circle,
     figure_text,
-    follow,
     frame_from_state,
     outcome_text,
     print_frame,

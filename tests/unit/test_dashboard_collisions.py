@@ -4,14 +4,21 @@ from __future__ import annotations
 
 import numpy as np
 
-from fatswarm.deploy.dashboard import Frame, outcome_text
+from fatswarm.deploy.view.dashboard import Frame, outcome_text
 
 SQUARE = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]])
 
 
 def formed(collisions: int) -> Frame:
-    return Frame(round=12, n=4, a=4.0, scheduler="ssync", positions=SQUARE, status="formed",
-                 collisions_total=collisions)
+    return Frame(
+        round=12,
+        n=4,
+        a=4.0,
+        scheduler="ssync",
+        positions=SQUARE,
+        status="formed",
+        collisions_total=collisions,
+    )
 
 
 def test_a_formation_without_collisions_is_shown_as_formed() -> None:

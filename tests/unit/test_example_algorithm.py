@@ -29,8 +29,9 @@ def algorithm() -> Algorithm[Any]:
     return load_algorithm(f"{EXAMPLE}:ALGORITHM")
 
 
-def test_it_loads_by_file_path_as_the_docs_say(monkeypatch: pytest.MonkeyPatch,
-                                               algorithm: Algorithm[Any]) -> None:
+def test_it_loads_by_file_path_as_the_docs_say(
+    monkeypatch: pytest.MonkeyPatch, algorithm: Algorithm[Any]
+) -> None:
     monkeypatch.chdir(ROOT)
     loaded = load_algorithm("examples/spread_out.py:ALGORITHM")
     assert loaded is algorithm  # a file is imported once per process
@@ -39,17 +40,20 @@ def test_it_loads_by_file_path_as_the_docs_say(monkeypatch: pytest.MonkeyPatch,
 
 
 def test_the_file_imports_only_the_seam_the_path_numpy_and_the_standard_library() -> None:
-    imports = [line.split()[1] for line in EXAMPLE.read_text().splitlines()
-               if line.startswith(("import ", "from "))]
+    imports = [
+        line.split()[1]
+        for line in EXAMPLE.read_text().splitlines()
+        if line.startswith(("import ", "from "))
+    ]
     fatswarm = {name for name in imports if name.startswith("fatswarm")}
     assert fatswarm <= {"fatswarm.domain.seam", "fatswarm.domain.path"}
 
 
 @SETTINGS
 @given(grid_starts(pitch_max=5.0), st.data())
-def test_path_is_the_same_for_every_order_of_the_view(algorithm: Algorithm[Any],
-                                                      positions: Points,
-                                                      data: st.DataObject) -> None:
+def test_path_is_the_same_for_every_order_of_the_view(
+    algorithm: Algorithm[Any], positions: Points, data: st.DataObject
+) -> None:
     params = Configured.of(algorithm, len(positions)).params
     for robot in range(len(positions)):
         view = view_of(positions, robot)
@@ -59,8 +63,9 @@ def test_path_is_the_same_for_every_order_of_the_view(algorithm: Algorithm[Any],
 
 @SETTINGS
 @given(grid_starts(pitch_max=5.0))
-def test_mirroring_the_view_mirrors_the_path_exactly(algorithm: Algorithm[Any],
-                                                     positions: Points) -> None:
+def test_mirroring_the_view_mirrors_the_path_exactly(
+    algorithm: Algorithm[Any], positions: Points
+) -> None:
     params = Configured.of(algorithm, len(positions)).params
     for robot in range(len(positions)):
         view = view_of(positions, robot)
@@ -70,14 +75,19 @@ def test_mirroring_the_view_mirrors_the_path_exactly(algorithm: Algorithm[Any],
 
 @SETTINGS
 @given(grid_starts(pitch_max=5.0))
-def test_robots_never_overlap_and_spread_out_when_all_move_at_once(algorithm: Algorithm[Any],
-                                                                  positions: Points) -> None:
+def test_robots_never_overlap_and_spread_out_when_all_move_at_once(
+    algorithm: Algorithm[Any], positions: Points
+) -> None:
     params = Configured.of(algorithm, len(positions)).params
     for _ in range(200):
         if algorithm.goal(positions, params):
             break
-        moves = np.array([end_point((0.0, 0.0), algorithm.compute(view_of(positions, r), params))
-                          for r in range(len(positions))])
+        moves = np.array(
+            [
+                end_point((0.0, 0.0), algorithm.compute(view_of(positions, r), params))
+                for r in range(len(positions))
+            ]
+        )
         assert closest_during(positions, moves) >= 2.0 - 1e-9
         positions = positions + moves
     assert algorithm.goal(positions, params)
@@ -103,8 +113,9 @@ def test_goal_holds_on_a_spread_start_and_not_on_a_crowded_one(algorithm: Algori
     assert algorithm.goal(np.array([[1.0, 1.0]]), Configured.of(algorithm, 1).params)
 
 
-@pytest.mark.parametrize("values", [{"spacing": "2"}, {"step": "0"}, {"spacing": "nan"},
-                                    {"radius": "6"}])
+@pytest.mark.parametrize(
+    "values", [{"spacing": "2"}, {"step": "0"}, {"spacing": "nan"}, {"radius": "6"}]
+)
 def test_bad_parameters_are_refused(algorithm: Algorithm[Any], values: dict[str, str]) -> None:
     with pytest.raises(AlgorithmParamsError):
         Configured.of(algorithm, 4, values)

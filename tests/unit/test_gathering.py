@@ -36,8 +36,9 @@ def step_vectors(positions: Points, robots: list[int]) -> Points:
 
 @SETTINGS
 @given(STARTS, st.data())
-def test_path_is_the_same_for_every_order_of_the_view(positions: Points, data: st.DataObject
-                                                      ) -> None:
+def test_path_is_the_same_for_every_order_of_the_view(
+    positions: Points, data: st.DataObject
+) -> None:
     for robot in range(len(positions)):
         view = view_of(positions, robot)
         order = data.draw(st.permutations(range(len(view))))
@@ -55,10 +56,10 @@ def test_mirroring_the_view_mirrors_the_path_exactly(positions: Points) -> None:
 
 
 @SETTINGS
-@given(STARTS,
-       st.lists(st.lists(st.booleans(), min_size=9, max_size=9), min_size=1, max_size=6))
-def test_robots_never_overlap_when_they_move_at_once(positions: Points,
-                                                     rounds: list[list[bool]]) -> None:
+@given(STARTS, st.lists(st.lists(st.booleans(), min_size=9, max_size=9), min_size=1, max_size=6))
+def test_robots_never_overlap_when_they_move_at_once(
+    positions: Points, rounds: list[list[bool]]
+) -> None:
     for active in [[True] * 9, *rounds]:  # one fsync round, then any subsets
         robots = [r for r in range(len(positions)) if active[r]]
         moves = step_vectors(positions, robots)
@@ -71,8 +72,7 @@ def test_robots_never_overlap_when_they_move_at_once(positions: Points,
 @SETTINGS
 @given(STARTS)
 def test_goal_holds_exactly_when_every_robot_stays(positions: Points) -> None:
-    stays = all(not ALGORITHM.compute(view_of(positions, r), PARAMS)
-                for r in range(len(positions)))
+    stays = all(not ALGORITHM.compute(view_of(positions, r), PARAMS) for r in range(len(positions)))
     assert ALGORITHM.goal(positions, PARAMS) == stays
 
 

@@ -188,12 +188,16 @@ def test_contact_is_two_radii() -> None:
 
 
 @settings(max_examples=200, deadline=None)
-@given(st.lists(st.tuples(st.integers(-4, 4), st.integers(-3, 3)), min_size=1, max_size=30),
-       st.floats(-3, 3))
+@given(
+    st.lists(st.tuples(st.integers(-4, 4), st.integers(-3, 3)), min_size=1, max_size=30),
+    st.floats(-3, 3),
+)
 def test_mirror_matching_agrees_with_all_pairs(cells: list[tuple[int, int]], axis: float) -> None:
     # integer grids make many robots share a Y, exercising both the window and the dense path
     pts = np.array([(axis + 1.5 * x, 2.0 * y) for x, y in cells], dtype=np.float64)
     mx = 2 * axis - pts[:, 0]
-    dense = (np.hypot(mx[:, None] - pts[None, :, 0], pts[:, None, 1] - pts[None, :, 1])
-             .min(axis=1) <= 1e-6)
+    dense = (
+        np.hypot(mx[:, None] - pts[None, :, 0], pts[:, None, 1] - pts[None, :, 1]).min(axis=1)
+        <= 1e-6
+    )
     assert np.array_equal(mirror_matched(pts, axis, 1e-6), dense)

@@ -10,6 +10,8 @@ import pytest
 import zenoh
 
 from fatswarm.domain.path import STAY
+from fatswarm.world.core import WorldCore, WorldSetup
+from fatswarm.world.journal import open_world
 from fatswarm.world.protocol import (
     Begin,
     Commit,
@@ -18,7 +20,7 @@ from fatswarm.world.protocol import (
     Snapshot,
     snapshot_key,
 )
-from fatswarm.world.service import HOLD_LOOK_S, HeldLooks, WorldCore, WorldSetup, open_world
+from fatswarm.world.service import HOLD_LOOK_S, HeldLooks
 
 SWARM = "t"
 START = np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]])
@@ -171,8 +173,12 @@ def test_a_look_that_carries_the_robots_move_delivers_it_and_is_held_for_the_nex
     # the agent sends its move again with every Look until one is answered: no news, no word
     _take_look(world, _look_with(0, LookRequest(world.epoch, 1, move)), looks, notices)
     assert world.held == {0: STAY} and sum(world.rejected.values()) == 1
-    _take_look(world, _look_with(1, LookRequest(world.epoch, 1, MoveSubmitted(1, 1, STAY)
-                                                .encode())), looks, notices)
+    _take_look(
+        world,
+        _look_with(1, LookRequest(world.epoch, 1, MoveSubmitted(1, 1, STAY).encode())),
+        looks,
+        notices,
+    )
     assert len(notices.sent) == 1  # every active robot moved: one notice
     assert world.control(Commit(1))[0].ok
     # and a move of a round no longer open, sent again with a Look, is dropped quietly too

@@ -19,7 +19,7 @@ import pytest
 
 from fatswarm.coordinator.schedule import load_script
 from fatswarm.deploy import cli
-from fatswarm.deploy.hunt import (
+from fatswarm.deploy.hunt.search import (
     COLLISION,
     MAX_ROUNDS,
     Case,
@@ -35,9 +35,9 @@ from fatswarm.deploy.hunt import (
     shrink,
     start_families,
 )
-from fatswarm.deploy.sweep import sweep_schedulers
+from fatswarm.deploy.scenarios.starts import load_init
+from fatswarm.deploy.sweep.grid import sweep_schedulers
 from fatswarm.world.record import read_record
-from fatswarm.world.starts import load_init
 
 ROOT = Path(__file__).resolve().parents[2]
 PLANTED = f"{ROOT / 'tests' / 'data' / 'always_right.py'}:ALGORITHM"
@@ -131,12 +131,18 @@ def test_the_case_of_a_failure_replays_it_exactly_under_its_script() -> None:
     case, kind = planted_failure(5)
     outcome = replay(PLANTED_HUNT, case)
     assert outcome.failure is not None and outcome.failure.kind == kind
-    assert case.rounds is not None and outcome.active == case.rounds[:len(outcome.active)]
+    assert case.rounds is not None and outcome.active == case.rounds[: len(outcome.active)]
 
 
 def test_dropping_robots_renumbers_the_script_and_drops_empty_rounds() -> None:
-    case = Case(((0.0, 0.0), (3.0, 0.0), (6.0, 0.0), (9.0, 0.0)), ((1,), (0, 2), (3,)), "fsync",
-                7, 100, "ssync")
+    case = Case(
+        ((0.0, 0.0), (3.0, 0.0), (6.0, 0.0), (9.0, 0.0)),
+        ((1,), (0, 2), (3,)),
+        "fsync",
+        7,
+        100,
+        "ssync",
+    )
     smaller = drop_robots(PLANTED_HUNT, case, [1])
     assert smaller is not None
     assert smaller.positions == ((0.0, 0.0), (6.0, 0.0), (9.0, 0.0))
@@ -158,9 +164,27 @@ def test_hunt_finds_shrinks_and_saves_the_planted_failure(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "found"
-    code = hunt(["--algorithm", PLANTED, "--scheduler", ",".join(ROUND_MODELS), "-n", "3..8",
-                 "--budget-runs", "40", "--max-failures", "2", "--jobs", "2", "--seed", "3",
-                 "--out", str(out), "-q"])
+    code = hunt(
+        [
+            "--algorithm",
+            PLANTED,
+            "--scheduler",
+            ",".join(ROUND_MODELS),
+            "-n",
+            "3..8",
+            "--budget-runs",
+            "40",
+            "--max-failures",
+            "2",
+            "--jobs",
+            "2",
+            "--seed",
+            "3",
+            "--out",
+            str(out),
+            "-q",
+        ]
+    )
     assert code == 1
     folders = sorted(out.iterdir())
     assert len(folders) == 2
@@ -184,34 +208,88 @@ def test_a_run_budget_saves_the_same_failures_on_one_worker_or_two(tmp_path: Pat
     saved = {}
     for jobs in ("1", "2"):
         out = tmp_path / f"jobs{jobs}"
-        assert hunt(["--algorithm", PLANTED, "--scheduler", ",".join(ROUND_MODELS), "-n", "3..6",
-                     "--budget-runs", "12", "--max-failures", "3", "--jobs", jobs, "--seed", "9",
-                     "--out", str(out), "-q"]) == 1
-        saved[jobs] = {folder.name: [(folder / name).read_text() for name in
-                                     ("start.json", "schedule.json", "summary.json")]
-                       for folder in out.iterdir()}
+        assert (
+            hunt(
+                [
+                    "--algorithm",
+                    PLANTED,
+                    "--scheduler",
+                    ",".join(ROUND_MODELS),
+                    "-n",
+                    "3..6",
+                    "--budget-runs",
+                    "12",
+                    "--max-failures",
+                    "3",
+                    "--jobs",
+                    jobs,
+                    "--seed",
+                    "9",
+                    "--out",
+                    str(out),
+                    "-q",
+                ]
+            )
+            == 1
+        )
+        saved[jobs] = {
+            folder.name: [
+                (folder / name).read_text()
+                for name in ("start.json", "schedule.json", "summary.json")
+            ]
+            for folder in out.iterdir()
+        }
     assert len(saved["1"]) == 3 and saved["1"] == saved["2"]
 
 
 def test_a_saved_failure_replays_through_fatswarm_run(tmp_path: Path) -> None:
     out = tmp_path / "found"
-    assert hunt(["--algorithm", PLANTED, "--scheduler", "fsync", "-n", "4", "--budget-runs", "4",
-                 "--max-failures", "1", "--jobs", "1", "--seed", "1", "--out", str(out),
-                 "-q"]) == 1
+    assert (
+        hunt(
+            [
+                "--algorithm",
+                PLANTED,
+                "--scheduler",
+                "fsync",
+                "-n",
+                "4",
+                "--budget-runs",
+                "4",
+                "--max-failures",
+                "1",
+                "--jobs",
+                "1",
+                "--seed",
+                "1",
+                "--out",
+                str(out),
+                "-q",
+            ]
+        )
+        == 1
+    )
     (folder,) = out.iterdir()
     summary = json.loads((folder / "summary.json").read_text())
     argv = shlex.split(summary["command"])
     assert argv[:2] == ["fatswarm", "run"]
-    done = subprocess.run([sys.executable, "-m", "fatswarm.deploy.cli", *argv[1:], "--json"],
-                          cwd=folder, capture_output=True, text=True, timeout=60, check=False)
+    done = subprocess.run(
+        [sys.executable, "-m", "fatswarm.deploy.cli", *argv[1:], "--json"],
+        cwd=folder,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
     assert done.returncode in (1, 3), done.stderr
     result = json.loads(done.stdout)
     if summary["kind"] == COLLISION:
         assert result["collisions"] > 0
     else:
         assert result["status"] == MAX_ROUNDS
-    saved, replayed = read_record(str(folder / "record.jsonl")), read_record(
-        str(folder / "replay.jsonl"))
+    saved, replayed = (
+        read_record(str(folder / "record.jsonl")),
+        read_record(str(folder / "replay.jsonl")),
+    )
     assert [e.active for e in replayed.rounds] == [e.active for e in saved.rounds]
     for mine, theirs in zip(saved.rounds, replayed.rounds, strict=True):
         np.testing.assert_array_equal(mine.positions, theirs.positions)
@@ -221,26 +299,46 @@ def test_the_paper_algorithm_under_fsync_gives_nothing_in_a_small_budget(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "none"
-    assert hunt(["--scheduler", "fsync", "-n", "3..8", "--budget-runs", "30", "--jobs", "2",
-                 "--seed", "1", "--out", str(out)]) == 0
+    assert (
+        hunt(
+            [
+                "--scheduler",
+                "fsync",
+                "-n",
+                "3..8",
+                "--budget-runs",
+                "30",
+                "--jobs",
+                "2",
+                "--seed",
+                "1",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert list(out.iterdir()) == []
     assert "nothing found in 30 runs" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize(("argv", "says"), [
-    (["--scheduler", "scripted"], "needs a schedule file"),
-    (["--scheduler", "nope"], "is not a scheduler"),
-    (["--starts", "square"], "not a start family"),
-    (["-n", "5..3"], "LOW <= HIGH"),
-    (["-n", "1", "--starts", "rim"], "widen -n"),
-    (["--budget-runs", "0"], "--budget-runs must be at least 1"),
-    (["--budget-seconds", "nan"], "--budget-seconds must be"),
-    (["--max-failures", "0"], "--max-failures must be at least 1"),
-    (["--param", "a=2"], "a must be > 3"),
-    (["--algorithm", "no_such_module:X"], "no_such_module"),
-    (["--non-rigid", "-1"], "--non-rigid must be"),
-    (["--jobs", "0"], "--jobs must be at least 1"),
-])
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["--scheduler", "scripted"], "needs a schedule file"),
+        (["--scheduler", "nope"], "is not a scheduler"),
+        (["--starts", "square"], "not a start family"),
+        (["-n", "5..3"], "LOW <= HIGH"),
+        (["-n", "1", "--starts", "rim"], "widen -n"),
+        (["--budget-runs", "0"], "--budget-runs must be at least 1"),
+        (["--budget-seconds", "nan"], "--budget-seconds must be"),
+        (["--max-failures", "0"], "--max-failures must be at least 1"),
+        (["--param", "a=2"], "a must be > 3"),
+        (["--algorithm", "no_such_module:X"], "no_such_module"),
+        (["--non-rigid", "-1"], "--non-rigid must be"),
+        (["--jobs", "0"], "--jobs must be at least 1"),
+    ],
+)
 def test_bad_input_is_one_line_and_exit_two(
     argv: list[str], says: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -261,10 +359,34 @@ def test_a_non_empty_out_is_refused(tmp_path: Path, capsys: pytest.CaptureFixtur
 
 def test_ctrl_c_exits_130_with_no_worker_left(tmp_path: Path) -> None:
     proc = subprocess.Popen(
-        [sys.executable, "-u", "-m", "fatswarm.deploy.cli", "hunt", "--algorithm", PLANTED,
-         "--scheduler", "fsync", "--budget-seconds", "120", "--max-failures", "1000",
-         "--shrink-runs", "100000", "--jobs", "2", "--seed", "1", "--out", str(tmp_path / "o")],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+        [
+            sys.executable,
+            "-u",
+            "-m",
+            "fatswarm.deploy.cli",
+            "hunt",
+            "--algorithm",
+            PLANTED,
+            "--scheduler",
+            "fsync",
+            "--budget-seconds",
+            "120",
+            "--max-failures",
+            "1000",
+            "--shrink-runs",
+            "100000",
+            "--jobs",
+            "2",
+            "--seed",
+            "1",
+            "--out",
+            str(tmp_path / "o"),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
     try:
         deadline = time.monotonic() + 60
         assert proc.stderr is not None
@@ -285,8 +407,9 @@ def test_ctrl_c_exits_130_with_no_worker_left(tmp_path: Path) -> None:
 
 def _group(pgid: int) -> str:
     """The processes left in process group `pgid` (for a failure's message)."""
-    listing = subprocess.run(["ps", "-o", "pid,pgid,args", "-g", str(pgid)], capture_output=True,
-                             text=True, check=False)
+    listing = subprocess.run(
+        ["ps", "-o", "pid,pgid,args", "-g", str(pgid)], capture_output=True, text=True, check=False
+    )
     return listing.stdout
 
 

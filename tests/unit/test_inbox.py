@@ -8,7 +8,7 @@ import threading
 
 import pytest
 
-from fatswarm.deploy.parts import MAX_LOG_CHARS, ShortLines
+from fatswarm.deploy.net.parts import MAX_LOG_CHARS, ShortLines
 from fatswarm.world.inbox import Inbox
 
 
@@ -34,12 +34,20 @@ def test_get_waits_for_an_offer_and_times_out_on_none() -> None:
 
 
 def test_a_long_log_message_is_cut_saying_how_much() -> None:
-    record = logging.LogRecord("fatswarm.world", logging.WARNING, __file__, 1,
-                               "rejected (move-garbage): %s", ("x" * 900_000,), None)
+    record = logging.LogRecord(
+        "fatswarm.world",
+        logging.WARNING,
+        __file__,
+        1,
+        "rejected (move-garbage): %s",
+        ("x" * 900_000,),
+        None,
+    )
     assert ShortLines().filter(record)
     message = record.getMessage()
     assert len(message) < MAX_LOG_CHARS + 60
-    assert message.endswith(f"({900_000 + len('rejected (move-garbage): ') - MAX_LOG_CHARS} "
-                            "more characters cut)")
+    assert message.endswith(
+        f"({900_000 + len('rejected (move-garbage): ') - MAX_LOG_CHARS} more characters cut)"
+    )
     short = logging.LogRecord("x", logging.INFO, __file__, 1, "round %d", (3,), None)
     assert ShortLines().filter(short) and short.getMessage() == "round 3"

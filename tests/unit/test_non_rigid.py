@@ -42,8 +42,9 @@ def test_a_longer_path_is_cut_to_delta_plus_u_of_the_rest_and_ends_on_it(
 
 
 def test_the_draw_is_a_pure_function_of_seed_round_and_robot() -> None:
-    draws = {(s, r, k): cut_fraction(s, r, k) for s in (0, 1, 2**40) for r in (1, 2, 3)
-             for k in range(6)}
+    draws = {
+        (s, r, k): cut_fraction(s, r, k) for s in (0, 1, 2**40) for r in (1, 2, 3) for k in range(6)
+    }
     assert all(0.0 <= u < 1.0 for u in draws.values())
     assert draws == {key: cut_fraction(*key) for key in draws}  # no hidden state
     assert len(set(draws.values())) == len(draws)  # robots, rounds and seeds draw apart
@@ -103,8 +104,21 @@ def test_resuming_a_non_rigid_record_reproduces_it_byte_for_byte(
     scheduler: str, tmp_path: FsPath, capsys: pytest.CaptureFixture[str]
 ) -> None:
     whole = tmp_path / "whole.jsonl"
-    assert _fatswarm("-n", "6", "--seed", "2", "--scheduler", scheduler, "--non-rigid", "1",
-                     "--record", str(whole)) == 0
+    assert (
+        _fatswarm(
+            "-n",
+            "6",
+            "--seed",
+            "2",
+            "--scheduler",
+            scheduler,
+            "--non-rigid",
+            "1",
+            "--record",
+            str(whole),
+        )
+        == 0
+    )
     lines = whole.read_text().splitlines(keepends=True)
     assert any('"cut"' in line for line in lines[1:5])
     part = tmp_path / "part.jsonl"

@@ -10,7 +10,7 @@ from dataclasses import replace
 
 import pytest
 
-from fatswarm.deploy.plot import (
+from fatswarm.deploy.view.plot import (
     MISSING_MATPLOTLIB,
     add_arguments,
     default_title,

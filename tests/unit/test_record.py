@@ -99,8 +99,9 @@ def test_iter_record_streams_entries_in_order(tmp_path: FsPath) -> None:
 
 def test_writer_refuses_non_finite_numbers(tmp_path: FsPath) -> None:
     with RecordWriter(tmp_path / "run.jsonl") as w, pytest.raises(ValueError):
-        w.header(1, 0, "fsync", np.array([[np.nan, 0.0]]), algorithm="uniform-circle",
-                 params={"a": 4.0})
+        w.header(
+            1, 0, "fsync", np.array([[np.nan, 0.0]]), algorithm="uniform-circle", params={"a": 4.0}
+        )
 
 
 def mutate(tmp_path: FsPath, line: int, change: dict[str, object] | str) -> FsPath:

@@ -25,7 +25,7 @@ from jsonschema import Draft202012Validator
 from fatswarm.agent.params import Params
 from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy import cli
-from fatswarm.deploy.lockstep import run_lockstep
+from fatswarm.deploy.engine.lockstep import run_lockstep
 from fatswarm.domain.path import STAY, Line, point_at
 from fatswarm.domain.path import Path as RobotPath
 from fatswarm.world.core import WorldCore, WorldSetup, crash_after
@@ -48,8 +48,11 @@ def _no_constant(name: str) -> Any:
 def lines_of(path: Path) -> list[RecordLine]:
     """The record's lines as JSON objects (NaN and Infinity refused, as the writer never writes
     them and a JSON Schema number would let them through)."""
-    return [json.loads(text, parse_constant=_no_constant)
-            for text in path.read_text().splitlines() if text.strip()]
+    return [
+        json.loads(text, parse_constant=_no_constant)
+        for text in path.read_text().splitlines()
+        if text.strip()
+    ]
 
 
 @pytest.fixture(scope="module")
@@ -61,9 +64,11 @@ def validator() -> Draft202012Validator:
 
 def problems(validator: Draft202012Validator, record: Path) -> list[str]:
     """Every schema error of every line, as `line N: message`."""
-    return [f"line {number}: {error.message}"
-            for number, line in enumerate(lines_of(record), start=1)
-            for error in validator.iter_errors(line)]
+    return [
+        f"line {number}: {error.message}"
+        for number, line in enumerate(lines_of(record), start=1)
+        for error in validator.iter_errors(line)
+    ]
 
 
 # --- records of every kind ----------------------------------------------------------------------
@@ -91,18 +96,31 @@ def bump(view: np.ndarray, params: Any) -> RobotPath:
 def collide(record: Path) -> None:
     """Two robots that run into each other: a round with two collisions (both were moving)."""
     with RecordWriter(record) as rec:
-        run_lockstep(np.array([[0.0, 0.0], [8.0, 0.0]]), Params(2, 4.0),
-                     make_scheduler("fsync", 2, 0), seed=0, record=rec, compute=bump,
-                     header_extra={"command": ["test_record_schema.py", "collide"]})
+        run_lockstep(
+            np.array([[0.0, 0.0], [8.0, 0.0]]),
+            Params(2, 4.0),
+            make_scheduler("fsync", 2, 0),
+            seed=0,
+            record=rec,
+            compute=bump,
+            header_extra={"command": ["test_record_schema.py", "collide"]},
+        )
 
 
 def faults(record: Path) -> None:
     """The networked world's core with robot 1's agent gone, then back: rounds with `timed_out`,
     then `crashed` (after crash_after(2) rounds) and `recovered`, and a max_rounds result."""
     cap = crash_after(2) + 2
-    setup = WorldSetup(swarm="schema", n=2, seed=5, scheduler="fsync",
-                       initial=np.array([[0.0, 0.0], [10.0, 0.0]]), max_rounds=cap,
-                       algorithm="gathering", extra={"move_timeout": 5.0})
+    setup = WorldSetup(
+        swarm="schema",
+        n=2,
+        seed=5,
+        scheduler="fsync",
+        initial=np.array([[0.0, 0.0], [10.0, 0.0]]),
+        max_rounds=cap,
+        algorithm="gathering",
+        extra={"move_timeout": 5.0},
+    )
     with RecordWriter(record) as rec:
         world = WorldCore(setup, rec)
         world.set_alive(0, True)
@@ -112,8 +130,9 @@ def faults(record: Path) -> None:
             assert world.control(Begin(round_no, (0, 1)))[0].ok
             assert world.look(0) is not None
             step = 0.5 if round_no % 2 else -0.5  # robot 0 keeps moving, so nothing stalls
-            world.move(0, MoveSubmitted(robot=0, round=round_no,
-                                        path=RobotPath((Line((0.0, step)),))))
+            world.move(
+                0, MoveSubmitted(robot=0, round=round_no, path=RobotPath((Line((0.0, step)),)))
+            )
             assert world.control(Commit(round_no, timed_out=(1,)))[0].ok
     assert world.status == "max_rounds"
 
@@ -131,8 +150,17 @@ def scripted(record: Path) -> None:
     schedule, init = record.with_name("schedule.json"), record.with_name("init.json")
     schedule.write_text(json.dumps({"rounds": [[0, 2], [1], [3], [0, 1, 2, 3]]}))
     init.write_text(json.dumps({"positions": [[0, 0], [3, 0], [0, 3], [-3, -1]], "a": 4.0}))
-    fatswarm_lockstep(record, "--init", str(init), "--seed", "1", "--scheduler", "scripted",
-                      "--schedule", str(schedule))
+    fatswarm_lockstep(
+        record,
+        "--init",
+        str(init),
+        "--seed",
+        "1",
+        "--scheduler",
+        "scripted",
+        "--schedule",
+        str(schedule),
+    )
 
 
 def lockstep(*flags: str) -> Callable[[Path], None]:
@@ -144,8 +172,13 @@ def rounds_with(key: str) -> Callable[[list[RecordLine]], bool]:
 
 
 def has_arc(lines: list[RecordLine]) -> bool:
-    return any("arc" in segment for line in lines if line["type"] == "round"
-               for move in line["moves"] for segment in move["path"])
+    return any(
+        "arc" in segment
+        for line in lines
+        if line["type"] == "round"
+        for move in line["moves"]
+        for segment in move["path"]
+    )
 
 
 def status(name: str) -> Callable[[list[RecordLine]], bool]:
@@ -158,28 +191,45 @@ def header_without(key: str) -> Callable[[list[RecordLine]], bool]:
 
 # name: (how to make it, what it must show for the kind to be covered)
 KINDS: dict[str, tuple[Callable[[Path], None], Callable[[list[RecordLine]], bool]]] = {
-    "fsync-with-an-arc": (lockstep("-n", "5", "--seed", "3", "--start", "dense",
-                                   "--scheduler", "fsync"), has_arc),
+    "fsync-with-an-arc": (
+        lockstep("-n", "5", "--seed", "3", "--start", "dense", "--scheduler", "fsync"),
+        has_arc,
+    ),
     "ssync": (lockstep("-n", "5", "--seed", "1", "--scheduler", "ssync"), status("formed")),
-    "centralized": (lockstep("-n", "4", "--seed", "1", "--scheduler", "centralized"),
-                    status("formed")),
+    "centralized": (
+        lockstep("-n", "4", "--seed", "1", "--scheduler", "centralized"),
+        status("formed"),
+    ),
     "scripted": (scripted, status("formed")),
-    "non-rigid": (lockstep("-n", "5", "--seed", "1", "--scheduler", "fsync", "--non-rigid", "1"),
-                  rounds_with("cut")),
-    "crash-stalled": (lockstep("-n", "4", "--seed", "2", "--scheduler", "fsync", "--crash", "1"),
-                      lambda lines: rounds_with("crash")(lines) and status("stalled")(lines)),
+    "non-rigid": (
+        lockstep("-n", "5", "--seed", "1", "--scheduler", "fsync", "--non-rigid", "1"),
+        rounds_with("cut"),
+    ),
+    "crash-stalled": (
+        lockstep("-n", "4", "--seed", "2", "--scheduler", "fsync", "--crash", "1"),
+        lambda lines: rounds_with("crash")(lines) and status("stalled")(lines),
+    ),
     "max-rounds": (lockstep("-n", "5", "--seed", "1", "--max-rounds", "3"), status("max_rounds")),
-    "gathering": (lockstep("-n", "5", "--seed", "1", "--algorithm", "gathering"),
-                  header_without("a")),
+    "gathering": (
+        lockstep("-n", "5", "--seed", "1", "--algorithm", "gathering"),
+        header_without("a"),
+    ),
     "resumed": (resumed, status("formed")),
     "collisions": (collide, lambda lines: any(line.get("collisions") for line in lines[1:-1])),
-    "async": (lockstep("-n", "5", "--seed", "1", "--scheduler", "async", "--non-rigid", "1"),
-              lambda lines: rounds_with("look")(lines) and rounds_with("cut")(lines)
-              and "time" in lines[-1]),
-    "async-slowest": (lockstep("-n", "4", "--seed", "2", "--scheduler", "async-slowest"),
-                      lambda lines: "fairness_time" in lines[0] and status("formed")(lines)),
-    "world-faults": (faults, lambda lines: all(rounds_with(key)(lines)
-                                               for key in ("timed_out", "crashed", "recovered"))),
+    "async": (
+        lockstep("-n", "5", "--seed", "1", "--scheduler", "async", "--non-rigid", "1"),
+        lambda lines: (
+            rounds_with("look")(lines) and rounds_with("cut")(lines) and "time" in lines[-1]
+        ),
+    ),
+    "async-slowest": (
+        lockstep("-n", "4", "--seed", "2", "--scheduler", "async-slowest"),
+        lambda lines: "fairness_time" in lines[0] and status("formed")(lines),
+    ),
+    "world-faults": (
+        faults,
+        lambda lines: all(rounds_with(key)(lines) for key in ("timed_out", "crashed", "recovered")),
+    ),
 }
 
 
@@ -197,11 +247,27 @@ def records(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
 def networked_record(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A real networked run (router, world, coordinator, 4 agent processes): about 2 s."""
     record = tmp_path_factory.mktemp("networked") / "run.jsonl"
-    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", "-n", "4", "--seed", "3",
-            "--scheduler", "fsync", "--record", str(record), "-q", "--no-dashboard",
-            "--pace", "0"]
-    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            start_new_session=True)
+    argv = [
+        sys.executable,
+        "-m",
+        "fatswarm.deploy.cli",
+        "run",
+        "-n",
+        "4",
+        "--seed",
+        "3",
+        "--scheduler",
+        "fsync",
+        "--record",
+        str(record),
+        "-q",
+        "--no-dashboard",
+        "--pace",
+        "0",
+    ]
+    proc = subprocess.Popen(
+        argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True
+    )
     try:
         out, _ = proc.communicate(timeout=60)
     finally:
@@ -279,8 +345,13 @@ def test_a_position_within_a_round_is_the_point_at_that_time_along_the_path(
             for move in entry.moves:
                 start = (float(before[move.robot, 0]), float(before[move.robot, 1]))
                 end = point_at(start, move.path, move.traveled)
-                assert np.hypot(end[0] - entry.positions[move.robot, 0],
-                                end[1] - entry.positions[move.robot, 1]) <= GRID_SNAP
+                assert (
+                    np.hypot(
+                        end[0] - entry.positions[move.robot, 0],
+                        end[1] - entry.positions[move.robot, 1],
+                    )
+                    <= GRID_SNAP
+                )
                 if move.robot in stops:
                     assert stops[move.robot] == move.traveled
                 checked += 1
@@ -329,8 +400,10 @@ BROKEN: dict[str, tuple[str, Callable[[RecordLine], None]]] = {
     "round-with-an-unknown-move-key": ("round", in_first_move("speed", 1.0)),
     "round-with-an-empty-path": ("round", in_first_move("path", [])),
     "round-with-an-unknown-segment": ("round", first_segment({"curve": [0.0, 0.0]})),
-    "round-with-a-two-key-segment": ("round", first_segment({"line": [0.0, 0.0],
-                                                             "arc": [0.0, 0.0, 1.0]})),
+    "round-with-a-two-key-segment": (
+        "round",
+        first_segment({"line": [0.0, 0.0], "arc": [0.0, 0.0, 1.0]}),
+    ),
     "round-with-a-short-arc": ("round", first_segment({"arc": [0.0, 1.0]})),
     "round-with-a-three-number-point": ("round", lambda line: line["positions"][0].append(0.0)),
     "result-still-running": ("result", put("status", "running")),
@@ -343,8 +416,11 @@ BROKEN: dict[str, tuple[str, Callable[[RecordLine], None]]] = {
 def sample_lines(records: dict[str, Path]) -> dict[str, RecordLine]:
     """A header with params and a, a round with a move, and a result, of one record."""
     lines = lines_of(records["ssync"])
-    return {"header": lines[0], "result": lines[-1],
-            "round": next(line for line in lines[1:-1] if line["moves"])}
+    return {
+        "header": lines[0],
+        "result": lines[-1],
+        "round": next(line for line in lines[1:-1] if line["moves"]),
+    }
 
 
 @pytest.mark.parametrize("broken", BROKEN)

@@ -10,7 +10,7 @@ import re
 
 import pytest
 
-from fatswarm.deploy.replay import (
+from fatswarm.deploy.view.replay import (
     FrameFigures,
     Player,
     add_arguments,
@@ -228,7 +228,8 @@ def test_replay_survives_a_figures_hook_that_raises_and_says_so_once(
     assert all(f.figures == {} for f in shown)
     assert len(warned) == 1 and warned[0].startswith(
         "replaying without figures: the figures of algorithm broken raised RuntimeError: no "
-        "figures today (at broken.py:")
+        "figures today (at broken.py:"
+    )
 
 
 def test_figures_are_computed_once_per_round_shown() -> None:

@@ -149,13 +149,29 @@ def test_a_lockstep_record_header_says_how_to_repeat_the_run(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     record = tmp_path / "g.jsonl"
-    argv = ["run", "--lockstep", "-n", "5", "--seed", "4", "--algorithm", "gathering", "--param",
-            "tolerance=0.01", "--record", str(record), "-q"]
+    argv = [
+        "run",
+        "--lockstep",
+        "-n",
+        "5",
+        "--seed",
+        "4",
+        "--algorithm",
+        "gathering",
+        "--param",
+        "tolerance=0.01",
+        "--record",
+        str(record),
+        "-q",
+    ]
     assert cli.main(argv) == 0
     assert "algorithm=gathering tolerance=0.01" in capsys.readouterr().out
     header = read_record(record).header
     assert (header.algorithm, header.algorithm_ref, header.params) == (
-        "gathering", "gathering", {"tolerance": 0.01})
+        "gathering",
+        "gathering",
+        {"tolerance": 0.01},
+    )
     assert header.extra["start"] == "clustered" and header.extra["fairness"] == 10
     assert header.extra["fatswarm_version"] == fatswarm.__version__
     assert "--param" in header.extra["command"]
@@ -165,11 +181,15 @@ def test_a_lockstep_record_header_says_how_to_repeat_the_run(
 def test_a_record_from_before_the_seam_reads_as_the_papers_algorithm() -> None:
     header = read_record(DATA / "lockstep-n6-seed1.jsonl").header
     assert (header.algorithm, header.algorithm_ref, header.params) == (
-        "uniform-circle", "uniform-circle", {"a": 4.0})
+        "uniform-circle",
+        "uniform-circle",
+        {"a": 4.0},
+    )
 
 
-def test_the_readme_python_example_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                                        capsys: pytest.CaptureFixture[str]) -> None:
+def test_the_readme_python_example_runs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     readme = (ROOT / "README.md").read_text()
     section = readme.split("## Python API", 1)[1]
     code = section.split("```python\n", 1)[1].split("```", 1)[0]
@@ -193,7 +213,7 @@ def test_the_api_takes_positions_and_refuses_bad_ones() -> None:
         fatswarm.run(positions=np.zeros((2, 2)))
 
 
-FAULTY = '''
+FAULTY = """
 from fatswarm.domain.path import STAY, Line, Path
 from fatswarm.domain.seam import ParamSpec
 
@@ -223,22 +243,32 @@ class Faulty:
         return {"x": float("nan"), "y": 1.0} if mode != "badfigures" else {"x": "wide"}
 
 ALGORITHM = Faulty()
-'''
+"""
 
 
-@pytest.mark.parametrize(("mode", "says"), [
-    ("raise", "compute raised ZeroDivisionError"),
-    ("none", "compute raised TypeError: compute returned NoneType, not a Path"),
-    ("nan", "sent a move the world refuses"),
-])
+@pytest.mark.parametrize(
+    ("mode", "says"),
+    [
+        ("raise", "compute raised ZeroDivisionError"),
+        ("none", "compute raised TypeError: compute returned NoneType, not a Path"),
+        ("nan", "sent a move the world refuses"),
+    ],
+)
 def test_a_failing_compute_in_lock_step_leaves_the_robot_timed_out_as_networked(
     tmp_path: Path, mode: str, says: str, caplog: pytest.LogCaptureFixture
 ) -> None:
     source = tmp_path / "faulty.py"
     source.write_text(FAULTY)
     record = tmp_path / "run.jsonl"
-    result = fatswarm.run(3, algorithm=f"{source}:ALGORITHM", params={"mode": mode}, seed=1,
-                          scheduler="fsync", max_rounds=4, record=record)
+    result = fatswarm.run(
+        3,
+        algorithm=f"{source}:ALGORITHM",
+        params={"mode": mode},
+        seed=1,
+        scheduler="fsync",
+        max_rounds=4,
+        record=record,
+    )
     assert (result.status, result.rounds, result.moves) == ("max_rounds", 4, 0)
     rounds = read_record(record).rounds
     assert all(entry.extra["timed_out"] == [0, 1, 2] for entry in rounds)
@@ -252,8 +282,21 @@ def test_a_goal_that_raises_ends_the_lockstep_run_with_one_line_naming_its_line(
     source = tmp_path / "faulty.py"
     source.write_text(FAULTY)
     record = tmp_path / "run.jsonl"
-    argv = ["run", "--lockstep", "-n", "3", "--seed", "1", "--algorithm", f"{source}:ALGORITHM",
-            "--param", "mode=badgoal", "--record", str(record), "-q"]
+    argv = [
+        "run",
+        "--lockstep",
+        "-n",
+        "3",
+        "--seed",
+        "1",
+        "--algorithm",
+        f"{source}:ALGORITHM",
+        "--param",
+        "mode=badgoal",
+        "--record",
+        str(record),
+        "-q",
+    ]
     assert cli.main(argv) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "the goal of algorithm faulty raised IndexError" in err[0], err
@@ -270,11 +313,13 @@ def test_figures_that_fail_leave_the_world_without_them_and_drop_non_finite_ones
     source.write_text(FAULTY)
     ref = f"{source}:ALGORITHM"
     start = np.array([[0.0, 0.0], [5.0, 0.0], [0.0, 5.0]])
-    fine = WorldCore(WorldSetup("s", 3, 1, "fsync", start, 10, algorithm=ref,
-                                params={"mode": "stay"}))
+    fine = WorldCore(
+        WorldSetup("s", 3, 1, "fsync", start, 10, algorithm=ref, params={"mode": "stay"})
+    )
     assert fine.state().figures == {"y": 1.0}
-    broken = WorldCore(WorldSetup("s", 3, 1, "fsync", start, 10, algorithm=ref,
-                                  params={"mode": "badfigures"}))
+    broken = WorldCore(
+        WorldSetup("s", 3, 1, "fsync", start, 10, algorithm=ref, params={"mode": "badfigures"})
+    )
     assert broken.state().figures == {} and broken.state().figures == {}
     warned = [r for r in caplog.records if "figures of algorithm faulty raised" in r.getMessage()]
     assert len(warned) == 1

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from fatswarm.agent.geometry import sec
-from fatswarm.world.starts import (
+from fatswarm.deploy.scenarios.starts import (
     KINDS,
     InitFileError,
     degenerate_starts,

@@ -8,12 +8,12 @@ import pytest
 
 from fatswarm.agent import uniform_circle
 from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy.lockstep import run_lockstep
+from fatswarm.deploy.engine.lockstep import run_lockstep
+from fatswarm.deploy.scenarios.starts import random_start
 from fatswarm.domain.draws import draw_flip
 from fatswarm.domain.path import path_length, truncate
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.seam import AlgorithmParamsError, Configured
-from fatswarm.world.starts import random_start
 
 STEPPED = load_algorithm("uniform-circle-stepped")
 
@@ -46,9 +46,11 @@ def test_each_move_is_the_papers_move_cut_to_the_step(seed: int) -> None:
     flips = [draw_flip(seed, r) for r in range(n)]
     planned = STEPPED.round_planner(stepped.params).paths(positions, list(range(n)), flips)
     paper_planned = uniform_circle.SharedPlans(stepped.params.paper).paths(
-        positions, list(range(n)), flips)
-    assert planned == {r: truncate((0.0, 0.0), p, step) if p else p
-                       for r, p in paper_planned.items()}
+        positions, list(range(n)), flips
+    )
+    assert planned == {
+        r: truncate((0.0, 0.0), p, step) if p else p for r, p in paper_planned.items()
+    }
 
 
 def test_the_papers_async_counterexample_forms_collision_free_with_steps() -> None:

@@ -22,7 +22,8 @@ from rich.console import Console
 
 from fatswarm.coordinator.schedule import NAMES
 from fatswarm.deploy import cli
-from fatswarm.deploy.sweep import (
+from fatswarm.deploy.sweep.command import summary_table
+from fatswarm.deploy.sweep.grid import (
     COLUMNS,
     ERROR,
     KEY_COLUMNS,
@@ -51,8 +52,7 @@ from fatswarm.deploy.sweep import (
     summarize,
     sweep_schedulers,
 )
-from fatswarm.deploy.sweep_cli import summary_table
-from fatswarm.deploy.sweep_run import RunTable, run_spec
+from fatswarm.deploy.sweep.pool import RunTable, run_spec
 from fatswarm.domain.registry import load_algorithm
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -81,10 +81,17 @@ def test_numbers_take_lists_ranges_steps_and_repeated_flags() -> None:
     assert parse_ints([" 3 , 5..6 "], "-n", least=1) == (3, 5, 6)
 
 
-@pytest.mark.parametrize(("text", "says"), [
-    ("0", ">= 1"), ("x", "whole numbers"), ("8..4", "LOW <= HIGH"), ("4..8:0", "STEP >= 1"),
-    (",", "at least one value"), ("4.5", "whole numbers"),
-])
+@pytest.mark.parametrize(
+    ("text", "says"),
+    [
+        ("0", ">= 1"),
+        ("x", "whole numbers"),
+        ("8..4", "LOW <= HIGH"),
+        ("4..8:0", "STEP >= 1"),
+        (",", "at least one value"),
+        ("4.5", "whole numbers"),
+    ],
+)
 def test_bad_numbers_are_refused(text: str, says: str) -> None:
     with pytest.raises(SweepInputError, match=says):
         parse_ints([text], "-n", least=1)
@@ -100,8 +107,13 @@ def test_seeds_are_a_count_a_range_or_a_list() -> None:
 
 
 def test_the_grid_has_every_combination_once_seed_by_seed() -> None:
-    grid = Grid((("uniform-circle", ()), ("gathering", ())), (4, 8), ("clustered", "dense"),
-                ("fsync", "ssync"), (0, 1, 2))
+    grid = Grid(
+        (("uniform-circle", ()), ("gathering", ())),
+        (4, 8),
+        ("clustered", "dense"),
+        ("fsync", "ssync"),
+        (0, 1, 2),
+    )
     runs = grid.runs()
     assert len(runs) == grid.size == 2 * 2 * 2 * 2 * 3
     assert len({spec.key() for spec in runs}) == len(runs)
@@ -111,8 +123,13 @@ def test_the_grid_has_every_combination_once_seed_by_seed() -> None:
 
 def test_a_huge_grid_is_refused() -> None:
     with pytest.raises(SweepInputError, match="sweep it in parts"):
-        Grid((("gathering", ()),), tuple(range(1, 1001)), ("clustered",), ("fsync",),
-             tuple(range(1001)))
+        Grid(
+            (("gathering", ()),),
+            tuple(range(1, 1001)),
+            ("clustered",),
+            ("fsync",),
+            tuple(range(1001)),
+        )
 
 
 def test_non_rigid_and_crash_take_lists_words_and_default_to_the_plain_model() -> None:
@@ -129,8 +146,9 @@ def test_a_non_rigid_delta_must_be_a_finite_distance_above_zero(text: str) -> No
         parse_non_rigid([text])
 
 
-@pytest.mark.parametrize(("text", "says"), [("-1", ">= 0"), ("x", "whole numbers"),
-                                            ("2..1", "LOW <= HIGH")])
+@pytest.mark.parametrize(
+    ("text", "says"), [("-1", ">= 0"), ("x", "whole numbers"), ("2..1", "LOW <= HIGH")]
+)
 def test_a_crash_count_must_be_a_whole_number(text: str, says: str) -> None:
     with pytest.raises(SweepInputError, match=says):
         parse_crash([text])
@@ -144,8 +162,16 @@ def test_the_model_label_names_the_scheduler_then_non_rigid_then_crash() -> None
 
 
 def test_the_grid_crosses_non_rigid_and_crash_and_leaves_out_crashes_of_n_or_more() -> None:
-    grid = Grid((("uniform-circle", ()),), (2, 3, 4), ("clustered",), ("fsync", "async"),
-                (0, 1), None, (None, 1.0), (None, 2, 3))
+    grid = Grid(
+        (("uniform-circle", ()),),
+        (2, 3, 4),
+        ("clustered",),
+        ("fsync", "async"),
+        (0, 1),
+        None,
+        (None, 1.0),
+        (None, 2, 3),
+    )
     runs = grid.runs()
     # (f, n) cells: no crash with n = 2, 3, 4; f = 2 with n = 3, 4; f = 3 with n = 4
     assert len(runs) == grid.size == 2 * 2 * 2 * 6
@@ -153,15 +179,22 @@ def test_the_grid_crosses_non_rigid_and_crash_and_leaves_out_crashes_of_n_or_mor
     assert len({spec.key() for spec in runs}) == len(runs)
     assert all(spec.crash is None or spec.crash < spec.n for spec in runs)
     assert {(spec.non_rigid, spec.crash) for spec in runs} == {
-        (d, f) for d in (None, 1.0) for f in (None, 2, 3)}
+        (d, f) for d in (None, 1.0) for f in (None, 2, 3)
+    }
     assert [spec.seed for spec in runs] == sorted(spec.seed for spec in runs)
     assert runs[0] == RunSpec("uniform-circle", 2, "clustered", "fsync", 0)
     assert {spec.model for spec in runs if spec.n == 4 and spec.scheduler == "fsync"} == {
-        "fsync", "fsync+crash2", "fsync+crash3", "fsync+nr1", "fsync+nr1+crash2",
-        "fsync+nr1+crash3"}
+        "fsync",
+        "fsync+crash2",
+        "fsync+crash3",
+        "fsync+nr1",
+        "fsync+nr1+crash2",
+        "fsync+nr1+crash3",
+    }
     with pytest.raises(SweepInputError, match="the grid has no run"):
-        Grid((("uniform-circle", ()),), (3, 4), ("clustered",), ("fsync",), (0,), None,
-             (None,), (4,))
+        Grid(
+            (("uniform-circle", ()),), (3, 4), ("clustered",), ("fsync",), (0,), None, (None,), (4,)
+        )
 
 
 def test_the_schedulers_are_the_ones_the_code_names_less_the_scripted_one() -> None:
@@ -176,13 +209,27 @@ def test_parameters_are_canonical_so_one_run_is_one_key() -> None:
 
 def test_key_cells_are_the_first_columns_and_the_command_repeats_the_run() -> None:
     spec = RunSpec("gathering", 6, "dense", "ssync", 3, (("tolerance", "0.01"),), 50)
-    assert spec.key() == ("gathering", "6", "dense", "ssync", "3", "tolerance=0.01", "50", "",
-                          "")
+    assert spec.key() == ("gathering", "6", "dense", "ssync", "3", "tolerance=0.01", "50", "", "")
     assert COLUMNS[: len(KEY_COLUMNS)] == KEY_COLUMNS
     assert shlex.split(spec.command()) == [
-        "fatswarm", "run", "--lockstep", "-n", "6", "--seed", "3", "--start", "dense",
-        "--scheduler", "ssync", "--algorithm", "gathering", "--param", "tolerance=0.01",
-        "--max-rounds", "50"]
+        "fatswarm",
+        "run",
+        "--lockstep",
+        "-n",
+        "6",
+        "--seed",
+        "3",
+        "--start",
+        "dense",
+        "--scheduler",
+        "ssync",
+        "--algorithm",
+        "gathering",
+        "--param",
+        "tolerance=0.01",
+        "--max-rounds",
+        "50",
+    ]
     assert "--algorithm" not in RunSpec("uniform-circle", 4, "clustered", "fsync", 0).command()
 
 
@@ -195,16 +242,23 @@ def test_non_rigid_and_crash_are_key_cells_and_in_the_command() -> None:
     assert shlex.split(both.command())[-4:] == ["--non-rigid", "0.1", "--crash", "2"]
     assert "--non-rigid" not in plain.command() and "--crash" not in plain.command()
     # resume tells rows apart by them: one more delta or crash count is another run
-    keys = {row_key(make_row(spec, RunFigures("formed"), "0.1.0")) for spec in (
-        plain, both, RunSpec("uniform-circle", 5, "clustered", "async", 2, non_rigid=0.1),
-        RunSpec("uniform-circle", 5, "clustered", "async", 2, crash=2))}
+    keys = {
+        row_key(make_row(spec, RunFigures("formed"), "0.1.0"))
+        for spec in (
+            plain,
+            both,
+            RunSpec("uniform-circle", 5, "clustered", "async", 2, non_rigid=0.1),
+            RunSpec("uniform-circle", 5, "clustered", "async", 2, crash=2),
+        )
+    }
     assert len(keys) == 4
 
 
 def test_the_time_column_is_the_virtual_time_and_empty_for_round_models() -> None:
     spec = RunSpec("uniform-circle", 4, "clustered", "async", 0)
     assert make_row(spec, RunFigures("formed", rounds=30, time=20.25), "0.1.0")["time"] == (
-        "20.250000")
+        "20.250000"
+    )
     assert make_row(spec, RunFigures("formed", rounds=6), "0.1.0")["time"] == ""
     assert make_row(spec, RunFigures(ERROR, time=3.0), "0.1.0")["time"] == ""
 
@@ -237,7 +291,7 @@ def test_the_ratio_is_undefined_without_a_bound() -> None:
 
 def test_a_row_is_one_csv_line_that_reads_back() -> None:
     spec = RunSpec("dir with space/alg.py:A", 4, "clustered", "fsync", 1, (("s", "x,y"),))
-    figures = RunFigures(ERROR, wall_s=0.25, error="ValueError: bad\nthing, \"quoted\"")
+    figures = RunFigures(ERROR, wall_s=0.25, error='ValueError: bad\nthing, "quoted"')
     row = make_row(spec, figures, "0.1.0")
     line = row_line(row)
     assert line.count("\n") == 1 and line.endswith("\n")
@@ -321,11 +375,22 @@ def test_a_run_that_raises_is_an_error_row() -> None:
 # -- the summary ------------------------------------------------------------------------------
 
 
-def _row(scheduler: str, n: int, seed: int, status: str, rounds: int, collisions: int,
-         ratio: str, *, non_rigid: float | None = None, crash: int | None = None,
-         time: float | None = None) -> dict[str, str]:
-    spec = RunSpec("uniform-circle", n, "clustered", scheduler, seed, non_rigid=non_rigid,
-                   crash=crash)
+def _row(
+    scheduler: str,
+    n: int,
+    seed: int,
+    status: str,
+    rounds: int,
+    collisions: int,
+    ratio: str,
+    *,
+    non_rigid: float | None = None,
+    crash: int | None = None,
+    time: float | None = None,
+) -> dict[str, str]:
+    spec = RunSpec(
+        "uniform-circle", n, "clustered", scheduler, seed, non_rigid=non_rigid, crash=crash
+    )
     figures = RunFigures(status, rounds=rounds, collisions=collisions, time=time)
     return {**make_row(spec, figures, "0.1.0"), "ratio": ratio}
 
@@ -340,7 +405,12 @@ def test_the_summary_counts_and_takes_medians_of_formed_runs() -> None:
     ]
     fsync4, ssync8 = summarize(rows, grid)
     assert (fsync4.scheduler, fsync4.n, fsync4.runs, fsync4.formed, fsync4.clean) == (
-        "fsync", 4, 3, 2, 1)
+        "fsync",
+        4,
+        3,
+        2,
+        1,
+    )
     assert (fsync4.collided, fsync4.stalled, fsync4.errors) == (1, 1, 0)
     assert fsync4.rounds is not None and fsync4.rounds[1] == 7.0
     assert fsync4.ratio is not None and fsync4.ratio[1] == pytest.approx(1.2)
@@ -353,8 +423,16 @@ def test_the_summary_counts_and_takes_medians_of_formed_runs() -> None:
 
 
 def test_the_markdown_summary_groups_every_n_by_model() -> None:
-    grid = Grid((("uniform-circle", ()),), (4, 8), ("clustered",), ("fsync", "async"), (0, 1),
-                None, (None, 1.0), (None, 2))
+    grid = Grid(
+        (("uniform-circle", ()),),
+        (4, 8),
+        ("clustered",),
+        ("fsync", "async"),
+        (0, 1),
+        None,
+        (None, 1.0),
+        (None, 2),
+    )
     rows = [
         _row("fsync", 4, 0, "formed", 6, 0, "1.1"),
         _row("fsync", 8, 0, "formed", 10, 1, "1.2"),
@@ -367,50 +445,72 @@ def test_the_markdown_summary_groups_every_n_by_model() -> None:
     ]
     cells = summarize(rows, grid, by_n=False)
     assert [(c.model, c.n, c.sizes, c.runs) for c in cells] == [  # in the grid's order
-        ("fsync", None, (4, 8), 3), ("fsync+crash2", None, (4,), 1),
-        ("fsync+nr1", None, (4,), 1), ("async", None, (4, 8), 3)]
+        ("fsync", None, (4, 8), 3),
+        ("fsync+crash2", None, (4,), 1),
+        ("fsync+nr1", None, (4,), 1),
+        ("async", None, (4, 8), 3),
+    ]
     lines = markdown_table(cells).splitlines()
     assert lines[0].split(" | ")[1:5] == ["scheduler", "non-rigid", "crash", "n"]
     assert lines[0].endswith("| median rounds | median time |")
     assert lines[1].startswith("|---|") and lines[1].count("|") == lines[0].count("|")
     body = [[cell.strip() for cell in line.strip("|").split("|")] for line in lines[2:]]
     assert body == [
-        ["uniform-circle", "fsync", "rigid", "none", "4,8", "3", "2", "1", "0", "1", "0", "8",
-         "-"],
+        ["uniform-circle", "fsync", "rigid", "none", "4,8", "3", "2", "1", "0", "1", "0", "8", "-"],
         ["uniform-circle", "fsync", "rigid", "2", "4", "1", "0", "0", "1", "0", "0", "-", "-"],
         ["uniform-circle", "fsync", "1", "none", "4", "1", "1", "0", "0", "0", "0", "12", "-"],
-        ["uniform-circle", "async", "rigid", "none", "4,8", "3", "2", "0", "0", "0", "1", "40",
-         "25.5"],
+        [
+            "uniform-circle",
+            "async",
+            "rigid",
+            "none",
+            "4,8",
+            "3",
+            "2",
+            "0",
+            "0",
+            "0",
+            "1",
+            "40",
+            "25.5",
+        ],
     ]
     # the figures take the same groups, as model labels
     assert [label for label, *_ in success_rates(summarize(rows, grid))] == [
-        "fsync", "fsync+crash2", "fsync+nr1", "async"]
+        "fsync",
+        "fsync+crash2",
+        "fsync+nr1",
+        "async",
+    ]
 
 
 # -- the command ------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize(("argv", "says"), [
-    (["-n", "0"], "-n values must be >= 1"),
-    (["-n", "x"], "-n takes whole numbers"),
-    (["--seeds", "9..3"], "LOW <= HIGH"),
-    (["--start", "nowhere"], "not a start kind"),
-    (["--scheduler", "scripted"], "needs a schedule file"),
-    (["--scheduler", "asynchronous"], "is not a scheduler"),
-    (["--algorithm", "nope"], "no algorithm named 'nope'"),
-    (["--param", "a=2"], "a must be > 3"),
-    (["--param", "zzz=1"], "has no parameter 'zzz'"),
-    (["--param", "novalue"], "NAME=VALUE"),
-    (["--algorithm", "gathering", "--param", "a=5"], "has no parameter 'a'"),
-    (["--jobs", "0"], "--jobs must be at least 1"),
-    (["--jobs", "two"], "invalid int value"),
-    (["--max-rounds", "0"], "--max-rounds must be at least 1"),
-    (["--non-rigid", "0"], "--non-rigid takes distances > 0"),
-    (["--non-rigid", "rigid,soft"], "--non-rigid takes distances > 0"),
-    (["--crash", "-1"], "--crash values must be >= 0"),
-    (["--crash", "two"], "--crash takes whole numbers"),
-    (["-n", "3,4", "--crash", "4"], "the grid has no run"),
-])
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["-n", "0"], "-n values must be >= 1"),
+        (["-n", "x"], "-n takes whole numbers"),
+        (["--seeds", "9..3"], "LOW <= HIGH"),
+        (["--start", "nowhere"], "not a start kind"),
+        (["--scheduler", "scripted"], "needs a schedule file"),
+        (["--scheduler", "asynchronous"], "is not a scheduler"),
+        (["--algorithm", "nope"], "no algorithm named 'nope'"),
+        (["--param", "a=2"], "a must be > 3"),
+        (["--param", "zzz=1"], "has no parameter 'zzz'"),
+        (["--param", "novalue"], "NAME=VALUE"),
+        (["--algorithm", "gathering", "--param", "a=5"], "has no parameter 'a'"),
+        (["--jobs", "0"], "--jobs must be at least 1"),
+        (["--jobs", "two"], "invalid int value"),
+        (["--max-rounds", "0"], "--max-rounds must be at least 1"),
+        (["--non-rigid", "0"], "--non-rigid takes distances > 0"),
+        (["--non-rigid", "rigid,soft"], "--non-rigid takes distances > 0"),
+        (["--crash", "-1"], "--crash values must be >= 0"),
+        (["--crash", "two"], "--crash takes whole numbers"),
+        (["-n", "3,4", "--crash", "4"], "the grid has no run"),
+    ],
+)
 def test_bad_input_is_one_line_and_exit_two(
     argv: list[str], says: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -433,8 +533,10 @@ def test_bad_outputs_are_one_line_and_exit_two(
         (["--out", str(other)], "other columns"),
         (["--out", str(tmp_path / "r.csv"), "--plot", str(other)], "not a directory"),
         (["--out", str(tmp_path / "r.csv"), "--summary-md", str(tmp_path)], "is a directory"),
-        (["--out", str(tmp_path / "r.csv"), "--summary-md", str(tmp_path / "no" / "s.md")],
-         "does not exist"),
+        (
+            ["--out", str(tmp_path / "r.csv"), "--summary-md", str(tmp_path / "no" / "s.md")],
+            "does not exist",
+        ),
     ]
     for argv, says in cases:
         assert sweep(argv) == 2
@@ -445,9 +547,17 @@ def test_bad_outputs_are_one_line_and_exit_two(
 def test_help_explains_the_grid(capsys: pytest.CaptureFixture[str]) -> None:
     assert sweep(["--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())
-    for word in ("--scheduler", "--seeds", "LOW..HIGH", "Resumable", "docs/sweep.md",
-                 "130 interrupted", "--non-rigid DELTAS", "--crash COUNTS",
-                 "--summary-md PATH"):
+    for word in (
+        "--scheduler",
+        "--seeds",
+        "LOW..HIGH",
+        "Resumable",
+        "docs/sweep.md",
+        "130 interrupted",
+        "--non-rigid DELTAS",
+        "--crash COUNTS",
+        "--summary-md PATH",
+    ):
         assert word in text
 
 
@@ -455,14 +565,25 @@ def test_a_small_sweep_writes_one_row_per_run_and_a_second_one_adds_none(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "runs.csv"
-    argv = ["-n", "4,5", "--scheduler", "fsync,ssync", "--seeds", "2", "--jobs", "2",
-            "--out", str(out)]
+    argv = [
+        "-n",
+        "4,5",
+        "--scheduler",
+        "fsync,ssync",
+        "--seeds",
+        "2",
+        "--jobs",
+        "2",
+        "--out",
+        str(out),
+    ]
     assert sweep(argv) == 0
     summary = capsys.readouterr().out
     rows = rows_of(out)
     assert list(rows[0]) == list(COLUMNS)
     assert sorted((r["n"], r["scheduler"], r["seed"]) for r in rows) == sorted(
-        (n, s, seed) for n in ("4", "5") for s in ("fsync", "ssync") for seed in ("0", "1"))
+        (n, s, seed) for n in ("4", "5") for s in ("fsync", "ssync") for seed in ("0", "1")
+    )
     for row in rows:
         assert row["status"] == "formed" and row["collisions"] == "0", row
         assert float(row["total_distance"]) >= float(row["bound"]) - 1e-6
@@ -484,7 +605,10 @@ def test_a_small_sweep_writes_one_row_per_run_and_a_second_one_adds_none(
     assert cli.main([*shlex.split(row["command"])[1:], "-q", "--json"]) == 0
     again = json.loads(capsys.readouterr().out)
     assert (again["status"], str(again["rounds"]), str(again["collisions"])) == (
-        row["status"], row["rounds"], row["collisions"])
+        row["status"],
+        row["rounds"],
+        row["collisions"],
+    )
     assert f"{again['total_distance']:.6f}" == row["total_distance"]
 
 
@@ -492,16 +616,33 @@ def test_a_sweep_over_models_has_their_rows_summary_and_commands_and_resumes_by_
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out, md = tmp_path / "runs.csv", tmp_path / "summary.md"
-    argv = ["-n", "3,4", "--scheduler", "fsync,async", "--non-rigid", "rigid,1", "--crash",
-            "0,3", "--seeds", "1", "--jobs", "2", "--out", str(out)]
+    argv = [
+        "-n",
+        "3,4",
+        "--scheduler",
+        "fsync,async",
+        "--non-rigid",
+        "rigid,1",
+        "--crash",
+        "0,3",
+        "--seeds",
+        "1",
+        "--jobs",
+        "2",
+        "--out",
+        str(out),
+    ]
     assert sweep([*argv, "--summary-md", str(md)]) == 0
     captured = capsys.readouterr()
     assert "4 runs left out" in captured.err  # crash 3 of 3 robots
     assert "fsync+nr1" in captured.out and "async+nr1+crash3" in captured.out
     rows = rows_of(out)
     assert sorted((r["scheduler"], r["non_rigid"], r["crash"], r["n"]) for r in rows) == sorted(
-        (s, d, f, n) for s in ("fsync", "async") for d in ("", "1.0")
-        for f, n in (("", "3"), ("", "4"), ("3", "4")))
+        (s, d, f, n)
+        for s in ("fsync", "async")
+        for d in ("", "1.0")
+        for f, n in (("", "3"), ("", "4"), ("3", "4"))
+    )
     for row in rows:  # virtual time: async runs only
         assert (row["time"] != "") == (row["scheduler"] == "async"), row
     assert all(float(r["time"]) > 0 for r in rows if r["time"])
@@ -518,47 +659,91 @@ def test_a_sweep_over_models_has_their_rows_summary_and_commands_and_resumes_by_
         formed = [r for r in group if r["status"] == "formed"]
         stalled = sum(r["status"] == "stalled" for r in group)
         assert cells[4] == ",".join(sorted({r["n"] for r in group}))
-        assert [int(c) for c in (cells[5], cells[6], cells[8])] == [len(group), len(formed),
-                                                                   stalled]
+        assert [int(c) for c in (cells[5], cells[6], cells[8])] == [
+            len(group),
+            len(formed),
+            stalled,
+        ]
         rounds = [float(r["rounds"]) for r in formed]
         times = [float(r["time"]) for r in formed if r["time"]]
         assert cells[11] == (f"{statistics.median(rounds):g}" if rounds else "-")
         assert cells[12] == (f"{statistics.median(times):.1f}" if times else "-")
     # the command column repeats an async, a non-rigid and a crash run exactly
-    for pick in (("async", "", ""), ("fsync", "1.0", ""), ("fsync", "", "3"),
-                 ("async", "1.0", "3")):
+    for pick in (
+        ("async", "", ""),
+        ("fsync", "1.0", ""),
+        ("fsync", "", "3"),
+        ("async", "1.0", "3"),
+    ):
         row = next(r for r in rows if (r["scheduler"], r["non_rigid"], r["crash"]) == pick)
         assert cli.main([*shlex.split(row["command"])[1:], "-q", "--json"]) in (0, 1)
         again = json.loads(capsys.readouterr().out)
         assert (again["status"], str(again["rounds"]), str(again["collisions"])) == (
-            row["status"], row["rounds"], row["collisions"]), row["command"]
+            row["status"],
+            row["rounds"],
+            row["collisions"],
+        ), row["command"]
         assert f"{again['total_distance']:.6f}" == row["total_distance"]
     # resume: a run is the same run only with the same non_rigid and crash
     before = out.read_bytes()
     assert sweep(argv) == 0
     assert "nothing to run" in capsys.readouterr().err
     assert out.read_bytes() == before
-    assert sweep(["-n", "4", "--scheduler", "fsync", "--non-rigid", "1,0.5", "--crash", "3,2",
-                  "--seeds", "1", "--out", str(out)]) == 0
+    assert (
+        sweep(
+            [
+                "-n",
+                "4",
+                "--scheduler",
+                "fsync",
+                "--non-rigid",
+                "1,0.5",
+                "--crash",
+                "3,2",
+                "--seeds",
+                "1",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert "1 already in" in capsys.readouterr().err
-    added = rows_of(out)[len(rows):]
+    added = rows_of(out)[len(rows) :]
     assert sorted((r["non_rigid"], r["crash"]) for r in added) == [
-        ("0.5", "2"), ("0.5", "3"), ("1.0", "2")]
+        ("0.5", "2"),
+        ("0.5", "3"),
+        ("1.0", "2"),
+    ]
 
 
 def test_an_interrupted_sweep_resumes_to_the_rows_of_an_uninterrupted_one(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    grid = ["--algorithm", SLOW, "-n", "3,4", "--scheduler", "fsync,ssync", "--seeds", "2",
-            "--jobs", "2"]
+    grid = [
+        "--algorithm",
+        SLOW,
+        "-n",
+        "3,4",
+        "--scheduler",
+        "fsync,ssync",
+        "--seeds",
+        "2",
+        "--jobs",
+        "2",
+    ]
     whole, broken = tmp_path / "whole.csv", tmp_path / "broken.csv"
     assert sweep([*grid, "--out", str(whole), "-q"]) == 0
     # the same sweep, slowed down (0.3 s per run), stopped by Ctrl-C after its second row
     env = {**os.environ, "FATSWARM_TEST_SLOW": "0.3"}
     proc = subprocess.Popen(
-        [sys.executable, "-u", "-m", "fatswarm.deploy.cli", "sweep", *grid, "--out",
-         str(broken)], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        start_new_session=True)  # its own process group: Ctrl-C reaches the workers too
+        [sys.executable, "-u", "-m", "fatswarm.deploy.cli", "sweep", *grid, "--out", str(broken)],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )  # its own process group: Ctrl-C reaches the workers too
     try:
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline and proc.poll() is None:
@@ -603,8 +788,12 @@ def test_a_worker_that_dies_ends_the_sweep_with_one_line(
 ) -> None:
     monkeypatch.setenv("FATSWARM_TEST_DIE", "1")
     out = tmp_path / "runs.csv"
-    assert sweep(["--algorithm", SLOW, "-n", "3", "--seeds", "2", "--jobs", "1", "--out",
-                  str(out), "-q"]) == 1
+    assert (
+        sweep(
+            ["--algorithm", SLOW, "-n", "3", "--seeds", "2", "--jobs", "1", "--out", str(out), "-q"]
+        )
+        == 1
+    )
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "a worker process died" in err, err
     assert out.read_text() == header_line()

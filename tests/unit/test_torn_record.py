@@ -8,7 +8,7 @@ from types import ModuleType
 
 import pytest
 
-from fatswarm.deploy import plot, replay
+from fatswarm.deploy.view import plot, replay
 from fatswarm.world.record import RecordFormatError, iter_record, read_record
 
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data"

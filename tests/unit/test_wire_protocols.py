@@ -46,7 +46,9 @@ def _state(n: int = 3) -> WorldState:
     return WorldState(
         round=4,
         n=n,
-        algorithm="uniform-circle", params={"a": 4.0}, figures={},
+        algorithm="uniform-circle",
+        params={"a": 4.0},
+        figures={},
         scheduler="ssync",
         swarm="s1",
         positions=np.arange(2 * n, dtype=np.float64).reshape(n, 2) / 3,
@@ -66,7 +68,13 @@ def test_world_state_round_trips_exactly() -> None:
     assert np.array_equal(d.positions, s.positions)
     assert (d.round, d.n, d.a, d.scheduler, d.swarm) == (4, 3, 4.0, "ssync", "s1")
     assert (d.active, d.open_round, d.moved, d.stopped, d.collisions_total, d.status) == (
-        (0, 2), 5, (2,), (), 1, "running")
+        (0, 2),
+        5,
+        (2,),
+        (),
+        1,
+        "running",
+    )
     assert d.agents == s.agents
 
 
@@ -130,13 +138,20 @@ def test_a_commits_reply_names_the_robots_that_timed_out_and_only_then_carries_t
     assert "timed_out" not in msgpack.unpackb(ControlReply(True, "", 5, 2, 3, "running").encode())
 
 
-@pytest.mark.parametrize(("fields", "reason"), [
-    ({"at": -1.0}, "'at'"), ({"at": float("nan")}, "'at'"), ({"at": "soon"}, "'at'"),
-    ({"looks": [[0]]}, "rows"), ({"looks": [[0, -1.0]]}, "'t0'"), ({"looks": "all"}, "'looks'"),
-    ({"looks": [[MAX_ROBOTS, 1.0]]}, "'robot'"), ({"looks": [[True, 1.0]]}, "'robot'"),
-])
-def test_an_async_begin_with_bad_times_is_refused(fields: dict[str, object], reason: str
-                                                  ) -> None:
+@pytest.mark.parametrize(
+    ("fields", "reason"),
+    [
+        ({"at": -1.0}, "'at'"),
+        ({"at": float("nan")}, "'at'"),
+        ({"at": "soon"}, "'at'"),
+        ({"looks": [[0]]}, "rows"),
+        ({"looks": [[0, -1.0]]}, "'t0'"),
+        ({"looks": "all"}, "'looks'"),
+        ({"looks": [[MAX_ROBOTS, 1.0]]}, "'robot'"),
+        ({"looks": [[True, 1.0]]}, "'robot'"),
+    ],
+)
+def test_an_async_begin_with_bad_times_is_refused(fields: dict[str, object], reason: str) -> None:
     good = {"v": PROTOCOL_VERSION, "t": "begin", "round": 2, "active": [0]}
     with pytest.raises(ProtocolError, match=reason):
         decode_control(_raw(**good, **fields))
@@ -155,7 +170,8 @@ def test_control_messages_round_trip() -> None:
 
 
 ROBOT_SETS = st.lists(st.integers(0, MAX_ROBOTS - 1), unique=True, max_size=40).map(
-    lambda v: tuple(sorted(v)))
+    lambda v: tuple(sorted(v))
+)
 
 
 @given(round_no=st.integers(1, 2**62), timed_out=ROBOT_SETS, then_active=ROBOT_SETS)
@@ -185,8 +201,21 @@ def test_the_largest_commit_and_moves_notice_fit_under_their_size_limits() -> No
     assert len(Commit(2**62, everyone, (), delays).encode()) <= MAX_CONTROL_BYTES
     looks = tuple((r, late) for r in everyone)
     assert len(Begin(2**62, everyone, late, looks).encode()) <= MAX_CONTROL_BYTES
-    reply = ControlReply(True, "x" * 200, MAX_ROBOTS, 2**62, 2**62, "running", 2**62, everyone,
-                         late, looks, everyone, 2**63 - 1, everyone)
+    reply = ControlReply(
+        True,
+        "x" * 200,
+        MAX_ROBOTS,
+        2**62,
+        2**62,
+        "running",
+        2**62,
+        everyone,
+        late,
+        looks,
+        everyone,
+        2**63 - 1,
+        everyone,
+    )
     assert len(reply.encode()) <= MAX_CONTROL_BYTES
     assert len(MovesHeld(2**62, everyone, 2**63 - 1).encode()) <= MAX_NOTICE_BYTES
 
@@ -203,14 +232,24 @@ def test_snapshot_round_trips_and_checks_its_size() -> None:
 
 def test_look_request_round_trips_and_refuses_garbage() -> None:
     move = MoveSubmitted(3, 2, Path((Line((1.0, 0.5)),))).encode()
-    for request in (LookRequest(), LookRequest(epoch=2**63 - 1, after=2**62),
-                    LookRequest(epoch=1, after=2, move=move)):
+    for request in (
+        LookRequest(),
+        LookRequest(epoch=2**63 - 1, after=2**62),
+        LookRequest(epoch=1, after=2, move=move),
+    ):
         assert LookRequest.decode(request.encode()) == request
     assert "move" not in msgpack.unpackb(LookRequest(1, 2).encode())  # none: no key at all
     good = {"v": PROTOCOL_VERSION, "t": "look", "epoch": 1, "after": 2}
     too_big = b"x" * (MAX_MOVE_BYTES + 1)
-    for change in ({"after": -1}, {"epoch": -1}, {"after": "2"}, {"t": "snapshot"},
-                   {"move": "text"}, {"move": 7}, {"move": too_big}):
+    for change in (
+        {"after": -1},
+        {"epoch": -1},
+        {"after": "2"},
+        {"t": "snapshot"},
+        {"move": "text"},
+        {"move": 7},
+        {"move": too_big},
+    ):
         with pytest.raises(ProtocolError):
             LookRequest.decode(_raw(**{**good, **change}))
     assert len(LookRequest(1, 2, b"x" * MAX_MOVE_BYTES).encode()) <= MAX_LOOK_BYTES
@@ -273,8 +312,13 @@ def test_control_decoder_refuses_unknown_requests() -> None:
         decode_control(_raw(v=PROTOCOL_VERSION, t="begin", round=1, active="all"))
 
 
-GOOD_COMMIT = {"v": PROTOCOL_VERSION, "t": "commit", "round": 2, "timed_out": [1],
-               "then_active": [0, 1]}
+GOOD_COMMIT = {
+    "v": PROTOCOL_VERSION,
+    "t": "commit",
+    "round": 2,
+    "timed_out": [1],
+    "then_active": [0, 1],
+}
 
 
 @pytest.mark.parametrize(
@@ -293,8 +337,9 @@ GOOD_COMMIT = {"v": PROTOCOL_VERSION, "t": "commit", "round": 2, "timed_out": [1
         ({"v": PROTOCOL_VERSION - 1}, "protocol version"),
     ],
 )
-def test_commit_decoder_refuses_a_bad_next_active_set(change: dict[str, object], reason: str
-                                                     ) -> None:
+def test_commit_decoder_refuses_a_bad_next_active_set(
+    change: dict[str, object], reason: str
+) -> None:
     fields = {k: v for k, v in {**GOOD_COMMIT, **change}.items() if v is not None}
     assert decode_control(_raw(**GOOD_COMMIT)) == Commit(2, (1,), (0, 1))  # the good one passes
     with pytest.raises(ProtocolError, match=reason):

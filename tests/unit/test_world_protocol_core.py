@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from fatswarm.domain.path import STAY, Line, Path
-from fatswarm.world.core import crash_after
+from fatswarm.world.core import WorldCore, WorldSetup, crash_after
+from fatswarm.world.journal import open_world
 from fatswarm.world.protocol import (
     Begin,
     Commit,
@@ -23,14 +24,7 @@ from fatswarm.world.protocol import (
     snapshot_key,
 )
 from fatswarm.world.record import read_record
-from fatswarm.world.service import (
-    WorldCore,
-    WorldSetup,
-    control_bytes,
-    look_bytes,
-    move_bytes,
-    open_world,
-)
+from fatswarm.world.service import control_bytes, look_bytes, move_bytes
 
 SWARM = "t"
 START = np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]])
@@ -61,8 +55,9 @@ def _ctl(world: WorldCore, data: bytes) -> ControlReply:
 
 
 def _move(world: WorldCore, key_robot: int, robot: int, round_no: int, path: Path) -> bool:
-    return move_bytes(world, move_key(SWARM, key_robot),
-                      MoveSubmitted(robot, round_no, path).encode())
+    return move_bytes(
+        world, move_key(SWARM, key_robot), MoveSubmitted(robot, round_no, path).encode()
+    )
 
 
 def test_snapshot_only_for_active_robots_relative_and_without_ids(tmp_path: FsPath) -> None:
@@ -92,8 +87,12 @@ def test_moves_are_taken_once_from_active_robots_that_looked(tmp_path: FsPath) -
     assert _move(w, 0, 0, 1, step) is True
     assert _move(w, 0, 0, 1, STAY) is False  # a second move for the round
     assert set(w.rejected) == {
-        "move-without-look", "move-wrong-robot", "move-not-active", "move-wrong-round",
-        "move-garbage", "move-duplicate",
+        "move-without-look",
+        "move-wrong-robot",
+        "move-not-active",
+        "move-wrong-round",
+        "move-garbage",
+        "move-duplicate",
     }
     reply = _ctl(w, Commit(1).encode())
     assert reply.ok and reply.committed == 1
@@ -238,7 +237,9 @@ def test_a_commit_with_the_next_active_set_commits_and_opens_the_next_round(
     assert last.committed == 2 and last.timed_out == ()
     w.journal.close()
     assert [(r.round, r.active) for r in read_record(tmp_path / "state.jsonl").rounds] == [
-        (1, (0, 1)), (2, (1, 2))]
+        (1, (0, 1)),
+        (2, (1, 2)),
+    ]
 
 
 def test_a_commit_that_ends_the_run_opens_no_next_round(tmp_path: FsPath) -> None:

@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 import zenoh
 
-from fatswarm.deploy import zconf
-from fatswarm.deploy.zconf import (
+from fatswarm.deploy.net import zconf
+from fatswarm.deploy.net.zconf import (
     ZenohSetupError,
     check_network,
     endpoint_problem,
@@ -25,25 +25,37 @@ from fatswarm.deploy.zconf import (
 # Verbatim messages of eclipse-zenoh 1.10 (Rust source paths included), and what we show instead.
 RUST = "/root/.cargo/git/checkouts/zenoh-9c599d5ef3e0480e/cc83980"
 ZENOH_SAYS = [
-    (f"Unable to connect to any of [Single(tcp/127.0.0.1:1), Single(tcp/[::1]:2)]!  at "
-     f"{RUST}/zenoh/src/net/runtime/orchestrator.rs:447.",
-     "no Zenoh router answers at tcp/127.0.0.1:1, tcp/[::1]:2"),
-    ('Json5Err(Message { msg: "Endpoints must be of the form <protocol>/<address>[?<metadata>]'
-     f'[#<config>]: garbage at {RUST}/commons/zenoh-protocol/src/core/endpoint.rs:615.", '
-     f"location: Some(Location {{ line: 1, column: 2 }}) }}) at {RUST}/zenoh/src/api/config.rs:86.",
-     "'garbage' is not an endpoint: write <protocol>/<address>, e.g. tcp/127.0.0.1:7447"),
-    (f"Can not create a new TCP listener bound to tcp/127.0.0.1:7447: [127.0.0.1:7447: Address "
-     f"already in use (os error 98) at {RUST}/io/zenoh-link-commons/src/tcp.rs:61.] at "
-     f"{RUST}/io/zenoh-links/zenoh-link-tcp/src/unicast.rs:338.",
-     "cannot listen on tcp/127.0.0.1:7447: address already in use (a router already running "
-     "there? pick another port)"),
-    (f"Can not create a new TCP listener bound to tcp/10.9.9.9:7447: [10.9.9.9:7447: Cannot "
-     f"assign requested address (os error 99) at {RUST}/io/zenoh-link-commons/src/tcp.rs:61.] at "
-     f"{RUST}/io/zenoh-links/zenoh-link-tcp/src/unicast.rs:338.",
-     "cannot listen on tcp/10.9.9.9:7447: cannot assign requested address"),
+    (
+        f"Unable to connect to any of [Single(tcp/127.0.0.1:1), Single(tcp/[::1]:2)]!  at "
+        f"{RUST}/zenoh/src/net/runtime/orchestrator.rs:447.",
+        "no Zenoh router answers at tcp/127.0.0.1:1, tcp/[::1]:2",
+    ),
+    (
+        'Json5Err(Message { msg: "Endpoints must be of the form <protocol>/<address>[?<metadata>]'
+        f'[#<config>]: garbage at {RUST}/commons/zenoh-protocol/src/core/endpoint.rs:615.", '
+        f"location: Some(Location {{ line: 1, column: 2 }}) }}) at "
+        f"{RUST}/zenoh/src/api/config.rs:86.",
+        "'garbage' is not an endpoint: write <protocol>/<address>, e.g. tcp/127.0.0.1:7447",
+    ),
+    (
+        f"Can not create a new TCP listener bound to tcp/127.0.0.1:7447: [127.0.0.1:7447: Address "
+        f"already in use (os error 98) at {RUST}/io/zenoh-link-commons/src/tcp.rs:61.] at "
+        f"{RUST}/io/zenoh-links/zenoh-link-tcp/src/unicast.rs:338.",
+        "cannot listen on tcp/127.0.0.1:7447: address already in use (a router already running "
+        "there? pick another port)",
+    ),
+    (
+        f"Can not create a new TCP listener bound to tcp/10.9.9.9:7447: [10.9.9.9:7447: Cannot "
+        f"assign requested address (os error 99) at "
+        f"{RUST}/io/zenoh-link-commons/src/tcp.rs:61.] at "
+        f"{RUST}/io/zenoh-links/zenoh-link-tcp/src/unicast.rs:338.",
+        "cannot listen on tcp/10.9.9.9:7447: cannot assign requested address",
+    ),
     (f"invalid port value at {RUST}/io/zenoh-link-commons/src/lib.rs:62.", "invalid port value"),
-    ("Unicast not supported for foo protocol [zenoh-link/src/lib.rs:183]",
-     "unicast not supported for foo protocol"),
+    (
+        "Unicast not supported for foo protocol [zenoh-link/src/lib.rs:183]",
+        "unicast not supported for foo protocol",
+    ),
 ]
 
 
@@ -52,8 +64,6 @@ def test_zenoh_messages_become_one_sentence_without_rust_source_paths(
     message: str, shown: str
 ) -> None:
     assert explain_zenoh_error(zenoh.ZError(message)) == shown
-
-
 
 
 def _raised_by(action: object) -> zenoh.ZError:
@@ -108,8 +118,15 @@ def test_malformed_endpoints_are_refused_with_the_flag_and_what_to_fix(
 
 @pytest.mark.parametrize(
     "endpoint",
-    ["tcp/127.0.0.1:7447", "tcp/localhost:7447", "tcp/[::1]:7447", "udp/10.0.0.1:7447",
-     "tcp/0.0.0.0:7447?iface=lo", "ws/router.lab:80", "unixsock-stream//tmp/zenoh.sock"],
+    [
+        "tcp/127.0.0.1:7447",
+        "tcp/localhost:7447",
+        "tcp/[::1]:7447",
+        "udp/10.0.0.1:7447",
+        "tcp/0.0.0.0:7447?iface=lo",
+        "ws/router.lab:80",
+        "unixsock-stream//tmp/zenoh.sock",
+    ],
 )
 def test_well_formed_endpoints_pass(endpoint: str) -> None:
     assert endpoint_problem(endpoint) is None
@@ -151,8 +168,11 @@ def test_an_unknown_host_is_named_when_no_router_answers(monkeypatch: pytest.Mon
 def test_the_run_refuses_a_listen_port_in_use_or_malformed_and_accepts_a_free_one(
     busy_port: int,
 ) -> None:
-    with pytest.raises(ZenohSetupError, match=rf"^cannot listen on tcp/127.0.0.1:{busy_port}: "
-                       "address already in use"):
+    with pytest.raises(
+        ZenohSetupError,
+        match=rf"^cannot listen on tcp/127.0.0.1:{busy_port}: "
+        "address already in use",
+    ):
         check_network([], [f"tcp/127.0.0.1:{busy_port}"])
     with pytest.raises(ZenohSetupError, match=r"^bad --listen endpoint 'garbage'"):
         check_network([], ["garbage"])
@@ -171,7 +191,6 @@ def test_a_router_linked_to_no_other_opens_without_zenohs_scouting_wait(tmp_path
     linked = make_config("router", connect=["tcp/127.0.0.1:7448"], listen=["tcp/127.0.0.1:7447"])
     client = make_config("client", connect=["tcp/127.0.0.1:7447"])
     own = tmp_path / "zenoh.json5"
-    own.write_text('{ scouting: { delay: 250 } }')
+    own.write_text("{ scouting: { delay: 250 } }")
     assert (_delay(lone), _delay(linked), _delay(client)) == (0, None, None)
     assert _delay(make_config("router", listen=["tcp/127.0.0.1:7447"], config_file=str(own))) == 250
-

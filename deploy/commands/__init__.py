@@ -1,0 +1,1 @@
+"""The `fatswarm run` command (flags, summary, resume) and `fatswarm algorithms`."""

@@ -1,0 +1,243 @@
+"""`fatswarm run --resume`: the run a record continues, taken from its header, and the refusal of
+a flag that contradicts it or of a record that cannot be continued (one line each)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+from typing import TYPE_CHECKING, Any
+
+from fatswarm.deploy.engine.config import RunInputError, RunSetup, check_crash, check_non_rigid
+from fatswarm.deploy.flags import flag_given
+from fatswarm.domain.outcome import Status
+
+if TYPE_CHECKING:
+    from fatswarm.domain.path import Points
+    from fatswarm.world.record import Header, Result, RunRecord
+
+
+def resolve_resume(args: argparse.Namespace) -> RunSetup:
+    """The run `--resume` continues: the --record file's header (n, a, seed, scheduler, start,
+    round cap) and committed rounds; raises one of `input_errors()` for a record that cannot be
+    continued or a flag given that contradicts it (flags that agree with it are fine)."""
+    from fatswarm.coordinator.schedule import make_scheduler
+    from fatswarm.deploy.engine.lockstep import default_max_rounds
+    from fatswarm.domain.registry import load_algorithm
+    from fatswarm.domain.seam import Configured
+    from fatswarm.world.physics import validate_configuration
+
+    path: str = args.record
+    record = read_resumable(path, lockstep=bool(args.lockstep))
+    h = record.header
+    if h.seed is None:
+        raise RunInputError(f"--resume: {path} does not say its seed; its run cannot be continued")
+    saved = h.extra.get("max_rounds")
+    cap = saved if isinstance(saved, int) and not isinstance(saved, bool) and saved >= 1 else None
+    if args.max_rounds is not None and args.max_rounds < 1:
+        raise RunInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
+    check_against_header(args, h, cap, path)
+    if h.scheduler != "scripted" and args.schedule is not None:
+        raise RunInputError(
+            f"--schedule only goes with --scheduler scripted; {path}'s run has "
+            f"scheduler={h.scheduler}"
+        )
+    params = Configured.of(load_algorithm(h.algorithm_ref), h.n, h.params)
+    params.check_start(h.initial)
+    initial = validate_configuration(h.initial)
+    recorded_k = h.extra.get("fairness")
+    if isinstance(recorded_k, int) and args.fairness is not None and args.fairness != recorded_k:
+        raise RunInputError(
+            f"--fairness {args.fairness} contradicts {path}, whose run has "
+            f"fairness={recorded_k}; drop --fairness to resume it"
+        )
+    fairness = (
+        args.fairness
+        if args.fairness is not None
+        else (recorded_k if isinstance(recorded_k, int) else None)
+    )
+    schedule = args.schedule
+    if schedule is None and isinstance(h.extra.get("schedule"), str):
+        schedule = h.extra["schedule"]  # the script the run was made with, where it was
+    scheduler = make_scheduler(h.scheduler, h.n, h.seed, schedule, fairness)
+    if cap is None:  # a header without its cap: as the run would have had it
+        cap = args.max_rounds or default_max_rounds(h.n, h.scheduler)
+    return RunSetup(
+        h.seed,
+        params,
+        initial,
+        scheduler,
+        cap,
+        record,
+        h.algorithm_ref,
+        non_rigid=recorded_non_rigid(args, h, path),
+        crash=recorded_crash(args, h, path),
+    )
+
+
+def recorded_non_rigid(args: argparse.Namespace, header: Header, path: str) -> float | None:
+    """The header's non-rigid delta (None: rigid moves); RunInputError for a --non-rigid that is
+    not a finite number > 0 or that says otherwise than the record."""
+    from fatswarm.world.core import header_non_rigid
+
+    delta = header_non_rigid(header)
+    given: float | None = getattr(args, "non_rigid", None)
+    check_non_rigid(given)
+    if given is not None and given != delta:
+        says = "rigid moves" if delta is None else f"non_rigid={delta:g}"
+        raise RunInputError(
+            f"--non-rigid {given:g} contradicts {path}, whose run has {says}; "
+            "drop --non-rigid to resume it"
+        )
+    return delta
+
+
+def recorded_crash(args: argparse.Namespace, header: Header, path: str) -> int | None:
+    """The header's crash count f (None: no crashes); RunInputError for a --crash that is not
+    0 < f < n or that says otherwise than the record."""
+    from fatswarm.world.core import header_crash
+
+    f = header_crash(header)
+    given: int | None = getattr(args, "crash", None)
+    check_crash(given, header.n)
+    if given is not None and given != f:
+        says = "no crashes" if f is None else f"crash={f}"
+        raise RunInputError(
+            f"--crash {given} contradicts {path}, whose run has {says}; drop --crash to resume it"
+        )
+    return f
+
+
+def read_resumable(path: str, *, lockstep: bool) -> RunRecord:
+    """The run record at `path`, if it holds a run to continue; else RunInputError (one line).
+
+    A torn last line (a crash mid-write) is left for the networked world, which drops it; a
+    lockstep run never cuts a record, so it refuses one.
+    """
+    from fatswarm.world.record import RecordFormatError, read_record
+
+    if not os.path.exists(path):
+        raise RunInputError(
+            f"--resume: {path} does not exist; nothing to resume (drop --resume to start a new run)"
+        )
+    if os.path.isfile(path) and os.path.getsize(path) == 0:
+        raise RunInputError(f"--resume: {path} is empty, not a run record; nothing to resume")
+    try:
+        record = read_record(path, allow_torn_end=True)
+    except RecordFormatError as exc:
+        raise RunInputError(f"--resume: not a run record: {exc}") from None
+    if record.result is not None:
+        raise RunInputError(
+            f"--resume: {path} already finished ({ended(record.result)}); nothing to resume"
+        )
+    if lockstep and record.torn_line is not None:
+        raise RunInputError(
+            f"--resume: {path} ends with a torn line (line {record.torn_line}, a "
+            "crash mid-write) that --lockstep will not cut: delete that line, or "
+            "resume without --lockstep (the world drops it)"
+        )
+    return record
+
+
+def ended(result: Result) -> str:
+    """How a finished record ended, in a few words: "formed in 31 rounds"."""
+    if result.status == Status.FORMED:
+        return f"formed in {result.rounds} rounds"
+    if result.status == Status.MAX_ROUNDS:
+        return f"stopped at the round limit of {result.rounds} rounds"
+    return f"{result.status} after {result.rounds} rounds"
+
+
+def check_against_header(
+    args: argparse.Namespace, header: Header, cap: int | None, path: str
+) -> None:
+    """Refuse (RunInputError, one line) a flag given with --resume that contradicts the record's
+    header, naming the flag and both values; `cap`: the header's round cap, if it says one."""
+    from fatswarm.deploy.scenarios.starts import random_start
+
+    h = header
+    checks: list[tuple[str, str, Any, Any, str]] = [
+        ("-n", "n", args.n, h.n, f"n={h.n}"),
+        ("-a", "a", args.a, h.a, f"a={_number(h.a)}"),
+        ("--seed", "seed", args.seed, h.seed, f"seed={h.seed}"),
+        ("--scheduler", "scheduler", args.scheduler, h.scheduler, f"scheduler={h.scheduler}"),
+        ("--max-rounds", "max_rounds", args.max_rounds, cap, f"max_rounds={cap}"),
+    ]
+    if flag_given(args, "algorithm") and args.algorithm != header.algorithm_ref:
+        raise RunInputError(
+            f"--algorithm {args.algorithm} contradicts {path}, whose run has "
+            f"algorithm {header.algorithm_ref}; drop --algorithm to resume it"
+        )
+    from fatswarm.domain.seam import parse_assignments
+
+    for name, text in parse_assignments(list(getattr(args, "param", []) or [])).items():
+        recorded = header.params.get(name)
+        if recorded is None or (str(recorded) != text and _as_number(text) != recorded):
+            raise RunInputError(
+                f"--param {name}={text} contradicts {path}, whose run has "
+                f"{name}={recorded}; drop --param to resume it"
+            )
+    for flag, dest, value, recorded, says in checks:
+        if flag_given(args, dest) and recorded is not None and value != recorded:
+            shown = _number(value) if isinstance(value, float) else value
+            raise RunInputError(
+                f"{flag} {shown} contradicts {path}, whose run has {says}; drop {flag} to resume it"
+            )
+    if args.init is not None:
+        from fatswarm.deploy.scenarios.starts import load_init
+        from fatswarm.world.physics import validate_configuration
+
+        positions, _ = load_init(args.init)
+        if len(positions) != h.n:
+            raise RunInputError(
+                f"--init {args.init} contradicts {path}, whose run has n={h.n} "
+                f"(the file {len(positions)} robots); drop --init to resume it"
+            )
+        where = _first_difference(validate_configuration(positions), h.initial)
+        if where is not None:
+            robot, mine, theirs = where
+            raise RunInputError(
+                f"--init {args.init} contradicts {path}, whose run started "
+                f"elsewhere (robot {robot} at {theirs}, not at {mine} as in the "
+                "file); drop --init to resume it"
+            )
+    elif flag_given(args, "start") and h.seed is not None:
+        kind: str = args.start
+        where = _first_difference(random_start(h.n, h.seed, kind, h.a), h.initial)
+        if where is not None:
+            robot, mine, theirs = where
+            raise RunInputError(
+                f"--start {kind} contradicts {path}, whose run did not start "
+                f"from the {kind} start of seed {h.seed} (robot {robot} at "
+                f"{theirs}, not at {mine}); drop --start to resume it"
+            )
+
+
+def _as_number(text: str) -> float | None:
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
+def _number(value: float) -> str:
+    """`value` as short as `:g` puts it, unless that would hide a difference."""
+    short = f"{value:g}"
+    return short if float(short) == value else repr(value)
+
+
+def _first_difference(mine: Points, theirs: Points) -> tuple[int, str, str] | None:
+    """The first robot placed differently in two (n, 2) starts, with both places; None if equal."""
+    for robot, (p, q) in enumerate(zip(mine, theirs, strict=True)):
+        if p[0] != q[0] or p[1] != q[1]:
+            return robot, f"({p[0]:.9g}, {p[1]:.9g})", f"({q[0]:.9g}, {q[1]:.9g})"
+    return None
+
+
+__all__ = [
+    "check_against_header",
+    "ended",
+    "read_resumable",
+    "recorded_crash",
+    "recorded_non_rigid",
+    "resolve_resume",
+]

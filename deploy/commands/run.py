@@ -1,0 +1,413 @@
+"""`fatswarm run`: run a swarm, networked (default, deploy.net.launcher) or in one process
+(--lockstep).
+
+Exit codes (`ExitCode`): 0 formed with no collision, 1 not formed (stalled or max_rounds, with or
+without collisions), 2 bad input (one line on stderr), 3 formed but with collisions, 130
+interrupted (SIGINT), 141 standard output closed early (a broken pipe), 143 terminated (SIGTERM).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import secrets
+import sys
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Final, TextIO
+
+from fatswarm.deploy.engine.config import (
+    DEFAULT_A,
+    DEFAULT_N,
+    DEFAULT_SCHEDULER,
+    DEFAULT_START,
+    RunConfig,
+    RunInputError,
+    RunSetup,
+    input_errors,
+)
+from fatswarm.deploy.engine.estimate import (
+    ESTIMATE_FROM_N,
+    ESTIMATE_FROM_S,
+    estimate_lockstep,
+    estimate_text,
+    eta_text,
+)
+from fatswarm.deploy.flags import StoreGiven, add_algorithm_arguments, check_writable
+from fatswarm.deploy.view.summary import Outcome, exit_code, print_outcome, side_of
+from fatswarm.domain.outcome import ExitCode
+
+if TYPE_CHECKING:
+    from fatswarm.deploy.engine.lockstep import RoundReport
+
+
+EXIT_CODES_HELP: Final = (
+    f"exit codes: {ExitCode.FORMED:d} formed with no collision; {ExitCode.NOT_FORMED:d} not formed "
+    f"(stalled or out of rounds; networked: or a part's process died, one line says which); "
+    f"{ExitCode.BAD_INPUT:d} bad input (one line on stderr says what to "
+    f"fix); {ExitCode.FORMED_WITH_COLLISIONS:d} formed, but with collisions (robots stopped at "
+    f"contact: not the collision-free formation the paper guarantees); "
+    f"{ExitCode.RECORD_FAILED:d} the run record could not be written (disk full, permissions: "
+    f"the run stopped; --resume goes on once fixed); {ExitCode.INTERRUPTED:d} "
+    f"interrupted (Ctrl-C); {ExitCode.BROKEN_PIPE:d} standard output closed early (e.g. | head); "
+    f"{ExitCode.TERMINATED:d} terminated (SIGTERM)."
+)
+PROGRESS_SECONDS: Final = 1.0  # at most one progress line per this many seconds
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Flags of `fatswarm run`, the launcher's (networked) and the dashboard's among them."""
+    from fatswarm.coordinator.schedule import NAMES
+    from fatswarm.deploy.net.launcher import add_network_arguments
+    from fatswarm.deploy.scenarios.starts import KINDS
+    from fatswarm.deploy.view.dashboard import add_run_arguments
+
+    p.epilog = EXIT_CODES_HELP
+    p.add_argument(
+        "--lockstep",
+        action="store_true",
+        help="run every robot in this one process, in lock step (no Zenoh; refuses the "
+        "networked-run flags)",
+    )
+    p.add_argument(
+        "-n",
+        type=int,
+        default=None,
+        metavar="N",
+        help=f"number of robots (default {DEFAULT_N}; with --init, taken from the file)",
+    )
+    p.add_argument(
+        "-a",
+        type=float,
+        default=None,
+        metavar="A",
+        help=f"the paper's least side of the polygon, > 3: --param a=A (default "
+        f"{DEFAULT_A:g}, or the --init file's 'a'); random starts are drawn at this "
+        "scale",
+    )
+    add_algorithm_arguments(p)
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=None,
+        metavar="S",
+        help="seed of the start, frames and scheduler (default: random, printed)",
+    )
+    p.add_argument(
+        "--init",
+        metavar="PATH",
+        help='start from a JSON file {"positions": [[x, y], ...], "a": 4.0}',
+    )
+    p.add_argument(
+        "--start",
+        choices=KINDS,
+        default=DEFAULT_START,
+        action=StoreGiven,
+        help=f"kind of random start without --init (default {DEFAULT_START}: needs SEC expansion)",
+    )
+    p.add_argument(
+        "--scheduler",
+        choices=NAMES,
+        default=DEFAULT_SCHEDULER,
+        action=StoreGiven,
+        help=f"who is active each round (default {DEFAULT_SCHEDULER}); async, "
+        "async-slowest: no rounds, robots on their own clocks in virtual time, the "
+        "adversary's delays random or slowest robot last",
+    )
+    p.add_argument(
+        "--schedule",
+        metavar="PATH",
+        help='scripted scheduler: JSON {"rounds": [[0, 2], [1], ...]} or a run record',
+    )
+    p.add_argument(
+        "--fairness",
+        type=int,
+        default=None,
+        metavar="K",
+        help="ssync/centralized: every robot active at least once in every K rounds (default 2n)",
+    )
+    p.add_argument(
+        "--max-rounds",
+        type=int,
+        default=None,
+        metavar="R",
+        help="stop after R rounds (default: 10 (n + 10) for fsync, 40 (n + 10) for "
+        "ssync, 40 n (n + 10) ended cycles for the async models, 10 n (n + 10) "
+        "otherwise)",
+    )
+    p.add_argument(
+        "--non-rigid",
+        type=float,
+        default=None,
+        metavar="DELTA",
+        help="non-rigid moves: the adversary may stop a move anywhere after the robot "
+        "has travelled DELTA (> 0, robot radii; e.g. 1) or at its end, drawn from the "
+        "seed (default: rigid moves)",
+    )
+    p.add_argument(
+        "--crash",
+        type=int,
+        default=None,
+        metavar="F",
+        help="F robots (0 < F < n) crash at rounds the adversary draws from the seed "
+        "and stay for good as still obstacles; the goal is then judged on the live "
+        "robots (default: none)",
+    )
+    p.add_argument(
+        "--record",
+        metavar="PATH",
+        help="write the run record (JSON Lines) to PATH (a new file, unless --force)",
+    )
+    p.add_argument("--force", action="store_true", help="let --record overwrite an existing file")
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the unfinished run of the --record file after its last round, "
+        "appending to it: n, a, seed, scheduler, start and round cap are the record's "
+        "(a flag that contradicts them is refused)",
+    )
+    p.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="no progress lines while running (the summary is still printed)",
+    )
+    p.add_argument(
+        "--json",
+        action="store_true",
+        help="print the summary as one JSON object on stdout (progress stays on "
+        "stderr; no live dashboard)",
+    )
+    add_network_arguments(p)
+    # The dashboard's run flags (--no-dashboard, --svg): `add_run_arguments`, because the CLI
+    # would hand an `add_dashboard_arguments` to `fatswarm dashboard` itself.
+    add_run_arguments(p)
+
+
+def _fail(message: str) -> ExitCode:
+    print(f"fatswarm run: {message}", file=sys.stderr)
+    return ExitCode.BAD_INPUT
+
+
+def main(args: argparse.Namespace) -> int:
+    """Run the swarm as asked; returns the exit code."""
+    if not args.lockstep:
+        return _networked(args)
+    return run_lockstep_command(args)
+
+
+def _networked(args: argparse.Namespace) -> int:
+    from fatswarm.deploy.net.launcher import run_networked
+
+    return run_networked(args, resolve_run)
+
+
+def networked_flags_given(args: argparse.Namespace) -> list[str]:
+    """The networked-only flags (the launcher's) that differ from their defaults in `args`."""
+    flags: tuple[tuple[str, str, object], ...] = getattr(args, "_networked_flags", ())
+    return [flag for flag, dest, default in flags if getattr(args, dest, default) != default]
+
+
+def check_lockstep_flags(args: argparse.Namespace) -> None:
+    """Refuse networked-only flags in a lockstep run rather than ignore them (RunInputError)."""
+    given = networked_flags_given(args)
+    if given:
+        only = "is" if len(given) == 1 else "are"
+        raise RunInputError(
+            f"{', '.join(given)} {only} for networked runs only: drop "
+            f"{'it' if len(given) == 1 else 'them'} or --lockstep"
+        )
+
+
+def check_outputs(args: argparse.Namespace) -> None:
+    """Refuse a --record or --svg that cannot be written, before anything runs (RunInputError).
+
+    An existing record is overwritten only with --force (--resume continues it).
+    """
+    record: str | None = args.record
+    resume = bool(getattr(args, "resume", False))
+    if resume and not record:
+        raise RunInputError("--resume continues a run record: name it with --record PATH")
+    if record:
+        check_writable("--record", record)
+        if resume and args.force:
+            raise RunInputError(
+                "--resume continues the --record file, --force overwrites it: pass one of them"
+            )
+        if os.path.exists(record) and not os.path.isfile(record):
+            raise RunInputError(
+                f"--record {record} exists and is not a regular file (a device, "
+                "a pipe...); name a file"
+            )
+        if os.path.exists(record) and not (args.force or resume):
+            raise RunInputError(f"--record {record} exists; pass --force to overwrite it")
+    svg: str | None = getattr(args, "svg", None)  # the dashboard's flag
+    if svg:
+        check_writable("--svg", svg)
+
+
+def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
+    """Build the run the flags describe (shared by lockstep and networked runs, so both refuse
+    the same input with the same message); raises one of `input_errors()`."""
+    check_outputs(args)
+    if getattr(args, "resume", False):
+        from fatswarm.deploy.commands.resume import resolve_resume
+
+        return resolve_resume(args)
+    return RunConfig.from_args(args, seed).resolve()
+
+
+def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) -> int:
+    """`fatswarm run --lockstep`: build the run from the flags, run it, print the summary."""
+    from fatswarm.deploy.engine.lockstep import HistoryMismatchError, run_lockstep
+    from fatswarm.domain.adversary import ASYNC_NAMES
+    from fatswarm.domain.seam import AlgorithmFailure
+    from fatswarm.world.physics import InvalidConfigurationError
+    from fatswarm.world.record import RecordFormatError, RecordWriteError, RecordWriter
+
+    out = sys.stdout if out is None else out
+    seed_given = args.seed is not None
+    seed: int = args.seed if seed_given else secrets.randbelow(2**31)
+    bad_input: tuple[type[Exception], ...] = (*input_errors(), RecordFormatError)
+    try:
+        check_lockstep_flags(args)
+        setup = resolve_run(args, seed)
+        resumed = setup.resumed
+        if resumed is not None and setup.scheduler.name in ASYNC_NAMES:
+            raise RunInputError(
+                f"--resume: a {setup.scheduler.name} run cannot be resumed yet; "
+                "run it again with its --seed: a lock-step run repeats exactly"
+            )
+        # --resume appends after the committed rounds: nothing there is ever cut or rewritten
+        record = RecordWriter(args.record, append=resumed is not None) if args.record else None
+    except bad_input as exc:
+        return _fail(str(exc))
+    params, initial, scheduler, max_rounds, seed = (
+        setup.params,
+        setup.initial,
+        setup.scheduler,
+        setup.max_rounds,
+        setup.seed,
+    )
+
+    forecast = estimate_lockstep(params.n, scheduler.name, max_rounds)
+    if not args.quiet:
+        if not seed_given and resumed is None:
+            print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
+        if params.n >= ESTIMATE_FROM_N or forecast.seconds >= ESTIMATE_FROM_S:
+            print(
+                estimate_text(forecast, params.n, record=bool(args.record)),
+                file=sys.stderr,
+                flush=True,
+            )
+    on_round = None if args.quiet else _progress_printer(max_rounds, forecast.rounds)
+    try:
+        result = run_lockstep(
+            initial,
+            params,
+            scheduler,
+            seed=seed,
+            max_rounds=max_rounds,
+            record=record,
+            on_round=on_round,
+            history=None if resumed is None else resumed.rounds,
+            algorithm_ref=setup.algorithm_ref,
+            header_extra=(
+                {}
+                if setup.config is None
+                else setup.config.header_extra(networked=False, n=setup.params.n)
+            ),
+            non_rigid=setup.non_rigid,
+            crash=setup.crash,
+        )
+    except InvalidConfigurationError as exc:
+        return _fail(f"invalid start: {exc}")
+    except AlgorithmFailure as exc:  # the record holds every round before it
+        print(f"fatswarm run: {exc}", file=sys.stderr)
+        return ExitCode.NOT_FORMED
+    except RecordWriteError as exc:  # the rounds written stay; --resume goes on from them
+        print(
+            f"fatswarm run: {exc}; the run stopped (resume it with --resume once fixed)",
+            file=sys.stderr,
+        )
+        return ExitCode.RECORD_FAILED
+    except HistoryMismatchError as exc:  # refused before anything was appended
+        return _fail(
+            f"--resume: {args.record} cannot be continued exactly in lock step: {exc} "
+            "(resume it with the run's own --fairness or --schedule, or networked if "
+            "it ran so)"
+        )
+    finally:
+        if record is not None:
+            with contextlib.suppress(RecordWriteError):  # said above, if it matters
+                record.close()
+
+    outcome = Outcome(
+        status=result.status,
+        rounds=result.rounds,
+        collisions=result.collisions,
+        n=params.n,
+        a=side_of(params.values),
+        seed=seed,
+        scheduler=scheduler.name,
+        epochs=result.epochs,
+        moves=result.moves,
+        total_distance=result.total_distance,
+        algorithm=params.name,
+        params=dict(params.values),
+        time=result.time,
+    )
+    code = exit_code(outcome)
+    svg: str | None = getattr(args, "svg", None)  # the dashboard's flag, when it is there
+    if svg:
+        from fatswarm.deploy.view.dashboard import Frame, save_svg
+
+        final = Frame(
+            round=result.rounds,
+            n=params.n,
+            algorithm=params.name,
+            params=dict(params.values),
+            figures=params.figures(result.positions),
+            scheduler=scheduler.name,
+            positions=result.positions,
+            collisions_total=result.collisions,
+            status=result.status,
+            seed=seed,
+            max_rounds=max_rounds,
+            source="lockstep",
+        )
+        try:
+            save_svg(final, svg)
+        except OSError as exc:
+            code = _fail(f"cannot write {svg}: {exc.strerror}")
+            svg = None
+    print_outcome(outcome, code, out, as_json=args.json, record=args.record, svg=svg)
+    return code
+
+
+def _progress_printer(max_rounds: int, expected_rounds: int) -> Callable[[RoundReport], None]:
+    """A round callback printing a progress line (with an ETA) to stderr at most once per
+    PROGRESS_SECONDS."""
+    start = time.monotonic()
+    last = [start]
+
+    def show(report: RoundReport) -> None:
+        now = time.monotonic()
+        if now - last[0] < PROGRESS_SECONDS:
+            return
+        last[0] = now
+        p = report.progress
+        rate = report.round / (now - start) if now > start else 0.0
+        print(
+            f"round {report.round}/{max_rounds}  epochs {p.epochs}  moves {p.moves}  "
+            f"distance {p.total_distance:.1f}  collisions {p.collisions}  "
+            f"{eta_text(report.round, rate, expected_rounds, max_rounds)}",
+            file=sys.stderr,
+            flush=True,
+        )
+
+    return show
+
+
+__all__ = ["add_arguments", "check_outputs", "main", "resolve_run", "run_lockstep_command"]

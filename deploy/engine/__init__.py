@@ -1,0 +1,1 @@
+"""The in-process engine: a run's configuration, the lock step and the Python API built on it."""

@@ -1,0 +1,271 @@
+"""One run's configuration, frozen: what the CLI, the Python API and the parts are built from.
+
+`RunConfig` holds what a user asks for (flags or keyword arguments); `resolve()` checks it and
+builds the run (`RunSetup`): the algorithm configured for n robots, the start on the grid, the
+scheduler and the round cap. `header_extra()` is what the record's header adds so that the run can
+be repeated exactly. Every refusal is one of `input_errors()`, with a message saying what to fix.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Final
+
+import numpy as np
+
+from fatswarm.domain.path import Points
+
+if TYPE_CHECKING:
+    from fatswarm.coordinator.schedule import Scheduler
+    from fatswarm.domain.seam import Configured
+    from fatswarm.world.record import RunRecord
+
+DEFAULT_N: Final = 8
+DEFAULT_A: Final = 4.0
+DEFAULT_SCHEDULER: Final = "ssync"  # the paper's model
+DEFAULT_START: Final = "clustered"  # needs SEC expansion, so every phase of the algorithm runs
+DEFAULT_MOVE_TIMEOUT_S: Final = 5.0
+
+
+class RunInputError(ValueError):
+    """A combination of settings a run cannot use."""
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class RunConfig:
+    """What a run is asked to be. Unset fields take the documented defaults on `resolve()`.
+
+    The start is `positions` (an (n, 2) array), else the JSON file `init`, else a random start of
+    kind `start` drawn from `seed`. `params` are the algorithm's (values or their text).
+    """
+
+    n: int | None = None
+    algorithm: str = "uniform-circle"
+    params: Mapping[str, object] = field(default_factory=dict)
+    seed: int = 0
+    start: str = DEFAULT_START
+    init: str | None = None
+    positions: Points | None = None
+    scheduler: str = DEFAULT_SCHEDULER
+    schedule: str | None = None
+    fairness: int | None = None
+    max_rounds: int | None = None
+    non_rigid: float | None = None  # the adversary's delta: moves may stop after it (None: rigid)
+    crash: int | None = None  # f robots the adversary crashes for good (None: none)
+    move_timeout_s: float = DEFAULT_MOVE_TIMEOUT_S
+    pace_s: float = 0.0
+    command: tuple[str, ...] = ()
+
+    @staticmethod
+    def from_args(args: argparse.Namespace, seed: int) -> RunConfig:
+        """The configuration `fatswarm run`'s flags ask for (`-a` is `--param a=`)."""
+        from fatswarm.domain.seam import parse_assignments
+
+        params: dict[str, object] = dict(parse_assignments(list(getattr(args, "param", []) or [])))
+        if getattr(args, "a", None) is not None:
+            if "a" in params:
+                raise RunInputError("give the side once: -a or --param a=..., not both")
+            params["a"] = float(args.a)
+        return RunConfig(
+            n=args.n,
+            algorithm=getattr(args, "algorithm", "uniform-circle"),
+            params=params,
+            seed=seed,
+            start=args.start,
+            init=args.init,
+            scheduler=args.scheduler,
+            schedule=args.schedule,
+            fairness=args.fairness,
+            max_rounds=args.max_rounds,
+            non_rigid=getattr(args, "non_rigid", None),
+            crash=getattr(args, "crash", None),
+            move_timeout_s=float(getattr(args, "move_timeout", DEFAULT_MOVE_TIMEOUT_S)),
+            pace_s=float(getattr(args, "pace", None) or 0.0),
+            command=tuple(getattr(args, "_argv", None) or sys.argv),
+        )
+
+    def resolve(self) -> RunSetup:
+        """Check everything and build the run; raises one of `input_errors()`."""
+        from fatswarm.coordinator.schedule import make_scheduler
+        from fatswarm.deploy.engine.lockstep import default_max_rounds
+
+        if self.scheduler != "scripted" and self.schedule is not None:
+            raise RunInputError("--schedule only goes with --scheduler scripted")
+        if self.max_rounds is not None and self.max_rounds < 1:
+            raise RunInputError(f"--max-rounds must be at least 1, got {self.max_rounds}")
+        check_non_rigid(self.non_rigid)
+        setting, initial = resolve_start(
+            self.init,
+            self.n,
+            None,
+            self.seed,
+            self.start,
+            self.algorithm,
+            params=self.params,
+            positions=self.positions,
+        )
+        scheduler = make_scheduler(
+            self.scheduler, setting.n, self.seed, self.schedule, self.fairness
+        )
+        max_rounds = self.max_rounds or default_max_rounds(setting.n, self.scheduler)
+        check_crash(self.crash, setting.n)
+        return RunSetup(
+            self.seed,
+            setting,
+            initial,
+            scheduler,
+            max_rounds,
+            algorithm_ref=self.algorithm,
+            config=self,
+            non_rigid=self.non_rigid,
+            crash=self.crash,
+        )
+
+    def header_extra(self, *, networked: bool, n: int) -> dict[str, Any]:
+        """What the record's header adds: the software version, start kind (or file), fairness
+        (as resolved for n robots), schedule file, move timeout (networked), the command line."""
+        from fatswarm import __version__
+        from fatswarm.coordinator.schedule import default_fairness
+
+        extra: dict[str, Any] = {"fatswarm_version": __version__}
+        if self.positions is None and self.init is None:
+            extra["start"] = self.start
+        elif self.init is not None:
+            extra["init"] = os.path.abspath(self.init)
+        if self.scheduler in ("ssync", "centralized"):
+            extra["fairness"] = int(self.fairness or default_fairness(n))
+        if self.schedule is not None:
+            extra["schedule"] = os.path.abspath(self.schedule)
+        if networked:
+            extra["move_timeout"] = float(self.move_timeout_s)
+        if self.command:
+            extra["command"] = list(self.command)
+        return extra
+
+
+@dataclass(frozen=True, slots=True)
+class RunSetup:
+    """What the flags of `fatswarm run` ask for, checked: the start, parameters and scheduler."""
+
+    seed: int
+    params: Configured  # the algorithm and its parameters for n robots
+    initial: Points
+    scheduler: Scheduler
+    max_rounds: int
+    resumed: RunRecord | None = None  # --resume: the record whose committed rounds go on
+    algorithm_ref: str = "uniform-circle"  # how every process loads the algorithm
+    config: RunConfig | None = None  # what was asked for (None: a resumed record's run)
+    non_rigid: float | None = None  # the adversary's delta (world.core.cut_path); None: rigid
+    crash: int | None = None  # f robots crashed for good (world.core.crash_plan); None: none
+
+
+def check_non_rigid(delta: float | None) -> None:
+    """Refuse a non-rigid delta that is not a finite number > 0 (RunInputError)."""
+    if delta is not None and not (math.isfinite(delta) and delta > 0):
+        raise RunInputError(
+            f"--non-rigid must be a finite distance > 0 (robot radii), got {delta:g}"
+        )
+
+
+def check_crash(f: int | None, n: int) -> None:
+    """Refuse a crash count f that is not 0 < f < n (RunInputError)."""
+    if f is not None and not 0 < f < n:
+        raise RunInputError(f"--crash must be between 1 and n - 1 = {n - 1}, got {f}")
+
+
+def input_errors() -> tuple[type[Exception], ...]:
+    """The exceptions `resolve_run` raises for bad input (each message says what to fix)."""
+    from fatswarm.coordinator.schedule import ScheduleError
+    from fatswarm.deploy.scenarios.starts import InitFileError
+    from fatswarm.domain.seam import AlgorithmError, AlgorithmParamsError
+    from fatswarm.domain.tolerance import UnsupportedInputError
+    from fatswarm.world.physics import InvalidConfigurationError
+
+    return (
+        AlgorithmError,
+        AlgorithmParamsError,
+        InitFileError,
+        ScheduleError,
+        InvalidConfigurationError,
+        UnsupportedInputError,
+        RunInputError,
+    )
+
+
+def resolve_start(
+    init: str | None,
+    n: int | None,
+    a: float | None,
+    seed: int,
+    kind: str,
+    algorithm: str | None = None,
+    param_texts: Sequence[str] = (),
+    *,
+    params: Mapping[str, object] | None = None,
+    positions: Points | None = None,
+) -> tuple[Configured, Points]:
+    """The algorithm (configured) and (n, 2) start that `--init` or `-n`/`--seed`/`--start`,
+    `--algorithm`, `--param` and `-a` ask for, valid and supported by the algorithm; raises one of
+    `input_errors()`. Shared by `fatswarm run` and `fatswarm world`, so both refuse the same start
+    the same way. Random starts are drawn at the scale of a parameter `a`, if there is one."""
+    from fatswarm.deploy.scenarios.starts import load_init, random_start
+    from fatswarm.domain.registry import DEFAULT, load_algorithm
+    from fatswarm.domain.seam import Configured, parse_assignments
+    from fatswarm.domain.tolerance import check_supported
+    from fatswarm.world.physics import validate_configuration
+
+    chosen = load_algorithm(algorithm or DEFAULT)
+    given: dict[str, object] = dict(parse_assignments(list(param_texts)))
+    given.update(params or {})
+    has_a = any(spec.name == "a" for spec in chosen.parameters)
+    if a is not None:
+        if "a" in given:
+            raise RunInputError("give the side once: -a or --param a=..., not both")
+        given["a"] = a
+    if positions is not None:
+        initial = np.array(positions, dtype=np.float64)
+        if initial.ndim != 2 or initial.shape[1:] != (2,) or not len(initial):
+            raise RunInputError(f"positions must be an (n, 2) array, got shape {initial.shape}")
+        if not np.isfinite(initial).all():
+            raise RunInputError("positions must be finite numbers")
+        if n is not None and n != len(initial):
+            raise RunInputError(f"n={n} disagrees with the {len(initial)} positions given")
+        setting = Configured.of(chosen, len(initial), given)
+    elif init is not None:
+        initial, file_a = load_init(init)  # finite numbers, as check_supported needs
+        if n is not None and n != len(initial):
+            raise RunInputError(
+                f"-n {n} disagrees with the {len(initial)} robots of {init}; drop -n"
+            )
+        if has_a and "a" not in given and file_a is not None:
+            given["a"] = file_a
+        setting = Configured.of(chosen, len(initial), given)
+    else:
+        setting = Configured.of(chosen, DEFAULT_N if n is None else n, given)
+        scale = setting.values.get("a", DEFAULT_A)
+        assert isinstance(scale, (int, float))
+        # the scale first: a random start is drawn at it (a = 1e308 would overflow it)
+        check_supported(np.zeros((setting.n, 2)), float(scale))
+        initial = random_start(setting.n, seed, kind, float(scale))
+    setting.check_start(initial)
+    return setting, validate_configuration(initial)
+
+
+__all__ = [
+    "DEFAULT_A",
+    "DEFAULT_N",
+    "DEFAULT_SCHEDULER",
+    "DEFAULT_START",
+    "RunConfig",
+    "RunInputError",
+    "RunSetup",
+    "check_crash",
+    "check_non_rigid",
+    "input_errors",
+    "resolve_start",
+]

@@ -1,0 +1,383 @@
+"""The whole run in one process: the world's and the coordinator's very cores on an in-process
+bus, with every robot's Look-Compute-Move done in turn.
+
+Nothing of the round is written here: `world.core.WorldCore` serves the looks, holds the moves,
+commits through physics and keeps the record; `coordinator.rounds.CoordinatorCore` picks the
+active sets and opens and closes the rounds, exactly as in a networked run. Each active robot
+Looks (its snapshot, in its private frame with the seeded X flip, as an agent) and Moves. An
+algorithm with a `round_planner` (the paper's: `SharedPlans`) makes the round's paths at once,
+the very paths each robot's own `compute` returns; a `compute` passed in is called per robot.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any, Final
+
+import numpy as np
+
+from fatswarm.agent.frames import compute_in_frame, path_to_world
+from fatswarm.agent.params import Params
+from fatswarm.agent.uniform_circle import ALGORITHM as UNIFORM_CIRCLE
+from fatswarm.coordinator.async_rounds import coordinator_core
+from fatswarm.coordinator.rounds import Ask, CoordinatorCore, Finished, RoundTimes
+from fatswarm.coordinator.schedule import Scheduler
+from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel
+from fatswarm.domain.draws import draw_flip
+from fatswarm.domain.outcome import Status
+from fatswarm.domain.path import Path, Points
+from fatswarm.domain.seam import Configured, checked
+from fatswarm.domain.wire import ProtocolError
+from fatswarm.world.async_core import AsyncWorldCore, make_world
+from fatswarm.world.asynchrony import CycleDone
+from fatswarm.world.core import Committed, Journal, WorldCore, WorldSetup
+from fatswarm.world.physics import RoundOutcome, validate_configuration
+from fatswarm.world.progress import Progress
+from fatswarm.world.protocol import Commit, MoveSubmitted
+from fatswarm.world.record import Header, RoundEntry, RunRecord
+
+# Default round cap = ROUNDS_PER_STEP[scheduler] * (n + STEP_SLACK). The algorithm needs about
+# n + 2 sequential steps (one mover or one mirror pair each); a step costs 1 round under fsync,
+# about 2 under ssync (p = 1/2), about n under centralized; the caps leave a factor 10 or more.
+# Under the async models a "round" is an ended cycle: every robot cycles while one moves, and the
+# fastest ones cycle up to 2n - 1 times as often under async-slowest (non-rigid 0.1 at n = 12
+# took 2733 cycles), hence 40 n.
+STEP_SLACK: Final = 10
+ROUNDS_PER_STEP: Final = {"fsync": 10, "ssync": 40}  # others (centralized, scripted): 10 n
+CYCLES_PER_STEP_PER_ROBOT: Final = 40  # the async models: 40 n
+LOCKSTEP_SWARM: Final = "lockstep"
+SHOWN_FAULTS: Final = 3  # an algorithm's failing computes logged in full; the rest are counted
+
+log = logging.getLogger("fatswarm.lockstep")
+
+ComputeFn = Callable[[Points, Any], Path]
+
+
+class HistoryMismatchError(ValueError):
+    """Committed rounds to resume from that this run would not have produced."""
+
+
+def default_max_rounds(n: int, scheduler: str) -> int:
+    """A round cap far above what a correct run needs under `scheduler` (see ROUNDS_PER_STEP)."""
+    per_robot = CYCLES_PER_STEP_PER_ROBOT if scheduler in ASYNC_NAMES else 10
+    per_step = ROUNDS_PER_STEP.get(scheduler, per_robot * max(1, n))
+    return per_step * (n + STEP_SLACK)
+
+
+@dataclass(frozen=True, slots=True)
+class RoundReport(Committed):
+    """A committed round (world frame) and the run's figures after it, for callbacks such as a
+    progress line or a dashboard."""
+
+    progress: Progress
+
+
+@dataclass(frozen=True, slots=True)
+class RunResult:
+    """How a run ended and what it cost. Positions are (n, 2), world frame."""
+
+    status: str
+    rounds: int
+    epochs: int
+    moves: int
+    total_distance: float
+    collisions: int
+    looks: int
+    initial: Points
+    positions: Points
+    moves_by_robot: tuple[int, ...]
+    time: float | None = None  # async models: the virtual time the run ended at
+
+
+def configured(params: Params | Configured) -> Configured:
+    """The run's algorithm: a `Configured` as given, or the paper's algorithm for `Params`."""
+    if isinstance(params, Configured):
+        return params
+    return Configured(UNIFORM_CIRCLE, params.n, {"a": float(params.a)}, params)
+
+
+def run_lockstep(
+    initial: Points,
+    params: Params | Configured,
+    scheduler: Scheduler,
+    *,
+    seed: int,
+    max_rounds: int | None = None,
+    record: Journal | None = None,
+    on_round: Callable[[RoundReport], None] | None = None,
+    compute: ComputeFn | None = None,
+    history: Sequence[RoundEntry] | None = None,
+    algorithm_ref: str | None = None,
+    header_extra: dict[str, Any] | None = None,
+    non_rigid: float | None = None,
+    crash: int | None = None,
+) -> RunResult:
+    """Run until formed, stalled or `max_rounds` (default `default_max_rounds`).
+
+    `params`: the paper's `Params`, or any algorithm `Configured` for n robots.
+    `seed` fixes the robots' private frames and view orders; the scheduler carries its own seed.
+    `compute(view, params)` replaces the algorithm's compute (called per robot and Look).
+    `history`: resume a run from `initial` after these committed rounds (a record's, maybe none):
+    the world and the coordinator replay them as they do after a restart, and they are not
+    recorded again (nor the header); the run then goes on exactly as it would have without the
+    break. `algorithm_ref` (how to load the algorithm again; default its name) and
+    `header_extra` go into the record's header. `non_rigid`: the adversary's delta (moves may be
+    stopped after delta, `world.core.cut_path`); None for rigid moves. `crash`: f robots the
+    adversary crashes for good (`world.core.crash_plan`); None for none.
+    Raises InvalidConfigurationError for an invalid start, the algorithm's refusal of the start
+    (UnsupportedInputError for the paper's, outside the supported range), ValueError if n
+    disagrees with params, HistoryMismatchError for a history this run would not have produced.
+    """
+    setting = configured(params)
+    positions = validate_configuration(initial)  # a fresh float64 copy, on the grid
+    n = len(positions)
+    if n != setting.n:
+        raise ValueError(f"the start has {n} robots but params say n={setting.n}")
+    cap = default_max_rounds(n, scheduler.name) if max_rounds is None else max_rounds
+    if isinstance(scheduler, AsyncModel) and history is not None:
+        raise HistoryMismatchError(f"a {scheduler.name} run cannot be resumed (yet)")
+    setup = WorldSetup(
+        swarm=LOCKSTEP_SWARM,
+        n=n,
+        seed=seed,
+        scheduler=scheduler.name,
+        initial=positions,
+        max_rounds=cap,
+        algorithm=algorithm_ref or setting.name,
+        params=dict(setting.values),
+        extra=dict(header_extra or {}),
+        non_rigid=non_rigid,
+        crash=crash,
+    )
+    if history is None:
+        setting.check_start(positions)
+        world = make_world(setup, record, algorithm=setting)
+        checked = scheduler
+    else:
+        _check_history(history)
+        past = RunRecord(Header(n, seed, scheduler.name, positions), tuple(history), None)
+        try:
+            world = WorldCore(setup, record, past, algorithm=setting)
+        except RuntimeError as exc:  # the tracker saw a round after the run had ended
+            raise HistoryMismatchError(str(exc)) from None
+        if world.status != Status.RUNNING:
+            raise HistoryMismatchError(
+                f"the run already ended ({world.status}) after round {len(history)}"
+            )
+        checked = _CheckedScheduler(scheduler, history)
+    for robot in range(n):  # every robot's "agent" lives here, for the whole run
+        world.set_alive(robot, True)
+    bus = _Bus(world, setting, compute, [draw_flip(seed, robot) for robot in range(n)], on_round)
+    coordinator = coordinator_core(
+        scheduler.name, lambda _n: checked, RoundTimes(), resume_live=range(n)
+    )
+    for robot in range(n):
+        coordinator.on_alive(robot, True, 0.0)
+    finished = bus.run(coordinator)
+    progress = world.tracker.snapshot()
+    assert progress.status is not None and finished.status == progress.status
+    return RunResult(
+        status=progress.status,
+        rounds=progress.rounds,
+        epochs=progress.epochs,
+        moves=progress.moves,
+        total_distance=progress.total_distance,
+        collisions=progress.collisions,
+        looks=bus.looks + sum(len(entry.active) for entry in history or ()),
+        initial=np.array(positions),
+        positions=world.positions,
+        moves_by_robot=progress.moves_by_robot,
+        time=world.clock.now if isinstance(world, AsyncWorldCore) else None,
+    )
+
+
+class _Bus:
+    """The in-process bus: carries the coordinator's actions to the world and the agents, and
+    their answers back, until the coordinator finishes."""
+
+    def __init__(
+        self,
+        world: WorldCore,
+        setting: Configured,
+        compute: ComputeFn | None,
+        flips: list[bool],
+        on_round: Callable[[RoundReport], None] | None,
+    ) -> None:
+        self.world = world
+        self.setting = setting
+        self.flips = flips
+        self.on_round = on_round
+        self.on_round_cycles: Callable[[RoundReport], None] | None = None
+        self.looks = 0
+        self.faults = 0  # computes that raised or gave no valid path (the robot stayed)
+        self.compute: Callable[[Points], Path]
+        if compute is not None:
+            user, own = compute, setting.params
+            self.compute = lambda view: user(view, own)
+        else:
+            self.compute = setting.compute
+        if isinstance(world, AsyncWorldCore) and on_round is not None:
+            world.on_cycle = self._cycle_report  # progress by ended cycle, not by instant
+            self.on_round_cycles, self.on_round = on_round, None
+        make_planner = getattr(setting.algorithm, "round_planner", None)
+        self.planner = (
+            make_planner(setting.params) if compute is None and make_planner is not None else None
+        )
+
+    def run(self, coordinator: CoordinatorCore) -> Finished:
+        """Deliver actions until the coordinator says the run is over."""
+        now = 0.0  # virtual time: it moves only to a deadline nothing else can meet first
+        pending = deque(coordinator.start(now))
+        while True:
+            if not pending:
+                deadline = coordinator.next_deadline()
+                if deadline is None:
+                    break
+                now = max(now, deadline)
+                pending.extend(coordinator.on_tick(now))
+                continue
+            action = pending.popleft()
+            if isinstance(action, Finished):
+                return action
+            assert isinstance(action, Ask)
+            opened = self.world.open_round
+            reply, _ = self.world.control(action.request)
+            if isinstance(action.request, Commit) and reply.ok:
+                self._report()
+            pending.extend(coordinator.on_reply(reply, now))
+            if reply.ok and self.world.open_round and self.world.open_round != opened:
+                # every robot's Look is held at the world: the round's opening answers them
+                self._act(self.world.open_round, self.world.active)
+                notice = self.world.moves_notice()
+                if notice is not None:
+                    pending.extend(coordinator.on_held(notice, now))
+        raise RuntimeError("the coordinator stopped without finishing the run")  # a bug
+
+    def _act(self, round_no: int, active: Sequence[int]) -> None:
+        """Every active robot's Look, Compute and Move."""
+        world = self.world
+        planned = None
+        if self.planner is not None:
+            planned = self.planner.paths(world.positions, active, self.flips)
+        for robot in active:
+            if not world.may_look(robot):
+                continue  # its Look stays held (a robot the async adversary crashed)
+            if planned is not None:
+                if not world.admit_look(robot):
+                    continue
+                path = path_to_world(planned[robot], (0.0, 0.0), self.flips[robot])
+            else:
+                snapshot = world.look(robot)
+                if snapshot is None:
+                    continue
+                self.looks += 1
+                msg = self._computed(world, robot, round_no, snapshot.view)
+                if msg is None:
+                    continue  # as a networked agent whose compute failed: it stays, timed out
+                world.move(robot, msg)
+                continue
+            self.looks += 1
+            world.move(robot, MoveSubmitted(robot=robot, round=round_no, path=path))
+
+    def _computed(
+        self, world: WorldCore, robot: int, round_no: int, view: Points
+    ) -> MoveSubmitted | None:
+        """Robot `robot`'s move as the world would receive it over the wire (encoded and decoded,
+        so the same checks apply), or None where a networked agent would send none: its compute
+        raised, or returned something that is not a path (said on the log, first ones in full)."""
+        try:
+            path = compute_in_frame(view, self.flips[robot], checked(self.compute))
+            wire = MoveSubmitted(robot=robot, round=round_no, path=path).encode()
+            return MoveSubmitted.decode(wire)
+        except ProtocolError as exc:
+            world.reject("move-garbage", f"robot {robot} round {round_no}: {exc}")
+            problem = f"sent a move the world refuses: {exc}"
+        except Exception as exc:  # a bug in the algorithm: the robot stays put, as networked
+            problem = f"compute raised {type(exc).__name__}: {exc}"
+        self.faults += 1
+        if self.faults <= SHOWN_FAULTS:
+            log.warning(
+                "robot %d, round %d: %s; it stays put (timed out)%s",
+                robot,
+                round_no,
+                problem,
+                "; further faults are only counted" if self.faults == SHOWN_FAULTS else "",
+            )
+        return None
+
+    def _cycle_report(self, done: CycleDone) -> None:
+        callback = self.on_round_cycles
+        if callback is None:
+            return
+        moved = {done.robot: done.path} if done.path else {}
+        traveled = {done.robot: done.traveled} if done.path else {}
+        outcome = RoundOutcome(done.positions, traveled, list(done.collisions))
+        k = self.world.tracker.snapshot().rounds
+        callback(RoundReport(k, (done.robot,), moved, outcome, self.world.tracker.snapshot()))
+
+    def _report(self) -> None:
+        done = self.world.last_commit
+        if self.on_round is None or done is None:
+            return
+        self.on_round(
+            RoundReport(
+                done.round, done.active, done.paths, done.outcome, self.world.tracker.snapshot()
+            )
+        )
+
+
+class _CheckedScheduler:
+    """The run's scheduler, checked against the recorded active sets while the coordinator
+    replays the committed rounds into it."""
+
+    def __init__(self, scheduler: Scheduler, history: Sequence[RoundEntry]) -> None:
+        self.scheduler = scheduler
+        self.name = scheduler.name
+        self.history = history
+
+    def active(self, round_no: int, live: Sequence[int]) -> list[int]:
+        active = self.scheduler.active(round_no, live)
+        if round_no <= len(self.history):
+            recorded = list(self.history[round_no - 1].active)
+            if recorded != active:
+                raise HistoryMismatchError(
+                    f"round {round_no} activated robots {recorded} where this "
+                    f"{self.scheduler.name} schedule activates {active}"
+                )
+        return active
+
+
+def _check_history(history: Sequence[RoundEntry]) -> None:
+    """Refuse rounds out of order, or with robots timed out (a networked run's slow agents cannot
+    be redone in lock step; an algorithm's failing compute could, but the record cannot say
+    which it was)."""
+    for round_no, entry in enumerate(history, start=1):
+        if entry.round != round_no:
+            raise HistoryMismatchError(f"round {entry.round} comes where round {round_no} should")
+        crashed = entry.extra.get("crashed")
+        if crashed:
+            raise HistoryMismatchError(
+                f"round {round_no}: robots {crashed} counted as crashed "
+                "(their agents were gone), which a lock step cannot redo"
+            )
+        timed_out = entry.extra.get("timed_out")
+        if timed_out:
+            raise HistoryMismatchError(
+                f"round {round_no}: robots {timed_out} timed out (slow "
+                "agents, or a compute that failed), which a lock step "
+                "cannot tell apart, so it cannot redo them"
+            )
+
+
+__all__ = [
+    "ComputeFn",
+    "HistoryMismatchError",
+    "RoundReport",
+    "RunResult",
+    "configured",
+    "default_max_rounds",
+    "run_lockstep",
+]

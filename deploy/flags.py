@@ -1,0 +1,88 @@
+"""The flags and checks every command shares: which flags were given, the algorithm's flags, and the
+refusal of a file or a duration that cannot be used (one line, RunInputError)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+from typing import TYPE_CHECKING, Any, Final
+
+from fatswarm.deploy.engine.config import (
+    RunInputError,
+)
+
+if TYPE_CHECKING:
+    pass
+
+
+GIVEN: Final = "_given"  # the namespace attribute listing the flags given (`StoreGiven`)
+
+TRACKED: Final = ("scheduler", "start")  # flags with a default other than None: `StoreGiven`
+
+
+class StoreGiven(argparse.Action):
+    """Store the value and note that the flag was given: --resume refuses a given flag that
+    contradicts the record, while a default one never does (its default may be the record's)."""
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        setattr(namespace, self.dest, values)
+        setattr(namespace, GIVEN, (*getattr(namespace, GIVEN, ()), self.dest))
+
+
+def flag_given(args: argparse.Namespace, dest: str) -> bool:
+    """Whether the user gave the flag of `dest`: listed by `StoreGiven` for the TRACKED ones,
+    else not None (their default)."""
+    if dest in TRACKED:
+        return dest in getattr(args, GIVEN, ())
+    return getattr(args, dest, None) is not None
+
+
+def add_algorithm_arguments(p: argparse.ArgumentParser, *, params: bool = True) -> None:
+    """`--algorithm` (and `--param`): which algorithm the robots run, with what parameters."""
+    from fatswarm.domain.registry import DEFAULT
+
+    p.add_argument(
+        "--algorithm",
+        default=DEFAULT,
+        metavar="NAME",
+        action=StoreGiven,
+        help=f"the algorithm every robot runs: a registered name (`fatswarm "
+        f"algorithms` lists them; default {DEFAULT}) or module:attribute or "
+        "path/to/file.py:attribute of your own (docs/algorithms.md)",
+    )
+    if params:
+        p.add_argument(
+            "--param",
+            action="append",
+            default=[],
+            metavar="NAME=VALUE",
+            help="set one of the algorithm's parameters (repeat for more; "
+            "`fatswarm algorithms` lists them)",
+        )
+
+
+def check_writable(flag: str, path: str) -> None:
+    """Refuse `path` for `flag` if it is a directory or its directory is missing or read-only."""
+    if os.path.isdir(path):
+        raise RunInputError(f"{flag} {path} is a directory; name a file")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise RunInputError(
+            f"{flag} {path}: the directory {folder} does not exist; create it first"
+        )
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise RunInputError(f"{flag} {path}: cannot write in {folder}")
+
+
+def check_seconds(flag: str, value: float, *, zero_ok: bool) -> None:
+    """Refuse a duration flag that is not finite, or not > 0 (>= 0 if `zero_ok`)."""
+    if not math.isfinite(value) or value < 0 or (value == 0 and not zero_ok):
+        bound = ">= 0" if zero_ok else "> 0"
+        raise RunInputError(f"{flag} must be a finite number of seconds {bound}, got {value:g}")

@@ -1,0 +1,1 @@
+"""`fatswarm hunt`: a search for counterexamples, shrunk and saved (search, pool, command)."""

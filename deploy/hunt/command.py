@@ -1,0 +1,477 @@
+"""`fatswarm hunt`: search for counterexamples to an algorithm on every core, shrink each one and
+save it as files that `fatswarm run` replays exactly and `fatswarm replay` shows.
+
+`deploy/hunt/search.py` draws, runs, classifies and shrinks; `deploy/hunt/pool.py` runs that in
+worker processes and saves the failures; this module reads the flags, shows progress (a rich bar on
+a terminal, plain lines otherwise) and the summary.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import secrets
+import signal
+import sys
+import time
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Final, TextIO
+
+from fatswarm.deploy.hunt.search import (
+    DEFAULT_SHRINK_RUNS,
+    SEED_BOUND,
+    Hunt,
+    HuntInputError,
+    hunt_models,
+    kind_counts,
+    start_families,
+)
+from fatswarm.deploy.sweep.grid import SweepInputError, params_text, parse_ints, split_values
+from fatswarm.domain.outcome import ExitCode
+
+if TYPE_CHECKING:
+    from rich.table import Table
+
+    from fatswarm.deploy.hunt.pool import Budget, Saved, Tally
+
+DEFAULT_SIZES: Final = "3..12"
+DEFAULT_SECONDS: Final = 60.0  # the budget when neither --budget-runs nor --budget-seconds is given
+DEFAULT_FAILURES: Final = 5
+DEFAULT_OUT: Final = "hunt"
+PROGRESS_SECONDS: Final = 5.0  # at most one plain progress line per this many seconds
+DESCRIPTION: Final = (
+    "Search for counterexamples to an algorithm: lock-step runs from random and adversarial "
+    "starts (near-symmetric, touching, lattices...), under the schedulers asked for, drawn from "
+    "a seed, on every core. A failure is a collision, a stall, a run past its round cap, or a "
+    "broken invariant (overlap; for uniform-circle, a robot leaving the smallest enclosing "
+    "circle in FormUCircle). Each failure is shrunk (fewer robots, a shorter schedule, simpler "
+    "coordinates) and saved in a folder of --out: start.json, schedule.json, the command that "
+    "replays it with `fatswarm run`, its record and summary.json. Docs: docs/hunt.md."
+)
+EPILOG: Final = (
+    "Without a budget the hunt runs for 60 s. exit codes: 0 nothing found; 1 failures found (each "
+    "saved in --out), or a worker process died; 2 bad input (one line on stderr says what to "
+    "fix); 130 interrupted (Ctrl-C: the failures saved so far stay); 143 terminated."
+)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Flags of `fatswarm hunt`."""
+    from fatswarm.domain.registry import DEFAULT
+
+    p.description = DESCRIPTION
+    p.epilog = EPILOG
+    p.add_argument(
+        "--algorithm",
+        default=DEFAULT,
+        metavar="NAME",
+        help=f"the algorithm hunted (default {DEFAULT}; a registered name, "
+        "module:attribute or path/to/file.py:attribute)",
+    )
+    p.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="a parameter of the algorithm, the same in every run (repeatable)",
+    )
+    p.add_argument(
+        "--scheduler",
+        action="append",
+        default=[],
+        metavar="NAMES",
+        help=f"schedulers (models) to draw from: {', '.join(hunt_models())} (default: all of them)",
+    )
+    p.add_argument(
+        "--non-rigid",
+        type=float,
+        default=None,
+        metavar="DELTA",
+        help="non-rigid moves in every run: the adversary may stop a move after DELTA",
+    )
+    p.add_argument(
+        "--crash",
+        type=int,
+        default=None,
+        metavar="F",
+        help="F robots crash for good in every run (n is then drawn above F)",
+    )
+    p.add_argument(
+        "-n",
+        "--n",
+        action="append",
+        default=[],
+        metavar="SIZES",
+        dest="n",
+        help=f"numbers of robots to draw from, e.g. 3..12 or 4,8 (default {DEFAULT_SIZES})",
+    )
+    p.add_argument(
+        "--starts",
+        action="append",
+        default=[],
+        metavar="FAMILIES",
+        help=f"start families to draw from: {', '.join(start_families())} (default: all of them)",
+    )
+    p.add_argument(
+        "--max-rounds",
+        type=int,
+        default=None,
+        metavar="R",
+        help="round cap of every run (default: the scheduler's for n, as fatswarm run)",
+    )
+    p.add_argument(
+        "--budget-runs",
+        type=int,
+        default=None,
+        metavar="K",
+        help="stop drawing after K candidate runs (reproducible from --seed)",
+    )
+    p.add_argument(
+        "--budget-seconds",
+        type=float,
+        default=None,
+        metavar="S",
+        help="stop drawing after S seconds (default 60 when no budget is given)",
+    )
+    p.add_argument(
+        "--max-failures",
+        type=int,
+        default=DEFAULT_FAILURES,
+        metavar="K",
+        help=f"stop once K failures are found; each is shrunk and saved (default "
+        f"{DEFAULT_FAILURES})",
+    )
+    p.add_argument(
+        "--shrink-runs",
+        type=int,
+        default=DEFAULT_SHRINK_RUNS,
+        metavar="K",
+        help=f"runs one failure's shrinking may take (default {DEFAULT_SHRINK_RUNS})",
+    )
+    p.add_argument(
+        "--jobs",
+        type=int,
+        default=None,
+        metavar="J",
+        help="worker processes (default: one per core)",
+    )
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=None,
+        metavar="S",
+        help="the hunt's seed: the same seed and run budget find the same failures "
+        "(default: random, printed)",
+    )
+    p.add_argument(
+        "--out",
+        default=DEFAULT_OUT,
+        metavar="DIR",
+        help=f"where failures are saved, one folder each (default {DEFAULT_OUT}; a "
+        "new or empty directory)",
+    )
+    p.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="no progress while running (the summary is still printed)",
+    )
+
+
+def build_hunt(args: argparse.Namespace) -> Hunt:
+    """The hunt the flags ask for, checked; raises HuntInputError or one of
+    `config.input_errors()` with a line saying what to fix."""
+    from fatswarm.coordinator.schedule import NAMES
+    from fatswarm.deploy.engine.config import check_non_rigid
+    from fatswarm.domain.registry import load_algorithm
+    from fatswarm.domain.seam import Configured
+
+    sizes = parse_ints(args.n or [DEFAULT_SIZES], "-n", least=1)
+    usable = hunt_models()
+    models = split_values(args.scheduler) or usable
+    for name in models:
+        if name not in usable:
+            why = "needs a schedule file" if name in NAMES else "is not a scheduler"
+            raise HuntInputError(f"--scheduler {name} {why}; a hunt takes {', '.join(usable)}")
+    known = start_families()
+    families = split_values(args.starts) or known
+    for family in families:
+        if family not in known:
+            raise HuntInputError(
+                f"--starts {family}: not a start family; choose from {', '.join(known)}"
+            )
+    check_non_rigid(args.non_rigid)
+    if args.crash is not None and args.crash < 1:
+        raise HuntInputError(f"--crash must be at least 1, got {args.crash}")
+    if args.max_rounds is not None and args.max_rounds < 1:
+        raise HuntInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
+    algorithm = load_algorithm(args.algorithm)
+    texts = params_text(algorithm, args.param)
+    hunt = Hunt(
+        args.algorithm, texts, families, sizes, models, args.non_rigid, args.crash, args.max_rounds
+    )
+    choices = hunt.choices()
+    if not choices:
+        least = max(2, (args.crash or 0) + 1)
+        asked = ",".join(args.n) or DEFAULT_SIZES
+        raise HuntInputError(
+            f"no start family asked for builds an n of -n {asked} that is at "
+            f"least {least}; widen -n"
+        )
+    for n in sorted({n for _, ns in choices for n in ns}):  # an n the algorithm refuses: now
+        Configured.of(algorithm, n, dict(texts))
+    return hunt
+
+
+def build_budget(args: argparse.Namespace) -> Budget:
+    """The budget the flags ask for; raises HuntInputError."""
+    from fatswarm.deploy.hunt.pool import Budget
+
+    if args.budget_runs is not None and args.budget_runs < 1:
+        raise HuntInputError(f"--budget-runs must be at least 1, got {args.budget_runs}")
+    seconds = args.budget_seconds
+    if seconds is not None and not (seconds > 0 and seconds < float("inf")):
+        raise HuntInputError(f"--budget-seconds must be a finite number > 0, got {seconds:g}")
+    if args.budget_runs is None and seconds is None:
+        seconds = DEFAULT_SECONDS
+    if args.max_failures < 1:
+        raise HuntInputError(f"--max-failures must be at least 1, got {args.max_failures}")
+    if args.shrink_runs < 1:
+        raise HuntInputError(f"--shrink-runs must be at least 1, got {args.shrink_runs}")
+    return Budget(args.budget_runs, seconds, args.max_failures, args.shrink_runs)
+
+
+def main(args: argparse.Namespace) -> int:
+    """`fatswarm hunt`: hunt, save the failures, print the summary; the exit code."""
+    from fatswarm.deploy.engine.config import input_errors
+    from fatswarm.deploy.hunt.pool import check_out, run_hunt
+    from fatswarm.deploy.sweep.command import _jobs, _stop_on_signals
+    from fatswarm.deploy.sweep.pool import WorkerDiedError
+
+    refused: tuple[type[Exception], ...] = (SweepInputError, *input_errors())
+    try:
+        hunt = build_hunt(args)
+        budget = build_budget(args)
+        jobs = _jobs(args.jobs)
+        if args.seed is not None and not 0 <= args.seed < 2**63:
+            raise HuntInputError(f"--seed must be a whole number >= 0, got {args.seed}")
+        check_out(args.out)
+    except refused as exc:
+        return _fail(str(exc))
+    seed = args.seed if args.seed is not None else secrets.randbelow(SEED_BOUND)
+    os.makedirs(args.out, exist_ok=True)
+    if not args.quiet:
+        _say(_plan_text(hunt, budget, seed, jobs, args.out))
+    progress = _progress(budget, quiet=args.quiet)
+    try:
+        with _stop_on_signals() as stopped, progress:
+            tally, complete = run_hunt(
+                hunt, seed, budget, jobs, args.out, progress.show, lambda: stopped[0] is not None
+            )
+    except WorkerDiedError as exc:
+        _say(f"fatswarm hunt: {exc}; the failures saved so far stay in {args.out}")
+        return ExitCode.NOT_FORMED
+    except OSError as exc:  # a full disk, a permission, while saving a failure
+        _say(f"fatswarm hunt: cannot save a failure in {args.out}: {exc.strerror or exc}")
+        return ExitCode.RECORD_FAILED
+    if not complete:
+        word = "interrupted" if stopped[0] == signal.SIGINT else "terminated"
+        _say(
+            f"{word}: {tally.runs} runs, {len(tally.saved)} failures saved in {args.out}; "
+            f"rerun with --seed {seed} to hunt again"
+        )
+        return ExitCode.INTERRUPTED if stopped[0] == signal.SIGINT else ExitCode.TERMINATED
+    print_summary(tally, sys.stdout)
+    _say(_end_text(tally, seed, args.out))
+    return ExitCode.NOT_FORMED if tally.saved else ExitCode.OK
+
+
+def _plan_text(hunt: Hunt, budget: Budget, seed: int, jobs: int, out: str) -> str:
+    limits = []
+    if budget.runs is not None:
+        limits.append(f"{budget.runs} runs")
+    if budget.seconds is not None:
+        limits.append(f"{budget.seconds:g} s")
+    extra = "".join(
+        [
+            f", non-rigid {hunt.non_rigid:g}" if hunt.non_rigid is not None else "",
+            f", crash {hunt.crash}" if hunt.crash is not None else "",
+        ]
+    )
+    return (
+        f"hunt: seed {seed}, {hunt.algorithm}, n {_sizes(hunt.sizes)}, "
+        f"{', '.join(hunt.models)}{extra}; {len(hunt.families)} start families; budget "
+        f"{' or '.join(limits)}, at most {budget.failures} failures into {out}/; "
+        f"{jobs} worker processes"
+    )
+
+
+def _sizes(sizes: Sequence[int]) -> str:
+    if len(sizes) > 2 and list(sizes) == list(range(sizes[0], sizes[-1] + 1)):
+        return f"{sizes[0]}..{sizes[-1]}"
+    return ",".join(map(str, sizes))
+
+
+def _end_text(tally: Tally, seed: int, out: str) -> str:
+    if not tally.saved:
+        return (
+            f"nothing found in {tally.runs} runs ({tally.refused} starts refused as "
+            f"unsupported); hunt seed {seed}"
+        )
+    first = tally.saved[0]
+    return (
+        f"{len(tally.saved)} failures saved in {out}/ (hunt seed {seed}); replay one with\n"
+        f"  cd {first.folder} && {first.summary['command']}\n"
+        f"  fatswarm replay {os.path.join(first.folder, 'record.jsonl')}"
+    )
+
+
+# -- progress -------------------------------------------------------------------------------------
+
+
+class _Progress:
+    """Shows a tally (plain lines, a rich bar) or nothing (quiet)."""
+
+    def __init__(self, budget: Budget) -> None:
+        self.budget = budget
+
+    def show(self, tally: Tally) -> None:
+        """Nothing to show (quiet)."""
+
+    @staticmethod
+    def counts(tally: Tally) -> str:
+        found = kind_counts(tally.kinds) or "none"
+        shrinking = f"  shrinking {tally.shrinking}" if tally.shrinking else ""
+        return (
+            f"runs {tally.runs}  failures: {found}  saved {len(tally.saved)}{shrinking}  "
+            f"refused {tally.refused}"
+        )
+
+    def done_fraction(self, tally: Tally) -> float:
+        """How far the search is through its budget (the nearer of runs and seconds)."""
+        parts = [0.0]
+        if self.budget.runs is not None:
+            parts.append(tally.runs / self.budget.runs)
+        if self.budget.seconds is not None:
+            parts.append((time.monotonic() - tally.started) / self.budget.seconds)
+        return min(1.0, max(parts))
+
+    def __enter__(self) -> _Progress:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+
+class _PlainProgress(_Progress):
+    """A line on stderr every PROGRESS_SECONDS (for a log file or a pipe)."""
+
+    def __init__(self, budget: Budget, out: TextIO) -> None:
+        super().__init__(budget)
+        self.out = out
+        self.last = time.monotonic()
+
+    def show(self, tally: Tally) -> None:
+        now = time.monotonic()
+        if now - self.last >= PROGRESS_SECONDS:
+            self.last = now
+            print(
+                f"hunt: {self.done_fraction(tally):.0%}  {self.counts(tally)}",
+                file=self.out,
+                flush=True,
+            )
+
+
+class _RichProgress(_Progress):
+    """A rich progress bar on the terminal (stderr): the budget spent, with the counts beside."""
+
+    def __init__(self, budget: Budget) -> None:
+        from rich.console import Console
+        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+        super().__init__(budget)
+        self.bar = Progress(
+            TextColumn("hunt"),
+            BarColumn(),
+            TextColumn("{task.percentage:>3.0f}%"),
+            TextColumn("{task.fields[counts]}"),
+            TimeElapsedColumn(),
+            console=Console(stderr=True),
+            transient=False,
+        )
+        self.task = self.bar.add_task("hunt", total=1.0, counts="")
+
+    def show(self, tally: Tally) -> None:
+        self.bar.update(self.task, completed=self.done_fraction(tally), counts=self.counts(tally))
+
+    def __enter__(self) -> _Progress:
+        self.bar.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.bar.stop()
+
+
+def _progress(budget: Budget, *, quiet: bool) -> _Progress:
+    if quiet:
+        return _Progress(budget)
+    if sys.stderr.isatty():
+        return _RichProgress(budget)
+    return _PlainProgress(budget, sys.stderr)
+
+
+# -- the summary ----------------------------------------------------------------------------------
+
+
+def summary_table(saved: Sequence[Saved]) -> Table:
+    """One line per saved failure: its folder (index and kind), where the hunt found it (family,
+    scheduler, n) and what shrinking left (n, script rounds, decimals), the runs shrinking took,
+    and whether the saved files replay to the same kind."""
+    from rich import box
+    from rich.table import Table
+
+    table = Table(box=box.SIMPLE_HEAD, pad_edge=False, show_edge=False)
+    table.add_column("failure (folder)", no_wrap=True)
+    table.add_column("found in")  # the one column that wraps on a narrow terminal
+    for name in ("n", "rounds", "decimals", "shrink\nruns"):
+        table.add_column(name, justify="right", no_wrap=True)
+    table.add_column("replays", no_wrap=True)
+    for item in saved:
+        s = item.summary
+        found, small = s["found"], s["shrunk"]
+        rounds = "-" if small["script_rounds"] is None else str(small["script_rounds"])
+        replays = s["replayed"] is not None and s["replayed"]["kind"] == s["kind"]
+        table.add_row(
+            os.path.basename(item.folder),
+            f"{found['family']} {found['scheduler']}",
+            f"{found['n']}->{small['n']}",
+            rounds,
+            f"{found['decimals']}->{small['decimals']}",
+            str(small["runs"]),
+            "yes" if replays else "NO",
+        )
+    return table
+
+
+def print_summary(tally: Tally, out: TextIO) -> None:
+    """The counts of every kind found, then the table of saved failures, to `out`."""
+    from rich.console import Console
+
+    tty = out.isatty()
+    console = Console(file=out, width=None if tty else 200, no_color=not tty, highlight=False)
+    found = kind_counts(tally.kinds) or "none"
+    console.print(f"{tally.runs} runs, {tally.refused} starts refused; failures found: {found}")
+    if tally.saved:
+        console.print(summary_table(tally.saved))
+
+
+def _say(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+def _fail(message: str) -> int:
+    _say(f"fatswarm hunt: {message}")
+    return ExitCode.BAD_INPUT
+
+
+__all__ = ["add_arguments", "build_budget", "build_hunt", "main", "print_summary", "summary_table"]

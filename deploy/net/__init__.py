@@ -1,0 +1,2 @@
+"""Networked runs: Zenoh configurations, the router, each part alone and the launcher of them
+all."""

@@ -1,0 +1,523 @@
+"""`fatswarm run` networked: a router here, then world, coordinator and N agent processes.
+
+Every child is its own OS process (`subprocess.Popen` of `sys.executable`, never a fork of a
+process with a Zenoh session) in its own process group; whatever happens, `Children` stops them all.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import secrets
+import signal
+import sys
+import tempfile
+import threading
+import time
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any
+
+from fatswarm.deploy.net.children import STOP_GRACE_S, Children, stop_grace_s
+from fatswarm.deploy.net.zconf import (
+    DEFAULT_SWARM,
+    ROUTER_ENDPOINT_HELP,
+    ZenohSetupError,
+    check_network,
+    loopback_endpoint,
+    make_config,
+    open_client,
+)
+from fatswarm.deploy.view.summary import Outcome, exit_code, print_outcome, side_of, summary
+from fatswarm.domain.outcome import ExitCode
+from fatswarm.world.record import RecordWriteError, RecordWriter
+
+if TYPE_CHECKING:
+    from fatswarm.deploy.engine.config import RunSetup
+
+Resolver = Callable[[argparse.Namespace, int], "RunSetup"]  # flags and seed -> the run
+
+log = logging.getLogger("fatswarm.launcher")
+
+STDERR_FD = 2  # a file descriptor, not sys.stderr: that may be an in-process capture
+WATCH_S = 15.0  # a watched run (live dashboard, no --pace) lasts about this long
+MIN_WATCH_PACE_S, MAX_WATCH_PACE_S = 0.02, 1.0
+FINAL_STATE_WAIT_S = 5.0  # the dashboard's wait for the final state (re-published every second)
+# How a coordinator that ended the run exits: 0 formed, 1 not formed, 2 bad input, 3 collisions
+COORDINATOR_ENDS = frozenset(
+    {ExitCode.FORMED, ExitCode.NOT_FORMED, ExitCode.BAD_INPUT, ExitCode.FORMED_WITH_COLLISIONS}
+)
+
+
+# --- flags ---------------------------------------------------------------------------------------
+
+
+def add_network_arguments(p: argparse.ArgumentParser) -> None:
+    """The networked run's flags on top of the lockstep ones (a lockstep run refuses them)."""
+    g = p.add_argument_group("networked run (default; not with --lockstep)")
+    flags = [
+        g.add_argument(
+            "--connect",
+            action="append",
+            default=[],
+            metavar="ENDPOINT",
+            help="use this router instead of the one the world process hosts; "
+            f"{ROUTER_ENDPOINT_HELP}",
+        ),
+        g.add_argument(
+            "--listen",
+            action="append",
+            default=[],
+            metavar="ENDPOINT",
+            help="endpoint(s) of the router that the world process hosts (default: a "
+            "free loopback port)",
+        ),
+        g.add_argument(
+            "--swarm",
+            default=None,
+            help=f"swarm name, keys under fatswarm/<swarm>/ (default {DEFAULT_SWARM!r} "
+            "on the world's own router, a fresh random name with --connect)",
+        ),
+        g.add_argument(
+            "--move-timeout",
+            type=float,
+            default=5.0,
+            metavar="SECONDS",
+            help="an active robot that has not moved by then stays put (default 5; finite, > 0)",
+        ),
+        g.add_argument(
+            "--pace",
+            type=float,
+            default=None,
+            metavar="SECONDS",
+            help="least time per round, to watch a run unfold (finite, >= 0; 0: full "
+            f"speed). Default: with the live dashboard, about {WATCH_S:g} s for a "
+            "typical run; else 0",
+        ),
+        g.add_argument(
+            "--spawn",
+            choices=("fork", "exec"),
+            default="fork",
+            help="agent processes forked from one preloaded host process before any "
+            "Zenoh session exists (fork, fast) or one fresh interpreter each (exec)",
+        ),
+    ]
+    # what `fatswarm run --lockstep` refuses when given (deploy.run.networked_flags_given)
+    p.set_defaults(_networked_flags=tuple((a.option_strings[-1], a.dest, a.default) for a in flags))
+
+
+def watchable_pace(n: int, scheduler: str) -> float:
+    """Seconds per round that make a typical run last about WATCH_S, so a person can follow it
+    (the algorithm's steps times the rounds a step takes under `scheduler`), within bounds."""
+    from fatswarm.deploy.engine.estimate import expected_rounds_per_step
+
+    rounds = expected_rounds_per_step(n, scheduler) * (n + 2)
+    return min(MAX_WATCH_PACE_S, max(MIN_WATCH_PACE_S, WATCH_S / rounds))
+
+
+def live_dashboard(args: argparse.Namespace) -> bool:
+    """Whether this run shows the live dashboard (a terminal, not --no-dashboard or --json)."""
+    plain = getattr(args, "no_dashboard", False) or getattr(args, "json", False)
+    return not plain and sys.stdout.isatty()
+
+
+def _child_endpoint(listen: str) -> str:
+    """Where local children reach a router listening on `listen` (wildcard hosts -> loopback)."""
+    for wildcard in ("0.0.0.0", "[::]"):
+        listen = listen.replace(f"/{wildcard}:", "/127.0.0.1:")
+    return listen
+
+
+# --- the run -------------------------------------------------------------------------------------
+
+
+def run_networked(args: argparse.Namespace, resolve_run: Resolver) -> int:
+    """Run the swarm over Zenoh as `fatswarm run` asks; returns the exit code (`ExitCode`).
+    `resolve_run(args, seed)` builds the run from the flags (`deploy.commands.run.resolve_run`)."""
+    problem, seed, setup = check_inputs(args, resolve_run)
+    if problem is not None:
+        print(f"fatswarm run: {problem}", file=sys.stderr)
+        return ExitCode.BAD_INPUT
+    assert setup is not None
+    pace: float = args.pace
+    if pace is None:
+        pace = watchable_pace(setup.params.n, setup.scheduler.name) if live_dashboard(args) else 0.0
+    if setup.resumed is None and args.seed is None and not args.quiet:
+        print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
+    # The world's own router holds one swarm: the default name lets `fatswarm dashboard` attach
+    # as is. On a shared router (--connect), a fresh name keeps two runs from mixing messages.
+    swarm = args.swarm or (f"run-{secrets.token_hex(4)}" if args.connect else DEFAULT_SWARM)
+    with tempfile.TemporaryDirectory(prefix="fatswarm-") as tmp:
+        record = args.record or os.path.join(tmp, "record.jsonl")
+        if setup.resumed is None:
+            try:  # a new run (an existing file only with --force, checked): truncated
+                write_header(setup, record, swarm)
+            except RecordWriteError as exc:
+                print(f"fatswarm run: {exc}", file=sys.stderr)
+                return ExitCode.RECORD_FAILED
+        return _launch(args, setup, record, pace, swarm)
+
+
+def check_inputs(
+    args: argparse.Namespace, resolve_run: Resolver
+) -> tuple[str | None, int, RunSetup | None]:
+    """(what to fix or None, the seed, the run): the lockstep run's checks, before any process
+    starts; with --resume, the seed and the run are the record's. `resolve_run` builds the run
+    from the flags: the same function as the lockstep run's, so both refuse the same input."""
+    from fatswarm.deploy.engine.config import RunInputError, input_errors
+    from fatswarm.deploy.flags import check_seconds
+    from fatswarm.domain.adversary import ASYNC_NAMES
+
+    seed: int = args.seed if args.seed is not None else secrets.randbelow(2**31)
+    bad_input: tuple[type[Exception], ...] = (*input_errors(), ValueError)  # ValueError: swarm
+    setup = None
+    try:
+        check_seconds("--move-timeout", args.move_timeout, zero_ok=False)
+        if args.pace is not None:
+            check_seconds("--pace", args.pace, zero_ok=True)
+        setup = resolve_run(args, seed)
+        seed = setup.seed
+        if setup.resumed is not None and setup.scheduler.name in ASYNC_NAMES:
+            raise RunInputError(
+                f"--resume: a {setup.scheduler.name} run cannot be resumed yet; "
+                "run it again with its --seed"
+            )
+        if args.swarm is not None:
+            from fatswarm.domain.wire import check_swarm
+
+            check_swarm(args.swarm)
+        check_network(args.connect, args.listen)  # a router answers; --listen well formed, free
+    except bad_input as exc:
+        return str(exc), seed, setup
+    return None, seed, setup
+
+
+def write_header(setup: RunSetup, record: str, swarm: str) -> None:
+    """Start the record of a new run with its header: the world then runs exactly this run (it
+    resumes the record, with no round yet), so none of it travels as flags to the world.
+    Raises RecordWriteError (a full disk, a permission)."""
+    from fatswarm.world.async_core import make_world
+    from fatswarm.world.core import WorldSetup
+
+    assert setup.config is not None
+    extra = setup.config.header_extra(networked=True, n=setup.params.n)
+    world = WorldSetup(
+        swarm,
+        setup.params.n,
+        setup.seed,
+        setup.scheduler.name,
+        setup.initial,
+        setup.max_rounds,
+        algorithm=setup.algorithm_ref,
+        params=dict(setup.params.values),
+        extra=extra,
+        non_rigid=setup.non_rigid,
+        crash=setup.crash,
+    )
+    with RecordWriter(record, fsync=True) as journal:
+        make_world(world, journal, algorithm=setup.params)
+
+
+class StopSignal:
+    """Set by SIGTERM or SIGINT (a signal handler); remembers which, for the exit code."""
+
+    def __init__(self) -> None:
+        self.event = threading.Event()
+        self.signum: int | None = None
+
+    def __call__(self, signum: int, frame: object) -> None:
+        del frame
+        self.signum = signum
+        self.event.set()
+
+    def exit_code(self) -> ExitCode:
+        """143 after SIGTERM, 130 after Ctrl-C (SIGINT)."""
+        return ExitCode.TERMINATED if self.signum == signal.SIGTERM else ExitCode.INTERRUPTED
+
+
+def _launch(args: argparse.Namespace, setup: RunSetup, record: str, pace: float, swarm: str) -> int:
+    """Start the world (hosting the router, unless --connect), the coordinator and the agents for
+    the resolved run `setup`; follow it; the exit code."""
+    stop = StopSignal()
+    previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)}
+    listen: list[str] = []  # where the world hosts the router; none with --connect
+    if args.connect:
+        endpoints = list(args.connect)
+    else:
+        listen = list(args.listen) or [loopback_endpoint()]
+        endpoints = [_child_endpoint(listen[0])]
+    watcher = session = None
+    followed = False  # a display followed the run (it saves --svg)
+    try:
+        if not args.quiet:
+            print(
+                f"swarm {swarm!r} on {endpoints[0]} (watch from elsewhere: fatswarm dashboard "
+                f"--connect {endpoints[0]} --swarm {swarm})",
+                file=sys.stderr,
+            )
+        # the agents host needs its own grace first, to stop its agents one by one
+        with Children(stop_grace_s(setup.params.n) + STOP_GRACE_S) as children:
+            _start_world(setup, record, swarm, endpoints, listen, children)
+            if listen:
+                session = _await_router(endpoints[0], children, stop)
+            if session is not None or not listen:
+                watcher = _follow(args, swarm, session, endpoints[0])
+                followed = watcher is not None
+                code = _run_children(args, setup, pace, swarm, endpoints, children, stop)
+            else:
+                code = _world_gone(children) if "world" in children.exited() else stop.exit_code()
+            if (
+                watcher is not None
+                and code in (ExitCode.FORMED, ExitCode.NOT_FORMED)
+                and not _part_died(children)
+            ):
+                _await_final_state(watcher, FINAL_STATE_WAIT_S)
+            if watcher is not None:
+                watcher.stop()  # before the world (and with it the router) goes
+                watcher = None
+    finally:
+        if watcher is not None:
+            watcher.stop()
+        if session is not None:
+            session.close()
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    if code in (ExitCode.FORMED, ExitCode.NOT_FORMED):
+        # the record, not the coordinator's 0/1, says whether robots collided on the way
+        outcome = read_outcome(record)
+        if outcome is not None:
+            code = exit_code(outcome)
+        print_outcome(
+            outcome,
+            code,
+            sys.stdout,
+            as_json=args.json,
+            record=args.record,
+            svg=getattr(args, "svg", None) if followed else None,
+        )
+    return code
+
+
+def _await_router(endpoint: str, children: Children, stop: StopSignal) -> Any:
+    """A client session to the router the world hosts, once it listens; None if the world exited
+    or a signal came first (a world that loads a large record may take a while)."""
+    while not stop.event.is_set() and "world" not in children.exited():
+        try:
+            return open_client(make_config("client", [endpoint]), stop.event, deadline_s=0.5)
+        except ZenohSetupError:  # not listening yet: look again
+            stop.event.wait(0.05)
+    return None
+
+
+def _follow(args: argparse.Namespace, swarm: str, session: Any, endpoint: str) -> Any:
+    """The dashboard (on a terminal, not with --json) or progress lines on stderr, from the
+    world's state stream: standard output carries only the summary."""
+    try:
+        from fatswarm.deploy.net.watch import follow
+    except ImportError:
+        return None
+    if session is not None:
+        return follow(args, swarm, session=session, progress=_to_stderr)
+    return follow(args, swarm, connect=endpoint, progress=_to_stderr)
+
+
+def _to_stderr(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
+
+
+def _await_final_state(watcher: Any, timeout_s: float) -> None:
+    """Let the display see the world's final state before the world is stopped.
+
+    The world answers the last commit before it publishes the state, so the coordinator may be
+    gone before the state arrives; the world, still up, re-publishes it every second.
+    """
+    deadline = time.monotonic() + timeout_s
+    while not (watcher.ended.is_set() or watcher.finished.is_set()):
+        if time.monotonic() >= deadline:
+            log.warning("the display did not see the run's final state within %g s", timeout_s)
+            return
+        watcher.ended.wait(0.05)
+
+
+def _part(name: str, *flags: str) -> list[str]:
+    return [sys.executable, "-m", "fatswarm.deploy.net.parts", name, *flags]
+
+
+def _start_world(
+    setup: RunSetup,
+    record: str,
+    swarm: str,
+    endpoints: Sequence[str],
+    listen: Sequence[str],
+    children: Children,
+) -> None:
+    """Start the world from the record's header; with `listen`, hosting the router there."""
+    net = ["--swarm", swarm, *_quiet()]
+    if listen:
+        net.append("--router")
+        for ep in listen:
+            net += ["--listen", ep]
+    else:
+        for ep in endpoints:
+            net += ["--connect", ep]
+    # the parts' standard output joins ours on stderr (fd 2): stdout carries only the summary
+    children.start("world", _part("world", *net, "--state", record), stdout=STDERR_FD)
+
+
+def _quiet() -> list[str]:
+    return ["--log-level", "warning", "--exit-with-parent", str(os.getpid())]
+
+
+def _run_children(
+    args: argparse.Namespace,
+    setup: RunSetup,
+    pace: float,
+    swarm: str,
+    endpoints: Sequence[str],
+    children: Children,
+    stop: StopSignal,
+) -> int:
+    """Start the coordinator and the agents, configured from the resolved run, and wait until the
+    coordinator or the world ends or a signal comes."""
+    from fatswarm.deploy.net.parts import agents_command
+
+    net = ["--swarm", swarm]
+    for ep in endpoints:
+        net += ["--connect", ep]
+    seed, scheduler = setup.seed, setup.scheduler
+    coord = [
+        "--seed",
+        str(seed),
+        "--scheduler",
+        scheduler.name,
+        "--move-timeout",
+        repr(args.move_timeout),
+        "--pace",
+        repr(pace),
+    ]
+    script = args.schedule or _schedule_of(setup)
+    if script is not None:
+        coord += ["--schedule", script]
+    fairness = getattr(scheduler, "fairness", None)
+    if isinstance(fairness, int):
+        coord += ["--fairness", str(fairness)]
+    children.start("coordinator", _part("coordinator", *net, *_quiet(), *coord), stdout=STDERR_FD)
+    n = setup.params.n
+    children.start(
+        "agents",
+        [
+            *agents_command(
+                n, seed, swarm, endpoints, "warning", args.spawn, algorithm=setup.algorithm_ref
+            ),
+            "--exit-with-parent",
+            str(os.getpid()),
+        ],
+        stdout=STDERR_FD,
+    )
+    while not stop.event.wait(0.1):
+        gone = children.exited()
+        if "coordinator" in gone:
+            ended = gone["coordinator"]  # 0 formed, 1 not formed, 2 bad input, 3 collisions
+            if ended in COORDINATOR_ENDS:
+                return ExitCode(ended)
+            print(
+                f"fatswarm run: the coordinator process exited with code {ended}; stopping the "
+                "run (its record keeps every committed round)",
+                file=sys.stderr,
+            )
+            return ExitCode.NOT_FORMED
+        if "world" in gone:
+            return _world_gone(children)
+        if "agents" in gone:  # every robot with it: no round can be run any more
+            print(
+                f"fatswarm run: the agents' process exited with code {gone['agents']}; "
+                "stopping the run (its record keeps every committed round)",
+                file=sys.stderr,
+            )
+            return ExitCode.NOT_FORMED
+    code = stop.exit_code()
+    print(
+        f"{'terminated' if code == ExitCode.TERMINATED else 'interrupted'}: stopping every "
+        "process started",
+        file=sys.stderr,
+    )
+    return code
+
+
+def _part_died(children: Children) -> bool:
+    """Whether the run ended because a part died (no final state will come): the world or the
+    agents exited, or the coordinator exited without ending the run."""
+    gone = children.exited()
+    return (
+        "world" in gone
+        or "agents" in gone
+        or gone.get("coordinator", ExitCode.FORMED) not in COORDINATOR_ENDS
+    )
+
+
+def _world_gone(children: Children) -> ExitCode:
+    """The run's exit code once the world process has exited (it says why on its own)."""
+    code = children.exited()["world"]
+    print(f"fatswarm run: the world process exited with code {code}", file=sys.stderr)
+    said = (ExitCode.BAD_INPUT, ExitCode.RECORD_FAILED)  # its own line says why
+    return ExitCode(code) if code in said else ExitCode.NOT_FORMED
+
+
+def _schedule_of(setup: RunSetup) -> str | None:
+    """The schedule file of a scripted run: the one asked for, or the one its record names."""
+    if setup.config is not None:
+        return setup.config.schedule
+    if setup.resumed is not None:
+        named = setup.resumed.header.extra.get("schedule")
+        return named if isinstance(named, str) else None
+    return None
+
+
+def print_summary(record: str, out: Any) -> Outcome | None:
+    """Print the same summary as a lockstep run, read back from the record; the outcome, None if
+    the record holds no result (the run did not end)."""
+    outcome = read_outcome(record)
+    if outcome is not None:
+        print(summary(outcome), file=out)
+    return outcome
+
+
+def read_outcome(record: str) -> Outcome | None:
+    """How the run of this record ended; None (said on stderr) if unreadable or unfinished."""
+    from fatswarm.world.record import RecordFormatError, read_record
+
+    try:
+        rec = read_record(record)
+    except RecordFormatError as exc:
+        print(f"no summary: {exc}", file=sys.stderr)
+        return None
+    h, res = rec.header, rec.result
+    if res is None:
+        print(f"unfinished: n={h.n} after {len(rec.rounds)} rounds", file=sys.stderr)
+        return None
+    x = res.extra
+    collisions = x.get("collisions")
+    epochs = x.get("epochs")
+    return Outcome(
+        status=res.status,
+        rounds=res.rounds,
+        # the world writes the count; else the rounds' own collisions say it
+        collisions=(
+            collisions
+            if isinstance(collisions, int)
+            else sum(len(r.collisions) for r in rec.rounds)
+        ),
+        n=h.n,
+        a=side_of(h.params),
+        seed=h.seed,
+        scheduler=h.scheduler,
+        epochs=epochs if isinstance(epochs, int) else None,
+        moves=int(x.get("moves", 0)),
+        total_distance=float(x.get("total_distance", 0.0)),
+        algorithm=h.algorithm,
+        params=dict(h.params),
+        time=float(x["time"]) if isinstance(x.get("time"), (int, float)) else None,
+    )
+
+
+__all__ = ["StopSignal", "add_network_arguments", "read_outcome", "run_networked"]

@@ -1,0 +1,582 @@
+"""`fatswarm sweep`: a grid of lock-step runs on every core, one CSV row per run, resumable.
+
+Flags build the grid (`deploy/sweep/grid.py`), `deploy/sweep/pool.py` runs it and keeps the table;
+this module shows progress (a rich bar on a terminal, plain lines otherwise), the summary and the
+runs to look at, and draws the figures (`deploy/sweep/figures.py`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import os
+import signal
+import sys
+import threading
+import time
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager, suppress
+from types import FrameType
+from typing import TYPE_CHECKING, Final, TextIO
+
+from fatswarm.deploy.sweep.grid import (
+    ERROR,
+    Cell,
+    Grid,
+    RunFigures,
+    RunSpec,
+    SweepInputError,
+    is_clean,
+    make_row,
+    markdown_table,
+    params_text,
+    parse_crash,
+    parse_ints,
+    parse_non_rigid,
+    parse_seeds,
+    row_key,
+    split_values,
+    summarize,
+    sweep_schedulers,
+)
+from fatswarm.domain.outcome import ExitCode, Status
+
+if TYPE_CHECKING:
+    from rich.table import Table
+
+    from fatswarm.deploy.sweep.pool import RunTable
+
+DEFAULT_SIZES: Final = "4,8,16"
+DEFAULT_SEEDS: Final = "10"
+DEFAULT_OUT: Final = "runs.csv"
+PROGRESS_SECONDS: Final = 5.0  # at most one plain progress line per this many seconds
+SHOWN_FAILURES: Final = 5  # commands printed for runs that did not form collision-free
+MISSING_MATPLOTLIB: Final = (
+    "fatswarm sweep: --plot needs matplotlib: install it with `pip install 'fatswarm[plot]'` "
+    "(or `pip install matplotlib`)"
+)
+MISSING_SCIPY: Final = (
+    "fatswarm sweep: scipy is not installed, so the bound and ratio columns stay empty "
+    "(`pip install 'fatswarm[sweep]'` fills them)"
+)
+DESCRIPTION: Final = (
+    "Run a grid of lock-step runs (algorithm x n x start kind x scheduler x non-rigid delta x "
+    "crash count x seeds) on every core, appending one CSV row per run (outcome, cost, the "
+    "distance's ratio to the optimal-assignment bound, the virtual time of async runs, wall "
+    "time, the configuration and the `fatswarm run --lockstep` command that repeats it). "
+    "Resumable: interrupted (Ctrl-C), the same command goes on where it stopped, as rows already "
+    "in the CSV are skipped. Docs: docs/sweep.md."
+)
+EPILOG: Final = (
+    "Lists: a flag takes a comma list and can be repeated; numbers also take inclusive ranges "
+    "LOW..HIGH[:STEP] (-n 4..16:4 is 4,8,12,16). exit codes: 0 every run of the grid is in the "
+    "CSV (whatever its outcome); 1 a worker process died; 2 bad input (one line on stderr says "
+    "what to fix); 4 the CSV could not be written; 130 interrupted (the rows written stay: run "
+    "the same command again to go on); 143 terminated."
+)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Flags of `fatswarm sweep`."""
+    from fatswarm.deploy.engine.config import DEFAULT_START
+    from fatswarm.deploy.scenarios.starts import KINDS
+    from fatswarm.domain.registry import DEFAULT
+
+    p.description = DESCRIPTION
+    p.epilog = EPILOG
+    usable = ", ".join(sweep_schedulers())
+    p.add_argument(
+        "--algorithm",
+        action="append",
+        default=[],
+        metavar="NAMES",
+        help=f"algorithms to run (default {DEFAULT}; a registered name, "
+        "module:attribute or path/to/file.py:attribute)",
+    )
+    p.add_argument(
+        "-n",
+        action="append",
+        default=[],
+        metavar="SIZES",
+        help=f"numbers of robots, e.g. 4,8,16 or 4..32:4 (default {DEFAULT_SIZES})",
+    )
+    p.add_argument(
+        "--start",
+        action="append",
+        default=[],
+        metavar="KINDS",
+        help=f"random start kinds: {', '.join(KINDS)} (default {DEFAULT_START})",
+    )
+    p.add_argument(
+        "--scheduler",
+        action="append",
+        default=[],
+        metavar="NAMES",
+        help=f"schedulers (models) to run under: {usable} (default: all of them)",
+    )
+    p.add_argument(
+        "--non-rigid",
+        action="append",
+        default=[],
+        metavar="DELTAS",
+        help="non-rigid adversaries' deltas (> 0, robot radii) and/or 'rigid', e.g. "
+        "rigid,1,0.1 (default rigid: rigid moves only)",
+    )
+    p.add_argument(
+        "--crash",
+        action="append",
+        default=[],
+        metavar="COUNTS",
+        help="crash counts F (F robots crash for good, 0 < F < n; a cell with F >= n "
+        "is left out) and/or 0 or 'none', e.g. 0,1,2 (default none)",
+    )
+    p.add_argument(
+        "--seeds",
+        action="append",
+        default=[],
+        metavar="SEEDS",
+        help="seeds: a count K (seeds 0..K-1), a range 100..119 or a list 3,7 "
+        f"(default {DEFAULT_SEEDS}: seeds 0..9)",
+    )
+    p.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="a parameter of the algorithms, the same for every run (repeatable)",
+    )
+    p.add_argument(
+        "--max-rounds",
+        type=int,
+        default=None,
+        metavar="R",
+        help="round cap of every run (default: the scheduler's, as fatswarm run)",
+    )
+    p.add_argument(
+        "--out",
+        default=DEFAULT_OUT,
+        metavar="CSV",
+        help=f"the table to append to (default {DEFAULT_OUT}); its rows are skipped",
+    )
+    p.add_argument(
+        "--jobs",
+        type=int,
+        default=None,
+        metavar="J",
+        help="worker processes (default: one per core)",
+    )
+    p.add_argument(
+        "--plot",
+        metavar="DIR",
+        help="write summary figures to DIR (created if missing; needs matplotlib)",
+    )
+    p.add_argument(
+        "--summary-md",
+        metavar="PATH",
+        help="write the summary over every n as a Markdown table to PATH (replaced "
+        "if it exists), a line per algorithm, scheduler, non-rigid delta and crash "
+        "count",
+    )
+    p.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="no progress while running (the summary is still printed)",
+    )
+
+
+def build_grid(args: argparse.Namespace) -> Grid:
+    """The grid the flags ask for, checked; raises SweepInputError or one of
+    `config.input_errors()` with a line saying what to fix."""
+    from fatswarm.coordinator.schedule import NAMES
+    from fatswarm.deploy.engine.config import DEFAULT_START
+    from fatswarm.deploy.scenarios.starts import KINDS
+    from fatswarm.domain.registry import DEFAULT, load_algorithm
+    from fatswarm.domain.seam import Configured
+
+    sizes = parse_ints(args.n or [DEFAULT_SIZES], "-n", least=1)
+    seeds = parse_seeds(args.seeds or [DEFAULT_SEEDS])
+    starts = split_values(args.start) or (DEFAULT_START,)
+    for kind in starts:
+        if kind not in KINDS:
+            raise SweepInputError(
+                f"--start {kind}: not a start kind; choose from {', '.join(KINDS)}"
+            )
+    usable = sweep_schedulers()
+    schedulers = split_values(args.scheduler) or usable
+    for name in schedulers:
+        if name not in usable:
+            why = "needs a schedule file" if name in NAMES else "is not a scheduler"
+            raise SweepInputError(f"--scheduler {name} {why}; a sweep takes {', '.join(usable)}")
+    if args.max_rounds is not None and args.max_rounds < 1:
+        raise SweepInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
+    non_rigids = parse_non_rigid(args.non_rigid)
+    crashes = parse_crash(args.crash)
+    algorithms = []
+    for ref in split_values(args.algorithm) or (DEFAULT,):
+        algorithm = load_algorithm(ref)
+        texts = params_text(algorithm, args.param)
+        for n in sizes:  # refuse an n the algorithm refuses now, not once per run
+            Configured.of(algorithm, n, dict(texts))
+        algorithms.append((ref, texts))
+    return Grid(
+        tuple(algorithms), sizes, starts, schedulers, seeds, args.max_rounds, non_rigids, crashes
+    )
+
+
+def main(args: argparse.Namespace) -> int:
+    """`fatswarm sweep`: run what the CSV lacks of the grid, then summarise; the exit code."""
+    from fatswarm.deploy.engine.config import input_errors
+    from fatswarm.deploy.sweep.pool import RunTable
+
+    refused: tuple[type[Exception], ...] = (SweepInputError, *input_errors())
+    try:
+        grid = build_grid(args)
+        jobs = _jobs(args.jobs)
+        _check_plot(args.plot)
+        _check_summary_md(args.summary_md)
+        table = RunTable.open(args.out)
+    except refused as exc:
+        return _fail(str(exc))
+    try:
+        return _sweep(args, grid, jobs, table)
+    finally:
+        table.close()
+
+
+def _sweep(args: argparse.Namespace, grid: Grid, jobs: int, table: RunTable) -> int:
+    from fatswarm import __version__
+    from fatswarm.deploy.sweep.pool import TableWriteError, WorkerDiedError, run_all
+
+    runs = grid.runs()
+    keys = {spec.key() for spec in runs}
+    present = table.keys()
+    todo = [spec for spec in runs if spec.key() not in present]
+    other = sum(1 for row in table.rows if row_key(row) not in keys)
+    if table.cut:
+        _say(f"{args.out}: cut a torn last row ({table.cut} bytes); that run is done again")
+    if not args.quiet:
+        _say(_plan_text(args.out, len(runs), len(runs) - len(todo), other, jobs))
+        if grid.left_out:
+            _say(f"sweep: {grid.left_out} runs left out, whose --crash F is >= their n (0 < F < n)")
+    if todo and importlib.util.find_spec("scipy") is None:
+        _say(MISSING_SCIPY)
+
+    def record(spec: RunSpec, figures: RunFigures) -> None:
+        table.append(make_row(spec, figures, __version__))
+        progress.advance(figures)
+
+    progress = _progress(len(todo), quiet=args.quiet or not todo)
+    try:
+        with _stop_on_signals() as stopped, progress:
+            complete = run_all(todo, jobs, record, lambda: stopped[0] is not None)
+    except TableWriteError as exc:
+        _say(
+            f"fatswarm sweep: {exc}; the rows written stay, run the same command again once "
+            "it is fixed"
+        )
+        return ExitCode.RECORD_FAILED
+    except WorkerDiedError as exc:  # exit 1: the sweep did not finish, and not by a signal
+        _say(f"fatswarm sweep: {exc}; the rows written stay, run the same command again to go on")
+        return ExitCode.NOT_FORMED
+    if not complete:
+        done = sum(1 for row in table.rows if row_key(row) in keys)
+        word = "interrupted" if stopped[0] == signal.SIGINT else "terminated"
+        _say(
+            f"{word}: {done} of {len(runs)} runs of the grid are in {args.out}; run the same "
+            "command again to go on"
+        )
+        return ExitCode.INTERRUPTED if stopped[0] == signal.SIGINT else ExitCode.TERMINATED
+    rows = [row for row in table.rows if row_key(row) in keys]
+    cells = summarize(rows, grid)
+    print_summary(cells, sys.stdout)
+    _show_failures(rows, args.out)
+    if args.summary_md:
+        try:
+            _write_text(args.summary_md, markdown_table(summarize(rows, grid, by_n=False)))
+        except OSError as exc:
+            return _fail(f"cannot write {args.summary_md}: {exc.strerror or exc}")
+        _say(f"summary table: {args.summary_md}")
+    if args.plot:
+        return _plot(cells, args.plot)
+    return ExitCode.OK
+
+
+def _plan_text(out: str, total: int, present: int, other: int, jobs: int) -> str:
+    there = f"{present} already in {out}" if present else f"none in {out} yet"
+    others = f" (and {other} rows of other grids, left as they are)" if other else ""
+    todo = total - present
+    return f"sweep: {total} run{'' if total == 1 else 's'}, {there}{others}; " + (
+        f"{todo} to run on {min(jobs, todo)} worker processes" if todo else "nothing to run"
+    )
+
+
+def _jobs(given: int | None) -> int:
+    if given is None:
+        affinity = getattr(os, "sched_getaffinity", None)
+        return len(affinity(0)) if affinity is not None else (os.cpu_count() or 1)
+    if given < 1:
+        raise SweepInputError(f"--jobs must be at least 1, got {given}")
+    return int(given)
+
+
+def _check_plot(folder: str | None) -> None:
+    if folder is None:
+        return
+    if importlib.util.find_spec("matplotlib") is None:
+        raise SweepInputError(MISSING_MATPLOTLIB.removeprefix("fatswarm sweep: "))
+    if os.path.exists(folder) and not os.path.isdir(folder):
+        raise SweepInputError(f"--plot {folder} is not a directory")
+    parent = os.path.dirname(os.path.abspath(folder))
+    if not os.path.isdir(parent):
+        raise SweepInputError(f"--plot {folder}: the directory {parent} does not exist")
+
+
+def _check_summary_md(path: str | None) -> None:
+    """Refuse a --summary-md PATH that cannot be written, before anything runs."""
+    from fatswarm.deploy.flags import check_writable
+
+    if path is not None:
+        check_writable("--summary-md", path)
+
+
+def _write_text(path: str, text: str) -> None:
+    """Write `text` to `path` whole: a temporary file beside it, renamed over it, so a reader
+    (or a crash) never sees half a table."""
+    partial = f"{path}.partial"
+    try:
+        with open(partial, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(partial, path)
+    except OSError:
+        with suppress(OSError):
+            os.remove(partial)
+        raise
+
+
+def _plot(cells: Sequence[Cell], folder: str) -> int:
+    from fatswarm.deploy.sweep.figures import draw_figures
+
+    try:
+        written = draw_figures(cells, folder)
+    except OSError as exc:
+        return _fail(f"cannot write the figures in {folder}: {exc.strerror or exc}")
+    _say("figures: " + ", ".join(written))
+    return ExitCode.OK
+
+
+# -- signals ----------------------------------------------------------------------------------
+
+
+@contextmanager
+def _stop_on_signals() -> Iterator[list[int | None]]:
+    """While inside, Ctrl-C and SIGTERM only set the flag yielded (`[signal number]`), so the
+    pool loop stops at a step of its own choosing: no row is half written, no worker left."""
+    stopped: list[int | None] = [None]
+    if threading.current_thread() is not threading.main_thread():
+        yield stopped
+        return
+
+    def note(signum: int, frame: FrameType | None) -> None:
+        stopped[0] = stopped[0] or signum
+
+    previous = {sig: signal.signal(sig, note) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield stopped
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+# -- progress ---------------------------------------------------------------------------------
+
+
+class _Progress:
+    """Counts finished runs; shown by a subclass (plain lines, a rich bar) or not at all."""
+
+    def __init__(self, total: int) -> None:
+        self.total = total
+        self.done = self.formed = self.collided = self.errors = 0
+        self.started = time.monotonic()
+
+    def advance(self, figures: RunFigures) -> None:
+        self.done += 1
+        self.formed += figures.status == Status.FORMED
+        self.collided += figures.collisions > 0
+        self.errors += figures.status == ERROR
+        self.show()
+
+    def show(self) -> None:
+        """Nothing to show (quiet)."""
+
+    def counts(self) -> str:
+        return f"formed {self.formed}  collided {self.collided}  errors {self.errors}"
+
+    def __enter__(self) -> _Progress:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+
+class _PlainProgress(_Progress):
+    """A line on stderr every PROGRESS_SECONDS (for a log file or a pipe) and at the end."""
+
+    def __init__(self, total: int, out: TextIO) -> None:
+        super().__init__(total)
+        self.out = out
+        self.last = self.started
+
+    def show(self) -> None:
+        now = time.monotonic()
+        if now - self.last >= PROGRESS_SECONDS or self.done == self.total:
+            self.last = now
+            rate = self.done / max(now - self.started, 1e-9)
+            eta = (self.total - self.done) / rate if rate > 0 else 0.0
+            print(
+                f"sweep: {self.done}/{self.total} runs  {self.counts()}  ETA {_duration(eta)}",
+                file=self.out,
+                flush=True,
+            )
+
+
+class _RichProgress(_Progress):
+    """A rich progress bar on the terminal (stderr), with the counts beside it."""
+
+    def __init__(self, total: int) -> None:
+        from rich.console import Console
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        super().__init__(total)
+        self.bar = Progress(
+            TextColumn("sweep"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("{task.fields[counts]}"),
+            TimeElapsedColumn(),
+            TextColumn("ETA"),
+            TimeRemainingColumn(),
+            console=Console(stderr=True),
+            transient=False,
+        )
+        self.task = self.bar.add_task("sweep", total=total, counts=self.counts())
+
+    def show(self) -> None:
+        self.bar.update(self.task, completed=self.done, counts=self.counts())
+
+    def __enter__(self) -> _Progress:
+        self.bar.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.bar.stop()
+
+
+def _progress(total: int, *, quiet: bool) -> _Progress:
+    if quiet:
+        return _Progress(total)
+    if sys.stderr.isatty():
+        return _RichProgress(total)
+    return _PlainProgress(total, sys.stderr)
+
+
+def _duration(seconds: float) -> str:
+    whole = round(seconds)
+    if whole < 60:
+        return f"{whole}s"
+    if whole < 3600:
+        return f"{whole // 60}m{whole % 60:02d}s"
+    return f"{whole // 3600}h{whole // 60 % 60:02d}m"
+
+
+# -- the summary ------------------------------------------------------------------------------
+
+
+def summary_table(cells: Sequence[Cell]) -> Table:
+    """The sweep's summary, one line per (algorithm, start, model, n) (`sweep.summarize`, the
+    groups of the Markdown table split by n): how many runs formed, collided and stalled (hit the
+    round cap or raised, when any did), and the median rounds, distance ratio and (async models,
+    when any) virtual time of the formed ones. The model is `sweep.model_label`'s (`fsync`,
+    `ssync+nr1`, `async+crash2`). Algorithm and start columns only when the grid has several, so
+    that the common table fits 80 columns."""
+    from rich import box
+    from rich.table import Table
+
+    several_alg = len({c.algorithm for c in cells}) > 1
+    several_start = len({c.start for c in cells}) > 1
+    any_capped = any(c.capped for c in cells)
+    any_errors = any(c.errors for c in cells)
+    any_time = any(c.time is not None for c in cells)
+    table = Table(box=box.SIMPLE_HEAD, pad_edge=False, show_edge=False)
+    if several_alg:
+        table.add_column("algorithm")
+    if several_start:
+        table.add_column("start")
+    table.add_column("model")
+    counts = ["n", "runs", "formed", "collided", "stalled"]
+    counts += ["capped"] if any_capped else []
+    counts += ["errors"] if any_errors else []
+    medians = ["median\nrounds", "median\nratio"] + (["median\ntime"] if any_time else [])
+    for name in [*counts, *medians]:
+        table.add_column(name, justify="right")
+    for c in cells:
+        lead = ([c.algorithm] if several_alg else []) + ([c.start] if several_start else [])
+        figures = [c.n, c.runs, c.formed, c.collided, c.stalled]
+        figures += [c.capped] if any_capped else []
+        figures += [c.errors] if any_errors else []
+        times = ["-" if c.time is None else f"{c.time[1]:.1f}"] if any_time else []
+        table.add_row(
+            *lead,
+            c.model,
+            *map(str, figures),
+            "-" if c.rounds is None else f"{c.rounds[1]:g}",
+            "-" if c.ratio is None else f"{c.ratio[1]:.3f}",
+            *times,
+        )
+    return table
+
+
+def print_summary(cells: Sequence[Cell], out: TextIO) -> None:
+    """Print the summary table to `out` (no colour nor wrapping off a terminal)."""
+    from rich.console import Console
+
+    tty = out.isatty()
+    console = Console(file=out, width=None if tty else 200, no_color=not tty, highlight=False)
+    console.print(summary_table(cells))
+
+
+def _show_failures(rows: Sequence[dict[str, str]], out_path: str) -> None:
+    failed = [row for row in rows if not is_clean(row)]
+    if not failed:
+        return
+    _say(
+        f"{len(failed)} of {len(rows)} runs did not form collision-free (see the status, "
+        f"collisions and command columns of {out_path}); repeat one with, e.g.:"
+    )
+    for row in failed[:SHOWN_FAILURES]:
+        _say(f"  {row['command']}    # {_outcome(row)}")
+
+
+def _outcome(row: dict[str, str]) -> str:
+    if row["status"] == ERROR:
+        return f"error: {row['error']}"
+    return f"{row['status']} after {row['rounds']} rounds, {row['collisions']} collisions"
+
+
+def _say(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+def _fail(message: str) -> int:
+    _say(f"fatswarm sweep: {message}")
+    return ExitCode.BAD_INPUT
+
+
+__all__ = ["add_arguments", "build_grid", "main", "print_summary", "summary_table"]

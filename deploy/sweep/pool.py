@@ -1,0 +1,341 @@
+"""The machinery of `fatswarm sweep`: one lock-step run per worker process, the pool that runs a
+grid, and the CSV table it appends to row by row (resumable: a torn last row is cut on open).
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import contextlib
+import logging
+import multiprocessing
+import os
+import signal
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from concurrent.futures.process import BrokenProcessPool
+from typing import Final
+
+from fatswarm.deploy.sweep.grid import (
+    ERROR,
+    Key,
+    RunFigures,
+    RunSpec,
+    SweepInputError,
+    TableError,
+    assignment_bound,
+    header_error,
+    header_line,
+    kept_length,
+    parse_table,
+    row_key,
+    row_line,
+    values_text,
+)
+
+IN_FLIGHT_PER_JOB: Final = 4  # runs queued per worker: enough to keep it busy, few to cancel
+POLL_S: Final = 0.2  # how often the pool loop looks at the stop flag
+
+
+class WorkerDiedError(RuntimeError):
+    """A worker process vanished mid-run (killed, out of memory): the pool cannot go on."""
+
+
+class TableWriteError(OSError):
+    """A row could not be appended to the table (a full disk, a permission)."""
+
+
+# -- one run, in a worker ---------------------------------------------------------------------
+
+
+class _FirstWarning(logging.Handler):
+    """Keeps the first warning a run logs (a robot's compute that failed) and counts the rest."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.WARNING)
+        self.first = ""
+        self.count = 0
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.count += 1
+        if not self.first:
+            self.first = record.getMessage()
+
+    def text(self) -> str:
+        more = f" (+{self.count - 1} more)" if self.count > 1 else ""
+        return f"{self.first}{more}" if self.first else ""
+
+
+def init_worker() -> None:
+    """A worker ignores Ctrl-C (the sweep stops it), dies on SIGTERM, and logs to no terminal
+    (a run's warnings go to its row)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    logging.getLogger("fatswarm").propagate = False
+
+
+def run_spec(spec: RunSpec) -> RunFigures:
+    """Run `spec` in lock step and measure it; a run that raises is an ERROR row, not a crash."""
+    from fatswarm.deploy.engine.config import RunConfig
+    from fatswarm.deploy.engine.lockstep import default_max_rounds, run_lockstep
+    from fatswarm.domain.registry import load_algorithm
+    from fatswarm.domain.seam import resolve_values
+
+    logger = logging.getLogger("fatswarm")
+    warnings = _FirstWarning()
+    logger.addHandler(warnings)
+    t0 = time.perf_counter()
+    values, cap = "", None
+    try:
+        # the parameters and the cap first, so that a row of a run refused below still has them
+        values = values_text(resolve_values(load_algorithm(spec.algorithm), dict(spec.params)))
+        cap = spec.max_rounds or default_max_rounds(spec.n, spec.scheduler)
+        setup = RunConfig(
+            n=spec.n,
+            algorithm=spec.algorithm,
+            params=dict(spec.params),
+            seed=spec.seed,
+            start=spec.start,
+            scheduler=spec.scheduler,
+            max_rounds=spec.max_rounds,
+            non_rigid=spec.non_rigid,
+            crash=spec.crash,
+        ).resolve()
+        values, cap = values_text(setup.params.values), setup.max_rounds
+        result = run_lockstep(
+            setup.initial,
+            setup.params,
+            setup.scheduler,
+            seed=setup.seed,
+            max_rounds=setup.max_rounds,
+            algorithm_ref=setup.algorithm_ref,
+            non_rigid=setup.non_rigid,
+            crash=setup.crash,
+        )
+        wall = time.perf_counter() - t0
+        try:
+            bound: float | None = assignment_bound(result.initial, result.positions)
+        except ImportError:  # scipy is the optional `sweep` extra: the bound stays empty
+            bound = None
+    except Exception as exc:  # a run that raises is a finding: its row says what, the grid goes on
+        return RunFigures(
+            ERROR,
+            wall_s=time.perf_counter() - t0,
+            values=values,
+            round_cap=cap,
+            error=f"{type(exc).__name__}: {exc}",
+            warning=warnings.text(),
+        )
+    finally:
+        logger.removeHandler(warnings)
+    return RunFigures(
+        status=str(result.status),
+        rounds=result.rounds,
+        epochs=result.epochs,
+        looks=result.looks,
+        moves=result.moves,
+        collisions=result.collisions,
+        total_distance=result.total_distance,
+        bound=bound,
+        wall_s=wall,
+        values=values,
+        round_cap=cap,
+        warning=warnings.text(),
+        time=result.time,
+    )
+
+
+# -- the pool ---------------------------------------------------------------------------------
+
+
+def run_all(
+    todo: Sequence[RunSpec],
+    jobs: int,
+    on_done: Callable[[RunSpec, RunFigures], None],
+    stop: Callable[[], bool],
+) -> bool:
+    """Run `todo` on `jobs` worker processes, calling `on_done` here as each run ends; True when
+    all ran, False when `stop()` turned true first. On any way out but the end (a stop, an
+    exception from `on_done`) the workers are killed, their runs dropped.
+
+    Workers are spawned, not forked: they share no thread, lock or signal handler with this
+    process (which runs a progress thread). Raises WorkerDiedError if a worker vanished.
+    """
+    if not todo:
+        return True
+    jobs = max(1, min(jobs, len(todo)))
+    pool = cf.ProcessPoolExecutor(
+        max_workers=jobs, mp_context=multiprocessing.get_context("spawn"), initializer=init_worker
+    )
+    pending: dict[cf.Future[RunFigures], RunSpec] = {}
+    queue = iter(todo)
+    finished = False
+    try:
+        _fill(pool, pending, queue, jobs * IN_FLIGHT_PER_JOB)
+        while pending:
+            if stop():
+                return False
+            done, _ = cf.wait(pending, timeout=POLL_S, return_when=cf.FIRST_COMPLETED)
+            for future in done:
+                spec = pending.pop(future)
+                try:
+                    figures = future.result()
+                except BrokenProcessPool:
+                    if stop():  # a worker killed by the same signal, say
+                        return False
+                    raise WorkerDiedError(
+                        "a worker process died (killed, or out of memory?) with runs in flight, "
+                        f"such as {spec.command()!r}"
+                    ) from None
+                on_done(spec, figures)
+            _fill(pool, pending, queue, jobs * IN_FLIGHT_PER_JOB)
+        finished = True
+        return True
+    finally:
+        if not finished:
+            _kill_workers(pool)
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _fill(
+    pool: cf.ProcessPoolExecutor,
+    pending: dict[cf.Future[RunFigures], RunSpec],
+    queue: Iterator[RunSpec],
+    limit: int,
+) -> None:
+    """Submit runs up to `limit` in flight. The pool spawns its workers in `submit`: with SIGINT
+    blocked here, they start with it blocked, so a Ctrl-C during their start-up (before
+    `init_worker` ignores it) cannot kill them with a traceback; this process gets it after."""
+    with _sigint_blocked():
+        while len(pending) < limit:
+            spec = next(queue, None)
+            if spec is None:
+                return
+            pending[pool.submit(run_spec, spec)] = spec
+
+
+@contextlib.contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    if not hasattr(signal, "pthread_sigmask"):  # not POSIX
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def _kill_workers(pool: cf.ProcessPoolExecutor) -> None:
+    """Stop the pool's workers now (a run can take minutes); Python 3.14 has
+    `terminate_workers()`, before it the processes are only reachable as `_processes`."""
+    processes: Mapping[int, multiprocessing.process.BaseProcess] = (
+        getattr(pool, "_processes", None) or {}
+    )
+    for process in list(processes.values()):
+        if process.is_alive():
+            process.terminate()
+    for process in list(processes.values()):
+        process.join(timeout=5)
+
+
+# -- the CSV table ----------------------------------------------------------------------------
+
+
+class RunTable:
+    """The sweep's CSV file, open for appending, locked against a second sweep on it.
+
+    Opening it cuts a torn last row (a crash mid-write) and reads the rows there. Each row is
+    appended with one write and no buffer: a Ctrl-C, which this process only acts on between
+    Python steps, cannot leave half a row.
+    """
+
+    def __init__(self, path: str, fd: int, rows: list[dict[str, str]], cut: int) -> None:
+        self.path = path
+        self._fd = fd
+        self.rows = rows  # the rows there when opened, then every row appended
+        self.cut = cut  # bytes of a torn last row cut on opening (0: none)
+
+    @staticmethod
+    def open(path: str) -> RunTable:
+        """Open (or create) the table at `path`; raises SweepInputError (TableError for a file
+        that is not a sweep table of this schema, or one another sweep holds)."""
+        _check_output(path)
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_APPEND | os.O_CLOEXEC, 0o644)
+        except OSError as exc:
+            raise SweepInputError(f"--out {path}: cannot open it: {exc.strerror}") from None
+        try:
+            _lock(fd, path)
+            data = _read_all(fd)
+            header = header_line().encode()
+            if not (data.startswith(header) or header.startswith(data)):  # ours, or torn header
+                first = data.split(b"\n", 1)[0].decode("utf-8", errors="replace")
+                raise header_error(first, path)
+            keep = kept_length(data)
+            if keep < len(data):
+                os.ftruncate(fd, keep)
+            rows = parse_table(data[:keep].decode("utf-8", errors="replace"), path)
+            if keep == 0:
+                _write_all(fd, header)
+        except BaseException:
+            os.close(fd)
+            raise
+        return RunTable(path, fd, rows, len(data) - keep)
+
+    def keys(self) -> set[Key]:
+        return {row_key(row) for row in self.rows}
+
+    def append(self, row: dict[str, str]) -> None:
+        """Add one row at the end of the file; raises TableWriteError (a full disk...)."""
+        try:
+            _write_all(self._fd, row_line(row).encode())
+        except OSError as exc:
+            raise TableWriteError(f"cannot write {self.path}: {exc.strerror or exc}") from None
+        self.rows.append(row)
+
+    def close(self) -> None:
+        if self._fd >= 0:
+            os.close(self._fd)  # releases the lock
+            self._fd = -1
+
+
+def _check_output(path: str) -> None:
+    if os.path.isdir(path):
+        raise SweepInputError(f"--out {path} is a directory; name a CSV file")
+    if os.path.exists(path) and not os.path.isfile(path):
+        raise SweepInputError(f"--out {path} is not a regular file; name a CSV file")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise SweepInputError(
+            f"--out {path}: the directory {folder} does not exist; create it first"
+        )
+
+
+def _lock(fd: int, path: str) -> None:
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no lock, as no second sweep is expected there
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        raise TableError(
+            f"another fatswarm sweep is writing {path}; let it finish or name another --out"
+        ) from None
+
+
+def _read_all(fd: int) -> bytes:
+    chunks, offset = [], 0
+    while chunk := os.pread(fd, 1 << 20, offset):
+        chunks.append(chunk)
+        offset += len(chunk)
+    return b"".join(chunks)
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view) :]
+
+
+__all__ = ["RunTable", "TableWriteError", "WorkerDiedError", "init_worker", "run_all", "run_spec"]

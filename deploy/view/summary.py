@@ -1,0 +1,116 @@
+"""How a finished run ended and the summary every kind of run prints: text, or one JSON object."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, TextIO
+
+from fatswarm.domain.outcome import ExitCode, Status, exit_code_for
+
+if TYPE_CHECKING:
+    pass
+
+
+def print_outcome(
+    outcome: Outcome | None,
+    code: int,
+    out: TextIO,
+    *,
+    as_json: bool,
+    record: str | None,
+    svg: str | None,
+) -> None:
+    """Print the end of a run to `out`: the text summary and the files written, or (`as_json`)
+    one JSON object. `outcome` None: the run ended without a result in its record."""
+    if as_json:
+        print(summary_json(outcome, code, record=record, svg=svg), file=out)
+        return
+    if outcome is not None:
+        print(summary(outcome), file=out)
+    if record:
+        print(f"record: {record}", file=out)
+    if svg:
+        print(f"svg: {svg}", file=out)
+
+
+@dataclass(frozen=True, slots=True)
+class Outcome:
+    """How a finished run ended (lockstep result or networked record): what the summary says."""
+
+    status: str  # a world.outcome.Status that ended the run
+    rounds: int
+    collisions: int  # robots stopped at contact, over the whole run
+    n: int
+    a: float | None  # the paper's side, None for an algorithm without one
+    seed: int | None
+    scheduler: str
+    epochs: int | None  # None when the record does not say
+    moves: int
+    total_distance: float
+    algorithm: str = "uniform-circle"
+    params: dict[str, Any] = dataclasses.field(default_factory=dict)
+    time: float | None = None  # async models: the virtual time the run ended at
+
+
+def side_of(values: Any) -> float | None:
+    """The parameter `a` (the paper's side), None for an algorithm without one."""
+    a = values.get("a")
+    return float(a) if isinstance(a, (int, float)) and not isinstance(a, bool) else None
+
+
+def exit_code(outcome: Outcome) -> ExitCode:
+    """The exit code of `fatswarm run` for this outcome (see EXIT_CODES_HELP)."""
+    return exit_code_for(outcome.status, outcome.collisions)
+
+
+def verdict(outcome: Outcome) -> str:
+    """One line: formed or not, in how many rounds, and whether robots collided on the way."""
+    k, rounds = outcome.collisions, outcome.rounds
+    collisions = f"{k} collision{'' if k == 1 else 's'}"
+    if outcome.status == Status.FORMED:
+        if k == 0:
+            return f"formed in {rounds} rounds, collision-free"
+        return (
+            f"formed in {rounds} rounds, but with {collisions}: not the collision-free "
+            "formation the paper guarantees"
+        )
+    if outcome.status == Status.STALLED:
+        head = f"not formed: stalled after {rounds} rounds"
+    elif outcome.status == Status.MAX_ROUNDS:
+        head = f"not formed: stopped at the round limit ({rounds} rounds)"
+    else:
+        head = f"not formed: {outcome.status} after {rounds} rounds"
+    return head if k == 0 else f"{head}, with {collisions}"
+
+
+def summary(outcome: Outcome) -> str:
+    """The summary both kinds of run print at the end: the verdict, the run, its figures."""
+    o = outcome
+    epochs = "?" if o.epochs is None else str(o.epochs)
+    values = o.params or ({"a": o.a} if o.algorithm == "uniform-circle" else {})
+    shown = "".join(
+        f" {k}={v:g}" if isinstance(v, float) else f" {k}={v}" for k, v in values.items()
+    )
+    named = "" if o.algorithm == "uniform-circle" else f" algorithm={o.algorithm}"
+    return (
+        f"{verdict(o)}\n"
+        f"n={o.n}{named}{shown} seed={'?' if o.seed is None else o.seed} "
+        f"scheduler={o.scheduler}\n"
+        f"rounds {o.rounds}  epochs {epochs}  moves {o.moves} ({o.moves / o.n:.2f} per robot)  "
+        f"total distance {o.total_distance:.3f}  collisions {o.collisions}"
+        + ("" if o.time is None else f"  virtual time {o.time:.3f}")
+    )
+
+
+def summary_json(
+    outcome: Outcome | None, code: int, *, record: str | None = None, svg: str | None = None
+) -> str:
+    """The summary as one JSON object (`--json`): the outcome's figures, verdict, exit code and
+    the files written; status "unfinished" (and no figures) when the run ended without a result."""
+    fields: dict[str, Any] = {"status": "unfinished"}
+    if outcome is not None:
+        fields = {**dataclasses.asdict(outcome), "verdict": verdict(outcome)}
+    fields.update(exit_code=int(code), record=record or None, svg=svg or None)
+    return json.dumps(fields, allow_nan=False)
