@@ -470,75 +470,97 @@ def _search(scene: _Scene) -> Path | None:
     Ties in length go to the smaller arrival point (x, y), then to the earlier expanded node, so
     the result does not depend on the order of the obstacles.
     """
-    ids = _Ids(2 * scene.m)
-    fans: dict[int, _Fan] = {}
-    status: dict[int, NDArray[np.int8]] = {}
-    arrivals: dict[int, list[_Arrival]] = {}
-    parent: dict[int, int] = {}
-    closed = np.zeros(ids.goal + 1, dtype=bool)
-    batches: list[_Batch] = []
-    heap: list[tuple[float, float, float, int, int, int]] = []
+    return _AStar(scene).run()
 
-    def push(b: _Batch) -> None:
+
+class _AStar:
+    """The state of one `_search`: the fans out of the start and of each circle end expanded,
+    which of their lines are known free or blocked, the arrivals expanded on each end, every
+    node's parent, the closed nodes, and the heap of the batches' next lines."""
+
+    def __init__(self, scene: _Scene) -> None:
+        self.scene = scene
+        self.ids = _Ids(2 * scene.m)
+        self.fans: dict[int, _Fan] = {}
+        self.status: dict[int, NDArray[np.int8]] = {}
+        self.arrivals: dict[int, list[_Arrival]] = {}
+        self.parent: dict[int, int] = {}
+        self.closed = np.zeros(self.ids.goal + 1, dtype=bool)
+        self.batches: list[_Batch] = []
+        self.heap: list[tuple[float, float, float, int, int, int]] = []
+
+    def run(self) -> Path | None:
+        """The shortest path found, or None."""
+        scene, ids, fans, closed, heap = self.scene, self.ids, self.fans, self.closed, self.heap
+        sx, sy = scene.start
+        fans[-1] = _fan(scene, sx, sy, 0.0, with_target=False)
+        self.status[-1] = np.zeros(ids.big_e, dtype=np.int8)
+        first = np.flatnonzero(fans[-1].exists)
+        self.push(_batch(-1, -1, fans[-1], ids.from_start + first, first, fans[-1].length[first]))
+
+        while heap:
+            _, _, _, node, which, pos = heapq.heappop(heap)
+            b = self.batches[which]
+            if pos + 1 < len(b.nodes):
+                self.queue(which, pos + 1)
+            if closed[node] or not self.free(b, pos):
+                continue
+            closed[node] = True
+            self.parent[node] = b.prev
+            if node == ids.goal:
+                return _assemble(scene, fans, self.parent, ids)
+            self.expand(node, b.cost.item(pos))
+        return None
+
+    def push(self, b: _Batch) -> None:
+        """Keep a batch and queue its first line."""
         if len(b.nodes):
-            batches.append(b)
-            entry = (b.f.item(0), b.x.item(0), b.y.item(0), b.nodes.item(0), len(batches) - 1, 0)
-            heapq.heappush(heap, entry)
+            self.batches.append(b)
+            self.queue(len(self.batches) - 1, 0)
 
-    def expand(node: int, g: float) -> None:
-        key, k = ids.line(node, parent[node])
+    def queue(self, which: int, pos: int) -> None:
+        """Put line `pos` of batch `which` on the heap, ordered by (f, x, y, node)."""
+        b = self.batches[which]
+        entry = (b.f.item(pos), b.x.item(pos), b.y.item(pos), b.nodes.item(pos), which, pos)
+        heapq.heappush(self.heap, entry)
+
+    def free(self, b: _Batch, pos: int) -> bool:
+        """Whether line `pos` of the batch is free of obstacles: checked, when not known yet, with
+        the next lines of the batch that are still open and unknown (a chunk at a time)."""
+        st, k = self.status[b.key], b.index.item(pos)
+        if st[k] == _UNKNOWN:
+            end = min(pos + CHECK_CHUNK, len(b.nodes))
+            idx = b.index[pos:end][~self.closed[b.nodes[pos:end]]]
+            idx = idx[st[idx] == _UNKNOWN]
+            fan = self.fans[b.key]
+            ok = _clear(self.scene, fan.x1[idx], fan.y1[idx], fan.x2[idx], fan.y2[idx])
+            st[idx] = np.where(ok, _FREE, _BLOCKED)
+        return bool(st[k] == _FREE)
+
+    def expand(self, node: int, g: float) -> None:
+        """Queue the lines out of the circle end at which `node` arrives, after a length g."""
+        scene, ids, fans = self.scene, self.ids, self.fans
+        key, k = ids.line(node, self.parent[node])
         e = ids.arrival_end(node)
         j, sigma = e // 2, 1.0 - 2.0 * (e % 2)
         cx, cy, rho = scene.cx.item(j), scene.cy.item(j), scene.rho.item(j)
         ax, ay = fans[key].x2.item(k) - cx, fans[key].y2.item(k) - cy
-        seen = arrivals.setdefault(e, [])
+        seen = self.arrivals.setdefault(e, [])
         if _dominated(seen, ax, ay, g, sigma, rho):
             return
         if e not in fans:
             fans[e] = _fan(scene, cx, cy, sigma * rho, with_target=True)
-            status[e] = np.zeros(ids.big_e + 1, dtype=np.int8)
-        fan, st = fans[e], status[e]
+            self.status[e] = np.zeros(ids.big_e + 1, dtype=np.int8)
+        fan, st = fans[e], self.status[e]
         reach = _extent(scene, j, ax, ay, sigma)
         seen.append(_Arrival(ax, ay, g, reach))
         turn = _turn(ax, ay, fan.x1 - cx, fan.y1 - cy, sigma)
         cand = np.flatnonzero(fan.exists & (turn <= reach) & (st != _BLOCKED))
         nodes = np.where(cand == ids.big_e, ids.goal, e * ids.big_e + cand)
-        open_ = ~closed[nodes]
+        open_ = ~self.closed[nodes]
         cand, nodes = cand[open_], nodes[open_]
         cost = g + rho * turn[cand] + fan.length[cand]
-        push(_batch(node, e, fan, nodes, cand, cost))
-
-    sx, sy = scene.start
-    fans[-1] = _fan(scene, sx, sy, 0.0, with_target=False)
-    status[-1] = np.zeros(ids.big_e, dtype=np.int8)
-    first = np.flatnonzero(fans[-1].exists)
-    push(_batch(-1, -1, fans[-1], ids.from_start + first, first, fans[-1].length[first]))
-
-    while heap:
-        _, _, _, node, which, pos = heapq.heappop(heap)
-        b = batches[which]
-        nxt = pos + 1
-        if nxt < len(b.nodes):
-            entry = (b.f.item(nxt), b.x.item(nxt), b.y.item(nxt), b.nodes.item(nxt), which, nxt)
-            heapq.heappush(heap, entry)
-        if closed[node]:
-            continue
-        st, k = status[b.key], b.index.item(pos)
-        if st[k] == _UNKNOWN:
-            end = min(pos + CHECK_CHUNK, len(b.nodes))
-            idx = b.index[pos:end][~closed[b.nodes[pos:end]]]
-            idx = idx[st[idx] == _UNKNOWN]
-            fan = fans[b.key]
-            ok = _clear(scene, fan.x1[idx], fan.y1[idx], fan.x2[idx], fan.y2[idx])
-            st[idx] = np.where(ok, _FREE, _BLOCKED)
-        if st[k] != _FREE:
-            continue
-        closed[node] = True
-        parent[node] = b.prev
-        if node == ids.goal:
-            return _assemble(scene, fans, parent, ids)
-        expand(node, b.cost.item(pos))
-    return None
+        self.push(_batch(node, e, fan, nodes, cand, cost))
 
 
 def _assemble(scene: _Scene, fans: dict[int, _Fan], parent: dict[int, int], ids: _Ids) -> Path:

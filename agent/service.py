@@ -28,7 +28,7 @@ from typing import Any
 from fatswarm.agent.frames import compute_in_frame
 from fatswarm.domain.draws import draw_flip
 from fatswarm.domain.path import Path
-from fatswarm.domain.registry import DEFAULT
+from fatswarm.domain.registry import DEFAULT, load_algorithm
 from fatswarm.domain.seam import Algorithm, AlgorithmParamsError, Configured, checked
 from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.protocol import (
@@ -93,7 +93,7 @@ def open_session(conf: Any, stop: threading.Event, waiting: str | None = None) -
 
     With `waiting` (who waits, e.g. "robot 3"), say every WAIT_NOTICE_S that it still waits, where.
     """
-    import zenoh
+    import zenoh  # the CLI imports this module for its flags: zenoh loads when a robot runs
 
     started = time.monotonic()
     noticed = 0  # notices given so far
@@ -160,9 +160,7 @@ def serve(
     `algorithm`: loaded from `cfg.algorithm` if None (raises AlgorithmError if it cannot be).
     Call it from the process's main thread: a stop signal interrupts a Look's wait there.
     """
-    import zenoh
-
-    from fatswarm.domain.registry import load_algorithm
+    import zenoh  # the CLI imports this module for its flags: zenoh loads when a robot runs
 
     stop = stop or threading.Event()
     robot = Robot(algorithm or load_algorithm(cfg.algorithm), draw_flip(cfg.seed, cfg.robot))
@@ -185,31 +183,42 @@ def serve(
             world_alive_key(cfg.swarm), look_wait.world_seen, history=True
         )
         log.info("robot %d up", cfg.robot)
-        # The world process and round it last answered, and the move for that round: the Move
-        # travels in every Look until the world answers one (a Look lost with a router that went
-        # away must not lose the move with it; the world takes a move once).
-        request = LookRequest()
-        with look_wait.install():
-            while not stop.is_set():
-                asked = time.monotonic()
-                try:
-                    snapshot = _look(querier, request, look_wait)
-                except Stopped:
-                    break
-                except Relook:
-                    log.info("robot %d: a world came up; asking again", cfg.robot)
-                    continue
-                except zenoh.ZError as exc:  # the router is away: ask again (move and all)
-                    log.warning("look failed: %s", exc)
-                    snapshot = None
-                if snapshot is None:
-                    if time.monotonic() - asked < RELOOK_S:  # no world to hold it: do not spin
-                        stop.wait(RELOOK_S)
-                    continue
-                request = LookRequest(
-                    epoch=snapshot.epoch, after=snapshot.round, move=_move(cfg, snapshot, robot)
-                )
+        _cycle(cfg, robot, querier, look_wait, stop)
     return 0
+
+
+def _cycle(
+    cfg: AgentConfig, robot: Robot, querier: Any, look_wait: _LookWait, stop: threading.Event
+) -> None:
+    """Look, Compute, Move until `stop` is set.
+
+    The world process and round it last answered, and the move for that round: the Move travels
+    in every Look until the world answers one (a Look lost with a router that went away must not
+    lose the move with it; the world takes a move once).
+    """
+    import zenoh  # the CLI imports this module for its flags: zenoh loads when a robot runs
+
+    request = LookRequest()
+    with look_wait.install():
+        while not stop.is_set():
+            asked = time.monotonic()
+            try:
+                snapshot = _look(querier, request, look_wait)
+            except Stopped:
+                break
+            except Relook:
+                log.info("robot %d: a world came up; asking again", cfg.robot)
+                continue
+            except zenoh.ZError as exc:  # the router is away: ask again (move and all)
+                log.warning("look failed: %s", exc)
+                snapshot = None
+            if snapshot is None:
+                if time.monotonic() - asked < RELOOK_S:  # no world to hold it: do not spin
+                    stop.wait(RELOOK_S)
+                continue
+            request = LookRequest(
+                epoch=snapshot.epoch, after=snapshot.round, move=_move(cfg, snapshot, robot)
+            )
 
 
 class _LookWait:
@@ -218,6 +227,7 @@ class _LookWait:
     exit. A world that comes up cancels the waiting Look's query (its cancellation token)."""
 
     def __init__(self, stop: threading.Event) -> None:
+
         self.stop = stop
         self.cancel: Any = None  # the waiting Look's zenoh.CancellationToken (None: none waits)
         self.world_up = False  # a world came up while it waited
@@ -237,7 +247,7 @@ class _LookWait:
     def world_seen(self, sample: Any) -> None:
         """Liveliness callback on the world's token: a world that (re)appears while a Look waits
         ends the wait, and the Look is asked again."""
-        import zenoh
+        import zenoh  # the CLI imports this module for its flags: zenoh loads when a robot runs
 
         if sample.kind != zenoh.SampleKind.PUT:
             return
@@ -249,7 +259,7 @@ class _LookWait:
 
     def begin(self) -> Any:
         """A cancellation token for the next Look's query (set as the waiting one)."""
-        import zenoh
+        import zenoh  # the CLI imports this module for its flags: zenoh loads when a robot runs
 
         with self._lock:
             self.cancel, self.world_up = zenoh.CancellationToken(), False
@@ -284,7 +294,7 @@ def _look(querier: Any, last: LookRequest, wait: _LookWait) -> Snapshot | None:
     (it holds the query until the robot is activated); None if it let the query go or sent
     nothing valid. Raises Relook when a world came up and cut the wait short (no reply came),
     Stopped on a stop signal."""
-    import zenoh
+    import zenoh  # the CLI imports this module for its flags: zenoh loads when a robot runs
 
     snapshot = None
     replied = False  # a cancelled query ends with no reply at all, not even its timeout's

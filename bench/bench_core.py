@@ -21,11 +21,12 @@ import time
 from collections import Counter, defaultdict
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from types import ModuleType
 from typing import Any
 
 import numpy as np
 
-from fatswarm.agent import algorithm
+from fatswarm.agent import algorithm, expansion, formation, planning
 from fatswarm.agent.params import Params
 from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy.engine.lockstep import RoundReport, run_lockstep
@@ -266,7 +267,7 @@ def looks_per_second(
 
     def count(report: RoundReport) -> None:
         nonlocal looks
-        looks += len(report.active)
+        looks += len(report.entry.active)
         if time.perf_counter() - t0 > budget:
             raise _Budget
 
@@ -327,6 +328,7 @@ def baseline_looks_per_second(checkout: str, n: int, budget: float) -> float | N
 # PHASE HOOK: until agent/algorithm.py exposes its phases, compute's time is split by wrapping the
 # helpers it calls (SEC; path checks). Replace `_PHASE_WRAPS` with the lead's phase functions
 # when they land. Wrapping adds a little overhead to every call: the split is approximate.
+_PLANNING_MODULES: tuple[ModuleType, ...] = (algorithm, planning, expansion, formation)
 _PHASE_WRAPS: dict[str, tuple[str, ...]] = {
     "sec": ("sec",),
     "path checks": ("is_free", "segment_distances"),
@@ -355,7 +357,7 @@ def compute_split(n: int, count: int) -> dict[str, float]:
     views = _sample_views(n, count)
     params = Params(n)
     spent: dict[str, float] = dict.fromkeys(_PHASE_WRAPS, 0.0)
-    originals: dict[str, Callable[..., Any]] = {}
+    originals: dict[tuple[ModuleType, str], Callable[..., Any]] = {}
 
     def wrap(phase: str, fn: Callable[..., Any]) -> Callable[..., Any]:
         def timed(*args: Any, **kwargs: Any) -> Any:
@@ -377,10 +379,11 @@ def compute_split(n: int, count: int) -> dict[str, float]:
     plain = min(timed_pass() for _ in range(REPEATS))
     try:
         for phase, names in _PHASE_WRAPS.items():
-            for name in names:
-                if hasattr(algorithm, name):
-                    originals[name] = getattr(algorithm, name)
-                    setattr(algorithm, name, wrap(phase, originals[name]))
+            for module in _PLANNING_MODULES:  # wherever the algorithm's phases call them from
+                for name in names:
+                    if hasattr(module, name):
+                        originals[module, name] = getattr(module, name)
+                        setattr(module, name, wrap(phase, originals[module, name]))
         wrapped = math.inf
         for _ in range(REPEATS):  # keep the phase times of the fastest pass
             spent.update(dict.fromkeys(spent, 0.0))
@@ -389,8 +392,8 @@ def compute_split(n: int, count: int) -> dict[str, float]:
                 wrapped, best = this, dict(spent)
         spent = best
     finally:
-        for name, fn in originals.items():
-            setattr(algorithm, name, fn)
+        for (module, name), fn in originals.items():
+            setattr(module, name, fn)
     calls = max(1, len(views))
     split = {"compute (unwrapped)": 1e6 * plain / calls}
     for phase, secs in spent.items():

@@ -32,7 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "integrat
 from netharness import Swarm, descendants_of, running
 
 from fatswarm.agent.geometry import is_formed
-from fatswarm.world.record import read_record
+from fatswarm.world.record_read import read_record
 
 ROLES = ("agent", "agents-fork", "agents-exec", "world", "coordinator", "router", "world-router")
 SIGNALS = ("kill", "stop")

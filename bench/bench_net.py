@@ -36,7 +36,7 @@ import numpy as np
 from fatswarm.agent.params import Params
 from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy.net.children import Children
-from fatswarm.deploy.net.parts import agent_command, agents_command
+from fatswarm.deploy.net.part_agents import agent_command, agents_command
 from fatswarm.deploy.net.zconf import loopback_endpoint, make_config
 from fatswarm.deploy.scenarios.starts import random_start
 from fatswarm.domain.wire import ProtocolError

@@ -205,6 +205,8 @@ def run_matrix(out: Path) -> dict[str, str]:
         record = out / f"{config.name}.jsonl"
         record.unlink(missing_ok=True)
         code = _run(["run", *_resolve(config.flags, out), "-q", "--record", record.name], out)
+        if not record.exists():
+            sys.exit(f"record_matrix: {config.name} wrote no record (exit {code})")
         hashes[config.name] = f"{_digest(record)} exit {code}"
         print(f"{config.name:28} {hashes[config.name]}", flush=True)
     # A resumed run: the ssync record cut after 5 rounds, continued.

@@ -177,7 +177,10 @@ class Scripted:
 
 def _script_from_record(path: str) -> list[Any]:
     """Active sets of a run record's committed rounds, to replay a recorded run exactly."""
-    from fatswarm.world.record import RecordFormatError, read_record
+    # the coordinator process imports this module but not world's record reader (which loads
+    # physics): only a --schedule that is a run record needs it
+    from fatswarm.world.record import RecordFormatError
+    from fatswarm.world.record_read import read_record
 
     try:
         record = read_record(path, allow_torn_end=True)
@@ -196,7 +199,14 @@ def load_script(path: str, n: int) -> Scripted:
             text = fh.read()
     except OSError as exc:
         raise ScheduleFileError(f"cannot read schedule file {path}: {exc.strerror}") from None
-    after = "repeat"
+    rounds, after = _script_rounds(path, text)
+    _check_rounds(path, rounds, n)
+    return Scripted(rounds, after)
+
+
+def _script_rounds(path: str, text: str) -> tuple[Any, str]:
+    """The rounds a schedule file's `text` holds (unchecked), and what comes after them: the
+    JSON object's, or a run record's committed rounds (then "repeat")."""
     data: Any
     try:
         data = json.loads(text)
@@ -207,18 +217,22 @@ def load_script(path: str, n: int) -> Scripted:
             raise ScheduleFileError(
                 f"schedule file {path} is not JSON (line {exc.lineno}: {exc.msg})"
             ) from None
-        rounds: Any = _script_from_record(path)
-    else:
-        if not isinstance(data, dict) or "rounds" not in data:
-            raise ScheduleFileError(
-                f'schedule file {path} must hold an object {{"rounds": [[0, 2], [1], ...]}}'
-            )
-        rounds = data["rounds"]
-        after = data.get("after", "repeat")
-        if after not in AFTER_SCRIPT:
-            raise ScheduleFileError(
-                f"schedule file {path}: 'after' must be one of {AFTER_SCRIPT}, got {after!r}"
-            )
+        return _script_from_record(path), "repeat"
+    if not isinstance(data, dict) or "rounds" not in data:
+        raise ScheduleFileError(
+            f'schedule file {path} must hold an object {{"rounds": [[0, 2], [1], ...]}}'
+        )
+    rounds = data["rounds"]
+    after = data.get("after", "repeat")
+    if after not in AFTER_SCRIPT:
+        raise ScheduleFileError(
+            f"schedule file {path}: 'after' must be one of {AFTER_SCRIPT}, got {after!r}"
+        )
+    return rounds, after
+
+
+def _check_rounds(path: str, rounds: Any, n: int) -> None:
+    """Refuse rounds that are not a non-empty list of non-empty lists of robots 0..n-1."""
     if not isinstance(rounds, list) or not rounds:
         raise ScheduleFileError(f"schedule file {path}: 'rounds' must be a non-empty list of lists")
     for k, entry in enumerate(rounds, start=1):
@@ -231,7 +245,6 @@ def load_script(path: str, n: int) -> Scripted:
                 raise ScheduleFileError(
                     f"schedule file {path}: round {k} names robot {robot!r}; robots are 0..{n - 1}"
                 )
-    return Scripted(rounds, after)
 
 
 def make_scheduler(

@@ -10,18 +10,16 @@ import logging
 import queue
 import threading
 import time
-from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import zenoh
+
 from fatswarm.coordinator.async_rounds import coordinator_core
+from fatswarm.coordinator.driver import AgentSeen, Event, WorldSeen, drive
 from fatswarm.coordinator.protocol import alive_key
-from fatswarm.coordinator.rounds import (
-    Action,
-    Finished,
-    RoundTimes,
-)
+from fatswarm.coordinator.rounds import Finished, Note, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
 from fatswarm.domain.outcome import Status, exit_code_for
 from fatswarm.domain.wire import ProtocolError
@@ -87,18 +85,15 @@ class Coordinator:
         self.events: Inbox[tuple[str, Any]] = Inbox()
         self.rejected = 0
         self._began = 0.0  # perf_counter mark of the round's opening (debug timings)
+        self._session: Any = None  # the open Zenoh session, while it runs
 
     # -- event intake (callbacks only enqueue) --------------------------------------------------
 
     def _on_alive(self, sample: Any) -> None:
-        import zenoh
-
         alive = sample.kind == zenoh.SampleKind.PUT
         self.events.offer("alive", ("alive", (str(sample.key_expr), alive)))
 
     def _on_world(self, sample: Any) -> None:
-        import zenoh
-
         self.events.offer("world", ("world", sample.kind == zenoh.SampleKind.PUT))
 
     def _on_held(self, sample: Any) -> None:
@@ -124,71 +119,68 @@ class Coordinator:
             return self._loop(session)
 
     def _loop(self, session: Any) -> int:
-        todo: deque[Action] = deque(self.core.start(time.monotonic()))
-        while not self.stop.is_set():
-            self._log_notes()
-            if not todo:
-                todo.extend(self._wait())
-                continue
-            action = todo.popleft()
-            if isinstance(action, Finished):
-                return self._end(action)
-            reply = self._ask(session, action.request)
-            todo.extend(self.core.on_reply(reply, time.monotonic()))
-        return self._end(self.core.stop())
+        self._session = session
+        return self._end(drive(self.core, self))
 
     def _end(self, finished: Finished) -> int:
-        self._log_notes()
         if finished.status != Status.RUNNING:
             log.info("run ended: %s after round %d", finished.status, self.core.round)
         return exit_code_for(finished.status, finished.collisions)
 
-    def _log_notes(self) -> None:
-        for note in self.core.pop_notes():
+    # -- the link `drive` runs on: the wall clock, Zenoh, the log --------------------------------
+
+    def now(self) -> float:
+        return time.monotonic()
+
+    def stopped(self) -> bool:
+        return self.stop.is_set()
+
+    def note(self, notes: Sequence[Note]) -> None:
+        for note in notes:
             log.log(logging.WARNING if note.warning else logging.INFO, "%s", note.text)
 
-    def _wait(self) -> list[Action]:
-        """Feed the core the events that come before its next deadline, then tick it."""
-        deadline = self.core.next_deadline()
+    def wait(self, deadline: float | None) -> list[Event] | None:
+        """The events that come before `deadline` (at most STOP_POLL_S from now), decoded; None
+        once stopped."""
+        if self.stop.is_set():
+            return None
         wait_s = STOP_POLL_S
         if deadline is not None:
             wait_s = min(wait_s, max(0.0, deadline - time.monotonic()))
-        actions: list[Action] = []
+        events: list[Event] = []
         try:
-            event = self.events.get(timeout=wait_s)
+            item = self.events.get(timeout=wait_s)
         except queue.Empty:
-            pass
-        else:
-            while True:
-                actions += self._feed(*event)
-                try:
-                    event = self.events.get_nowait()
-                except queue.Empty:
-                    break
-        return actions + self.core.on_tick(time.monotonic())
+            return events
+        while True:
+            event = self._decode(*item)
+            if event is not None:
+                events.append(event)
+            try:
+                item = self.events.get_nowait()
+            except queue.Empty:
+                return events
 
-    def _feed(self, kind: str, item: Any) -> list[Action]:
-        now = time.monotonic()
+    def _decode(self, kind: str, item: Any) -> Event | None:
         if kind == "world":
-            return self.core.on_world(bool(item), now)
+            return WorldSeen(bool(item))
         if kind == "alive":
             key, alive = item
             robot = robot_of_alive_key(key)
-            return [] if robot is None else self.core.on_alive(robot, alive, now)
+            return None if robot is None else AgentSeen(robot, alive)
         try:
-            notice = MovesHeld.decode(item)
+            return MovesHeld.decode(item)
         except ProtocolError as exc:
             self.rejected += 1
             log.warning("rejected move notice: %s [total %d]", exc, self.rejected)
-            return []
-        return self.core.on_held(notice, now)
+            return None
 
     # -- actions --------------------------------------------------------------------------------
 
-    def _ask(self, session: Any, request: ControlRequest) -> ControlReply | None:
+    def ask(self, request: ControlRequest) -> ControlReply | None:
         """One control request; None if the world did not answer (down or restarting)."""
         asked = time.perf_counter()
-        reply = self._get(session, request.encode())
+        reply = self._get(self._session, request.encode())
         if isinstance(request, Commit) and log.isEnabledFor(logging.DEBUG):
             log.debug(
                 "round %d: moves %.2f ms, commit %.2f ms",
@@ -201,8 +193,6 @@ class Coordinator:
         return reply
 
     def _get(self, session: Any, payload: bytes) -> ControlReply | None:
-        import zenoh
-
         try:
             replies = list(
                 session.get(control_key(self.cfg.swarm), payload=payload, timeout=CONTROL_TIMEOUT_S)

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any, Final
 from fatswarm.deploy.engine.config import (
     RunInputError,
 )
+from fatswarm.domain.registry import DEFAULT
 
 if TYPE_CHECKING:
     pass
@@ -46,8 +47,6 @@ def flag_given(args: argparse.Namespace, dest: str) -> bool:
 
 def add_algorithm_arguments(p: argparse.ArgumentParser, *, params: bool = True) -> None:
     """`--algorithm` (and `--param`): which algorithm the robots run, with what parameters."""
-    from fatswarm.domain.registry import DEFAULT
-
     p.add_argument(
         "--algorithm",
         default=DEFAULT,

@@ -12,13 +12,8 @@ from typing import Final
 
 import numpy as np
 
-from fatswarm.domain.outcome import ENDED, Status
+from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Points
-
-FORMED: Final = Status.FORMED
-STALLED: Final = Status.STALLED
-MAX_ROUNDS: Final = Status.MAX_ROUNDS
-STATUSES: Final = ENDED
 
 # A robot "moved" (the configuration changed) when its centre shifted by more than this. Far above
 # float noise at coordinates ~1e3 (~1e-13), far below any planned move (>= ~1e-6, the algorithm's
@@ -34,7 +29,7 @@ class Progress:
     once since the previous epoch ended (under fsync, epochs == rounds).
     """
 
-    status: str | None
+    status: Status | None
     rounds: int
     epochs: int
     moves: int
@@ -73,7 +68,7 @@ class ProgressTracker:
         self._epoch_seen: set[int] = set()
         self._seen_since_change: set[int] = set()
         self._wanting_since_change: set[int] = set()
-        self._status: str | None = None
+        self._status: Status | None = None
         self._crashed: set[int] = set()
 
     def crash(self, robots: Iterable[int]) -> None:
@@ -90,8 +85,8 @@ class ProgressTracker:
         return frozenset(self._crashed)
 
     @property
-    def status(self) -> str | None:
-        """'formed', 'stalled', 'max_rounds', or None while the run goes on."""
+    def status(self) -> Status | None:
+        """How the run ended (formed, stalled, max_rounds), or None while it goes on."""
         return self._status
 
     @property
@@ -107,7 +102,7 @@ class ProgressTracker:
         traveled: Mapping[int, float] | None = None,
         collisions: int = 0,
         changed: bool | None = None,
-    ) -> str | None:
+    ) -> Status | None:
         """Account one committed round; returns the status (None while the run goes on).
 
         `movers`: the active robots that asked for a non-empty path; `before`/`after`: (n, 2)
@@ -122,18 +117,7 @@ class ProgressTracker:
         active_set |= self._crashed  # a crashed robot stays, as if active and asking to stay
         if bad:
             raise ValueError(f"robots {sorted(bad)} are not in 0..{self.n - 1}")
-        self._rounds += 1
-        for robot in movers:
-            self._moves[robot] += 1
-        if traveled:
-            self._distance += float(sum(traveled.values()))
-        self._collisions += collisions
-
-        self._epoch_seen |= active_set
-        if len(self._epoch_seen) == self.n:
-            self._epochs += 1
-            self._epoch_seen = set()
-
+        self._count(active_set, movers, traveled, collisions)
         before_arr = np.asarray(before, dtype=np.float64)
         after_arr = np.asarray(after, dtype=np.float64)
         if changed if changed is not None else configuration_changed(before_arr, after_arr):
@@ -145,10 +129,29 @@ class ProgressTracker:
             self._wanting_since_change |= set(movers)
             if len(self._seen_since_change) == self.n:
                 formed = not self._wanting_since_change and bool(self.goal(after_arr))
-                self._status = FORMED if formed else STALLED
+                self._status = Status.FORMED if formed else Status.STALLED
         if self._status is None and self.max_rounds is not None and self._rounds >= self.max_rounds:
-            self._status = MAX_ROUNDS
+            self._status = Status.MAX_ROUNDS
         return self._status
+
+    def _count(
+        self,
+        active: set[int],
+        movers: Collection[int],
+        traveled: Mapping[int, float] | None,
+        collisions: int,
+    ) -> None:
+        """The round's figures: rounds, moves, distance, collisions and epochs."""
+        self._rounds += 1
+        for robot in movers:
+            self._moves[robot] += 1
+        if traveled:
+            self._distance += float(sum(traveled.values()))
+        self._collisions += collisions
+        self._epoch_seen |= active
+        if len(self._epoch_seen) == self.n:
+            self._epochs += 1
+            self._epoch_seen = set()
 
     def snapshot(self) -> Progress:
         """The figures so far."""
@@ -174,11 +177,7 @@ def configuration_changed(before: Points, after: Points) -> bool:
 
 
 __all__ = [
-    "FORMED",
-    "MAX_ROUNDS",
     "MOVE_TOLERANCE",
-    "STALLED",
-    "STATUSES",
     "Progress",
     "ProgressTracker",
     "configuration_changed",

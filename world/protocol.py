@@ -198,7 +198,7 @@ class WorldState:
     moved: tuple[int, ...]  # robots whose move was applied in `round`
     stopped: tuple[int, ...]  # robots stopped by contact in `round`
     collisions_total: int
-    status: str  # a world.outcome.Status
+    status: Status
     agents: tuple[AgentInfo, ...]  # one per robot
 
     @property
@@ -274,7 +274,7 @@ class WorldState:
             moved=get_robots(obj, "moved", n),
             stopped=get_robots(obj, "stopped", n),
             collisions_total=get_int(obj, "collisions_total", 0, 2**62),
-            status=status,
+            status=Status(status),
             agents=agents,
         )
 
@@ -484,7 +484,7 @@ class ControlReply:
     n: int
     committed: int  # last committed (durable) round, 0 before the first
     open_round: int  # the round open for moves, 0 if none
-    status: str  # a world.outcome.Status
+    status: Status
     collisions: int = 0  # robots stopped at contact so far (a formation with any is not clean)
     held: tuple[int, ...] = ()  # robots whose moves it holds for `open_round` (a restarted
     # coordinator need not wait for their notices again)
@@ -536,7 +536,7 @@ class ControlReply:
             n=get_int(obj, "n", 1, MAX_ROBOTS),
             committed=get_int(obj, "committed", 0, 2**62),
             open_round=get_int(obj, "open_round", 0, 2**62),
-            status=status,
+            status=Status(status),
             collisions=get_int(obj, "collisions", 0, 2**62),
             held=get_robots(obj, "held"),
             now=get_float(obj, "now", 0.0, MAX_TIME) if "now" in obj else 0.0,

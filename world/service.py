@@ -7,6 +7,7 @@ core answers. Nothing of the round's logic lives here. A Look the core cannot an
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import queue
 import threading
@@ -15,11 +16,14 @@ from collections import Counter
 from collections.abc import Callable
 from typing import Any
 
+import zenoh
+
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.seam import AlgorithmFailure
 from fatswarm.domain.wire import ProtocolError, robot_of_key
 from fatswarm.world.core import WorldCore
 from fatswarm.world.inbox import Inbox
+from fatswarm.world.journal import Journal, perform
 from fatswarm.world.protocol import (
     MAX_CONTROL_BYTES,
     MAX_LOOK_BYTES,
@@ -57,104 +61,144 @@ DROPPED_EVERY_S = 5.0  # dropped messages are counted in one log line at most th
 # --- the Zenoh shell --------------------------------------------------------------------------
 
 
-def serve(core: WorldCore, session: Any, stop: threading.Event | None = None) -> int:
-    """Run the world on an open Zenoh session until `stop` is set, then close it; returns 0, or 1
+def serve(
+    core: WorldCore, journal: Journal, session: Any, stop: threading.Event | None = None
+) -> int:
+    """Run the world on an open Zenoh session until `stop` is set, then close it and `journal`
+    (the run record the core's lines go to); returns 0, 4 when the record cannot be written, or 1
     when the algorithm's goal raised (the world cannot decide the run any more).
 
     The caller opens the session (`deploy.zconf.open_client`: a deadline, one-line errors).
     """
-    import zenoh
+    shell = _Shell(core, journal)
+    with session:
+        _token = shell.declare(session)
+        code = shell.run(stop or threading.Event())
+    try:
+        journal.close()
+    except RecordWriteError as exc:
+        log.error("%s", exc)
+        code = ExitCode.RECORD_FAILED
+    log.info("world stopped at round %d (%s)", core.committed, core.status)
+    return code
 
-    stop = stop or threading.Event()
-    events: Inbox[tuple[str, Any]] = Inbox()
-    swarm = core.setup.swarm
 
-    def on_alive(sample: zenoh.Sample) -> None:
+class _Shell:
+    """The world's Zenoh shell: callbacks only enqueue; one loop hands each event to the core,
+    performs what it asks (the record first), answers, and publishes the state."""
+
+    def __init__(self, core: WorldCore, journal: Journal) -> None:
+        self.core, self.journal = core, journal
+        self.events: Inbox[tuple[str, Any]] = Inbox()
+        self.looks = HeldLooks()
+        self.state_pub: Any = None
+        self.held_pub: Any = None
+
+    def declare(self, session: Any) -> Any:
+        """Publishers, queryables, subscribers and the world's liveliness token (returned: it
+        lives as long as the caller holds it)."""
+        swarm = self.core.setup.swarm
+        self.state_pub = session.declare_publisher(
+            state_key(swarm), congestion_control=zenoh.CongestionControl.DROP
+        )
+        self.held_pub = session.declare_publisher(
+            moves_held_key(swarm), congestion_control=zenoh.CongestionControl.BLOCK, express=True
+        )
+        session.declare_queryable(snapshot_any_key(swarm), self._on_query("look", MAX_LOOK_BYTES))
+        session.declare_queryable(control_key(swarm), self._on_query("control", MAX_CONTROL_BYTES))
+        session.declare_subscriber(move_any_key(swarm), self._on_move)
+        session.liveliness().declare_subscriber(
+            agent_alive_any_key(swarm), self._on_alive, history=True
+        )
+        return session.liveliness().declare_token(alive_key(swarm))
+
+    def _on_alive(self, sample: Any) -> None:
         alive = sample.kind == zenoh.SampleKind.PUT
-        events.offer("alive", ("alive", (str(sample.key_expr), alive)))
+        self.events.offer("alive", ("alive", (str(sample.key_expr), alive)))
 
-    def on_move(sample: zenoh.Sample) -> None:
+    def _on_move(self, sample: Any) -> None:
         size = len(sample.payload)
         if size > MAX_MOVE_BYTES:
-            events.too_big("move")
+            self.events.too_big("move")
             return
-        events.offer("move", ("move", (str(sample.key_expr), sample.payload.to_bytes())), size)
+        self.events.offer("move", ("move", (str(sample.key_expr), sample.payload.to_bytes())), size)
 
-    def on_query(kind: str, limit: int) -> Callable[[Any], None]:
+    def _on_query(self, kind: str, limit: int) -> Callable[[Any], None]:
         def take(query: Any) -> None:
             size = len(query.payload) if query.payload is not None else 0
             if size > limit:
-                events.too_big(kind)
+                self.events.too_big(kind)
                 query.drop()  # answered at once (with nothing): the asker does not wait
-            elif not events.offer(kind, (kind, query), size):
+            elif not self.events.offer(kind, (kind, query), size):
                 query.drop()
 
         return take
 
-    with session:
-        state_pub = session.declare_publisher(
-            state_key(swarm), congestion_control=zenoh.CongestionControl.DROP
-        )
-        held_pub = session.declare_publisher(
-            moves_held_key(swarm), congestion_control=zenoh.CongestionControl.BLOCK, express=True
-        )
-        session.declare_queryable(snapshot_any_key(swarm), on_query("look", MAX_LOOK_BYTES))
-        session.declare_queryable(control_key(swarm), on_query("control", MAX_CONTROL_BYTES))
-        session.declare_subscriber(move_any_key(swarm), on_move)
-        session.liveliness().declare_subscriber(agent_alive_any_key(swarm), on_alive, history=True)
-        _token = session.liveliness().declare_token(alive_key(swarm))
-        log.info("world of %d robots serving swarm %r", core.setup.n, swarm)
-        state_pub.put(core.state().encode())
-        dirty, published = False, time.monotonic()
-        looks = HeldLooks()
-        code = ExitCode.OK
+    def _publish(self) -> float:
+        """Publish the observers' state (and do what making it asked); when it was published."""
+        self.state_pub.put(self.core.state().encode())
+        perform(self.core.take_effects(), self.journal)
+        return time.monotonic()
+
+    def run(self, stop: threading.Event) -> ExitCode:
+        """Serve until `stop` is set or the world cannot go on; the exit code."""
+        core, events, looks = self.core, self.events, self.looks
+        log.info("world of %d robots serving swarm %r", core.setup.n, core.setup.swarm)
+        published, dirty = self._publish(), False
         said: Counter[str] = Counter()
         said_at = -DROPPED_EVERY_S
+        code = ExitCode.OK
         while not stop.is_set():
             try:
                 kind, item = events.get(timeout=0.2)
             except queue.Empty:
                 if dirty or time.monotonic() - published > REPUBLISH_S:  # late joiners see it
-                    state_pub.put(core.state().encode())
-                    dirty, published = False, time.monotonic()
+                    published, dirty = self._publish(), False
                 looks.expire(time.monotonic())
                 continue
             if time.monotonic() - looks.expired_at > HOLD_LOOK_S / 4:  # also when never idle
                 looks.expire(time.monotonic())
             if events.dropped != said:  # a flood: say so, at most every few seconds
                 said_at = _say_dropped(events, said, said_at)
-            try:
-                if _handle(core, kind, item, held_pub, looks):
-                    state_pub.put(core.state().encode())
-                    published = time.monotonic()
-                elif kind == "alive":
-                    dirty = True
-            except zenoh.ZError as exc:  # e.g. the asker left before its reply: not our problem
-                log.warning("zenoh refused a %s reply or notice: %s", kind, exc)
-            except RecordWriteError as exc:  # what is in the record stays; resume goes on from it
-                log.error(
-                    "%s; the world stops at round %d (resume it once this is fixed)",
-                    exc,
-                    core.open_round or core.committed,
-                )
-                code = ExitCode.RECORD_FAILED
+            outcome = self._step(kind, item)
+            if isinstance(outcome, ExitCode):
+                code = outcome
                 break
-            except AlgorithmFailure as exc:  # its round is durable; nobody can say what next
-                log.error(
-                    "%s; the world stops at round %d (in its record)",
-                    exc,
-                    core.open_round or core.committed,
-                )
-                code = ExitCode.NOT_FORMED
-                break
+            if outcome:
+                published = time.monotonic()
+            elif kind == "alive":
+                dirty = True
         looks.let_go_all()
-    try:
-        core.journal.close()
-    except RecordWriteError as exc:
-        log.error("%s", exc)
-        code = ExitCode.RECORD_FAILED
-    log.info("world stopped at round %d (%s)", core.committed, core.status)
-    return code
+        return code
+
+    def _step(self, kind: str, item: Any) -> bool | ExitCode:
+        """One event: whether to publish the state at once, or the exit code if the world stops."""
+        core = self.core
+        try:
+            publish = _handle(core, self.journal, kind, item, self.held_pub, self.looks)
+            if publish:
+                self.state_pub.put(core.state().encode())
+            perform(core.take_effects(), self.journal)
+            return publish
+        except zenoh.ZError as exc:  # e.g. the asker left before its reply: not our problem
+            log.warning("zenoh refused a %s reply or notice: %s", kind, exc)
+            return False
+        except RecordWriteError as exc:  # what is in the record stays; resume goes on from it
+            log.error(
+                "%s; the world stops at round %d (resume it once this is fixed)",
+                exc,
+                core.open_round or core.committed,
+            )
+            return ExitCode.RECORD_FAILED
+        except AlgorithmFailure as exc:  # its round is durable; nobody can say what next
+            with contextlib.suppress(RecordWriteError):  # said on its own when closing
+                perform(core.take_effects(), self.journal)
+            log.error(
+                "%s; the world stops at round %d (in its record)",
+                exc,
+                core.open_round or core.committed,
+            )
+            return ExitCode.NOT_FORMED
 
 
 def look_bytes(core: WorldCore, key: str) -> bytes | None:
@@ -224,8 +268,6 @@ class HeldLooks:
 
     def answer_ready(self, core: WorldCore) -> None:
         """Answer every held Look the core can answer now (its robot was just activated)."""
-        import zenoh
-
         for robot in [r for r, (_, req, _) in self._held.items() if core.may_look(r, req)]:
             try:
                 _answer_look(core, self._held.pop(robot)[0])
@@ -243,7 +285,9 @@ class HeldLooks:
         self._held.clear()
 
 
-def _handle(core: WorldCore, kind: str, item: Any, held_pub: Any, looks: HeldLooks) -> bool:
+def _handle(
+    core: WorldCore, journal: Journal, kind: str, item: Any, held_pub: Any, looks: HeldLooks
+) -> bool:
     """Apply one event; True when the observers' state changed enough to publish at once."""
     if kind == "look":
         _take_look(core, item, looks, held_pub)
@@ -251,7 +295,7 @@ def _handle(core: WorldCore, kind: str, item: Any, held_pub: Any, looks: HeldLoo
         if move_bytes(core, *item):
             _notify(core, held_pub)
     elif kind == "control":
-        return _answer_control(core, item, looks)
+        return _answer_control(core, journal, item, looks)
     elif kind == "alive":
         key, alive = item
         robot = robot_of_alive_key(key)
@@ -318,10 +362,12 @@ def _answer_look(core: WorldCore, query: Any) -> None:
         query.drop()
 
 
-def _answer_control(core: WorldCore, query: Any, looks: HeldLooks) -> bool:
+def _answer_control(core: WorldCore, journal: Journal, query: Any, looks: HeldLooks) -> bool:
+    """Answer a control request once what it committed is in the record (durable first)."""
     try:
         payload = query.payload.to_bytes() if query.payload is not None else b""
         reply, changed = control_bytes(core, payload)
+        perform(core.take_effects(), journal)
         if changed:
             looks.answer_ready(core)  # a round opened: its robots start computing first
         query.reply(query.key_expr, reply.encode())

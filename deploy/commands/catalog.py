@@ -6,6 +6,8 @@ import argparse
 import sys
 
 from fatswarm.domain.outcome import ExitCode
+from fatswarm.domain.registry import available, load_algorithm
+from fatswarm.domain.seam import AlgorithmError
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -22,8 +24,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def describe(ref: str) -> str:
     """An algorithm's name, summary and parameters (name, default, help), one per line."""
-    from fatswarm.domain.registry import load_algorithm
-
     algorithm = load_algorithm(ref)
     lines = [f"{algorithm.name}: {algorithm.summary}"]
     for spec in algorithm.parameters:
@@ -35,9 +35,6 @@ def describe(ref: str) -> str:
 
 def main(args: argparse.Namespace) -> int:
     """Print the catalogue (or one entry); an algorithm that does not load is one line, exit 2."""
-    from fatswarm.domain.registry import available
-    from fatswarm.domain.seam import AlgorithmError
-
     refs = [args.algorithm] if args.algorithm else list(available())
     shown = 0
     for ref in refs:

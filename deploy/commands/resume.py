@@ -7,9 +7,17 @@ import argparse
 import os
 from typing import TYPE_CHECKING, Any
 
+from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy.engine.config import RunInputError, RunSetup, check_crash, check_non_rigid
 from fatswarm.deploy.flags import flag_given
+from fatswarm.deploy.scenarios.starts import load_init, random_start
 from fatswarm.domain.outcome import Status
+from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.seam import Configured, parse_assignments
+from fatswarm.world.physics import validate_configuration
+from fatswarm.world.record import RecordFormatError
+from fatswarm.world.record_read import read_record
+from fatswarm.world.setup import header_crash, header_non_rigid
 
 if TYPE_CHECKING:
     from fatswarm.domain.path import Points
@@ -20,19 +28,16 @@ def resolve_resume(args: argparse.Namespace) -> RunSetup:
     """The run `--resume` continues: the --record file's header (n, a, seed, scheduler, start,
     round cap) and committed rounds; raises one of `input_errors()` for a record that cannot be
     continued or a flag given that contradicts it (flags that agree with it are fine)."""
-    from fatswarm.coordinator.schedule import make_scheduler
+    # the whole lock-step engine: the CLI imports this module (through deploy.commands.run) to
+    # build its parser
     from fatswarm.deploy.engine.lockstep import default_max_rounds
-    from fatswarm.domain.registry import load_algorithm
-    from fatswarm.domain.seam import Configured
-    from fatswarm.world.physics import validate_configuration
 
     path: str = args.record
     record = read_resumable(path, lockstep=bool(args.lockstep))
     h = record.header
     if h.seed is None:
         raise RunInputError(f"--resume: {path} does not say its seed; its run cannot be continued")
-    saved = h.extra.get("max_rounds")
-    cap = saved if isinstance(saved, int) and not isinstance(saved, bool) and saved >= 1 else None
+    cap = _recorded_cap(h)
     if args.max_rounds is not None and args.max_rounds < 1:
         raise RunInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
     check_against_header(args, h, cap, path)
@@ -44,17 +49,7 @@ def resolve_resume(args: argparse.Namespace) -> RunSetup:
     params = Configured.of(load_algorithm(h.algorithm_ref), h.n, h.params)
     params.check_start(h.initial)
     initial = validate_configuration(h.initial)
-    recorded_k = h.extra.get("fairness")
-    if isinstance(recorded_k, int) and args.fairness is not None and args.fairness != recorded_k:
-        raise RunInputError(
-            f"--fairness {args.fairness} contradicts {path}, whose run has "
-            f"fairness={recorded_k}; drop --fairness to resume it"
-        )
-    fairness = (
-        args.fairness
-        if args.fairness is not None
-        else (recorded_k if isinstance(recorded_k, int) else None)
-    )
+    fairness = recorded_fairness(args, h, path)
     schedule = args.schedule
     if schedule is None and isinstance(h.extra.get("schedule"), str):
         schedule = h.extra["schedule"]  # the script the run was made with, where it was
@@ -74,11 +69,31 @@ def resolve_resume(args: argparse.Namespace) -> RunSetup:
     )
 
 
+def _recorded_cap(header: Header) -> int | None:
+    """The header's round cap, if it says one (a whole number >= 1)."""
+    saved = header.extra.get("max_rounds")
+    return saved if isinstance(saved, int) and not isinstance(saved, bool) and saved >= 1 else None
+
+
+def recorded_fairness(args: argparse.Namespace, header: Header, path: str) -> int | None:
+    """The fairness bound of the resumed run: --fairness, else the header's (None: neither says
+    one); RunInputError for a --fairness that says otherwise than the record."""
+    recorded_k = header.extra.get("fairness")
+    if isinstance(recorded_k, int) and args.fairness is not None and args.fairness != recorded_k:
+        raise RunInputError(
+            f"--fairness {args.fairness} contradicts {path}, whose run has "
+            f"fairness={recorded_k}; drop --fairness to resume it"
+        )
+    return (
+        args.fairness
+        if args.fairness is not None
+        else (recorded_k if isinstance(recorded_k, int) else None)
+    )
+
+
 def recorded_non_rigid(args: argparse.Namespace, header: Header, path: str) -> float | None:
     """The header's non-rigid delta (None: rigid moves); RunInputError for a --non-rigid that is
     not a finite number > 0 or that says otherwise than the record."""
-    from fatswarm.world.core import header_non_rigid
-
     delta = header_non_rigid(header)
     given: float | None = getattr(args, "non_rigid", None)
     check_non_rigid(given)
@@ -94,8 +109,6 @@ def recorded_non_rigid(args: argparse.Namespace, header: Header, path: str) -> f
 def recorded_crash(args: argparse.Namespace, header: Header, path: str) -> int | None:
     """The header's crash count f (None: no crashes); RunInputError for a --crash that is not
     0 < f < n or that says otherwise than the record."""
-    from fatswarm.world.core import header_crash
-
     f = header_crash(header)
     given: int | None = getattr(args, "crash", None)
     check_crash(given, header.n)
@@ -113,8 +126,6 @@ def read_resumable(path: str, *, lockstep: bool) -> RunRecord:
     A torn last line (a crash mid-write) is left for the networked world, which drops it; a
     lockstep run never cuts a record, so it refuses one.
     """
-    from fatswarm.world.record import RecordFormatError, read_record
-
     if not os.path.exists(path):
         raise RunInputError(
             f"--resume: {path} does not exist; nothing to resume (drop --resume to start a new run)"
@@ -152,8 +163,6 @@ def check_against_header(
 ) -> None:
     """Refuse (RunInputError, one line) a flag given with --resume that contradicts the record's
     header, naming the flag and both values; `cap`: the header's round cap, if it says one."""
-    from fatswarm.deploy.scenarios.starts import random_start
-
     h = header
     checks: list[tuple[str, str, Any, Any, str]] = [
         ("-n", "n", args.n, h.n, f"n={h.n}"),
@@ -167,15 +176,7 @@ def check_against_header(
             f"--algorithm {args.algorithm} contradicts {path}, whose run has "
             f"algorithm {header.algorithm_ref}; drop --algorithm to resume it"
         )
-    from fatswarm.domain.seam import parse_assignments
-
-    for name, text in parse_assignments(list(getattr(args, "param", []) or [])).items():
-        recorded = header.params.get(name)
-        if recorded is None or (str(recorded) != text and _as_number(text) != recorded):
-            raise RunInputError(
-                f"--param {name}={text} contradicts {path}, whose run has "
-                f"{name}={recorded}; drop --param to resume it"
-            )
+    _check_params(args, header, path)
     for flag, dest, value, recorded, says in checks:
         if flag_given(args, dest) and recorded is not None and value != recorded:
             shown = _number(value) if isinstance(value, float) else value
@@ -183,33 +184,53 @@ def check_against_header(
                 f"{flag} {shown} contradicts {path}, whose run has {says}; drop {flag} to resume it"
             )
     if args.init is not None:
-        from fatswarm.deploy.scenarios.starts import load_init
-        from fatswarm.world.physics import validate_configuration
-
-        positions, _ = load_init(args.init)
-        if len(positions) != h.n:
-            raise RunInputError(
-                f"--init {args.init} contradicts {path}, whose run has n={h.n} "
-                f"(the file {len(positions)} robots); drop --init to resume it"
-            )
-        where = _first_difference(validate_configuration(positions), h.initial)
-        if where is not None:
-            robot, mine, theirs = where
-            raise RunInputError(
-                f"--init {args.init} contradicts {path}, whose run started "
-                f"elsewhere (robot {robot} at {theirs}, not at {mine} as in the "
-                "file); drop --init to resume it"
-            )
+        _check_init(args.init, h, path)
     elif flag_given(args, "start") and h.seed is not None:
-        kind: str = args.start
-        where = _first_difference(random_start(h.n, h.seed, kind, h.a), h.initial)
-        if where is not None:
-            robot, mine, theirs = where
+        _check_start(args.start, h, path)
+
+
+def _check_params(args: argparse.Namespace, header: Header, path: str) -> None:
+    """Refuse a --param whose value is not the record's."""
+    for name, text in parse_assignments(list(getattr(args, "param", []) or [])).items():
+        recorded = header.params.get(name)
+        if recorded is None or (str(recorded) != text and _as_number(text) != recorded):
             raise RunInputError(
-                f"--start {kind} contradicts {path}, whose run did not start "
-                f"from the {kind} start of seed {h.seed} (robot {robot} at "
-                f"{theirs}, not at {mine}); drop --start to resume it"
+                f"--param {name}={text} contradicts {path}, whose run has "
+                f"{name}={recorded}; drop --param to resume it"
             )
+
+
+def _check_init(init: str, header: Header, path: str) -> None:
+    """Refuse an --init file whose start is not the record's."""
+    h = header
+    positions, _ = load_init(init)
+    if len(positions) != h.n:
+        raise RunInputError(
+            f"--init {init} contradicts {path}, whose run has n={h.n} "
+            f"(the file {len(positions)} robots); drop --init to resume it"
+        )
+    where = _first_difference(validate_configuration(positions), h.initial)
+    if where is not None:
+        robot, mine, theirs = where
+        raise RunInputError(
+            f"--init {init} contradicts {path}, whose run started "
+            f"elsewhere (robot {robot} at {theirs}, not at {mine} as in the "
+            "file); drop --init to resume it"
+        )
+
+
+def _check_start(kind: str, header: Header, path: str) -> None:
+    """Refuse a --start kind whose start of the record's seed is not the record's start."""
+    h = header
+    assert h.seed is not None
+    where = _first_difference(random_start(h.n, h.seed, kind, h.a), h.initial)
+    if where is not None:
+        robot, mine, theirs = where
+        raise RunInputError(
+            f"--start {kind} contradicts {path}, whose run did not start "
+            f"from the {kind} start of seed {h.seed} (robot {robot} at "
+            f"{theirs}, not at {mine}); drop --start to resume it"
+        )
 
 
 def _as_number(text: str) -> float | None:
@@ -238,6 +259,7 @@ __all__ = [
     "ended",
     "read_resumable",
     "recorded_crash",
+    "recorded_fairness",
     "recorded_non_rigid",
     "resolve_resume",
 ]

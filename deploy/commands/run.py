@@ -17,6 +17,8 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Final, TextIO
 
+from fatswarm.coordinator.schedule import NAMES
+from fatswarm.deploy.commands.resume import resolve_resume
 from fatswarm.deploy.engine.config import (
     DEFAULT_A,
     DEFAULT_N,
@@ -35,11 +37,20 @@ from fatswarm.deploy.engine.estimate import (
     eta_text,
 )
 from fatswarm.deploy.flags import StoreGiven, add_algorithm_arguments, check_writable
+from fatswarm.deploy.net.run_flags import add_network_arguments
+from fatswarm.deploy.scenarios.starts import KINDS
+from fatswarm.deploy.view import dashboard
+from fatswarm.deploy.view.dashboard import Frame, save_svg
 from fatswarm.deploy.view.summary import Outcome, exit_code, print_outcome, side_of
+from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.outcome import ExitCode
+from fatswarm.domain.seam import AlgorithmFailure
+from fatswarm.world.physics import InvalidConfigurationError
+from fatswarm.world.record import RecordFormatError, RecordWriteError, RecordWriter
 
 if TYPE_CHECKING:
-    from fatswarm.deploy.engine.lockstep import RoundReport
+    from fatswarm.deploy.engine.estimate import Estimate
+    from fatswarm.deploy.engine.lockstep import RoundReport, RunResult
 
 
 EXIT_CODES_HELP: Final = (
@@ -58,12 +69,19 @@ PROGRESS_SECONDS: Final = 1.0  # at most one progress line per this many seconds
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm run`, the launcher's (networked) and the dashboard's among them."""
-    from fatswarm.coordinator.schedule import NAMES
-    from fatswarm.deploy.net.launcher import add_network_arguments
-    from fatswarm.deploy.scenarios.starts import KINDS
-    from fatswarm.deploy.view.dashboard import add_run_arguments
-
     p.epilog = EXIT_CODES_HELP
+    _add_start_arguments(p)
+    _add_model_arguments(p)
+    _add_output_arguments(p)
+    add_network_arguments(p)
+    # The dashboard's run flags (--no-dashboard, --svg): `add_run_arguments`, because the CLI
+    # would hand an `add_dashboard_arguments` to `fatswarm dashboard` itself. Called through its
+    # module: the CLI would take an `add_run_arguments` of this module for all of run's flags.
+    dashboard.add_run_arguments(p)
+
+
+def _add_start_arguments(p: argparse.ArgumentParser) -> None:
+    """How the run is made (in lock step or not), its robots, algorithm, seed and start."""
     p.add_argument(
         "--lockstep",
         action="store_true",
@@ -106,6 +124,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         action=StoreGiven,
         help=f"kind of random start without --init (default {DEFAULT_START}: needs SEC expansion)",
     )
+
+
+def _add_model_arguments(p: argparse.ArgumentParser) -> None:
+    """The scheduler and the adversary: who is active, fairness, round cap, non-rigid, crashes."""
     p.add_argument(
         "--scheduler",
         choices=NAMES,
@@ -154,6 +176,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "and stay for good as still obstacles; the goal is then judged on the live "
         "robots (default: none)",
     )
+
+
+def _add_output_arguments(p: argparse.ArgumentParser) -> None:
+    """The run record (new, overwritten or resumed) and what is printed."""
     p.add_argument(
         "--record",
         metavar="PATH",
@@ -179,10 +205,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="print the summary as one JSON object on stdout (progress stays on "
         "stderr; no live dashboard)",
     )
-    add_network_arguments(p)
-    # The dashboard's run flags (--no-dashboard, --svg): `add_run_arguments`, because the CLI
-    # would hand an `add_dashboard_arguments` to `fatswarm dashboard` itself.
-    add_run_arguments(p)
 
 
 def _fail(message: str) -> ExitCode:
@@ -198,6 +220,8 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _networked(args: argparse.Namespace) -> int:
+    # the launcher (subprocess, the parts' supervision) loads only for a networked run: the CLI
+    # imports this module to build its parser
     from fatswarm.deploy.net.launcher import run_networked
 
     return run_networked(args, resolve_run)
@@ -252,66 +276,99 @@ def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
     the same input with the same message); raises one of `input_errors()`."""
     check_outputs(args)
     if getattr(args, "resume", False):
-        from fatswarm.deploy.commands.resume import resolve_resume
-
         return resolve_resume(args)
     return RunConfig.from_args(args, seed).resolve()
 
 
 def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """`fatswarm run --lockstep`: build the run from the flags, run it, print the summary."""
-    from fatswarm.deploy.engine.lockstep import HistoryMismatchError, run_lockstep
-    from fatswarm.domain.adversary import ASYNC_NAMES
-    from fatswarm.domain.seam import AlgorithmFailure
-    from fatswarm.world.physics import InvalidConfigurationError
-    from fatswarm.world.record import RecordFormatError, RecordWriteError, RecordWriter
-
     out = sys.stdout if out is None else out
     seed_given = args.seed is not None
     seed: int = args.seed if seed_given else secrets.randbelow(2**31)
     bad_input: tuple[type[Exception], ...] = (*input_errors(), RecordFormatError)
     try:
-        check_lockstep_flags(args)
-        setup = resolve_run(args, seed)
-        resumed = setup.resumed
-        if resumed is not None and setup.scheduler.name in ASYNC_NAMES:
-            raise RunInputError(
-                f"--resume: a {setup.scheduler.name} run cannot be resumed yet; "
-                "run it again with its --seed: a lock-step run repeats exactly"
-            )
-        # --resume appends after the committed rounds: nothing there is ever cut or rewritten
-        record = RecordWriter(args.record, append=resumed is not None) if args.record else None
+        setup, record = _lockstep_setup(args, seed)
     except bad_input as exc:
         return _fail(str(exc))
-    params, initial, scheduler, max_rounds, seed = (
-        setup.params,
-        setup.initial,
-        setup.scheduler,
-        setup.max_rounds,
-        setup.seed,
-    )
-
-    forecast = estimate_lockstep(params.n, scheduler.name, max_rounds)
+    forecast = estimate_lockstep(setup.params.n, setup.scheduler.name, setup.max_rounds)
     if not args.quiet:
-        if not seed_given and resumed is None:
-            print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
-        if params.n >= ESTIMATE_FROM_N or forecast.seconds >= ESTIMATE_FROM_S:
-            print(
-                estimate_text(forecast, params.n, record=bool(args.record)),
-                file=sys.stderr,
-                flush=True,
-            )
-    on_round = None if args.quiet else _progress_printer(max_rounds, forecast.rounds)
+        _announce(args, setup, forecast, seed_given=seed_given)
+    on_round = None if args.quiet else _progress_printer(setup.max_rounds, forecast.rounds)
+    result = _run_setup(args, setup, record, on_round)
+    if isinstance(result, ExitCode):
+        return result
+    params = setup.params
+    outcome = Outcome(
+        status=result.status,
+        rounds=result.rounds,
+        collisions=result.collisions,
+        n=params.n,
+        a=side_of(params.values),
+        seed=setup.seed,
+        scheduler=setup.scheduler.name,
+        epochs=result.epochs,
+        moves=result.moves,
+        total_distance=result.total_distance,
+        algorithm=params.name,
+        params=dict(params.values),
+        time=result.time,
+    )
+    code = exit_code(outcome)
+    svg: str | None = getattr(args, "svg", None)  # the dashboard's flag, when it is there
+    if svg and not _save_final_frame(result, setup, svg):
+        code, svg = ExitCode.BAD_INPUT, None
+    print_outcome(outcome, code, out, as_json=args.json, record=args.record, svg=svg)
+    return code
+
+
+def _lockstep_setup(args: argparse.Namespace, seed: int) -> tuple[RunSetup, RecordWriter | None]:
+    """The run the flags ask for in lock step and the writer of its record (None: no --record);
+    raises one of `input_errors()` or RecordFormatError."""
+    check_lockstep_flags(args)
+    setup = resolve_run(args, seed)
+    resumed = setup.resumed
+    if resumed is not None and setup.scheduler.name in ASYNC_NAMES:
+        raise RunInputError(
+            f"--resume: a {setup.scheduler.name} run cannot be resumed yet; "
+            "run it again with its --seed: a lock-step run repeats exactly"
+        )
+    # --resume appends after the committed rounds: nothing there is ever cut or rewritten
+    record = RecordWriter(args.record, append=resumed is not None) if args.record else None
+    return setup, record
+
+
+def _announce(
+    args: argparse.Namespace, setup: RunSetup, forecast: Estimate, *, seed_given: bool
+) -> None:
+    """The drawn seed (of a new run) and, for a large or long run, the estimate, on stderr."""
+    n = setup.params.n
+    if not seed_given and setup.resumed is None:
+        print(f"seed {setup.seed} (pass --seed {setup.seed} to repeat this run)", file=sys.stderr)
+    if n >= ESTIMATE_FROM_N or forecast.seconds >= ESTIMATE_FROM_S:
+        print(estimate_text(forecast, n, record=bool(args.record)), file=sys.stderr, flush=True)
+
+
+def _run_setup(
+    args: argparse.Namespace,
+    setup: RunSetup,
+    record: RecordWriter | None,
+    on_round: Callable[[RoundReport], None] | None,
+) -> RunResult | ExitCode:
+    """Run `setup` in lock step, writing `record` (closed at the end); the result, or the exit
+    code of a run that could not go on (said on stderr)."""
+    # the whole lock-step engine: the CLI imports this module to build its parser
+    from fatswarm.deploy.engine.lockstep import HistoryMismatchError, run_lockstep
+
     try:
-        result = run_lockstep(
-            initial,
-            params,
-            scheduler,
-            seed=seed,
-            max_rounds=max_rounds,
+        return run_lockstep(
+            setup.initial,
+            setup.params,
+            setup.scheduler,
+            seed=setup.seed,
+            max_rounds=setup.max_rounds,
             record=record,
             on_round=on_round,
-            history=None if resumed is None else resumed.rounds,
+            history=None if setup.resumed is None else setup.resumed.rounds,
             algorithm_ref=setup.algorithm_ref,
             header_extra=(
                 {}
@@ -343,47 +400,31 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
             with contextlib.suppress(RecordWriteError):  # said above, if it matters
                 record.close()
 
-    outcome = Outcome(
-        status=result.status,
-        rounds=result.rounds,
-        collisions=result.collisions,
+
+def _save_final_frame(result: RunResult, setup: RunSetup, svg: str) -> bool:
+    """Save the run's final dashboard frame as SVG at `svg`; False (said on stderr) if it cannot
+    be written."""
+    params = setup.params
+    final = Frame(
+        round=result.rounds,
         n=params.n,
-        a=side_of(params.values),
-        seed=seed,
-        scheduler=scheduler.name,
-        epochs=result.epochs,
-        moves=result.moves,
-        total_distance=result.total_distance,
         algorithm=params.name,
         params=dict(params.values),
-        time=result.time,
+        figures=params.figures(result.positions),
+        scheduler=setup.scheduler.name,
+        positions=result.positions,
+        collisions_total=result.collisions,
+        status=result.status,
+        seed=setup.seed,
+        max_rounds=setup.max_rounds,
+        source="lockstep",
     )
-    code = exit_code(outcome)
-    svg: str | None = getattr(args, "svg", None)  # the dashboard's flag, when it is there
-    if svg:
-        from fatswarm.deploy.view.dashboard import Frame, save_svg
-
-        final = Frame(
-            round=result.rounds,
-            n=params.n,
-            algorithm=params.name,
-            params=dict(params.values),
-            figures=params.figures(result.positions),
-            scheduler=scheduler.name,
-            positions=result.positions,
-            collisions_total=result.collisions,
-            status=result.status,
-            seed=seed,
-            max_rounds=max_rounds,
-            source="lockstep",
-        )
-        try:
-            save_svg(final, svg)
-        except OSError as exc:
-            code = _fail(f"cannot write {svg}: {exc.strerror}")
-            svg = None
-    print_outcome(outcome, code, out, as_json=args.json, record=args.record, svg=svg)
-    return code
+    try:
+        save_svg(final, svg)
+    except OSError as exc:
+        _fail(f"cannot write {svg}: {exc.strerror}")
+        return False
+    return True
 
 
 def _progress_printer(max_rounds: int, expected_rounds: int) -> Callable[[RoundReport], None]:
@@ -398,11 +439,11 @@ def _progress_printer(max_rounds: int, expected_rounds: int) -> Callable[[RoundR
             return
         last[0] = now
         p = report.progress
-        rate = report.round / (now - start) if now > start else 0.0
+        rate = report.entry.round / (now - start) if now > start else 0.0
         print(
-            f"round {report.round}/{max_rounds}  epochs {p.epochs}  moves {p.moves}  "
+            f"round {report.entry.round}/{max_rounds}  epochs {p.epochs}  moves {p.moves}  "
             f"distance {p.total_distance:.1f}  collisions {p.collisions}  "
-            f"{eta_text(report.round, rate, expected_rounds, max_rounds)}",
+            f"{eta_text(report.entry.round, rate, expected_rounds, max_rounds)}",
             file=sys.stderr,
             flush=True,
         )

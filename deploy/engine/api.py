@@ -22,7 +22,8 @@ from numpy.typing import NDArray
 from fatswarm.deploy.engine.config import DEFAULT_SCHEDULER, DEFAULT_START, RunConfig
 from fatswarm.deploy.engine.lockstep import RoundReport, RunResult, run_lockstep
 from fatswarm.domain.path import Points
-from fatswarm.world.record import RecordWriter, RunRecord, read_record
+from fatswarm.world.record import RecordWriter, RunRecord
+from fatswarm.world.record_read import read_record
 
 
 def run(
@@ -69,6 +70,15 @@ def run(
         non_rigid=non_rigid,
         crash=crash,
     )
+    return _run_config(config, record, on_round)
+
+
+def _run_config(
+    config: RunConfig,
+    record: str | os.PathLike[str] | None,
+    on_round: Callable[[RoundReport], None] | None,
+) -> RunResult:
+    """Resolve `config` and run it in lock step, writing its record to `record` (if not None)."""
     setup = config.resolve()
     writer = None if record is None else RecordWriter(record)
     try:

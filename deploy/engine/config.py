@@ -18,11 +18,15 @@ from typing import TYPE_CHECKING, Any, Final
 
 import numpy as np
 
+from fatswarm import __version__
 from fatswarm.domain.path import Points
+from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
+from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.seam import AlgorithmError, AlgorithmParamsError, Configured, parse_assignments
+from fatswarm.domain.tolerance import UnsupportedInputError, check_supported
 
 if TYPE_CHECKING:
     from fatswarm.coordinator.schedule import Scheduler
-    from fatswarm.domain.seam import Configured
     from fatswarm.world.record import RunRecord
 
 DEFAULT_N: Final = 8
@@ -64,8 +68,6 @@ class RunConfig:
     @staticmethod
     def from_args(args: argparse.Namespace, seed: int) -> RunConfig:
         """The configuration `fatswarm run`'s flags ask for (`-a` is `--param a=`)."""
-        from fatswarm.domain.seam import parse_assignments
-
         params: dict[str, object] = dict(parse_assignments(list(getattr(args, "param", []) or [])))
         if getattr(args, "a", None) is not None:
             if "a" in params:
@@ -91,7 +93,10 @@ class RunConfig:
 
     def resolve(self) -> RunSetup:
         """Check everything and build the run; raises one of `input_errors()`."""
+        # an agent imports this module (through deploy.flags), never the schedulers
         from fatswarm.coordinator.schedule import make_scheduler
+
+        # the whole lock-step engine: the CLI imports this module to build its parser
         from fatswarm.deploy.engine.lockstep import default_max_rounds
 
         if self.scheduler != "scripted" and self.schedule is not None:
@@ -129,7 +134,7 @@ class RunConfig:
     def header_extra(self, *, networked: bool, n: int) -> dict[str, Any]:
         """What the record's header adds: the software version, start kind (or file), fairness
         (as resolved for n robots), schedule file, move timeout (networked), the command line."""
-        from fatswarm import __version__
+        # an agent imports this module (through deploy.flags), never the schedulers
         from fatswarm.coordinator.schedule import default_fairness
 
         extra: dict[str, Any] = {"fatswarm_version": __version__}
@@ -160,7 +165,7 @@ class RunSetup:
     resumed: RunRecord | None = None  # --resume: the record whose committed rounds go on
     algorithm_ref: str = "uniform-circle"  # how every process loads the algorithm
     config: RunConfig | None = None  # what was asked for (None: a resumed record's run)
-    non_rigid: float | None = None  # the adversary's delta (world.core.cut_path); None: rigid
+    non_rigid: float | None = None  # the adversary's delta (world.faults.cut_path); None: rigid
     crash: int | None = None  # f robots crashed for good (world.core.crash_plan); None: none
 
 
@@ -180,10 +185,10 @@ def check_crash(f: int | None, n: int) -> None:
 
 def input_errors() -> tuple[type[Exception], ...]:
     """The exceptions `resolve_run` raises for bad input (each message says what to fix)."""
+    # An agent process imports this module (through deploy.flags) and never the schedulers, the
+    # starts nor physics: they load here, when a run's input is checked.
     from fatswarm.coordinator.schedule import ScheduleError
     from fatswarm.deploy.scenarios.starts import InitFileError
-    from fatswarm.domain.seam import AlgorithmError, AlgorithmParamsError
-    from fatswarm.domain.tolerance import UnsupportedInputError
     from fatswarm.world.physics import InvalidConfigurationError
 
     return (
@@ -213,13 +218,10 @@ def resolve_start(
     `--algorithm`, `--param` and `-a` ask for, valid and supported by the algorithm; raises one of
     `input_errors()`. Shared by `fatswarm run` and `fatswarm world`, so both refuse the same start
     the same way. Random starts are drawn at the scale of a parameter `a`, if there is one."""
-    from fatswarm.deploy.scenarios.starts import load_init, random_start
-    from fatswarm.domain.registry import DEFAULT, load_algorithm
-    from fatswarm.domain.seam import Configured, parse_assignments
-    from fatswarm.domain.tolerance import check_supported
+    # an agent imports this module (through deploy.flags), never physics
     from fatswarm.world.physics import validate_configuration
 
-    chosen = load_algorithm(algorithm or DEFAULT)
+    chosen = load_algorithm(algorithm or DEFAULT_ALGORITHM)
     given: dict[str, object] = dict(parse_assignments(list(param_texts)))
     given.update(params or {})
     has_a = any(spec.name == "a" for spec in chosen.parameters)
@@ -228,32 +230,53 @@ def resolve_start(
             raise RunInputError("give the side once: -a or --param a=..., not both")
         given["a"] = a
     if positions is not None:
-        initial = np.array(positions, dtype=np.float64)
-        if initial.ndim != 2 or initial.shape[1:] != (2,) or not len(initial):
-            raise RunInputError(f"positions must be an (n, 2) array, got shape {initial.shape}")
-        if not np.isfinite(initial).all():
-            raise RunInputError("positions must be finite numbers")
-        if n is not None and n != len(initial):
-            raise RunInputError(f"n={n} disagrees with the {len(initial)} positions given")
+        initial = _given_positions(positions, n)
         setting = Configured.of(chosen, len(initial), given)
     elif init is not None:
-        initial, file_a = load_init(init)  # finite numbers, as check_supported needs
-        if n is not None and n != len(initial):
-            raise RunInputError(
-                f"-n {n} disagrees with the {len(initial)} robots of {init}; drop -n"
-            )
+        initial, file_a = _init_positions(init, n)
         if has_a and "a" not in given and file_a is not None:
             given["a"] = file_a
         setting = Configured.of(chosen, len(initial), given)
     else:
         setting = Configured.of(chosen, DEFAULT_N if n is None else n, given)
-        scale = setting.values.get("a", DEFAULT_A)
-        assert isinstance(scale, (int, float))
-        # the scale first: a random start is drawn at it (a = 1e308 would overflow it)
-        check_supported(np.zeros((setting.n, 2)), float(scale))
-        initial = random_start(setting.n, seed, kind, float(scale))
+        initial = _random_positions(setting, seed, kind)
     setting.check_start(initial)
     return setting, validate_configuration(initial)
+
+
+def _given_positions(positions: Points, n: int | None) -> Points:
+    """The (n, 2) start given as an array (the Python API's `positions`), checked."""
+    initial = np.array(positions, dtype=np.float64)
+    if initial.ndim != 2 or initial.shape[1:] != (2,) or not len(initial):
+        raise RunInputError(f"positions must be an (n, 2) array, got shape {initial.shape}")
+    if not np.isfinite(initial).all():
+        raise RunInputError("positions must be finite numbers")
+    if n is not None and n != len(initial):
+        raise RunInputError(f"n={n} disagrees with the {len(initial)} positions given")
+    return initial
+
+
+def _init_positions(init: str, n: int | None) -> tuple[Points, float | None]:
+    """The (n, 2) start of the `--init` file and its side `a` (None: the file has none)."""
+    # an agent imports this module (through deploy.flags), never the starts
+    from fatswarm.deploy.scenarios.starts import load_init
+
+    initial, file_a = load_init(init)  # finite numbers, as check_supported needs
+    if n is not None and n != len(initial):
+        raise RunInputError(f"-n {n} disagrees with the {len(initial)} robots of {init}; drop -n")
+    return initial, file_a
+
+
+def _random_positions(setting: Configured, seed: int, kind: str) -> Points:
+    """A random start of `kind` for the configured algorithm's n, drawn at the scale of its `a`."""
+    # an agent imports this module (through deploy.flags), never the starts
+    from fatswarm.deploy.scenarios.starts import random_start
+
+    scale = setting.values.get("a", DEFAULT_A)
+    assert isinstance(scale, (int, float))
+    # the scale first: a random start is drawn at it (a = 1e308 would overflow it)
+    check_supported(np.zeros((setting.n, 2)), float(scale))
+    return random_start(setting.n, seed, kind, float(scale))
 
 
 __all__ = [

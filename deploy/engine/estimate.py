@@ -6,6 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Final
 
+from fatswarm.domain.adversary import ASYNC_NAMES
+
 SECONDS_PER_ROUND: Final = 3e-4  # a round's fixed cost (scheduler, progress, record line)
 SECONDS_PER_ROBOT_ROUND: Final = 8e-6  # canonical form, plan and physics grow about linearly
 RECORD_BYTES_PER_ROUND: Final = 200
@@ -21,8 +23,6 @@ ASYNC_CYCLES_PER_STEP_PER_ROBOT: Final = 3
 
 def expected_rounds_per_step(n: int, scheduler: str) -> int:
     """Rounds (ended cycles under an async model) a correct run takes per step of the algorithm."""
-    from fatswarm.domain.adversary import ASYNC_NAMES
-
     per_robot = ASYNC_CYCLES_PER_STEP_PER_ROBOT if scheduler in ASYNC_NAMES else 1
     return EXPECTED_ROUNDS_PER_STEP.get(scheduler, per_robot * max(1, n))
 

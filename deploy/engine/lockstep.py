@@ -12,7 +12,6 @@ the very paths each robot's own `compute` returns; a `compute` passed in is call
 from __future__ import annotations
 
 import logging
-from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Final
@@ -23,7 +22,8 @@ from fatswarm.agent.frames import compute_in_frame, path_to_world
 from fatswarm.agent.params import Params
 from fatswarm.agent.uniform_circle import ALGORITHM as UNIFORM_CIRCLE
 from fatswarm.coordinator.async_rounds import coordinator_core
-from fatswarm.coordinator.rounds import Ask, CoordinatorCore, Finished, RoundTimes
+from fatswarm.coordinator.driver import Event, drive
+from fatswarm.coordinator.rounds import Finished, Note, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
 from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel
 from fatswarm.domain.draws import draw_flip
@@ -31,13 +31,13 @@ from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path, Points
 from fatswarm.domain.seam import Configured, checked
 from fatswarm.domain.wire import ProtocolError
-from fatswarm.world.async_core import AsyncWorldCore, make_world
-from fatswarm.world.asynchrony import CycleDone
-from fatswarm.world.core import Committed, Journal, WorldCore, WorldSetup
-from fatswarm.world.physics import RoundOutcome, validate_configuration
-from fatswarm.world.progress import Progress
-from fatswarm.world.protocol import Commit, MoveSubmitted
+from fatswarm.world.core import WorldCore
+from fatswarm.world.effects import Committed
+from fatswarm.world.journal import Journal, perform
+from fatswarm.world.physics import validate_configuration
+from fatswarm.world.protocol import ControlReply, ControlRequest, MoveSubmitted
 from fatswarm.world.record import Header, RoundEntry, RunRecord
+from fatswarm.world.setup import WorldSetup
 
 # Default round cap = ROUNDS_PER_STEP[scheduler] * (n + STEP_SLACK). The algorithm needs about
 # n + 2 sequential steps (one mover or one mirror pair each); a step costs 1 round under fsync,
@@ -67,19 +67,14 @@ def default_max_rounds(n: int, scheduler: str) -> int:
     return per_step * (n + STEP_SLACK)
 
 
-@dataclass(frozen=True, slots=True)
-class RoundReport(Committed):
-    """A committed round (world frame) and the run's figures after it, for callbacks such as a
-    progress line or a dashboard."""
-
-    progress: Progress
+RoundReport = Committed  # what `on_round` gets: the round's record line and the figures after it
 
 
 @dataclass(frozen=True, slots=True)
 class RunResult:
     """How a run ended and what it cost. Positions are (n, 2), world frame."""
 
-    status: str
+    status: Status
     rounds: int
     epochs: int
     moves: int
@@ -125,7 +120,7 @@ def run_lockstep(
     recorded again (nor the header); the run then goes on exactly as it would have without the
     break. `algorithm_ref` (how to load the algorithm again; default its name) and
     `header_extra` go into the record's header. `non_rigid`: the adversary's delta (moves may be
-    stopped after delta, `world.core.cut_path`); None for rigid moves. `crash`: f robots the
+    stopped after delta, `world.faults.cut_path`); None for rigid moves. `crash`: f robots the
     adversary crashes for good (`world.core.crash_plan`); None for none.
     Raises InvalidConfigurationError for an invalid start, the algorithm's refusal of the start
     (UnsupportedInputError for the paper's, outside the supported range), ValueError if n
@@ -137,8 +132,6 @@ def run_lockstep(
     if n != setting.n:
         raise ValueError(f"the start has {n} robots but params say n={setting.n}")
     cap = default_max_rounds(n, scheduler.name) if max_rounds is None else max_rounds
-    if isinstance(scheduler, AsyncModel) and history is not None:
-        raise HistoryMismatchError(f"a {scheduler.name} run cannot be resumed (yet)")
     setup = WorldSetup(
         swarm=LOCKSTEP_SWARM,
         n=n,
@@ -152,31 +145,19 @@ def run_lockstep(
         non_rigid=non_rigid,
         crash=crash,
     )
-    if history is None:
-        setting.check_start(positions)
-        world = make_world(setup, record, algorithm=setting)
-        checked = scheduler
-    else:
-        _check_history(history)
-        past = RunRecord(Header(n, seed, scheduler.name, positions), tuple(history), None)
-        try:
-            world = WorldCore(setup, record, past, algorithm=setting)
-        except RuntimeError as exc:  # the tracker saw a round after the run had ended
-            raise HistoryMismatchError(str(exc)) from None
-        if world.status != Status.RUNNING:
-            raise HistoryMismatchError(
-                f"the run already ended ({world.status}) after round {len(history)}"
-            )
-        checked = _CheckedScheduler(scheduler, history)
-    for robot in range(n):  # every robot's "agent" lives here, for the whole run
-        world.set_alive(robot, True)
-    bus = _Bus(world, setting, compute, [draw_flip(seed, robot) for robot in range(n)], on_round)
-    coordinator = coordinator_core(
-        scheduler.name, lambda _n: checked, RoundTimes(), resume_live=range(n)
+    world, checked = _open(setup, setting, scheduler, history)
+    if history is not None:
+        log.info("resumed %s after round %d", getattr(record, "path", "a run"), world.committed)
+    bus = _Bus(
+        world, setting, compute, [draw_flip(seed, robot) for robot in range(n)], record, on_round
     )
-    for robot in range(n):
-        coordinator.on_alive(robot, True, 0.0)
-    finished = bus.run(coordinator)
+    finished = bus.run(checked)
+    looks = bus.looks + sum(len(entry.active) for entry in history or ())
+    return _result(world, finished, looks, positions)
+
+
+def _result(world: WorldCore, finished: Finished, looks: int, initial: Points) -> RunResult:
+    """How the run ended and what it cost, from the world's books."""
     progress = world.tracker.snapshot()
     assert progress.status is not None and finished.status == progress.status
     return RunResult(
@@ -186,12 +167,39 @@ def run_lockstep(
         moves=progress.moves,
         total_distance=progress.total_distance,
         collisions=progress.collisions,
-        looks=bus.looks + sum(len(entry.active) for entry in history or ()),
-        initial=np.array(positions),
+        looks=looks,
+        initial=np.array(initial),
         positions=world.positions,
         moves_by_robot=progress.moves_by_robot,
-        time=world.clock.now if isinstance(world, AsyncWorldCore) else None,
+        time=world.model.time(),
     )
+
+
+def _open(
+    setup: WorldSetup,
+    setting: Configured,
+    scheduler: Scheduler,
+    history: Sequence[RoundEntry] | None,
+) -> tuple[WorldCore, Scheduler]:
+    """The world core of a new run, or of a run resumed after `history` (replayed, and the
+    scheduler checked against it); raises HistoryMismatchError for a history this run would
+    not have produced."""
+    if history is None:
+        setting.check_start(setup.initial)
+        return WorldCore(setup, setting), scheduler
+    if isinstance(scheduler, AsyncModel):
+        raise HistoryMismatchError(f"a {scheduler.name} run cannot be resumed (yet)")
+    _check_history(history)
+    header = Header(setup.n, setup.seed, scheduler.name, setup.initial)
+    try:
+        world = WorldCore(setup, setting, RunRecord(header, tuple(history), None))
+    except RuntimeError as exc:  # the tracker saw a round after the run had ended
+        raise HistoryMismatchError(str(exc)) from None
+    if world.status != Status.RUNNING:
+        raise HistoryMismatchError(
+            f"the run already ended ({world.status}) after round {len(history)}"
+        )
+    return world, _CheckedScheduler(scheduler, history)
 
 
 class _Bus:
@@ -204,13 +212,16 @@ class _Bus:
         setting: Configured,
         compute: ComputeFn | None,
         flips: list[bool],
+        record: Journal | None,
         on_round: Callable[[RoundReport], None] | None,
     ) -> None:
         self.world = world
         self.setting = setting
         self.flips = flips
+        self.record = record
         self.on_round = on_round
-        self.on_round_cycles: Callable[[RoundReport], None] | None = None
+        self.clock = 0.0  # virtual time: it moves only to a deadline nothing else can meet first
+        self.events: list[Event] = []  # for the coordinator: the open round's moves notice
         self.looks = 0
         self.faults = 0  # computes that raised or gave no valid path (the robot stayed)
         self.compute: Callable[[Points], Path]
@@ -219,42 +230,63 @@ class _Bus:
             self.compute = lambda view: user(view, own)
         else:
             self.compute = setting.compute
-        if isinstance(world, AsyncWorldCore) and on_round is not None:
-            world.on_cycle = self._cycle_report  # progress by ended cycle, not by instant
-            self.on_round_cycles, self.on_round = on_round, None
-        make_planner = getattr(setting.algorithm, "round_planner", None)
-        self.planner = (
-            make_planner(setting.params) if compute is None and make_planner is not None else None
-        )
+        self.planner = setting.round_planner() if compute is None else None
 
-    def run(self, coordinator: CoordinatorCore) -> Finished:
-        """Deliver actions until the coordinator says the run is over."""
-        now = 0.0  # virtual time: it moves only to a deadline nothing else can meet first
-        pending = deque(coordinator.start(now))
-        while True:
-            if not pending:
-                deadline = coordinator.next_deadline()
-                if deadline is None:
-                    break
-                now = max(now, deadline)
-                pending.extend(coordinator.on_tick(now))
-                continue
-            action = pending.popleft()
-            if isinstance(action, Finished):
-                return action
-            assert isinstance(action, Ask)
-            opened = self.world.open_round
-            reply, _ = self.world.control(action.request)
-            if isinstance(action.request, Commit) and reply.ok:
-                self._report()
-            pending.extend(coordinator.on_reply(reply, now))
-            if reply.ok and self.world.open_round and self.world.open_round != opened:
-                # every robot's Look is held at the world: the round's opening answers them
-                self._act(self.world.open_round, self.world.active)
-                notice = self.world.moves_notice()
-                if notice is not None:
-                    pending.extend(coordinator.on_held(notice, now))
-        raise RuntimeError("the coordinator stopped without finishing the run")  # a bug
+    def run(self, scheduler: Scheduler) -> Finished:
+        """Every robot's agent up for the whole run, the coordinator's core driven on this bus
+        until the run ends."""
+        n = self.world.setup.n
+        for robot in range(n):
+            self.world.set_alive(robot, True)
+        self.perform()  # the header of a new run
+        coordinator = coordinator_core(
+            scheduler.name, lambda _n: scheduler, RoundTimes(), resume_live=range(n)
+        )
+        for robot in range(n):
+            coordinator.on_alive(robot, True, 0.0)
+        finished = drive(coordinator, self)
+        if finished.status == Status.RUNNING:
+            raise RuntimeError("the coordinator stopped without finishing the run")  # a bug
+        return finished
+
+    # -- the link `drive` runs on: a virtual clock, the world core in this process ------------
+
+    def now(self) -> float:
+        return self.clock
+
+    def ask(self, request: ControlRequest) -> ControlReply:
+        """The world core answers at once; a round it opens has every robot Look, Compute and
+        Move at once too (each Look is held at the world until then), and its moves notice
+        comes back as the next event."""
+        opened = self.world.open_round
+        try:
+            reply, _ = self.world.control(request)
+        finally:  # what was committed is recorded, even when the algorithm's goal raised
+            self.perform()
+        if reply.ok and self.world.open_round and self.world.open_round != opened:
+            self._act(self.world.open_round, self.world.active)
+            self.perform()
+            notice = self.world.moves_notice()
+            if notice is not None:
+                self.events.append(notice)
+        return reply
+
+    def wait(self, deadline: float | None) -> list[Event] | None:
+        """The moves notice of the round just opened, if any; else the clock jumps to the
+        deadline (time passes only when nothing else can happen first); None if there is none."""
+        if self.events:
+            events, self.events = self.events, []
+            return events
+        if deadline is None:
+            return None
+        self.clock = max(self.clock, deadline)
+        return []
+
+    def stopped(self) -> bool:
+        return False
+
+    def note(self, notes: Sequence[Note]) -> None:
+        del notes  # a lock step keeps the coordinator's notes to itself, as it always has
 
     def _act(self, round_no: int, active: Sequence[int]) -> None:
         """Every active robot's Look, Compute and Move."""
@@ -308,25 +340,12 @@ class _Bus:
             )
         return None
 
-    def _cycle_report(self, done: CycleDone) -> None:
-        callback = self.on_round_cycles
-        if callback is None:
-            return
-        moved = {done.robot: done.path} if done.path else {}
-        traveled = {done.robot: done.traveled} if done.path else {}
-        outcome = RoundOutcome(done.positions, traveled, list(done.collisions))
-        k = self.world.tracker.snapshot().rounds
-        callback(RoundReport(k, (done.robot,), moved, outcome, self.world.tracker.snapshot()))
-
-    def _report(self) -> None:
-        done = self.world.last_commit
-        if self.on_round is None or done is None:
-            return
-        self.on_round(
-            RoundReport(
-                done.round, done.active, done.paths, done.outcome, self.world.tracker.snapshot()
-            )
-        )
+    def perform(self) -> None:
+        """Do what the world asked: its record lines to the run record, its notes to the log,
+        and every committed round (an ended cycle, under an async model) to `on_round`."""
+        for committed in perform(self.world.take_effects(), self.record):
+            if self.on_round is not None:
+                self.on_round(committed)
 
 
 class _CheckedScheduler:

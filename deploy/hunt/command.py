@@ -1,9 +1,9 @@
 """`fatswarm hunt`: search for counterexamples to an algorithm on every core, shrink each one and
 save it as files that `fatswarm run` replays exactly and `fatswarm replay` shows.
 
-`deploy/hunt/search.py` draws, runs, classifies and shrinks; `deploy/hunt/pool.py` runs that in
-worker processes and saves the failures; this module reads the flags, shows progress (a rich bar on
-a terminal, plain lines otherwise) and the summary.
+`deploy/hunt/search.py` draws, runs and classifies, `deploy/hunt/shrink.py` shrinks;
+`deploy/hunt/pool.py` runs that in worker processes and saves the failures; this module reads the
+flags and runs the hunt; `deploy/hunt/report.py` shows its progress and summary.
 """
 
 from __future__ import annotations
@@ -13,32 +13,34 @@ import os
 import secrets
 import signal
 import sys
-import time
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Final, TextIO
+from typing import TYPE_CHECKING, Final
 
+from fatswarm.coordinator.schedule import NAMES
+from fatswarm.deploy.engine.config import check_non_rigid, input_errors
+from fatswarm.deploy.hunt.report import make_progress, print_summary
 from fatswarm.deploy.hunt.search import (
-    DEFAULT_SHRINK_RUNS,
     SEED_BOUND,
     Hunt,
     HuntInputError,
     hunt_models,
-    kind_counts,
     start_families,
 )
+from fatswarm.deploy.hunt.shrink import DEFAULT_SHRINK_RUNS
+from fatswarm.deploy.sweep.command import _jobs, _stop_on_signals
 from fatswarm.deploy.sweep.grid import SweepInputError, params_text, parse_ints, split_values
 from fatswarm.domain.outcome import ExitCode
+from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
+from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.seam import Configured
 
 if TYPE_CHECKING:
-    from rich.table import Table
-
-    from fatswarm.deploy.hunt.pool import Budget, Saved, Tally
+    from fatswarm.deploy.hunt.pool import Budget, Tally
 
 DEFAULT_SIZES: Final = "3..12"
 DEFAULT_SECONDS: Final = 60.0  # the budget when neither --budget-runs nor --budget-seconds is given
 DEFAULT_FAILURES: Final = 5
 DEFAULT_OUT: Final = "hunt"
-PROGRESS_SECONDS: Final = 5.0  # at most one plain progress line per this many seconds
 DESCRIPTION: Final = (
     "Search for counterexamples to an algorithm: lock-step runs from random and adversarial "
     "starts (near-symmetric, touching, lattices...), under the schedulers asked for, drawn from "
@@ -57,15 +59,13 @@ EPILOG: Final = (
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm hunt`."""
-    from fatswarm.domain.registry import DEFAULT
-
     p.description = DESCRIPTION
     p.epilog = EPILOG
     p.add_argument(
         "--algorithm",
-        default=DEFAULT,
+        default=DEFAULT_ALGORITHM,
         metavar="NAME",
-        help=f"the algorithm hunted (default {DEFAULT}; a registered name, "
+        help=f"the algorithm hunted (default {DEFAULT_ALGORITHM}; a registered name, "
         "module:attribute or path/to/file.py:attribute)",
     )
     p.add_argument(
@@ -75,6 +75,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="NAME=VALUE",
         help="a parameter of the algorithm, the same in every run (repeatable)",
     )
+    _add_search_arguments(p)
+    _add_budget_arguments(p)
+    _add_hunt_run_arguments(p)
+
+
+def _add_search_arguments(p: argparse.ArgumentParser) -> None:
+    """What the candidate runs are drawn from: models, adversary, sizes, start families, cap."""
     p.add_argument(
         "--scheduler",
         action="append",
@@ -119,6 +126,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="R",
         help="round cap of every run (default: the scheduler's for n, as fatswarm run)",
     )
+
+
+def _add_budget_arguments(p: argparse.ArgumentParser) -> None:
+    """When the hunt stops drawing, and how much shrinking a failure may take."""
     p.add_argument(
         "--budget-runs",
         type=int,
@@ -148,6 +159,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="K",
         help=f"runs one failure's shrinking may take (default {DEFAULT_SHRINK_RUNS})",
     )
+
+
+def _add_hunt_run_arguments(p: argparse.ArgumentParser) -> None:
+    """How the hunt runs: workers, seed, where failures go, progress."""
     p.add_argument(
         "--jobs",
         type=int,
@@ -181,25 +196,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def build_hunt(args: argparse.Namespace) -> Hunt:
     """The hunt the flags ask for, checked; raises HuntInputError or one of
     `config.input_errors()` with a line saying what to fix."""
-    from fatswarm.coordinator.schedule import NAMES
-    from fatswarm.deploy.engine.config import check_non_rigid
-    from fatswarm.domain.registry import load_algorithm
-    from fatswarm.domain.seam import Configured
-
     sizes = parse_ints(args.n or [DEFAULT_SIZES], "-n", least=1)
-    usable = hunt_models()
-    models = split_values(args.scheduler) or usable
-    for name in models:
-        if name not in usable:
-            why = "needs a schedule file" if name in NAMES else "is not a scheduler"
-            raise HuntInputError(f"--scheduler {name} {why}; a hunt takes {', '.join(usable)}")
-    known = start_families()
-    families = split_values(args.starts) or known
-    for family in families:
-        if family not in known:
-            raise HuntInputError(
-                f"--starts {family}: not a start family; choose from {', '.join(known)}"
-            )
+    models = _models(args.scheduler)
+    families = _families(args.starts)
     check_non_rigid(args.non_rigid)
     if args.crash is not None and args.crash < 1:
         raise HuntInputError(f"--crash must be at least 1, got {args.crash}")
@@ -223,8 +222,33 @@ def build_hunt(args: argparse.Namespace) -> Hunt:
     return hunt
 
 
+def _models(given: Sequence[str]) -> tuple[str, ...]:
+    """The --scheduler models asked for (default: every one a hunt takes); HuntInputError."""
+    usable = hunt_models()
+    models = split_values(given) or usable
+    for name in models:
+        if name not in usable:
+            why = "needs a schedule file" if name in NAMES else "is not a scheduler"
+            raise HuntInputError(f"--scheduler {name} {why}; a hunt takes {', '.join(usable)}")
+    return models
+
+
+def _families(given: Sequence[str]) -> tuple[str, ...]:
+    """The --starts families asked for (default: all of them); HuntInputError."""
+    known = start_families()
+    families = split_values(given) or known
+    for family in families:
+        if family not in known:
+            raise HuntInputError(
+                f"--starts {family}: not a start family; choose from {', '.join(known)}"
+            )
+    return families
+
+
 def build_budget(args: argparse.Namespace) -> Budget:
     """The budget the flags ask for; raises HuntInputError."""
+    # the pool brings the whole lock-step engine and multiprocessing: the CLI imports this
+    # module to build its parser
     from fatswarm.deploy.hunt.pool import Budget
 
     if args.budget_runs is not None and args.budget_runs < 1:
@@ -243,9 +267,9 @@ def build_budget(args: argparse.Namespace) -> Budget:
 
 def main(args: argparse.Namespace) -> int:
     """`fatswarm hunt`: hunt, save the failures, print the summary; the exit code."""
-    from fatswarm.deploy.engine.config import input_errors
+    # the pools bring the whole lock-step engine and multiprocessing: the CLI imports this
+    # module to build its parser
     from fatswarm.deploy.hunt.pool import check_out, run_hunt
-    from fatswarm.deploy.sweep.command import _jobs, _stop_on_signals
     from fatswarm.deploy.sweep.pool import WorkerDiedError
 
     refused: tuple[type[Exception], ...] = (SweepInputError, *input_errors())
@@ -262,7 +286,7 @@ def main(args: argparse.Namespace) -> int:
     os.makedirs(args.out, exist_ok=True)
     if not args.quiet:
         _say(_plan_text(hunt, budget, seed, jobs, args.out))
-    progress = _progress(budget, quiet=args.quiet)
+    progress = make_progress(budget, quiet=args.quiet)
     try:
         with _stop_on_signals() as stopped, progress:
             tally, complete = run_hunt(
@@ -326,145 +350,6 @@ def _end_text(tally: Tally, seed: int, out: str) -> str:
     )
 
 
-# -- progress -------------------------------------------------------------------------------------
-
-
-class _Progress:
-    """Shows a tally (plain lines, a rich bar) or nothing (quiet)."""
-
-    def __init__(self, budget: Budget) -> None:
-        self.budget = budget
-
-    def show(self, tally: Tally) -> None:
-        """Nothing to show (quiet)."""
-
-    @staticmethod
-    def counts(tally: Tally) -> str:
-        found = kind_counts(tally.kinds) or "none"
-        shrinking = f"  shrinking {tally.shrinking}" if tally.shrinking else ""
-        return (
-            f"runs {tally.runs}  failures: {found}  saved {len(tally.saved)}{shrinking}  "
-            f"refused {tally.refused}"
-        )
-
-    def done_fraction(self, tally: Tally) -> float:
-        """How far the search is through its budget (the nearer of runs and seconds)."""
-        parts = [0.0]
-        if self.budget.runs is not None:
-            parts.append(tally.runs / self.budget.runs)
-        if self.budget.seconds is not None:
-            parts.append((time.monotonic() - tally.started) / self.budget.seconds)
-        return min(1.0, max(parts))
-
-    def __enter__(self) -> _Progress:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
-
-class _PlainProgress(_Progress):
-    """A line on stderr every PROGRESS_SECONDS (for a log file or a pipe)."""
-
-    def __init__(self, budget: Budget, out: TextIO) -> None:
-        super().__init__(budget)
-        self.out = out
-        self.last = time.monotonic()
-
-    def show(self, tally: Tally) -> None:
-        now = time.monotonic()
-        if now - self.last >= PROGRESS_SECONDS:
-            self.last = now
-            print(
-                f"hunt: {self.done_fraction(tally):.0%}  {self.counts(tally)}",
-                file=self.out,
-                flush=True,
-            )
-
-
-class _RichProgress(_Progress):
-    """A rich progress bar on the terminal (stderr): the budget spent, with the counts beside."""
-
-    def __init__(self, budget: Budget) -> None:
-        from rich.console import Console
-        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
-        super().__init__(budget)
-        self.bar = Progress(
-            TextColumn("hunt"),
-            BarColumn(),
-            TextColumn("{task.percentage:>3.0f}%"),
-            TextColumn("{task.fields[counts]}"),
-            TimeElapsedColumn(),
-            console=Console(stderr=True),
-            transient=False,
-        )
-        self.task = self.bar.add_task("hunt", total=1.0, counts="")
-
-    def show(self, tally: Tally) -> None:
-        self.bar.update(self.task, completed=self.done_fraction(tally), counts=self.counts(tally))
-
-    def __enter__(self) -> _Progress:
-        self.bar.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.bar.stop()
-
-
-def _progress(budget: Budget, *, quiet: bool) -> _Progress:
-    if quiet:
-        return _Progress(budget)
-    if sys.stderr.isatty():
-        return _RichProgress(budget)
-    return _PlainProgress(budget, sys.stderr)
-
-
-# -- the summary ----------------------------------------------------------------------------------
-
-
-def summary_table(saved: Sequence[Saved]) -> Table:
-    """One line per saved failure: its folder (index and kind), where the hunt found it (family,
-    scheduler, n) and what shrinking left (n, script rounds, decimals), the runs shrinking took,
-    and whether the saved files replay to the same kind."""
-    from rich import box
-    from rich.table import Table
-
-    table = Table(box=box.SIMPLE_HEAD, pad_edge=False, show_edge=False)
-    table.add_column("failure (folder)", no_wrap=True)
-    table.add_column("found in")  # the one column that wraps on a narrow terminal
-    for name in ("n", "rounds", "decimals", "shrink\nruns"):
-        table.add_column(name, justify="right", no_wrap=True)
-    table.add_column("replays", no_wrap=True)
-    for item in saved:
-        s = item.summary
-        found, small = s["found"], s["shrunk"]
-        rounds = "-" if small["script_rounds"] is None else str(small["script_rounds"])
-        replays = s["replayed"] is not None and s["replayed"]["kind"] == s["kind"]
-        table.add_row(
-            os.path.basename(item.folder),
-            f"{found['family']} {found['scheduler']}",
-            f"{found['n']}->{small['n']}",
-            rounds,
-            f"{found['decimals']}->{small['decimals']}",
-            str(small["runs"]),
-            "yes" if replays else "NO",
-        )
-    return table
-
-
-def print_summary(tally: Tally, out: TextIO) -> None:
-    """The counts of every kind found, then the table of saved failures, to `out`."""
-    from rich.console import Console
-
-    tty = out.isatty()
-    console = Console(file=out, width=None if tty else 200, no_color=not tty, highlight=False)
-    found = kind_counts(tally.kinds) or "none"
-    console.print(f"{tally.runs} runs, {tally.refused} starts refused; failures found: {found}")
-    if tally.saved:
-        console.print(summary_table(tally.saved))
-
-
 def _say(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
@@ -474,4 +359,4 @@ def _fail(message: str) -> int:
     return ExitCode.BAD_INPUT
 
 
-__all__ = ["add_arguments", "build_budget", "build_hunt", "main", "print_summary", "summary_table"]
+__all__ = ["add_arguments", "build_budget", "build_hunt", "main"]

@@ -15,8 +15,16 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from typing import Any, Final
 
+from fatswarm.deploy.engine.config import RunConfig
+from fatswarm.deploy.hunt.files import (
+    folder_name,
+    replay_argv,
+    replay_command,
+    schedule_data,
+    start_data,
+    summary_data,
+)
 from fatswarm.deploy.hunt.search import (
-    DEFAULT_SHRINK_RUNS,
     Candidate,
     Case,
     Failure,
@@ -24,17 +32,17 @@ from fatswarm.deploy.hunt.search import (
     HuntInputError,
     Outcome,
     draw_candidate,
-    folder_name,
-    replay_argv,
-    replay_command,
     run_candidate,
     run_case,
-    schedule_data,
-    shrink,
-    start_data,
-    summary_data,
 )
-from fatswarm.deploy.sweep.pool import WorkerDiedError, init_worker
+from fatswarm.deploy.hunt.shrink import DEFAULT_SHRINK_RUNS, shrink
+from fatswarm.deploy.sweep.pool import (
+    WorkerDiedError,
+    _kill_workers,
+    _sigint_blocked,
+    init_worker,
+)
+from fatswarm.world.record import RecordWriter
 
 IN_FLIGHT_PER_JOB: Final = 2  # candidate runs queued per worker: busy, yet quick to stop
 POLL_S: Final = 0.2  # how often the pool loop looks at the stop flag and the clock
@@ -102,9 +110,6 @@ def replay_files(hunt: Hunt, case: Case, folder: str) -> Failure | None:
     """Run the saved files of `case` in `folder` as `fatswarm run` reads them (the same
     `RunConfig.resolve`: `load_init`, `load_script`), writing record.jsonl; the failure it
     shows (None: it did not fail, which would be a bug of the hunt)."""
-    from fatswarm.deploy.engine.config import RunConfig
-    from fatswarm.world.record import RecordWriter
-
     argv = replay_argv(hunt, case, folder)
     config = RunConfig(
         algorithm=hunt.algorithm,
@@ -197,84 +202,23 @@ def run_hunt(
     are, so a hunt with a run budget finds and saves the same failures on any number of cores.
     Raises WorkerDiedError if a worker vanished.
     """
-    from fatswarm.deploy.sweep.pool import _kill_workers, _sigint_blocked
-
     tally = Tally()
     pool = cf.ProcessPoolExecutor(
         max_workers=jobs, mp_context=multiprocessing.get_context("spawn"), initializer=init_worker
     )
-    searches: dict[cf.Future[Searched], Candidate] = {}
-    shrinks: dict[cf.Future[Saved], Candidate] = {}
-    failed: dict[int, Searched] = {}  # found, waiting to be settled
-    settled: list[int] = []
-    done: set[int] = set()
-    state = {"frontier": 0, "drawn": 0}  # every candidate below frontier has run
+    loop = _HuntLoop(hunt, hunt_seed, budget, jobs, out, pool, tally)
     finished = False
-
-    def searching() -> bool:
-        if len(settled) >= budget.failures:
-            return False
-        if budget.runs is not None and state["drawn"] >= budget.runs:
-            return False
-        return budget.seconds is None or time.monotonic() - tally.started < budget.seconds
-
-    def settle(everything: bool) -> None:
-        for index in sorted(failed):
-            if len(settled) >= budget.failures or (index >= state["frontier"] and not everything):
-                return
-            found = failed.pop(index)
-            assert found.outcome.failure is not None and found.case is not None
-            settled.append(index)
-            folder = os.path.join(out, folder_name(found.candidate, found.outcome.failure.kind))
-            with _sigint_blocked():
-                future = pool.submit(
-                    shrink_and_save,
-                    hunt,
-                    hunt_seed,
-                    found.candidate,
-                    found.outcome.failure,
-                    found.case,
-                    folder,
-                    budget.shrink_runs,
-                )
-            shrinks[future] = found.candidate
-
-    def collect(future: cf.Future[Any]) -> None:
-        if future in searches:
-            candidate = searches.pop(future)
-            result: Searched = future.result()
-            _count(tally, result)
-            done.add(candidate.index)
-            if result.outcome.failure is not None and result.case is not None:
-                failed[candidate.index] = result
-        else:
-            shrinks.pop(future)
-            tally.saved.append(future.result())
-
     try:
         while True:
             if stop():
                 return tally, False
-            if searching():
-                with _sigint_blocked():
-                    while len(searches) < jobs * IN_FLIGHT_PER_JOB and searching():
-                        candidate = draw_candidate(hunt, hunt_seed, state["drawn"])
-                        searches[pool.submit(search, hunt, candidate)] = candidate
-                        state["drawn"] += 1
-            else:
-                for future in [f for f in searches if f.cancel()]:
-                    del searches[future]  # never started: the search is over
-                if not searches:
-                    settle(everything=True)
-            tally.shrinking = len(shrinks)
-            if not searches and not shrinks and not searching():
+            loop.feed()
+            if loop.over():
                 finished = True
                 break
-            waiting: list[cf.Future[Any]] = [*searches, *shrinks]
-            ready, _ = cf.wait(waiting, timeout=POLL_S, return_when=cf.FIRST_COMPLETED)
-            for future in ready:
+            for future in loop.ready():
                 try:
-                    collect(future)
+                    loop.collect(future)
                 except BrokenProcessPool:
                     if stop():
                         return tally, False
@@ -282,10 +226,7 @@ def run_hunt(
                         "a worker process died (killed, or out of memory?) "
                         "while hunting; rerun with the same --seed"
                     ) from None
-            while state["frontier"] in done:
-                state["frontier"] += 1
-            settle(everything=False)
-            tally.shrinking = len(shrinks)
+            loop.advance()
             on_change(tally)
         tally.saved.sort(key=lambda saved: saved.candidate.index)
         return tally, True
@@ -293,6 +234,112 @@ def run_hunt(
         if not finished:
             _kill_workers(pool)
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+class _HuntLoop:
+    """What `run_hunt`'s pool loop keeps: the searches and shrinkings in flight, the failures
+    found and not yet settled (shrunk and saved, or passed over), and how far the hunt has run."""
+
+    def __init__(
+        self,
+        hunt: Hunt,
+        hunt_seed: int,
+        budget: Budget,
+        jobs: int,
+        out: str,
+        pool: cf.ProcessPoolExecutor,
+        tally: Tally,
+    ) -> None:
+        self.hunt, self.hunt_seed, self.budget = hunt, hunt_seed, budget
+        self.jobs, self.out, self.pool, self.tally = jobs, out, pool, tally
+        self.searches: dict[cf.Future[Searched], Candidate] = {}
+        self.shrinks: dict[cf.Future[Saved], Candidate] = {}
+        self.failed: dict[int, Searched] = {}  # found, waiting to be settled
+        self.settled: list[int] = []
+        self.done: set[int] = set()
+        self.frontier = 0  # every candidate below frontier has run
+        self.drawn = 0
+
+    def searching(self) -> bool:
+        """Whether the search still draws candidates (its budget is not spent)."""
+        budget = self.budget
+        if len(self.settled) >= budget.failures:
+            return False
+        if budget.runs is not None and self.drawn >= budget.runs:
+            return False
+        return budget.seconds is None or time.monotonic() - self.tally.started < budget.seconds
+
+    def feed(self) -> None:
+        """Keep the workers busy with candidates while searching; once the search is over, drop
+        the candidates not started and, when none runs, settle every failure found."""
+        if self.searching():
+            with _sigint_blocked():
+                while len(self.searches) < self.jobs * IN_FLIGHT_PER_JOB and self.searching():
+                    candidate = draw_candidate(self.hunt, self.hunt_seed, self.drawn)
+                    self.searches[self.pool.submit(search, self.hunt, candidate)] = candidate
+                    self.drawn += 1
+        else:
+            for future in [f for f in self.searches if f.cancel()]:
+                del self.searches[future]  # never started: the search is over
+            if not self.searches:
+                self.settle(everything=True)
+        self.tally.shrinking = len(self.shrinks)
+
+    def over(self) -> bool:
+        """Whether nothing runs and nothing more will."""
+        return not self.searches and not self.shrinks and not self.searching()
+
+    def ready(self) -> set[cf.Future[Any]]:
+        """The runs that ended within POLL_S."""
+        waiting: list[cf.Future[Any]] = [*self.searches, *self.shrinks]
+        ready, _ = cf.wait(waiting, timeout=POLL_S, return_when=cf.FIRST_COMPLETED)
+        return ready
+
+    def collect(self, future: cf.Future[Any]) -> None:
+        """Count a candidate's run (keeping a failure to settle) or keep a saved failure."""
+        if future in self.searches:
+            candidate = self.searches.pop(future)
+            result: Searched = future.result()
+            _count(self.tally, result)
+            self.done.add(candidate.index)
+            if result.outcome.failure is not None and result.case is not None:
+                self.failed[candidate.index] = result
+        else:
+            self.shrinks.pop(future)
+            self.tally.saved.append(future.result())
+
+    def advance(self) -> None:
+        """Move the frontier past the candidates that have run and settle the failures below it."""
+        while self.frontier in self.done:
+            self.frontier += 1
+        self.settle(everything=False)
+        self.tally.shrinking = len(self.shrinks)
+
+    def settle(self, everything: bool) -> None:
+        """Shrink and save the failures found below the frontier (all of them with `everything`),
+        in the hunt's order, up to `budget.failures`."""
+        for index in sorted(self.failed):
+            if len(self.settled) >= self.budget.failures or (
+                index >= self.frontier and not everything
+            ):
+                return
+            found = self.failed.pop(index)
+            assert found.outcome.failure is not None and found.case is not None
+            self.settled.append(index)
+            kind = found.outcome.failure.kind
+            folder = os.path.join(self.out, folder_name(found.candidate, kind))
+            with _sigint_blocked():
+                future = self.pool.submit(
+                    shrink_and_save,
+                    self.hunt,
+                    self.hunt_seed,
+                    found.candidate,
+                    found.outcome.failure,
+                    found.case,
+                    folder,
+                    self.budget.shrink_runs,
+                )
+            self.shrinks[future] = found.candidate
 
 
 def _count(tally: Tally, result: Searched) -> None:

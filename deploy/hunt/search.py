@@ -1,6 +1,6 @@
 """The pure parts of `fatswarm hunt`: drawing a candidate run from the hunt's seed, running it in
-lock step and classifying how it failed, and shrinking a failure to a small case that a scripted
-schedule replays exactly. No printing, no processes: `deploy/hunt/pool.py` runs these in workers.
+lock step and classifying how it failed (replaying a failure's case and shrinking it is
+`deploy/hunt/shrink.py`). No printing, no processes: `deploy/hunt/pool.py` runs these in workers.
 
 The engine is a seeded random search with a greedy delta-debugging shrinker; docs/hunt.md says
 why it is not Hypothesis.
@@ -8,19 +8,34 @@ why it is not Hypothesis.
 
 from __future__ import annotations
 
-import os
-import shlex
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final
 
 import numpy as np
 
-from fatswarm.deploy.sweep.grid import ParamText, SweepInputError
+from fatswarm.agent.geometry import sec, target_radius
+from fatswarm.coordinator.schedule import make_scheduler
+from fatswarm.deploy.engine.config import DEFAULT_A, input_errors
+from fatswarm.deploy.scenarios.adversarial import FAMILIES, adversarial_start, family_range
+from fatswarm.deploy.scenarios.starts import KINDS as RANDOM_KINDS
+from fatswarm.deploy.scenarios.starts import overlapping_pair, random_start
+from fatswarm.deploy.sweep.grid import ParamText, SweepInputError, sweep_schedulers
+from fatswarm.domain import tolerance
+from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
+from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.seam import Configured
+from fatswarm.world.physics import (
+    InvalidConfigurationError,
+    PhysicsInvariantError,
+    validate_configuration,
+)
+
+if TYPE_CHECKING:
+    from fatswarm.deploy.engine.lockstep import RoundReport
 
 HUNT_STREAM: Final = 0x4B17  # keeps the hunt's draws apart from every other seeded stream
 SEED_MASK: Final = 0xFFFFFFFF
@@ -41,14 +56,6 @@ KINDS: Final = (COLLISION, INVARIANT, STALLED, MAX_ROUNDS, ERROR)
 # coordinator.schedule.NAMES (asynchronous, say) is hunted, but not held to it, unless named here.
 SSYNC_ROUNDS: Final = frozenset({"fsync", "ssync", "centralized", "scripted"})
 
-DEFAULT_SHRINK_RUNS: Final = 200  # runs one failure's shrinking may take
-SEED_TRIES: Final = (0, 1, 2, 3)  # simpler run seeds the shrinker tries
-DECIMAL_TRIES: Final = (0, 1, 2, 3, 4, 6)  # decimals the shrinker rounds coordinates to
-MAX_DECIMALS: Final = 17  # repr of a double never needs more
-# Shrinking a failure that shows in round k runs each proposal to FACTOR k + SLACK rounds only.
-HORIZON_FACTOR: Final = 2
-HORIZON_SLACK: Final = 10
-ROUND_DROP_LIMIT: Final = 48  # scripts this long or shorter also have single rounds dropped
 SEC_RADIUS_SLACK: Final = 1e-8  # world-grid rounding (2^-30) of an end point, with room
 
 
@@ -62,24 +69,17 @@ class HuntInputError(SweepInputError):
 def hunt_models() -> tuple[str, ...]:
     """The schedulers (models) a hunt draws from: those of `coordinator.schedule.NAMES` that need
     no file, read there through the sweep's one reading of it (a new model is one more value)."""
-    from fatswarm.deploy.sweep.grid import sweep_schedulers
-
     return sweep_schedulers()
 
 
 def start_families() -> tuple[str, ...]:
     """Random start kinds (`deploy/scenarios/starts.py`), then the adversarial families
     (`deploy/scenarios/adversarial.py`)."""
-    from fatswarm.deploy.scenarios.adversarial import FAMILIES
-    from fatswarm.deploy.scenarios.starts import KINDS as RANDOM_KINDS
-
     return (*RANDOM_KINDS, *FAMILIES)
 
 
 def family_sizes(family: str, sizes: Sequence[int]) -> tuple[int, ...]:
     """The n of `sizes` that `family` builds."""
-    from fatswarm.deploy.scenarios.adversarial import FAMILIES, family_range
-
     if family in FAMILIES:
         lo, hi = family_range(family)
         return tuple(n for n in sizes if lo <= n <= hi)
@@ -112,6 +112,8 @@ class Hunt:
 
     def cap(self, n: int, model: str) -> int:
         """The round cap of a run of n robots drawn under `model`."""
+        # the whole lock-step engine: the CLI imports this module (through deploy.hunt.command)
+        # to build its parser
         from fatswarm.deploy.engine.lockstep import default_max_rounds
 
         return self.max_rounds if self.max_rounds is not None else default_max_rounds(n, model)
@@ -200,8 +202,6 @@ class _Found(Exception):
 
 @lru_cache(maxsize=8)
 def _algorithm(ref: str) -> Any:
-    from fatswarm.domain.registry import load_algorithm
-
     return load_algorithm(ref)
 
 
@@ -213,10 +213,6 @@ def configure(hunt: Hunt, n: int) -> Configured:
 def candidate_start(hunt: Hunt, candidate: Candidate) -> Points:
     """The (n, 2) start of a candidate: a random kind drawn at the algorithm's scale `a` (as
     `fatswarm run --start` draws it), or an adversarial family's start."""
-    from fatswarm.deploy.engine.config import DEFAULT_A
-    from fatswarm.deploy.scenarios.adversarial import FAMILIES, adversarial_start
-    from fatswarm.deploy.scenarios.starts import random_start
-
     if candidate.family in FAMILIES:
         return adversarial_start(candidate.family, candidate.n, candidate.seed)
     scale = configure(hunt, candidate.n).values.get("a", DEFAULT_A)
@@ -235,9 +231,6 @@ def sec_invariant(setting: Configured) -> InvariantCheck:
     So no robot ends a round farther than r_c + 2 EPS_AT from the current centre, and the swarm
     never falls back to expansion. Expansion rounds (r_c < r) move leaders out of the SEC on
     purpose and are not checked. The slack adds the world grid's rounding of end points."""
-    from fatswarm.agent.geometry import sec, target_radius
-    from fatswarm.domain.tolerance import EPS_AT_REL, EPS_EQ_REL, scale
-
     a = setting.values.get("a")
     assert isinstance(a, float)
     r = target_radius(setting.n, a)
@@ -253,8 +246,8 @@ def sec_invariant(setting: Configured) -> InvariantCheck:
         circle = sec(before)
         if circle.radius < r:  # expansion (or within rounding of its threshold)
             return None
-        s = scale(circle.radius)
-        tol_at, tol_eq = EPS_AT_REL * s, EPS_EQ_REL * s
+        s = tolerance.scale(circle.radius)
+        tol_at, tol_eq = tolerance.EPS_AT_REL * s, tolerance.EPS_EQ_REL * s
         cx, cy = circle.center
         dist = np.hypot(after[:, 0] - cx, after[:, 1] - cy)
         worst = int(np.argmax(dist))
@@ -285,8 +278,6 @@ def invariants(hunt: Hunt, setting: Configured, model: str) -> list[InvariantChe
 
 def overlap(positions: Points) -> str | None:
     """A pair of discs that overlap (physics guarantees none; checked all the same)."""
-    from fatswarm.deploy.scenarios.starts import overlapping_pair
-
     pair = overlapping_pair(positions)
     if pair is None:
         return None
@@ -316,51 +307,16 @@ def run_case(
     raises is an INVARIANT failure, anything else the run raises an ERROR failure. `record`: a
     journal to write the run to (`world.record.RecordWriter`), with `header_extra` in its header.
     """
-    from fatswarm.deploy.engine.config import input_errors
-    from fatswarm.deploy.engine.lockstep import RoundReport, run_lockstep
-    from fatswarm.domain.outcome import Status
-    from fatswarm.world.physics import (
-        InvalidConfigurationError,
-        PhysicsInvariantError,
-        validate_configuration,
-    )
+    # the whole lock-step engine: the CLI imports this module (through deploy.hunt.command)
+    # to build its parser
+    from fatswarm.deploy.engine.lockstep import run_lockstep
 
-    active: list[tuple[int, ...]] = []
-    found: list[Failure] = []
     try:  # the input first: refused here, it is no failure
         setting = configure(hunt, len(positions))
         setting.check_start(validate_configuration(positions))
     except input_errors() as exc:
         return Outcome(None, refused=f"{type(exc).__name__}: {exc}")
-    checks = invariants(hunt, setting, model)
-    before = [np.array(positions, dtype=np.float64)]
-
-    def on_round(report: RoundReport) -> None:
-        active.append(tuple(report.active))
-        after = report.outcome.positions
-        failure = None
-        if report.outcome.collisions:
-            hit = report.outcome.collisions[0]
-            failure = Failure(
-                COLLISION,
-                report.round,
-                f"robot {hit.robot} stopped at contact with robot {hit.other} "
-                f"in round {report.round}",
-            )
-        else:
-            broken = overlap(after)
-            for check in checks if broken is None else ():
-                broken = check(before[0], after)
-                if broken is not None:
-                    break
-            if broken is not None:
-                failure = Failure(INVARIANT, report.round, f"round {report.round}: {broken}")
-        before[0] = np.array(after, dtype=np.float64)
-        if failure is not None and not found:
-            found.append(failure)
-            if stop_early:
-                raise _Found(failure)
-
+    watch = _RoundWatch(invariants(hunt, setting, model), positions, stop_early)
     try:
         result = run_lockstep(
             positions,
@@ -368,7 +324,7 @@ def run_case(
             scheduler,
             seed=seed,
             max_rounds=max_rounds,
-            on_round=on_round,
+            on_round=watch.on_round,
             algorithm_ref=hunt.algorithm,
             non_rigid=hunt.non_rigid,
             crash=hunt.crash,
@@ -376,41 +332,81 @@ def run_case(
             header_extra=header_extra,
         )
     except _Found as stop:
-        return Outcome(stop.failure, tuple(active), rounds=len(active))
+        return Outcome(stop.failure, tuple(watch.active), rounds=len(watch.active))
     except (InvalidConfigurationError, PhysicsInvariantError) as exc:  # physics saw an overlap
-        return Outcome(
-            Failure(INVARIANT, len(active) + 1, f"round {len(active) + 1}: {exc}"),
-            tuple(active),
-            rounds=len(active),
-        )
+        return watch.raised(INVARIANT, f"round {len(watch.active) + 1}: {exc}")
     except Exception as exc:  # a finding: the algorithm raised where the run cannot go on
-        return Outcome(
-            Failure(ERROR, len(active) + 1, f"{type(exc).__name__}: {exc}"),
-            tuple(active),
-            rounds=len(active),
-        )
-    if found:
-        return Outcome(found[0], tuple(active), status=result.status, rounds=result.rounds)
-    failure = None
-    if result.status == Status.STALLED:
-        failure = Failure(
+        return watch.raised(ERROR, f"{type(exc).__name__}: {exc}")
+    return watch.ended(result.status, result.rounds)
+
+
+class _RoundWatch:
+    """The round callback of `run_case`: the active sets so far, and the first collision or broken
+    invariant (raising `_Found` there with `stop_early`)."""
+
+    def __init__(self, checks: list[InvariantCheck], positions: Points, stop_early: bool) -> None:
+        self.checks = checks
+        self.stop_early = stop_early
+        self.active: list[tuple[int, ...]] = []
+        self.found: list[Failure] = []
+        self.before = np.array(positions, dtype=np.float64)
+
+    def on_round(self, report: RoundReport) -> None:
+        self.active.append(tuple(report.entry.active))
+        after = report.entry.positions
+        failure = self._failure(report, after)
+        self.before = np.array(after, dtype=np.float64)
+        if failure is not None and not self.found:
+            self.found.append(failure)
+            if self.stop_early:
+                raise _Found(failure)
+
+    def _failure(self, report: RoundReport, after: Points) -> Failure | None:
+        if report.entry.collisions:
+            hit = report.entry.collisions[0]
+            return Failure(
+                COLLISION,
+                report.entry.round,
+                f"robot {hit.robot} stopped at contact with robot {hit.other} "
+                f"in round {report.entry.round}",
+            )
+        broken = overlap(after)
+        for check in self.checks if broken is None else ():
+            broken = check(self.before, after)
+            if broken is not None:
+                break
+        if broken is not None:
+            return Failure(INVARIANT, report.entry.round, f"round {report.entry.round}: {broken}")
+        return None
+
+    def ended(self, status: str, rounds: int) -> Outcome:
+        """The outcome of a run that ended with `status` after `rounds`: its first failure seen,
+        else a stall or the cap."""
+        failure = self.found[0] if self.found else _ended_failure(status, rounds)
+        return Outcome(failure, tuple(self.active), status=status, rounds=rounds)
+
+    def raised(self, kind: str, detail: str) -> Outcome:
+        """The outcome of a run that raised after the rounds seen: a `kind` failure in the next."""
+        rounds = len(self.active)
+        return Outcome(Failure(kind, rounds + 1, detail), tuple(self.active), rounds=rounds)
+
+
+def _ended_failure(status: str, rounds: int) -> Failure | None:
+    """The failure of a run that ended with `status` after `rounds` (None: it formed)."""
+    if status == Status.STALLED:
+        return Failure(
             STALLED,
-            result.rounds,
-            f"stalled after {result.rounds} rounds: every robot stays, the goal does not hold",
+            rounds,
+            f"stalled after {rounds} rounds: every robot stays, the goal does not hold",
         )
-    elif result.status == Status.MAX_ROUNDS:
-        failure = Failure(
-            MAX_ROUNDS, result.rounds, f"still running at the round cap ({result.rounds} rounds)"
-        )
-    return Outcome(failure, tuple(active), status=result.status, rounds=result.rounds)
+    if status == Status.MAX_ROUNDS:
+        return Failure(MAX_ROUNDS, rounds, f"still running at the round cap ({rounds} rounds)")
+    return None
 
 
 def run_candidate(hunt: Hunt, candidate: Candidate) -> tuple[Outcome, Case | None]:
     """Run a drawn candidate under its model; with a failure, also the Case that replays it: its
     start and its rounds' active sets as a script (then fsync), its seed and its cap."""
-    from fatswarm.coordinator.schedule import make_scheduler
-    from fatswarm.deploy.engine.config import input_errors
-
     try:
         positions = candidate_start(hunt, candidate)
         scheduler = make_scheduler(candidate.model, candidate.n, candidate.seed)
@@ -441,376 +437,6 @@ def scriptable(model: str) -> bool:
     return model in SSYNC_ROUNDS
 
 
-def replay(
-    hunt: Hunt,
-    case: Case,
-    *,
-    stop_early: bool = True,
-    record: Any = None,
-    max_rounds: int | None = None,
-) -> Outcome:
-    """Run a Case under its scripted schedule (or its own model, when it has no script), up to
-    its cap or the lower `max_rounds`."""
-    from fatswarm.coordinator.schedule import Scripted, make_scheduler
-
-    if case.rounds is None:
-        scheduler: Any = make_scheduler(case.model, case.n, case.seed)
-        model = case.model
-    else:
-        scheduler, model = Scripted(case.rounds, case.after), "scripted"
-    cap = case.max_rounds if max_rounds is None else min(max_rounds, case.max_rounds)
-    return run_case(
-        hunt,
-        case.points(),
-        scheduler,
-        model,
-        seed=case.seed,
-        max_rounds=cap,
-        stop_early=stop_early,
-        record=record,
-    )
-
-
-# -- shrinking ---------------------------------------------------------------------------------
-
-
-@dataclass(slots=True)
-class Shrunk:
-    """A shrinking's result: the smallest case found that fails with the same kind, its failure,
-    the runs it took, and whether the unshrunk case replayed at all under its script."""
-
-    case: Case
-    failure: Failure
-    runs: int
-    reproduced: bool
-    steps: list[str] = field(default_factory=list)  # the shrink steps taken, in order
-
-
-def decimals(value: float) -> int:
-    """The fewest decimals that write `value` exactly (17 for most grid values)."""
-    for places in range(MAX_DECIMALS):
-        if round(value, places) == value:
-            return places
-    return MAX_DECIMALS
-
-
-def case_decimals(case: Case) -> int:
-    """The most decimals any coordinate of the case needs."""
-    return max((decimals(v) for p in case.positions for v in p), default=0)
-
-
-def _cap_for(hunt: Hunt, case: Case, n: int) -> int:
-    """A shrunk case's cap: the hunt's `--max-rounds`, or the default of its model for its n
-    (so a case past its cap is past the cap that model would give its n robots)."""
-    return hunt.cap(n, case.model)
-
-
-def drop_robots(hunt: Hunt, case: Case, robots: Sequence[int]) -> Case | None:
-    """The case without `robots`: the others renumbered in order, the script's sets likewise
-    (rounds left empty are dropped); None if too few robots would remain."""
-    gone = set(robots)
-    keep = [i for i in range(case.n) if i not in gone]
-    if len(keep) < max(2, (hunt.crash or 0) + 1):
-        return None
-    number = {old: new for new, old in enumerate(keep)}
-    rounds = (
-        None
-        if case.rounds is None
-        else tuple(
-            sets
-            for sets in (tuple(number[r] for r in rnd if r in number) for rnd in case.rounds)
-            if sets
-        )
-        or (tuple(range(len(keep))),)
-    )
-    return replace(
-        case,
-        positions=tuple(case.positions[i] for i in keep),
-        rounds=rounds,
-        max_rounds=_cap_for(hunt, case, len(keep)),
-    )
-
-
-def _fewer_robots(hunt: Hunt, case: Case) -> Iterator[tuple[str, Case]]:
-    """Drop halves, quarters... then single robots (delta debugging's complements)."""
-    size = case.n // 2
-    while size >= 1:
-        for lo in range(0, case.n, size):
-            smaller = drop_robots(hunt, case, range(lo, min(lo + size, case.n)))
-            if smaller is not None:
-                yield f"dropped robots {lo}..{min(lo + size, case.n) - 1}", smaller
-        size //= 2
-
-
-def _shorter_schedule(hunt: Hunt, case: Case) -> Iterator[tuple[str, Case]]:
-    """fsync from the start; then the script cut to its first 1, 2, 4... rounds (then fsync);
-    then, for a short script, single rounds dropped or made fsync rounds."""
-    del hunt
-    if case.rounds is None:
-        return
-    everyone = tuple(range(case.n))
-    if case.rounds != (everyone,) or case.after != "fsync":
-        yield "fsync from round 1", replace(case, rounds=(everyone,), after="fsync")
-    length = len(case.rounds)
-    keep = 1
-    while keep < length:
-        yield (
-            f"first {keep} rounds, then fsync",
-            replace(case, rounds=case.rounds[:keep], after="fsync"),
-        )
-        keep *= 2
-    if 1 < length <= ROUND_DROP_LIMIT:
-        for k in range(length):
-            yield (
-                f"dropped round {k + 1}",
-                replace(case, rounds=case.rounds[:k] + case.rounds[k + 1 :]),
-            )
-        for k in range(length):
-            if case.rounds[k] != everyone:
-                yield (
-                    f"round {k + 1} all active",
-                    replace(case, rounds=(*case.rounds[:k], everyone, *case.rounds[k + 1 :])),
-                )
-
-
-def _simpler_seed(hunt: Hunt, case: Case) -> Iterator[tuple[str, Case]]:
-    del hunt
-    for seed in SEED_TRIES:
-        if seed < case.seed:
-            yield f"seed {seed}", replace(case, seed=seed)
-
-
-def _simpler_coordinates(hunt: Hunt, case: Case) -> Iterator[tuple[str, Case]]:
-    """The swarm moved by a whole vector towards the origin; every coordinate rounded to fewer
-    decimals; then each coordinate alone."""
-    del hunt
-    pts = case.points()
-    shift = np.round(pts.mean(axis=0)) + 0.0  # + 0.0: no -0.0
-    if shift.any():
-        moved = pts - shift
-        yield f"moved by {(0.0 - shift).tolist()}", replace(case, positions=_pairs(moved))
-    most = case_decimals(case)
-    for places in DECIMAL_TRIES:
-        if places < most:
-            yield (
-                f"coordinates to {places} decimals",
-                replace(case, positions=_pairs(np.round(pts, places))),
-            )
-    for i in range(case.n):
-        for axis in (0, 1):
-            value = float(pts[i, axis])
-            for places in DECIMAL_TRIES:
-                if places < decimals(value):
-                    changed = pts.copy()
-                    changed[i, axis] = round(value, places)
-                    yield (
-                        f"robot {i} {'xy'[axis]} to {places} decimals",
-                        replace(case, positions=_pairs(changed)),
-                    )
-                    break
-
-
-def _pairs(points: Points) -> tuple[tuple[float, float], ...]:
-    return tuple((float(x) + 0.0, float(y) + 0.0) for x, y in points)  # + 0.0: no -0.0
-
-
-SHRINK_STEPS: Final = (_fewer_robots, _shorter_schedule, _simpler_seed, _simpler_coordinates)
-
-
-def _valid(case: Case) -> bool:
-    from fatswarm.deploy.scenarios.starts import overlapping_pair
-
-    pts = case.points()
-    return bool(np.isfinite(pts).all()) and overlapping_pair(pts) is None
-
-
-def shrink(hunt: Hunt, case: Case, kind: str, *, budget: int = DEFAULT_SHRINK_RUNS) -> Shrunk:
-    """The smallest case found that fails with the same `kind`: greedily, fewer robots, a shorter
-    script (then fsync), a smaller seed, simpler coordinates, again until a whole pass finds
-    nothing or `budget` runs are spent. Deterministic: no draw, the same steps in the same order.
-
-    The case is first replayed under its script: if that does not fail with `kind` (a model a
-    script cannot replay), it is returned as it is with `reproduced` False.
-    """
-    first = replay(hunt, case)
-    runs = 1
-    if first.failure is None or first.failure.kind != kind:
-        failure = first.failure or Failure(kind, 0, "not reproduced by a scripted replay")
-        return Shrunk(case, failure, runs, reproduced=False)
-    best, failure = _cut_after(case, first), first.failure
-    taken: list[str] = []
-    improved = True
-    while improved and runs < budget:
-        improved = False
-        for step in SHRINK_STEPS:
-            progress = True
-            while progress and runs < budget:
-                progress = False
-                for what, proposal in step(hunt, best):
-                    if runs >= budget:
-                        break
-                    if not _valid(proposal):
-                        continue
-                    runs += 1
-                    outcome = replay(hunt, proposal, max_rounds=_horizon(failure))
-                    if outcome.failure is not None and outcome.failure.kind == kind:
-                        best, failure = _cut_after(proposal, outcome), outcome.failure
-                        taken.append(what)
-                        progress = improved = True
-                        break
-    return Shrunk(best, failure, runs, reproduced=True, steps=taken)
-
-
-def _horizon(failure: Failure) -> int | None:
-    """How far a proposal is run while shrinking a failure that shows in a round (a collision,
-    an invariant, an error): a little past where the best case so far fails. A proposal failing
-    later is passed over (a smaller shrink, never a wrong one: a run's rounds before its cap do
-    not depend on the cap); it saves running every proposal that does not fail to its cap."""
-    if failure.kind in (COLLISION, INVARIANT, ERROR):
-        return HORIZON_FACTOR * failure.round + HORIZON_SLACK
-    return None
-
-
-def _cut_after(case: Case, outcome: Outcome) -> Case:
-    """A case failing by a collision or an invariant needs no script past its failing round."""
-    assert outcome.failure is not None
-    if (
-        case.rounds is not None
-        and outcome.failure.kind in (COLLISION, INVARIANT)
-        and (0 < outcome.failure.round < len(case.rounds))
-    ):
-        return replace(case, rounds=case.rounds[: outcome.failure.round])
-    return case
-
-
-# -- the files of a failure ---------------------------------------------------------------------
-
-
-def start_data(hunt: Hunt, case: Case) -> dict[str, Any]:
-    """The `--init` file of a case: `{"positions": [[x, y], ...]}`, with the side `a` when the
-    algorithm has one (what `world.starts.load_init` reads)."""
-    data: dict[str, Any] = {"positions": [[x, y] for x, y in case.positions]}
-    a = configure(hunt, case.n).values.get("a")
-    if a is not None:
-        data["a"] = a
-    return data
-
-
-def schedule_data(case: Case) -> dict[str, Any] | None:
-    """The `--schedule` file of a case (what `coordinator.schedule.load_script` reads); None for
-    a case replayed under its own model."""
-    if case.rounds is None:
-        return None
-    return {"rounds": [list(r) for r in case.rounds], "after": case.after}
-
-
-def replay_argv(
-    hunt: Hunt, case: Case, folder: str = ".", record: str = "replay.jsonl"
-) -> list[str]:
-    """`fatswarm run --lockstep` repeating the case from the files in `folder`: the same seed
-    (it fixes the private frames too), cap and adversary. A file algorithm is named absolutely."""
-
-    def inside(name: str) -> str:
-        return name if folder == "." else os.path.join(folder, name)
-
-    argv = ["fatswarm", "run", "--lockstep", "--init", inside("start.json")]
-    if case.rounds is None:
-        argv += ["--scheduler", case.model]
-    else:
-        argv += ["--scheduler", "scripted", "--schedule", inside("schedule.json")]
-    argv += ["--seed", str(case.seed), "--max-rounds", str(case.max_rounds)]
-    if hunt.algorithm != DEFAULT_ALGORITHM:
-        argv += ["--algorithm", absolute_ref(hunt.algorithm)]
-    for name, text in hunt.params:
-        argv += ["--param", f"{name}={text}"]
-    if hunt.non_rigid is not None:
-        argv += ["--non-rigid", repr(hunt.non_rigid)]
-    if hunt.crash is not None:
-        argv += ["--crash", str(hunt.crash)]
-    return [*argv, "--no-dashboard", "--record", inside(record), "--force"]
-
-
-def absolute_ref(ref: str) -> str:
-    """`path/file.py:attribute` with an absolute path (the command runs from any directory)."""
-    path, sep, attr = ref.rpartition(":")
-    if sep and path.endswith(".py"):
-        return f"{os.path.abspath(path)}:{attr}"
-    return ref
-
-
-def replay_command(hunt: Hunt, case: Case) -> str:
-    """The shell line that replays a saved case from inside its folder."""
-    return shlex.join(replay_argv(hunt, case))
-
-
-def summary_data(
-    hunt: Hunt,
-    hunt_seed: int,
-    candidate: Candidate,
-    found: Failure,
-    shrunk: Shrunk,
-    original: Case,
-    replayed: Failure | None,
-) -> dict[str, Any]:
-    """summary.json: what failed, where the hunt drew it, how it was shrunk and how to replay."""
-    from fatswarm import __version__
-
-    return {
-        "kind": shrunk.failure.kind,
-        "detail": shrunk.failure.detail,
-        "round": shrunk.failure.round,
-        "replayed": None
-        if replayed is None
-        else {"kind": replayed.kind, "detail": replayed.detail},
-        "reproduced": shrunk.reproduced,
-        "found": {
-            "index": candidate.index,
-            "family": candidate.family,
-            "n": candidate.n,
-            "scheduler": candidate.model,
-            "seed": candidate.seed,
-            "kind": found.kind,
-            "detail": found.detail,
-            "round": found.round,
-            "script_rounds": _length(original),
-            "decimals": case_decimals(original),
-        },
-        "shrunk": {
-            "n": shrunk.case.n,
-            "script_rounds": _length(shrunk.case),
-            "after": shrunk.case.after,
-            "seed": shrunk.case.seed,
-            "max_rounds": shrunk.case.max_rounds,
-            "decimals": case_decimals(shrunk.case),
-            "runs": shrunk.runs,
-            "steps": shrunk.steps,
-        },
-        "hunt": {
-            "seed": hunt_seed,
-            "algorithm": hunt.algorithm,
-            "params": dict(hunt.params),
-            "non_rigid": hunt.non_rigid,
-            "crash": hunt.crash,
-        },
-        "command": replay_command(hunt, shrunk.case),
-        "fatswarm_version": __version__,
-    }
-
-
-def _length(case: Case) -> int | None:
-    return None if case.rounds is None else len(case.rounds)
-
-
-def folder_name(candidate: Candidate, kind: str) -> str:
-    """A failure's subfolder: the candidate's index (the hunt's order) and the kind."""
-    return f"{candidate.index:06d}-{kind}"
-
-
-def kind_counts(kinds: Mapping[str, int]) -> str:
-    """`collision 3  stalled 1`, kinds in KINDS order, the ones never seen left out."""
-    return "  ".join(f"{kind} {kinds[kind]}" for kind in KINDS if kinds.get(kind))
-
-
 __all__ = [
     "COLLISION",
     "ERROR",
@@ -825,28 +451,14 @@ __all__ = [
     "Hunt",
     "HuntInputError",
     "Outcome",
-    "Shrunk",
-    "absolute_ref",
     "candidate_start",
-    "case_decimals",
     "configure",
-    "decimals",
     "draw_candidate",
-    "drop_robots",
-    "folder_name",
     "hunt_models",
     "invariants",
-    "kind_counts",
     "overlap",
-    "replay",
-    "replay_argv",
-    "replay_command",
     "run_candidate",
     "run_case",
-    "schedule_data",
     "sec_invariant",
-    "shrink",
-    "start_data",
     "start_families",
-    "summary_data",
 ]

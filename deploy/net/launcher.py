@@ -16,12 +16,15 @@ import tempfile
 import threading
 import time
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from fatswarm.deploy.engine.config import RunInputError, RunSetup, input_errors
+from fatswarm.deploy.flags import check_seconds
 from fatswarm.deploy.net.children import STOP_GRACE_S, Children, stop_grace_s
+from fatswarm.deploy.net.part_agents import agents_command
+from fatswarm.deploy.net.run_flags import live_dashboard, watchable_pace
 from fatswarm.deploy.net.zconf import (
     DEFAULT_SWARM,
-    ROUTER_ENDPOINT_HELP,
     ZenohSetupError,
     check_network,
     loopback_endpoint,
@@ -29,96 +32,22 @@ from fatswarm.deploy.net.zconf import (
     open_client,
 )
 from fatswarm.deploy.view.summary import Outcome, exit_code, print_outcome, side_of, summary
+from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.outcome import ExitCode
-from fatswarm.world.record import RecordWriteError, RecordWriter
+from fatswarm.domain.wire import check_swarm
+from fatswarm.world.record import RecordFormatError, RecordWriteError, RecordWriter
+from fatswarm.world.record_read import read_record
 
-if TYPE_CHECKING:
-    from fatswarm.deploy.engine.config import RunSetup
-
-Resolver = Callable[[argparse.Namespace, int], "RunSetup"]  # flags and seed -> the run
+Resolver = Callable[[argparse.Namespace, int], RunSetup]  # flags and seed -> the run
 
 log = logging.getLogger("fatswarm.launcher")
 
 STDERR_FD = 2  # a file descriptor, not sys.stderr: that may be an in-process capture
-WATCH_S = 15.0  # a watched run (live dashboard, no --pace) lasts about this long
-MIN_WATCH_PACE_S, MAX_WATCH_PACE_S = 0.02, 1.0
 FINAL_STATE_WAIT_S = 5.0  # the dashboard's wait for the final state (re-published every second)
 # How a coordinator that ended the run exits: 0 formed, 1 not formed, 2 bad input, 3 collisions
 COORDINATOR_ENDS = frozenset(
     {ExitCode.FORMED, ExitCode.NOT_FORMED, ExitCode.BAD_INPUT, ExitCode.FORMED_WITH_COLLISIONS}
 )
-
-
-# --- flags ---------------------------------------------------------------------------------------
-
-
-def add_network_arguments(p: argparse.ArgumentParser) -> None:
-    """The networked run's flags on top of the lockstep ones (a lockstep run refuses them)."""
-    g = p.add_argument_group("networked run (default; not with --lockstep)")
-    flags = [
-        g.add_argument(
-            "--connect",
-            action="append",
-            default=[],
-            metavar="ENDPOINT",
-            help="use this router instead of the one the world process hosts; "
-            f"{ROUTER_ENDPOINT_HELP}",
-        ),
-        g.add_argument(
-            "--listen",
-            action="append",
-            default=[],
-            metavar="ENDPOINT",
-            help="endpoint(s) of the router that the world process hosts (default: a "
-            "free loopback port)",
-        ),
-        g.add_argument(
-            "--swarm",
-            default=None,
-            help=f"swarm name, keys under fatswarm/<swarm>/ (default {DEFAULT_SWARM!r} "
-            "on the world's own router, a fresh random name with --connect)",
-        ),
-        g.add_argument(
-            "--move-timeout",
-            type=float,
-            default=5.0,
-            metavar="SECONDS",
-            help="an active robot that has not moved by then stays put (default 5; finite, > 0)",
-        ),
-        g.add_argument(
-            "--pace",
-            type=float,
-            default=None,
-            metavar="SECONDS",
-            help="least time per round, to watch a run unfold (finite, >= 0; 0: full "
-            f"speed). Default: with the live dashboard, about {WATCH_S:g} s for a "
-            "typical run; else 0",
-        ),
-        g.add_argument(
-            "--spawn",
-            choices=("fork", "exec"),
-            default="fork",
-            help="agent processes forked from one preloaded host process before any "
-            "Zenoh session exists (fork, fast) or one fresh interpreter each (exec)",
-        ),
-    ]
-    # what `fatswarm run --lockstep` refuses when given (deploy.run.networked_flags_given)
-    p.set_defaults(_networked_flags=tuple((a.option_strings[-1], a.dest, a.default) for a in flags))
-
-
-def watchable_pace(n: int, scheduler: str) -> float:
-    """Seconds per round that make a typical run last about WATCH_S, so a person can follow it
-    (the algorithm's steps times the rounds a step takes under `scheduler`), within bounds."""
-    from fatswarm.deploy.engine.estimate import expected_rounds_per_step
-
-    rounds = expected_rounds_per_step(n, scheduler) * (n + 2)
-    return min(MAX_WATCH_PACE_S, max(MIN_WATCH_PACE_S, WATCH_S / rounds))
-
-
-def live_dashboard(args: argparse.Namespace) -> bool:
-    """Whether this run shows the live dashboard (a terminal, not --no-dashboard or --json)."""
-    plain = getattr(args, "no_dashboard", False) or getattr(args, "json", False)
-    return not plain and sys.stdout.isatty()
 
 
 def _child_endpoint(listen: str) -> str:
@@ -164,10 +93,6 @@ def check_inputs(
     """(what to fix or None, the seed, the run): the lockstep run's checks, before any process
     starts; with --resume, the seed and the run are the record's. `resolve_run` builds the run
     from the flags: the same function as the lockstep run's, so both refuse the same input."""
-    from fatswarm.deploy.engine.config import RunInputError, input_errors
-    from fatswarm.deploy.flags import check_seconds
-    from fatswarm.domain.adversary import ASYNC_NAMES
-
     seed: int = args.seed if args.seed is not None else secrets.randbelow(2**31)
     bad_input: tuple[type[Exception], ...] = (*input_errors(), ValueError)  # ValueError: swarm
     setup = None
@@ -183,8 +108,6 @@ def check_inputs(
                 "run it again with its --seed"
             )
         if args.swarm is not None:
-            from fatswarm.domain.wire import check_swarm
-
             check_swarm(args.swarm)
         check_network(args.connect, args.listen)  # a router answers; --listen well formed, free
     except bad_input as exc:
@@ -196,8 +119,10 @@ def write_header(setup: RunSetup, record: str, swarm: str) -> None:
     """Start the record of a new run with its header: the world then runs exactly this run (it
     resumes the record, with no round yet), so none of it travels as flags to the world.
     Raises RecordWriteError (a full disk, a permission)."""
-    from fatswarm.world.async_core import make_world
-    from fatswarm.world.core import WorldSetup
+    # here, not at the top: only a new networked run needs the world's cores (not `--help`)
+    from fatswarm.world.core import WorldCore
+    from fatswarm.world.journal import perform
+    from fatswarm.world.setup import WorldSetup
 
     assert setup.config is not None
     extra = setup.config.header_extra(networked=True, n=setup.params.n)
@@ -215,7 +140,7 @@ def write_header(setup: RunSetup, record: str, swarm: str) -> None:
         crash=setup.crash,
     )
     with RecordWriter(record, fsync=True) as journal:
-        make_world(world, journal, algorithm=setup.params)
+        perform(WorldCore(world, setup.params).take_effects(), journal)
 
 
 class StopSignal:
@@ -246,8 +171,6 @@ def _launch(args: argparse.Namespace, setup: RunSetup, record: str, pace: float,
     else:
         listen = list(args.listen) or [loopback_endpoint()]
         endpoints = [_child_endpoint(listen[0])]
-    watcher = session = None
-    followed = False  # a display followed the run (it saves --svg)
     try:
         if not args.quiet:
             print(
@@ -255,6 +178,31 @@ def _launch(args: argparse.Namespace, setup: RunSetup, record: str, pace: float,
                 f"--connect {endpoints[0]} --swarm {swarm})",
                 file=sys.stderr,
             )
+        code, followed = _run_parts(args, setup, record, pace, swarm, (endpoints, listen), stop)
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    if code in (ExitCode.FORMED, ExitCode.NOT_FORMED):
+        code = _report(args, record, code, followed)
+    return code
+
+
+def _run_parts(
+    args: argparse.Namespace,
+    setup: RunSetup,
+    record: str,
+    pace: float,
+    swarm: str,
+    network: tuple[Sequence[str], Sequence[str]],
+    stop: StopSignal,
+) -> tuple[int, bool]:
+    """Run every part until the run ends or a signal comes, the live display following it;
+    `network`: (the endpoints the parts connect to, where the world hosts the router, if it does).
+    (The exit code, whether a display followed the run.)"""
+    endpoints, listen = network
+    watcher = session = None
+    followed = False  # a display followed the run (it saves --svg)
+    try:
         # the agents host needs its own grace first, to stop its agents one by one
         with Children(stop_grace_s(setup.params.n) + STOP_GRACE_S) as children:
             _start_world(setup, record, swarm, endpoints, listen, children)
@@ -280,21 +228,23 @@ def _launch(args: argparse.Namespace, setup: RunSetup, record: str, pace: float,
             watcher.stop()
         if session is not None:
             session.close()
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
-    if code in (ExitCode.FORMED, ExitCode.NOT_FORMED):
-        # the record, not the coordinator's 0/1, says whether robots collided on the way
-        outcome = read_outcome(record)
-        if outcome is not None:
-            code = exit_code(outcome)
-        print_outcome(
-            outcome,
-            code,
-            sys.stdout,
-            as_json=args.json,
-            record=args.record,
-            svg=getattr(args, "svg", None) if followed else None,
-        )
+    return code, followed
+
+
+def _report(args: argparse.Namespace, record: str, code: int, followed: bool) -> int:
+    """Print the outcome of a run that ended (formed or not) as its record says; the exit code."""
+    # the record, not the coordinator's 0/1, says whether robots collided on the way
+    outcome = read_outcome(record)
+    if outcome is not None:
+        code = exit_code(outcome)
+    print_outcome(
+        outcome,
+        code,
+        sys.stdout,
+        as_json=args.json,
+        record=args.record,
+        svg=getattr(args, "svg", None) if followed else None,
+    )
     return code
 
 
@@ -312,7 +262,7 @@ def _await_router(endpoint: str, children: Children, stop: StopSignal) -> Any:
 def _follow(args: argparse.Namespace, swarm: str, session: Any, endpoint: str) -> Any:
     """The dashboard (on a terminal, not with --json) or progress lines on stderr, from the
     world's state stream: standard output carries only the summary."""
-    try:
+    try:  # here: a run goes on without its display if the dashboard cannot be loaded
         from fatswarm.deploy.net.watch import follow
     except ImportError:
         return None
@@ -379,11 +329,29 @@ def _run_children(
 ) -> int:
     """Start the coordinator and the agents, configured from the resolved run, and wait until the
     coordinator or the world ends or a signal comes."""
-    from fatswarm.deploy.net.parts import agents_command
-
     net = ["--swarm", swarm]
     for ep in endpoints:
         net += ["--connect", ep]
+    coord = _coordinator_flags(args, setup, pace)
+    children.start("coordinator", _part("coordinator", *net, *_quiet(), *coord), stdout=STDERR_FD)
+    n, seed = setup.params.n, setup.seed
+    children.start(
+        "agents",
+        [
+            *agents_command(
+                n, seed, swarm, endpoints, "warning", args.spawn, algorithm=setup.algorithm_ref
+            ),
+            "--exit-with-parent",
+            str(os.getpid()),
+        ],
+        stdout=STDERR_FD,
+    )
+    return _await_end(children, stop)
+
+
+def _coordinator_flags(args: argparse.Namespace, setup: RunSetup, pace: float) -> list[str]:
+    """The coordinator's flags of the resolved run: seed, scheduler, move timeout, pace, and its
+    schedule file and fairness bound if it has them."""
     seed, scheduler = setup.seed, setup.scheduler
     coord = [
         "--seed",
@@ -401,19 +369,12 @@ def _run_children(
     fairness = getattr(scheduler, "fairness", None)
     if isinstance(fairness, int):
         coord += ["--fairness", str(fairness)]
-    children.start("coordinator", _part("coordinator", *net, *_quiet(), *coord), stdout=STDERR_FD)
-    n = setup.params.n
-    children.start(
-        "agents",
-        [
-            *agents_command(
-                n, seed, swarm, endpoints, "warning", args.spawn, algorithm=setup.algorithm_ref
-            ),
-            "--exit-with-parent",
-            str(os.getpid()),
-        ],
-        stdout=STDERR_FD,
-    )
+    return coord
+
+
+def _await_end(children: Children, stop: StopSignal) -> int:
+    """Wait until the coordinator or the world ends, the agents' process exits or a signal comes;
+    the run's exit code, said on stderr unless the coordinator ended the run."""
     while not stop.event.wait(0.1):
         gone = children.exited()
         if "coordinator" in gone:
@@ -484,8 +445,6 @@ def print_summary(record: str, out: Any) -> Outcome | None:
 
 def read_outcome(record: str) -> Outcome | None:
     """How the run of this record ended; None (said on stderr) if unreadable or unfinished."""
-    from fatswarm.world.record import RecordFormatError, read_record
-
     try:
         rec = read_record(record)
     except RecordFormatError as exc:
@@ -520,4 +479,4 @@ def read_outcome(record: str) -> Outcome | None:
     )
 
 
-__all__ = ["StopSignal", "add_network_arguments", "read_outcome", "run_networked"]
+__all__ = ["StopSignal", "read_outcome", "run_networked"]

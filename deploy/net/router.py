@@ -60,7 +60,7 @@ def open_router(
 
 
 def _open(conf: Any, config: str | None) -> Any:
-    import zenoh
+    import zenoh  # the CLI imports this module for the router's flags: zenoh loads when one opens
 
     try:
         return zenoh.open(conf)

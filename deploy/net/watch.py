@@ -9,7 +9,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from rich.console import Console
 
@@ -26,13 +26,12 @@ from fatswarm.deploy.view.dashboard import (
     save_svg,
 )
 from fatswarm.domain.outcome import ENDED, ExitCode, exit_code_for
-
-if TYPE_CHECKING:
-    from fatswarm.world.protocol import WorldState
+from fatswarm.domain.wire import ProtocolError, check_swarm
+from fatswarm.world.protocol import WorldState, state_key
 
 
 def _open_session(connect: str, config: str | None = None) -> Any:
-    import zenoh
+    import zenoh  # lazily: importing this module (the CLI's parser does) loads no zenoh
 
     if config is not None:  # Zenoh's own file (`--config`), e.g. a dashboard's from `secure`
         return zenoh.open(make_config("client", [connect], config_file=config))
@@ -84,10 +83,7 @@ class StateWatcher:
         return self
 
     def _run(self) -> None:
-        import zenoh
-
-        from fatswarm.domain.wire import ProtocolError
-        from fatswarm.world.protocol import WorldState, state_key
+        import zenoh  # lazily: importing this module (the CLI's parser does) loads no zenoh
 
         own = self.session is None
         try:
@@ -103,35 +99,7 @@ class StateWatcher:
         try:
             sub = session.declare_subscriber(state_key(self.swarm), zenoh.handlers.RingChannel(1))
             try:
-                while True:
-                    stopping = self._stop.is_set()  # then take one last look, and leave
-                    sample = sub.try_recv()
-                    frame = None
-                    if sample is not None:
-                        try:
-                            state = WorldState.decode(sample.payload.to_bytes())
-                        except ProtocolError:
-                            state = None
-                        if state is not None:
-                            rate = self.meter.add(time.monotonic(), state.round)
-                            if rate is None and self.latest is not None:
-                                rate = self.latest.rounds_per_second
-                            frame = frame_from_state(state, rate, self.max_rounds)
-                            self.latest = frame
-                            if frame.status in ENDED:
-                                self.ended.set()
-                    if stopping:
-                        break  # the sink shows `latest` when it closes
-                    if frame is None:
-                        self._stop.wait(self.period)
-                        continue
-                    began = time.monotonic()
-                    self.sink.show(frame)
-                    busy = time.monotonic() - began
-                    if self.stop_at_end and frame.status in ENDED:
-                        break
-                    # drawing may take at most 1/MAX_DUTY of the time: the swarm needs the CPU
-                    self._stop.wait(max(self.period, busy * (MAX_DUTY - 1)))
+                self._show_states(sub)
             finally:
                 sub.undeclare()
         except Exception as exc:  # a failing display must never take the run down with it
@@ -140,6 +108,42 @@ class StateWatcher:
             if own:
                 session.close()
             self.finished.set()
+
+    def _show_states(self, sub: Any) -> None:
+        """Hand the newest state's frame to the sink until stopped (or, with `stop_at_end`, until
+        the run ends)."""
+        while True:
+            stopping = self._stop.is_set()  # then take one last look, and leave
+            frame = self._frame_of(sub.try_recv())
+            if stopping:
+                break  # the sink shows `latest` when it closes
+            if frame is None:
+                self._stop.wait(self.period)
+                continue
+            began = time.monotonic()
+            self.sink.show(frame)
+            busy = time.monotonic() - began
+            if self.stop_at_end and frame.status in ENDED:
+                break
+            # drawing may take at most 1/MAX_DUTY of the time: the swarm needs the CPU
+            self._stop.wait(max(self.period, busy * (MAX_DUTY - 1)))
+
+    def _frame_of(self, sample: Any) -> Frame | None:
+        """The frame of a state sample, kept as `latest`; None if no sample or not a state."""
+        if sample is None:
+            return None
+        try:
+            state = WorldState.decode(sample.payload.to_bytes())
+        except ProtocolError:
+            return None
+        rate = self.meter.add(time.monotonic(), state.round)
+        if rate is None and self.latest is not None:
+            rate = self.latest.rounds_per_second
+        frame = frame_from_state(state, rate, self.max_rounds)
+        self.latest = frame
+        if frame.status in ENDED:
+            self.ended.set()
+        return frame
 
     def stop(self, final: Frame | WorldState | None = None) -> None:
         """Stop following; leave the final frame (given, else the last seen) on screen and in SVG.
@@ -252,8 +256,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     """`fatswarm dashboard`: follow a running swarm read-only until Ctrl-C (or its end)."""
-    from fatswarm.domain.wire import check_swarm
-
     try:
         check_swarm(args.swarm)
         if args.config is not None:  # a bad file is one line, before any wait

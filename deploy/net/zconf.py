@@ -112,6 +112,11 @@ def endpoint_problem(endpoint: str, listening: bool = False) -> str | None:
     least = 0 if listening else 1
     if not port.isdigit() or not least <= int(port) <= 65535:
         return f"the port must be a whole number in {least}..65535, got {port!r}"
+    return _host_problem(host)
+
+
+def _host_problem(host: str) -> str | None:
+    """What is wrong with the host of a <host>:<port> address, or None (no name is resolved)."""
     if host.startswith("[") and host.endswith("]"):
         return None if _is_ip(host[1:-1], 6) else f"{host} is not an IPv6 address"
     if re.fullmatch(r"[0-9.]+", host):
@@ -180,7 +185,7 @@ def make_config(
     Raises ZenohSetupError for a malformed endpoint, a bad file or an endpoint the file's
     `transport/link/protocols` does not allow; ValueError for an unknown mode.
     """
-    import zenoh
+    import zenoh  # lazily: what only checks endpoints or adds flags never loads zenoh
 
     if mode not in ("client", "peer", "router"):
         raise ValueError(f"mode must be client, peer or router, got {mode!r}")
@@ -206,6 +211,13 @@ def make_config(
         conf.insert_json5("transport/shared_memory/enabled", "false")
     if lease_ms is not None:
         conf.insert_json5("transport/link/tx/lease", str(int(lease_ms)))
+    _set_reconnection(conf, mode, config_file)
+    return conf
+
+
+def _set_reconnection(conf: zenoh.Config, mode: str, config_file: str | None) -> None:
+    """The reconnection pace and, for a router linked to no other router, no scouting delay:
+    defaults a `config_file` may override (docs/security.md), so set only where it does not."""
     if (
         mode == "router"
         and not connect_endpoints(conf)
@@ -224,7 +236,6 @@ def make_config(
                 }
             ),
         )
-    return conf
 
 
 def connect_endpoints(conf: zenoh.Config) -> list[str]:
@@ -272,7 +283,7 @@ def load_config_file(path: str) -> zenoh.Config:
     Raises ZenohSetupError in one line: a missing or unreadable file, one Zenoh cannot parse (with
     line and column), or a file it names that is not there.
     """
-    import zenoh
+    import zenoh  # lazily: what only checks endpoints or adds flags never loads zenoh
 
     where = f"--config {path}"
     if not os.path.isfile(path):
@@ -333,7 +344,7 @@ def open_client(
 
     Raises ZenohSetupError after `deadline_s` without a router, or at once for any other refusal.
     """
-    import zenoh
+    import zenoh  # lazily: what only checks endpoints or adds flags never loads zenoh
 
     stop = stop or threading.Event()
     deadline = time.monotonic() + deadline_s
@@ -356,7 +367,7 @@ def token_held(session: Any, key: str, stop: threading.Event | None = None) -> b
     True only if each of TOKEN_LOOKS liveliness gets, TOKEN_LOOK_EVERY_S apart, finds one (see
     TOKEN_LOOKS for why); False at the first look that finds none, or if `stop` is set meanwhile.
     """
-    import zenoh
+    import zenoh  # lazily: what only checks endpoints or adds flags never loads zenoh
 
     stop = stop or threading.Event()
     for look in range(TOKEN_LOOKS):

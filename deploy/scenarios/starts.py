@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
+from types import MappingProxyType
 from typing import Any, Final
 
 import numpy as np
@@ -117,38 +118,72 @@ def _pinned_circle(rng: np.random.Generator, radius: float) -> list[np.ndarray]:
     return [radius * u, -radius * u]
 
 
+def _dense(rng: np.random.Generator, n: int, a: float, r: float) -> np.ndarray | None:
+    pts = np.asarray(_clump(rng, n))
+    return pts if _radius_about_centroid(pts) < r * (1 - SEC_MARGIN) else None
+
+
+def _clustered(rng: np.random.Generator, n: int, a: float, r: float) -> np.ndarray | None:
+    hi = r * (1 - SEC_MARGIN)
+    lo = min(hi, max(1.0, 1.1 * math.sqrt(n)))
+    radius = lo + (hi - lo) * rng.random()
+    placed: list[np.ndarray] = []
+    ok = _scatter(rng, n, radius, CONTACT + 0.5 * rng.random(), placed)
+    return np.asarray(placed) if ok else None
+
+
+def _spread(rng: np.random.Generator, n: int, a: float, r: float) -> np.ndarray | None:
+    return _spread_or_loose(rng, n, a, r, "spread")
+
+
+def _loose(rng: np.random.Generator, n: int, a: float, r: float) -> np.ndarray | None:
+    return _spread_or_loose(rng, n, a, r, "loose")
+
+
+def _spread_or_loose(
+    rng: np.random.Generator, n: int, a: float, r: float, kind: str
+) -> np.ndarray | None:
+    sep = CONTACT if kind == "spread" else max(CONTACT, a)
+    radius = r * (1 + SEC_MARGIN + (0.5 if kind == "spread" else 2.0) * rng.random())
+    radius = max(radius, 0.6 * sep * math.sqrt(n) if kind == "loose" else 0.0)
+    placed = _pinned_circle(rng, radius)[: min(n, 2)]
+    gap = sep + (0.5 * rng.random() if kind == "spread" else 0.0)
+    return np.asarray(placed) if _scatter(rng, n - len(placed), radius, gap, placed) else None
+
+
+def _clumped(rng: np.random.Generator, n: int, a: float, r: float) -> np.ndarray | None:
+    if n <= 2:
+        return np.asarray(_pinned_circle(rng, r * (1 + SEC_MARGIN))[:n])
+    radius = r * (1 + SEC_MARGIN + 0.5 * rng.random())
+    clump = np.asarray(_clump(rng, n - 2))
+    shift = _in_disc(rng, max(0.0, radius - _radius_about_centroid(clump) - 2.0))
+    clump = clump - clump.mean(axis=0) + shift
+    placed = _pinned_circle(rng, radius)
+    if not all(_fits(p, placed, CONTACT) for p in clump):
+        return None
+    if np.max(np.linalg.norm(clump, axis=1)) > radius:
+        return None
+    return np.vstack([np.asarray(placed), clump])
+
+
+_Attempt = Callable[[np.random.Generator, int, float, float], np.ndarray | None]
+_ATTEMPTS: Final[Mapping[str, _Attempt]] = MappingProxyType(
+    {
+        "clustered": _clustered,
+        "dense": _dense,
+        "spread": _spread,
+        "loose": _loose,
+        "clumped": _clumped,
+    }
+)
+
+
 def _attempt(rng: np.random.Generator, n: int, kind: str, a: float, r: float) -> np.ndarray | None:
-    if kind == "dense":
-        pts = np.asarray(_clump(rng, n))
-        return pts if _radius_about_centroid(pts) < r * (1 - SEC_MARGIN) else None
-    if kind == "clustered":
-        hi = r * (1 - SEC_MARGIN)
-        lo = min(hi, max(1.0, 1.1 * math.sqrt(n)))
-        radius = lo + (hi - lo) * rng.random()
-        placed: list[np.ndarray] = []
-        ok = _scatter(rng, n, radius, CONTACT + 0.5 * rng.random(), placed)
-        return np.asarray(placed) if ok else None
-    if kind in ("spread", "loose"):
-        sep = CONTACT if kind == "spread" else max(CONTACT, a)
-        radius = r * (1 + SEC_MARGIN + (0.5 if kind == "spread" else 2.0) * rng.random())
-        radius = max(radius, 0.6 * sep * math.sqrt(n) if kind == "loose" else 0.0)
-        placed = _pinned_circle(rng, radius)[: min(n, 2)]
-        gap = sep + (0.5 * rng.random() if kind == "spread" else 0.0)
-        return np.asarray(placed) if _scatter(rng, n - len(placed), radius, gap, placed) else None
-    if kind == "clumped":
-        if n <= 2:
-            return np.asarray(_pinned_circle(rng, r * (1 + SEC_MARGIN))[:n])
-        radius = r * (1 + SEC_MARGIN + 0.5 * rng.random())
-        clump = np.asarray(_clump(rng, n - 2))
-        shift = _in_disc(rng, max(0.0, radius - _radius_about_centroid(clump) - 2.0))
-        clump = clump - clump.mean(axis=0) + shift
-        placed = _pinned_circle(rng, radius)
-        if not all(_fits(p, placed, CONTACT) for p in clump):
-            return None
-        if np.max(np.linalg.norm(clump, axis=1)) > radius:
-            return None
-        return np.vstack([np.asarray(placed), clump])
-    raise ValueError(f"unknown start kind {kind!r}; choose one of {', '.join(KINDS)}")
+    """One draw of a start of `kind` (see the module table); None if this draw does not fit."""
+    attempt = _ATTEMPTS.get(kind)
+    if attempt is None:
+        raise ValueError(f"unknown start kind {kind!r}; choose one of {', '.join(KINDS)}")
+    return attempt(rng, n, a, r)
 
 
 def random_start(
@@ -256,27 +291,10 @@ def load_init(path: str) -> tuple[Points, float | None]:
 
     Raises InitFileError with a one-line message saying what to fix.
     """
-    try:
-        with open(path, encoding="utf-8") as fh:
-            data = json.load(fh)
-    except OSError as exc:
-        raise InitFileError(f"cannot read init file {path}: {exc.strerror}") from None
-    except json.JSONDecodeError as exc:
-        raise InitFileError(
-            f"init file {path} is not JSON (line {exc.lineno}: {exc.msg})"
-        ) from None
-    except UnicodeDecodeError:
-        raise InitFileError(f"init file {path} is not UTF-8 text") from None
+    data = _read_json(path)
     if not isinstance(data, dict) or "positions" not in data:
         raise InitFileError(f'init file {path} must hold {{"positions": [[x, y], ...], "a": 4.0}}')
-    raw = data["positions"]
-    if not isinstance(raw, list) or not raw:
-        raise InitFileError(f"init file {path}: 'positions' must be a non-empty list of [x, y]")
-    pts = np.empty((len(raw), 2), dtype=np.float64)
-    for i, pair in enumerate(raw):
-        if not isinstance(pair, list) or len(pair) != 2:
-            raise InitFileError(f"init file {path}: position {i} must be [x, y], got {pair!r}")
-        pts[i] = (_coordinate(pair[0], path, i), _coordinate(pair[1], path, i))
+    pts = _positions(data["positions"], path)
     bad = overlapping_pair(pts)
     if bad is not None:
         i, j, dist = bad
@@ -289,6 +307,33 @@ def load_init(path: str) -> tuple[Points, float | None]:
     if isinstance(a, bool) or not isinstance(a, (int, float)) or not math.isfinite(a):
         raise InitFileError(f"init file {path}: 'a' must be a number, got {a!r}")
     return pts, float(a)
+
+
+def _read_json(path: str) -> Any:
+    """The JSON value of the file at `path`; InitFileError if it cannot be read or parsed."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return json.load(fh)
+    except OSError as exc:
+        raise InitFileError(f"cannot read init file {path}: {exc.strerror}") from None
+    except json.JSONDecodeError as exc:
+        raise InitFileError(
+            f"init file {path} is not JSON (line {exc.lineno}: {exc.msg})"
+        ) from None
+    except UnicodeDecodeError:
+        raise InitFileError(f"init file {path} is not UTF-8 text") from None
+
+
+def _positions(raw: Any, path: str) -> Points:
+    """The (n, 2) positions of an init file's 'positions' list; InitFileError if malformed."""
+    if not isinstance(raw, list) or not raw:
+        raise InitFileError(f"init file {path}: 'positions' must be a non-empty list of [x, y]")
+    pts = np.empty((len(raw), 2), dtype=np.float64)
+    for i, pair in enumerate(raw):
+        if not isinstance(pair, list) or len(pair) != 2:
+            raise InitFileError(f"init file {path}: position {i} must be [x, y], got {pair!r}")
+        pts[i] = (_coordinate(pair[0], path, i), _coordinate(pair[1], path, i))
+    return pts
 
 
 __all__ = [

@@ -18,7 +18,7 @@ import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from fatswarm.deploy.secure.plan import (
     CA_FILE,
@@ -32,6 +32,10 @@ from fatswarm.deploy.secure.plan import (
     is_ip,
 )
 from fatswarm.domain.outcome import ExitCode
+
+if TYPE_CHECKING:
+    from cryptography import x509
+    from cryptography.hazmat.primitives.asymmetric import ec
 
 DEFAULT_DAYS = 365
 EXTRA = 'pip install "fatswarm[secure]"'
@@ -51,7 +55,7 @@ class Issued:
 
 
 def _require_cryptography() -> None:
-    try:
+    try:  # cryptography is an optional extra (fatswarm[secure]): without it, say how to get it
         import cryptography  # noqa: F401
     except ImportError:
         raise MissingCryptography(f"certificates need the cryptography package: {EXTRA}") from None
@@ -65,10 +69,11 @@ def issue_all(plan: Plan, days: int = DEFAULT_DAYS) -> tuple[bytes, dict[str, Is
     certificate's common name is its identity.
     """
     _require_cryptography()
+    # cryptography is an optional extra (fatswarm[secure]), checked just above
     from cryptography import x509
-    from cryptography.hazmat.primitives import hashes, serialization
+    from cryptography.hazmat.primitives import serialization
     from cryptography.hazmat.primitives.asymmetric import ec
-    from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
+    from cryptography.x509.oid import NameOID
 
     if days < 1:
         raise ValueError(f"--days must be at least 1, got {days}")
@@ -76,7 +81,25 @@ def issue_all(plan: Plan, days: int = DEFAULT_DAYS) -> tuple[bytes, dict[str, Is
     end = start + datetime.timedelta(days=days)
     ca_key = ec.generate_private_key(ec.SECP256R1())
     ca_name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, f"fatswarm {plan.swarm} CA")])
-    ca_cert = (
+    ca_cert = _ca_certificate(ca_key, ca_name, start, end)
+    issued: dict[str, Issued] = {}
+    for who in plan.identities:
+        issued[who.name] = _issue(who, ca_key, ca_name, start, end)
+    return ca_cert.public_bytes(serialization.Encoding.PEM), issued
+
+
+def _ca_certificate(
+    ca_key: ec.EllipticCurvePrivateKey,
+    ca_name: x509.Name,
+    start: datetime.datetime,
+    end: datetime.datetime,
+) -> x509.Certificate:
+    """The authority's self-signed certificate: it signs certificates, nothing else."""
+    # the optional cryptography package (issue_all checked it)
+    from cryptography import x509
+    from cryptography.hazmat.primitives import hashes
+
+    return (
         x509.CertificateBuilder()
         .subject_name(ca_name)
         .issuer_name(ca_name)
@@ -85,75 +108,80 @@ def issue_all(plan: Plan, days: int = DEFAULT_DAYS) -> tuple[bytes, dict[str, Is
         .not_valid_before(start)
         .not_valid_after(end)
         .add_extension(x509.BasicConstraints(ca=True, path_length=0), critical=True)
-        .add_extension(
-            x509.KeyUsage(
-                digital_signature=False,
-                content_commitment=False,
-                key_encipherment=False,
-                data_encipherment=False,
-                key_agreement=False,
-                key_cert_sign=True,
-                crl_sign=True,
-                encipher_only=False,
-                decipher_only=False,
-            ),
-            critical=True,
-        )
+        .add_extension(_key_usage(signs_certificates=True), critical=True)
         .add_extension(
             x509.SubjectKeyIdentifier.from_public_key(ca_key.public_key()), critical=False
         )
         .sign(ca_key, hashes.SHA256())
     )
-    issued: dict[str, Issued] = {}
-    for who in plan.identities:
-        key = ec.generate_private_key(ec.SECP256R1())
-        usages = [ExtendedKeyUsageOID.CLIENT_AUTH]
-        if who.role == "router":  # it also accepts links, and links to the other routers
-            usages.append(ExtendedKeyUsageOID.SERVER_AUTH)
-        builder = (
-            x509.CertificateBuilder()
-            .subject_name(x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, who.name)]))
-            .issuer_name(ca_name)
-            .public_key(key.public_key())
-            .serial_number(x509.random_serial_number())
-            .not_valid_before(start)
-            .not_valid_after(end)
-            .add_extension(x509.BasicConstraints(ca=False, path_length=None), critical=True)
-            .add_extension(
-                x509.KeyUsage(
-                    digital_signature=True,
-                    content_commitment=False,
-                    key_encipherment=False,
-                    data_encipherment=False,
-                    key_agreement=False,
-                    key_cert_sign=False,
-                    crl_sign=False,
-                    encipher_only=False,
-                    decipher_only=False,
-                ),
-                critical=True,
-            )
-            .add_extension(x509.ExtendedKeyUsage(usages), critical=False)
-            .add_extension(
-                x509.AuthorityKeyIdentifier.from_issuer_public_key(ca_key.public_key()),
-                critical=False,
-            )
-            .add_extension(x509.SubjectAlternativeName(_alt_names(who)), critical=False)
+
+
+def _issue(
+    who: Identity,
+    ca_key: ec.EllipticCurvePrivateKey,
+    ca_name: x509.Name,
+    start: datetime.datetime,
+    end: datetime.datetime,
+) -> Issued:
+    """A new key for `who` and its certificate, signed by the authority."""
+    # the optional cryptography package (issue_all checked it)
+    from cryptography import x509
+    from cryptography.hazmat.primitives import hashes, serialization
+    from cryptography.hazmat.primitives.asymmetric import ec
+    from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
+
+    key = ec.generate_private_key(ec.SECP256R1())
+    usages = [ExtendedKeyUsageOID.CLIENT_AUTH]
+    if who.role == "router":  # it also accepts links, and links to the other routers
+        usages.append(ExtendedKeyUsageOID.SERVER_AUTH)
+    builder = (
+        x509.CertificateBuilder()
+        .subject_name(x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, who.name)]))
+        .issuer_name(ca_name)
+        .public_key(key.public_key())
+        .serial_number(x509.random_serial_number())
+        .not_valid_before(start)
+        .not_valid_after(end)
+        .add_extension(x509.BasicConstraints(ca=False, path_length=None), critical=True)
+        .add_extension(_key_usage(signs_certificates=False), critical=True)
+        .add_extension(x509.ExtendedKeyUsage(usages), critical=False)
+        .add_extension(
+            x509.AuthorityKeyIdentifier.from_issuer_public_key(ca_key.public_key()),
+            critical=False,
         )
-        cert = builder.sign(ca_key, hashes.SHA256())
-        issued[who.name] = Issued(
-            key.private_bytes(
-                serialization.Encoding.PEM,
-                serialization.PrivateFormat.PKCS8,
-                serialization.NoEncryption(),
-            ),
-            cert.public_bytes(serialization.Encoding.PEM),
-        )
-    return ca_cert.public_bytes(serialization.Encoding.PEM), issued
+        .add_extension(x509.SubjectAlternativeName(_alt_names(who)), critical=False)
+    )
+    cert = builder.sign(ca_key, hashes.SHA256())
+    return Issued(
+        key.private_bytes(
+            serialization.Encoding.PEM,
+            serialization.PrivateFormat.PKCS8,
+            serialization.NoEncryption(),
+        ),
+        cert.public_bytes(serialization.Encoding.PEM),
+    )
+
+
+def _key_usage(*, signs_certificates: bool) -> x509.KeyUsage:
+    """The authority's key usage (signs certificates and revocation lists) or an identity's
+    (digital signatures only)."""
+    from cryptography import x509  # the optional cryptography package (issue_all checked it)
+
+    return x509.KeyUsage(
+        digital_signature=not signs_certificates,
+        content_commitment=False,
+        key_encipherment=False,
+        data_encipherment=False,
+        key_agreement=False,
+        key_cert_sign=signs_certificates,
+        crl_sign=signs_certificates,
+        encipher_only=False,
+        decipher_only=False,
+    )
 
 
 def _alt_names(who: Identity) -> list[Any]:
-    from cryptography import x509
+    from cryptography import x509  # the optional cryptography package (issue_all checked it)
 
     if who.host is None:  # a client: its name, never checked (the routers match the CN)
         return [x509.DNSName(who.name)]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import ipaddress
 import json
 import re
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -182,93 +182,135 @@ def grants(swarm: str, who: Identity) -> tuple[Grant, ...]:
     A robot's move travels only inside its own Look (`LookRequest.move`): the `robot/<i>/move`
     route, open to any client of an unsecured swarm, is granted to nobody here.
     """
-    state, control = world_wire.state_key(swarm), world_wire.control_key(swarm)
-    held, snapshots = world_wire.moves_held_key(swarm), world_wire.snapshot_any_key(swarm)
-    agents_alive = world_wire.agent_alive_any_key(swarm)
-    world_alive = world_wire.alive_key(swarm)
-    coordinator_alive = coordinator_wire.alive_key(swarm)
-    presence = (agents_alive, world_alive, coordinator_alive)
-    if who.role == "agent":
-        if who.robot is None:
-            raise ValueError(f"agent identity {who.name} has no robot")
-        look = world_wire.snapshot_key(swarm, who.robot)
-        return tuple(
-            _both(
-                [
-                    ("query", look),
-                    ("liveliness_token", world_wire.agent_alive_key(swarm, who.robot)),
-                    ("declare_liveliness_subscriber", world_alive),
-                ],
-                # the world's queryable, as declared: no data, only that it exists; and the world's
-                # token (an agent asks again when a world comes up)
-                [
-                    ("reply", look),
-                    ("declare_queryable", snapshots),
-                    ("liveliness_token", world_alive),
-                ],
-            )
+    keys = _Keys.of(swarm)
+    role_grants = _ROLE_GRANTS.get(who.role)
+    if role_grants is None:
+        raise ValueError(f"unknown role {who.role!r}")
+    return tuple(role_grants(keys, who))
+
+
+@dataclass(frozen=True, slots=True)
+class _Keys:
+    """The key expressions of one swarm that the grants name (from the protocol modules)."""
+
+    swarm: str
+    state: str
+    control: str
+    held: str
+    snapshots: str
+    agents_alive: str
+    world_alive: str
+    coordinator_alive: str
+
+    @staticmethod
+    def of(swarm: str) -> _Keys:
+        return _Keys(
+            swarm,
+            state=world_wire.state_key(swarm),
+            control=world_wire.control_key(swarm),
+            held=world_wire.moves_held_key(swarm),
+            snapshots=world_wire.snapshot_any_key(swarm),
+            agents_alive=world_wire.agent_alive_any_key(swarm),
+            world_alive=world_wire.alive_key(swarm),
+            coordinator_alive=coordinator_wire.alive_key(swarm),
         )
-    if who.role == "world":
-        return tuple(
-            _both(
-                [
-                    ("declare_queryable", snapshots),
-                    ("declare_queryable", control),
-                    ("reply", snapshots),
-                    ("reply", control),
-                    ("put", state),
-                    ("put", held),
-                    ("declare_liveliness_subscriber", agents_alive),
-                    ("liveliness_token", world_alive),
-                    ("liveliness_query", world_alive),
-                ],
-                [
-                    ("query", snapshots),
-                    ("query", control),
-                    ("liveliness_token", agents_alive),
-                    ("liveliness_token", world_alive),
-                    ("declare_subscriber", state),
-                    ("declare_subscriber", held),
-                ],
-            )
-        )
-    if who.role == "coordinator":
-        return tuple(
-            _both(
-                [
-                    ("query", control),
-                    ("declare_subscriber", held),
-                    ("declare_liveliness_subscriber", agents_alive),
-                    ("declare_liveliness_subscriber", world_alive),
-                    ("liveliness_token", coordinator_alive),
-                    ("liveliness_query", world_alive),
-                    ("liveliness_query", coordinator_alive),
-                ],
-                [
-                    ("reply", control),
-                    ("put", held),
-                    ("declare_queryable", control),
-                    ("liveliness_token", agents_alive),
-                    ("liveliness_token", world_alive),
-                    ("liveliness_token", coordinator_alive),
-                ],
-            )
-        )
-    if who.role == "dashboard":
-        return tuple(
-            _both(
-                [
-                    ("declare_subscriber", state),
-                    *(("declare_liveliness_subscriber", k) for k in presence),
-                    *(("liveliness_query", k) for k in presence),
-                ],
-                [("put", state), *(("liveliness_token", k) for k in presence)],
-            )
-        )
-    if who.role == "router":  # a router passes on what the other routers let in: all the swarm's
-        everything = f"{wire.prefix(swarm)}/**"
-        return tuple(Grant(flow, m, everything) for flow in FLOWS for m in MESSAGES)
-    raise ValueError(f"unknown role {who.role!r}")
+
+    @property
+    def presence(self) -> tuple[str, str, str]:
+        """The liveliness keys of the agents, the world and the coordinator."""
+        return (self.agents_alive, self.world_alive, self.coordinator_alive)
+
+
+def _agent_grants(k: _Keys, who: Identity) -> list[Grant]:
+    if who.robot is None:
+        raise ValueError(f"agent identity {who.name} has no robot")
+    look = world_wire.snapshot_key(k.swarm, who.robot)
+    return _both(
+        [
+            ("query", look),
+            ("liveliness_token", world_wire.agent_alive_key(k.swarm, who.robot)),
+            ("declare_liveliness_subscriber", k.world_alive),
+        ],
+        # the world's queryable, as declared: no data, only that it exists; and the world's
+        # token (an agent asks again when a world comes up)
+        [
+            ("reply", look),
+            ("declare_queryable", k.snapshots),
+            ("liveliness_token", k.world_alive),
+        ],
+    )
+
+
+def _world_grants(k: _Keys, who: Identity) -> list[Grant]:
+    return _both(
+        [
+            ("declare_queryable", k.snapshots),
+            ("declare_queryable", k.control),
+            ("reply", k.snapshots),
+            ("reply", k.control),
+            ("put", k.state),
+            ("put", k.held),
+            ("declare_liveliness_subscriber", k.agents_alive),
+            ("liveliness_token", k.world_alive),
+            ("liveliness_query", k.world_alive),
+        ],
+        [
+            ("query", k.snapshots),
+            ("query", k.control),
+            ("liveliness_token", k.agents_alive),
+            ("liveliness_token", k.world_alive),
+            ("declare_subscriber", k.state),
+            ("declare_subscriber", k.held),
+        ],
+    )
+
+
+def _coordinator_grants(k: _Keys, who: Identity) -> list[Grant]:
+    return _both(
+        [
+            ("query", k.control),
+            ("declare_subscriber", k.held),
+            ("declare_liveliness_subscriber", k.agents_alive),
+            ("declare_liveliness_subscriber", k.world_alive),
+            ("liveliness_token", k.coordinator_alive),
+            ("liveliness_query", k.world_alive),
+            ("liveliness_query", k.coordinator_alive),
+        ],
+        [
+            ("reply", k.control),
+            ("put", k.held),
+            ("declare_queryable", k.control),
+            ("liveliness_token", k.agents_alive),
+            ("liveliness_token", k.world_alive),
+            ("liveliness_token", k.coordinator_alive),
+        ],
+    )
+
+
+def _dashboard_grants(k: _Keys, who: Identity) -> list[Grant]:
+    return _both(
+        [
+            ("declare_subscriber", k.state),
+            *(("declare_liveliness_subscriber", key) for key in k.presence),
+            *(("liveliness_query", key) for key in k.presence),
+        ],
+        [("put", k.state), *(("liveliness_token", key) for key in k.presence)],
+    )
+
+
+def _router_grants(k: _Keys, who: Identity) -> list[Grant]:
+    # a router passes on what the other routers let in: all the swarm's
+    everything = f"{wire.prefix(k.swarm)}/**"
+    return [Grant(flow, m, everything) for flow in FLOWS for m in MESSAGES]
+
+
+_ROLE_GRANTS: dict[str, Callable[[_Keys, Identity], list[Grant]]] = {
+    "agent": _agent_grants,
+    "world": _world_grants,
+    "coordinator": _coordinator_grants,
+    "dashboard": _dashboard_grants,
+    "router": _router_grants,
+}
 
 
 def access_control(plan: Plan) -> dict[str, Any]:

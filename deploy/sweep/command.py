@@ -1,8 +1,8 @@
 """`fatswarm sweep`: a grid of lock-step runs on every core, one CSV row per run, resumable.
 
 Flags build the grid (`deploy/sweep/grid.py`), `deploy/sweep/pool.py` runs it and keeps the table;
-this module shows progress (a rich bar on a terminal, plain lines otherwise), the summary and the
-runs to look at, and draws the figures (`deploy/sweep/figures.py`).
+`deploy/sweep/report.py` shows progress (a rich bar on a terminal, plain lines otherwise) and the
+summary; this module says the runs to look at and draws the figures (`deploy/sweep/figures.py`).
 """
 
 from __future__ import annotations
@@ -13,43 +13,44 @@ import os
 import signal
 import sys
 import threading
-import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager, suppress
 from types import FrameType
-from typing import TYPE_CHECKING, Final, TextIO
+from typing import TYPE_CHECKING, Final
 
+from fatswarm import __version__
+from fatswarm.coordinator.schedule import NAMES
+from fatswarm.deploy.engine.config import DEFAULT_START, input_errors
+from fatswarm.deploy.flags import check_writable
+from fatswarm.deploy.scenarios.starts import KINDS
+from fatswarm.deploy.sweep.figures import draw_figures
 from fatswarm.deploy.sweep.grid import (
-    ERROR,
-    Cell,
     Grid,
-    RunFigures,
+    Key,
     RunSpec,
     SweepInputError,
-    is_clean,
-    make_row,
-    markdown_table,
     params_text,
     parse_crash,
     parse_ints,
     parse_non_rigid,
     parse_seeds,
-    row_key,
     split_values,
-    summarize,
     sweep_schedulers,
 )
-from fatswarm.domain.outcome import ExitCode, Status
+from fatswarm.deploy.sweep.report import make_progress, print_summary
+from fatswarm.deploy.sweep.summary import Cell, is_clean, markdown_table, summarize
+from fatswarm.deploy.sweep.table import ERROR, RunFigures, make_row, row_key
+from fatswarm.domain.outcome import ExitCode
+from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
+from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.seam import Configured
 
 if TYPE_CHECKING:
-    from rich.table import Table
-
     from fatswarm.deploy.sweep.pool import RunTable
 
 DEFAULT_SIZES: Final = "4,8,16"
 DEFAULT_SEEDS: Final = "10"
 DEFAULT_OUT: Final = "runs.csv"
-PROGRESS_SECONDS: Final = 5.0  # at most one plain progress line per this many seconds
 SHOWN_FAILURES: Final = 5  # commands printed for runs that did not form collision-free
 MISSING_MATPLOTLIB: Final = (
     "fatswarm sweep: --plot needs matplotlib: install it with `pip install 'fatswarm[plot]'` "
@@ -78,19 +79,35 @@ EPILOG: Final = (
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm sweep`."""
-    from fatswarm.deploy.engine.config import DEFAULT_START
-    from fatswarm.deploy.scenarios.starts import KINDS
-    from fatswarm.domain.registry import DEFAULT
-
     p.description = DESCRIPTION
     p.epilog = EPILOG
+    _add_grid_arguments(p)
+    p.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="a parameter of the algorithms, the same for every run (repeatable)",
+    )
+    p.add_argument(
+        "--max-rounds",
+        type=int,
+        default=None,
+        metavar="R",
+        help="round cap of every run (default: the scheduler's, as fatswarm run)",
+    )
+    _add_output_arguments(p)
+
+
+def _add_grid_arguments(p: argparse.ArgumentParser) -> None:
+    """The grid's axes: algorithms, sizes, start kinds, schedulers, adversaries and seeds."""
     usable = ", ".join(sweep_schedulers())
     p.add_argument(
         "--algorithm",
         action="append",
         default=[],
         metavar="NAMES",
-        help=f"algorithms to run (default {DEFAULT}; a registered name, "
+        help=f"algorithms to run (default {DEFAULT_ALGORITHM}; a registered name, "
         "module:attribute or path/to/file.py:attribute)",
     )
     p.add_argument(
@@ -138,20 +155,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="seeds: a count K (seeds 0..K-1), a range 100..119 or a list 3,7 "
         f"(default {DEFAULT_SEEDS}: seeds 0..9)",
     )
-    p.add_argument(
-        "--param",
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="a parameter of the algorithms, the same for every run (repeatable)",
-    )
-    p.add_argument(
-        "--max-rounds",
-        type=int,
-        default=None,
-        metavar="R",
-        help="round cap of every run (default: the scheduler's, as fatswarm run)",
-    )
+
+
+def _add_output_arguments(p: argparse.ArgumentParser) -> None:
+    """Where the rows, the summary and the figures go, and how the sweep runs."""
     p.add_argument(
         "--out",
         default=DEFAULT_OUT,
@@ -188,32 +195,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def build_grid(args: argparse.Namespace) -> Grid:
     """The grid the flags ask for, checked; raises SweepInputError or one of
     `config.input_errors()` with a line saying what to fix."""
-    from fatswarm.coordinator.schedule import NAMES
-    from fatswarm.deploy.engine.config import DEFAULT_START
-    from fatswarm.deploy.scenarios.starts import KINDS
-    from fatswarm.domain.registry import DEFAULT, load_algorithm
-    from fatswarm.domain.seam import Configured
-
     sizes = parse_ints(args.n or [DEFAULT_SIZES], "-n", least=1)
     seeds = parse_seeds(args.seeds or [DEFAULT_SEEDS])
-    starts = split_values(args.start) or (DEFAULT_START,)
-    for kind in starts:
-        if kind not in KINDS:
-            raise SweepInputError(
-                f"--start {kind}: not a start kind; choose from {', '.join(KINDS)}"
-            )
-    usable = sweep_schedulers()
-    schedulers = split_values(args.scheduler) or usable
-    for name in schedulers:
-        if name not in usable:
-            why = "needs a schedule file" if name in NAMES else "is not a scheduler"
-            raise SweepInputError(f"--scheduler {name} {why}; a sweep takes {', '.join(usable)}")
+    starts = _start_kinds(args.start)
+    schedulers = _schedulers(args.scheduler)
     if args.max_rounds is not None and args.max_rounds < 1:
         raise SweepInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
     non_rigids = parse_non_rigid(args.non_rigid)
     crashes = parse_crash(args.crash)
     algorithms = []
-    for ref in split_values(args.algorithm) or (DEFAULT,):
+    for ref in split_values(args.algorithm) or (DEFAULT_ALGORITHM,):
         algorithm = load_algorithm(ref)
         texts = params_text(algorithm, args.param)
         for n in sizes:  # refuse an n the algorithm refuses now, not once per run
@@ -224,9 +215,32 @@ def build_grid(args: argparse.Namespace) -> Grid:
     )
 
 
+def _start_kinds(given: Sequence[str]) -> tuple[str, ...]:
+    """The --start kinds asked for (default DEFAULT_START); SweepInputError."""
+    starts = split_values(given) or (DEFAULT_START,)
+    for kind in starts:
+        if kind not in KINDS:
+            raise SweepInputError(
+                f"--start {kind}: not a start kind; choose from {', '.join(KINDS)}"
+            )
+    return starts
+
+
+def _schedulers(given: Sequence[str]) -> tuple[str, ...]:
+    """The --scheduler models asked for (default: every one a sweep takes); SweepInputError."""
+    usable = sweep_schedulers()
+    schedulers = split_values(given) or usable
+    for name in schedulers:
+        if name not in usable:
+            why = "needs a schedule file" if name in NAMES else "is not a scheduler"
+            raise SweepInputError(f"--scheduler {name} {why}; a sweep takes {', '.join(usable)}")
+    return schedulers
+
+
 def main(args: argparse.Namespace) -> int:
     """`fatswarm sweep`: run what the CSV lacks of the grid, then summarise; the exit code."""
-    from fatswarm.deploy.engine.config import input_errors
+    # the pool brings the whole lock-step engine and multiprocessing: the CLI imports this
+    # module to build its parser
     from fatswarm.deploy.sweep.pool import RunTable
 
     refused: tuple[type[Exception], ...] = (SweepInputError, *input_errors())
@@ -245,28 +259,18 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _sweep(args: argparse.Namespace, grid: Grid, jobs: int, table: RunTable) -> int:
-    from fatswarm import __version__
+    # the lock-step engine and multiprocessing: the CLI imports this module for its parser
     from fatswarm.deploy.sweep.pool import TableWriteError, WorkerDiedError, run_all
 
     runs = grid.runs()
     keys = {spec.key() for spec in runs}
-    present = table.keys()
-    todo = [spec for spec in runs if spec.key() not in present]
-    other = sum(1 for row in table.rows if row_key(row) not in keys)
-    if table.cut:
-        _say(f"{args.out}: cut a torn last row ({table.cut} bytes); that run is done again")
-    if not args.quiet:
-        _say(_plan_text(args.out, len(runs), len(runs) - len(todo), other, jobs))
-        if grid.left_out:
-            _say(f"sweep: {grid.left_out} runs left out, whose --crash F is >= their n (0 < F < n)")
-    if todo and importlib.util.find_spec("scipy") is None:
-        _say(MISSING_SCIPY)
+    todo = _todo(args, grid, table, runs, keys, jobs)
 
     def record(spec: RunSpec, figures: RunFigures) -> None:
         table.append(make_row(spec, figures, __version__))
         progress.advance(figures)
 
-    progress = _progress(len(todo), quiet=args.quiet or not todo)
+    progress = make_progress(len(todo), quiet=args.quiet or not todo)
     try:
         with _stop_on_signals() as stopped, progress:
             complete = run_all(todo, jobs, record, lambda: stopped[0] is not None)
@@ -280,14 +284,48 @@ def _sweep(args: argparse.Namespace, grid: Grid, jobs: int, table: RunTable) -> 
         _say(f"fatswarm sweep: {exc}; the rows written stay, run the same command again to go on")
         return ExitCode.NOT_FORMED
     if not complete:
-        done = sum(1 for row in table.rows if row_key(row) in keys)
-        word = "interrupted" if stopped[0] == signal.SIGINT else "terminated"
-        _say(
-            f"{word}: {done} of {len(runs)} runs of the grid are in {args.out}; run the same "
-            "command again to go on"
-        )
-        return ExitCode.INTERRUPTED if stopped[0] == signal.SIGINT else ExitCode.TERMINATED
-    rows = [row for row in table.rows if row_key(row) in keys]
+        return _stopped(args.out, table, keys, len(runs), stopped[0])
+    return _finish(args, grid, [row for row in table.rows if row_key(row) in keys])
+
+
+def _todo(
+    args: argparse.Namespace,
+    grid: Grid,
+    table: RunTable,
+    runs: Sequence[RunSpec],
+    keys: set[Key],
+    jobs: int,
+) -> list[RunSpec]:
+    """The runs of the grid the table lacks; the plan (and a torn row cut, runs left out, scipy
+    missing) said on stderr."""
+    present = table.keys()
+    todo = [spec for spec in runs if spec.key() not in present]
+    other = sum(1 for row in table.rows if row_key(row) not in keys)
+    if table.cut:
+        _say(f"{args.out}: cut a torn last row ({table.cut} bytes); that run is done again")
+    if not args.quiet:
+        _say(_plan_text(args.out, len(runs), len(runs) - len(todo), other, jobs))
+        if grid.left_out:
+            _say(f"sweep: {grid.left_out} runs left out, whose --crash F is >= their n (0 < F < n)")
+    if todo and importlib.util.find_spec("scipy") is None:
+        _say(MISSING_SCIPY)
+    return todo
+
+
+def _stopped(out: str, table: RunTable, keys: set[Key], total: int, signum: int | None) -> int:
+    """Say how far a sweep stopped by a signal got; its exit code."""
+    done = sum(1 for row in table.rows if row_key(row) in keys)
+    word = "interrupted" if signum == signal.SIGINT else "terminated"
+    _say(
+        f"{word}: {done} of {total} runs of the grid are in {out}; run the same "
+        "command again to go on"
+    )
+    return ExitCode.INTERRUPTED if signum == signal.SIGINT else ExitCode.TERMINATED
+
+
+def _finish(args: argparse.Namespace, grid: Grid, rows: Sequence[dict[str, str]]) -> int:
+    """The end of a complete sweep, from the grid's `rows`: the summary, the runs to look at, the
+    Markdown table and the figures asked for; the exit code."""
     cells = summarize(rows, grid)
     print_summary(cells, sys.stdout)
     _show_failures(rows, args.out)
@@ -334,8 +372,6 @@ def _check_plot(folder: str | None) -> None:
 
 def _check_summary_md(path: str | None) -> None:
     """Refuse a --summary-md PATH that cannot be written, before anything runs."""
-    from fatswarm.deploy.flags import check_writable
-
     if path is not None:
         check_writable("--summary-md", path)
 
@@ -355,8 +391,6 @@ def _write_text(path: str, text: str) -> None:
 
 
 def _plot(cells: Sequence[Cell], folder: str) -> int:
-    from fatswarm.deploy.sweep.figures import draw_figures
-
     try:
         written = draw_figures(cells, folder)
     except OSError as exc:
@@ -388,170 +422,6 @@ def _stop_on_signals() -> Iterator[list[int | None]]:
             signal.signal(sig, handler)
 
 
-# -- progress ---------------------------------------------------------------------------------
-
-
-class _Progress:
-    """Counts finished runs; shown by a subclass (plain lines, a rich bar) or not at all."""
-
-    def __init__(self, total: int) -> None:
-        self.total = total
-        self.done = self.formed = self.collided = self.errors = 0
-        self.started = time.monotonic()
-
-    def advance(self, figures: RunFigures) -> None:
-        self.done += 1
-        self.formed += figures.status == Status.FORMED
-        self.collided += figures.collisions > 0
-        self.errors += figures.status == ERROR
-        self.show()
-
-    def show(self) -> None:
-        """Nothing to show (quiet)."""
-
-    def counts(self) -> str:
-        return f"formed {self.formed}  collided {self.collided}  errors {self.errors}"
-
-    def __enter__(self) -> _Progress:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
-
-class _PlainProgress(_Progress):
-    """A line on stderr every PROGRESS_SECONDS (for a log file or a pipe) and at the end."""
-
-    def __init__(self, total: int, out: TextIO) -> None:
-        super().__init__(total)
-        self.out = out
-        self.last = self.started
-
-    def show(self) -> None:
-        now = time.monotonic()
-        if now - self.last >= PROGRESS_SECONDS or self.done == self.total:
-            self.last = now
-            rate = self.done / max(now - self.started, 1e-9)
-            eta = (self.total - self.done) / rate if rate > 0 else 0.0
-            print(
-                f"sweep: {self.done}/{self.total} runs  {self.counts()}  ETA {_duration(eta)}",
-                file=self.out,
-                flush=True,
-            )
-
-
-class _RichProgress(_Progress):
-    """A rich progress bar on the terminal (stderr), with the counts beside it."""
-
-    def __init__(self, total: int) -> None:
-        from rich.console import Console
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            TextColumn,
-            TimeElapsedColumn,
-            TimeRemainingColumn,
-        )
-
-        super().__init__(total)
-        self.bar = Progress(
-            TextColumn("sweep"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TextColumn("{task.fields[counts]}"),
-            TimeElapsedColumn(),
-            TextColumn("ETA"),
-            TimeRemainingColumn(),
-            console=Console(stderr=True),
-            transient=False,
-        )
-        self.task = self.bar.add_task("sweep", total=total, counts=self.counts())
-
-    def show(self) -> None:
-        self.bar.update(self.task, completed=self.done, counts=self.counts())
-
-    def __enter__(self) -> _Progress:
-        self.bar.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.bar.stop()
-
-
-def _progress(total: int, *, quiet: bool) -> _Progress:
-    if quiet:
-        return _Progress(total)
-    if sys.stderr.isatty():
-        return _RichProgress(total)
-    return _PlainProgress(total, sys.stderr)
-
-
-def _duration(seconds: float) -> str:
-    whole = round(seconds)
-    if whole < 60:
-        return f"{whole}s"
-    if whole < 3600:
-        return f"{whole // 60}m{whole % 60:02d}s"
-    return f"{whole // 3600}h{whole // 60 % 60:02d}m"
-
-
-# -- the summary ------------------------------------------------------------------------------
-
-
-def summary_table(cells: Sequence[Cell]) -> Table:
-    """The sweep's summary, one line per (algorithm, start, model, n) (`sweep.summarize`, the
-    groups of the Markdown table split by n): how many runs formed, collided and stalled (hit the
-    round cap or raised, when any did), and the median rounds, distance ratio and (async models,
-    when any) virtual time of the formed ones. The model is `sweep.model_label`'s (`fsync`,
-    `ssync+nr1`, `async+crash2`). Algorithm and start columns only when the grid has several, so
-    that the common table fits 80 columns."""
-    from rich import box
-    from rich.table import Table
-
-    several_alg = len({c.algorithm for c in cells}) > 1
-    several_start = len({c.start for c in cells}) > 1
-    any_capped = any(c.capped for c in cells)
-    any_errors = any(c.errors for c in cells)
-    any_time = any(c.time is not None for c in cells)
-    table = Table(box=box.SIMPLE_HEAD, pad_edge=False, show_edge=False)
-    if several_alg:
-        table.add_column("algorithm")
-    if several_start:
-        table.add_column("start")
-    table.add_column("model")
-    counts = ["n", "runs", "formed", "collided", "stalled"]
-    counts += ["capped"] if any_capped else []
-    counts += ["errors"] if any_errors else []
-    medians = ["median\nrounds", "median\nratio"] + (["median\ntime"] if any_time else [])
-    for name in [*counts, *medians]:
-        table.add_column(name, justify="right")
-    for c in cells:
-        lead = ([c.algorithm] if several_alg else []) + ([c.start] if several_start else [])
-        figures = [c.n, c.runs, c.formed, c.collided, c.stalled]
-        figures += [c.capped] if any_capped else []
-        figures += [c.errors] if any_errors else []
-        times = ["-" if c.time is None else f"{c.time[1]:.1f}"] if any_time else []
-        table.add_row(
-            *lead,
-            c.model,
-            *map(str, figures),
-            "-" if c.rounds is None else f"{c.rounds[1]:g}",
-            "-" if c.ratio is None else f"{c.ratio[1]:.3f}",
-            *times,
-        )
-    return table
-
-
-def print_summary(cells: Sequence[Cell], out: TextIO) -> None:
-    """Print the summary table to `out` (no colour nor wrapping off a terminal)."""
-    from rich.console import Console
-
-    tty = out.isatty()
-    console = Console(file=out, width=None if tty else 200, no_color=not tty, highlight=False)
-    console.print(summary_table(cells))
-
-
 def _show_failures(rows: Sequence[dict[str, str]], out_path: str) -> None:
     failed = [row for row in rows if not is_clean(row)]
     if not failed:
@@ -579,4 +449,4 @@ def _fail(message: str) -> int:
     return ExitCode.BAD_INPUT
 
 
-__all__ = ["add_arguments", "build_grid", "main", "print_summary", "summary_table"]
+__all__ = ["add_arguments", "build_grid", "main"]

@@ -11,7 +11,7 @@ import os
 from collections.abc import Sequence
 from typing import Any, Final
 
-from fatswarm.deploy.sweep.grid import Cell, curves, success_rates
+from fatswarm.deploy.sweep.summary import Cell, curves, success_rates
 
 FIGURES: Final = ("success.png", "rounds.png", "ratio.png")
 LOG_SPAN: Final = 30.0  # rounds spanning more than this factor are drawn on a log axis
@@ -23,10 +23,11 @@ UPRIGHT_BARS: Final = 8  # more models than this: the success bars lie, a row pe
 
 def draw_figures(cells: Sequence[Cell], folder: str) -> list[str]:
     """Write FIGURES into `folder` (created if missing); the paths written. Raises OSError."""
+    # matplotlib is an optional extra (fatswarm[plot]), and heavy: loaded only to draw
     import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # once the backend is chosen
 
     os.makedirs(folder, exist_ok=True)
     paths = [os.path.join(folder, name) for name in FIGURES]
@@ -103,7 +104,7 @@ def _curves(ax: Any, cells: Sequence[Cell], figure: str) -> None:
     little (and with its own marker) so that equal curves stay visible; with many labels (a
     sweep over models) the nudges shrink so that the points of one n span at most DODGE_SPAN of a
     gap."""
-    from matplotlib.ticker import MaxNLocator
+    from matplotlib.ticker import MaxNLocator  # the optional extra, as in draw_figures
 
     lines = {label: points for label, points in curves(cells, figure).items() if points}
     sizes = sorted({n for points in lines.values() for n, _ in points})

@@ -15,12 +15,12 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures.process import BrokenProcessPool
 from typing import Final
 
-from fatswarm.deploy.sweep.grid import (
+from fatswarm.deploy.engine.config import RunConfig
+from fatswarm.deploy.engine.lockstep import default_max_rounds, run_lockstep
+from fatswarm.deploy.sweep.grid import Key, RunSpec, SweepInputError, values_text
+from fatswarm.deploy.sweep.table import (
     ERROR,
-    Key,
     RunFigures,
-    RunSpec,
-    SweepInputError,
     TableError,
     assignment_bound,
     header_error,
@@ -29,8 +29,9 @@ from fatswarm.deploy.sweep.grid import (
     parse_table,
     row_key,
     row_line,
-    values_text,
 )
+from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.seam import resolve_values
 
 IN_FLIGHT_PER_JOB: Final = 4  # runs queued per worker: enough to keep it busy, few to cancel
 POLL_S: Final = 0.2  # how often the pool loop looks at the stop flag
@@ -75,11 +76,6 @@ def init_worker() -> None:
 
 def run_spec(spec: RunSpec) -> RunFigures:
     """Run `spec` in lock step and measure it; a run that raises is an ERROR row, not a crash."""
-    from fatswarm.deploy.engine.config import RunConfig
-    from fatswarm.deploy.engine.lockstep import default_max_rounds, run_lockstep
-    from fatswarm.domain.registry import load_algorithm
-    from fatswarm.domain.seam import resolve_values
-
     logger = logging.getLogger("fatswarm")
     warnings = _FirstWarning()
     logger.addHandler(warnings)
@@ -313,7 +309,7 @@ def _check_output(path: str) -> None:
 
 def _lock(fd: int, path: str) -> None:
     try:
-        import fcntl
+        import fcntl  # POSIX only: imported here so that a table opens (unlocked) elsewhere
     except ImportError:  # not POSIX: no lock, as no second sweep is expected there
         return
     try:

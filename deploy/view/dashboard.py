@@ -79,7 +79,7 @@ class Frame:
     moved: tuple[int, ...] = ()
     stopped: tuple[int, ...] = ()  # stopped by contact in `round`
     collisions_total: int = 0
-    status: str = Status.RUNNING  # a world.outcome.Status
+    status: Status = Status.RUNNING
     swarm: str = ""
     seed: int | None = None
     alive: tuple[bool, ...] | None = None  # None when unknown (a record holds no liveliness)
@@ -486,6 +486,8 @@ class LiveView:
     """A rich Live view of the frames on the alternate screen; the last frame stays on exit."""
 
     def __init__(self, console: Console | None = None) -> None:
+        # rich's Live machinery loads only when a live view starts: the CLI imports this module
+        # to build its parser
         from rich.live import Live
 
         self.console = console or Console()

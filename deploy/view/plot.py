@@ -12,15 +12,11 @@ import sys
 
 import numpy as np
 
+from fatswarm.deploy.view.dashboard import algorithm_text, enclosing_circle
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.path import Points, sample, truncate
-from fatswarm.world.record import (
-    RecordFormatError,
-    RunRecord,
-    move_origin,
-    read_record,
-    torn_end_note,
-)
+from fatswarm.world.record import RecordFormatError, RunRecord, move_origin
+from fatswarm.world.record_read import read_record, torn_end_note
 
 FORMATS = (".svg", ".png")
 TRAIL_STEP = 0.1  # world units between samples of a drawn path
@@ -56,8 +52,6 @@ def final_positions(record: RunRecord) -> Points:
 
 def default_title(record: RunRecord, rc: float) -> str:
     """The run in one line: algorithm and parameters, n, scheduler, seed, outcome, final r_c."""
-    from fatswarm.deploy.view.dashboard import algorithm_text
-
     header = record.header
     status = record.result.status if record.result is not None else "unfinished"
     rounds = record.rounds[-1].round if record.rounds else 0
@@ -69,13 +63,13 @@ def default_title(record: RunRecord, rc: float) -> str:
 
 def draw(record: RunRecord, out: str, title: str | None = None) -> None:
     """Render the record to `out` (format from its suffix); needs matplotlib."""
+    # matplotlib is an optional extra (fatswarm[plot]), and heavy: loaded only to draw
     import matplotlib
 
     matplotlib.use("Agg")
+    # once the backend is chosen
     import matplotlib.pyplot as plt
     from matplotlib.patches import Circle
-
-    from fatswarm.deploy.view.dashboard import enclosing_circle
 
     header = record.header
     end = final_positions(record)
@@ -125,7 +119,7 @@ def main(args: argparse.Namespace) -> int:
     note = torn_end_note(args.record, record)
     if note is not None:
         print(f"fatswarm plot: {note}", file=sys.stderr)
-    try:
+    try:  # matplotlib is an optional extra (fatswarm[plot]): without it, say how to install it
         import matplotlib  # noqa: F401
     except ImportError:
         print(MISSING_MATPLOTLIB, file=sys.stderr)

@@ -12,24 +12,21 @@ import math
 import os
 import select
 import sys
+import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import Any
+
+from rich.console import Console
 
 from fatswarm.deploy.view.dashboard import Frame, print_frame, render_frame, save_svg
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.path import Points, sample, truncate
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.seam import AlgorithmError, AlgorithmFailure, AlgorithmParamsError, Configured
-from fatswarm.world.record import (
-    Header,
-    RecordFormatError,
-    RunRecord,
-    move_origin,
-    read_record,
-    torn_end_note,
-)
+from fatswarm.world.record import Header, RecordFormatError, RunRecord, move_origin
+from fatswarm.world.record_read import read_record, torn_end_note
 
 TRAIL_STEP = 0.25  # world units between samples of a drawn path (a quarter of a robot radius)
 
@@ -220,6 +217,8 @@ def parse_keys(data: str) -> list[str]:
 
 @contextmanager
 def _cbreak(fd: int) -> Iterator[None]:
+    # POSIX only, and only to play interactively: the CLI imports this module on any system to
+    # build its parser, and --no-play needs neither
     import termios
     import tty
 
@@ -245,9 +244,8 @@ def play(
     frames: Sequence[Frame], player: Player, shown_as: Callable[[Frame], Frame] = lambda f: f
 ) -> Frame:
     """Show the frames (each through `shown_as`) interactively until q; returns the last shown."""
-    import time
-
-    from rich.console import Console
+    # rich's Live machinery loads only when a replay plays: the CLI imports this module to build
+    # its parser
     from rich.live import Live
 
     console = Console()
@@ -302,32 +300,14 @@ def main(args: argparse.Namespace) -> int:
     def warn(line: str) -> None:
         print(f"fatswarm replay: {line}", file=sys.stderr)
 
-    last = len(frames) - 1
-    if args.round is not None and not 0 <= args.round <= frames[-1].round:
-        print(
-            f"fatswarm replay: --round must be between 0 and {frames[-1].round}, got {args.round}",
-            file=sys.stderr,
-        )
+    refused = _refused(args, frames)
+    if refused is not None:
+        print(f"fatswarm replay: {refused}", file=sys.stderr)
         return ExitCode.BAD_INPUT
-    if not (args.speed > 0 and math.isfinite(args.speed)):
-        print("fatswarm replay: --speed must be a positive number", file=sys.stderr)
-        return ExitCode.BAD_INPUT
-    index = last
+    index = len(frames) - 1
     if args.round is not None:
         index = next(i for i, f in enumerate(frames) if f.round >= args.round)
-    shown_as = FrameFigures(figures_of(record.header, warn), warn)
-    interactive = not args.no_play and sys.stdin.isatty() and sys.stdout.isatty()
-    if interactive:
-        start = index if args.round is not None else 0
-        player = Player(
-            count=len(frames), index=start, playing=args.round is None, speed=args.speed
-        )
-        frame = play(frames, player, shown_as)
-    else:
-        from rich.console import Console
-
-        frame = shown_as(frames[index])
-        print_frame(frame, Console(width=None if sys.stdout.isatty() else 120), height=40)
+    frame = _show(args, frames, index, FrameFigures(figures_of(record.header, warn), warn))
     if args.svg:
         try:
             save_svg(frame, args.svg)
@@ -335,3 +315,29 @@ def main(args: argparse.Namespace) -> int:
             print(f"fatswarm replay: cannot write {args.svg}: {exc.strerror}", file=sys.stderr)
             return ExitCode.BAD_INPUT
     return ExitCode.OK
+
+
+def _refused(args: argparse.Namespace, frames: Sequence[Frame]) -> str | None:
+    """Why --round or --speed cannot be used with these frames (None: they can)."""
+    if args.round is not None and not 0 <= args.round <= frames[-1].round:
+        return f"--round must be between 0 and {frames[-1].round}, got {args.round}"
+    if not (args.speed > 0 and math.isfinite(args.speed)):
+        return "--speed must be a positive number"
+    return None
+
+
+def _show(
+    args: argparse.Namespace, frames: Sequence[Frame], index: int, shown_as: FrameFigures
+) -> Frame:
+    """Play the frames on a terminal (from `index` with --round, else from the start), or print
+    the frame at `index`; the frame shown at the end."""
+    interactive = not args.no_play and sys.stdin.isatty() and sys.stdout.isatty()
+    if interactive:
+        start = index if args.round is not None else 0
+        player = Player(
+            count=len(frames), index=start, playing=args.round is None, speed=args.speed
+        )
+        return play(frames, player, shown_as)
+    frame = shown_as(frames[index])
+    print_frame(frame, Console(width=None if sys.stdout.isatty() else 120), height=40)
+    return frame

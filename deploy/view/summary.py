@@ -39,7 +39,7 @@ def print_outcome(
 class Outcome:
     """How a finished run ended (lockstep result or networked record): what the summary says."""
 
-    status: str  # a world.outcome.Status that ended the run
+    status: Status  # what ended the run
     rounds: int
     collisions: int  # robots stopped at contact, over the whole run
     n: int

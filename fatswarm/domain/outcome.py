@@ -31,7 +31,7 @@ class ExitCode(enum.IntEnum):
     TERMINATED = 143  # 128 + SIGTERM
 
 
-def exit_code_for(status: str, collisions: int) -> ExitCode:
+def exit_code_for(status: Status, collisions: int) -> ExitCode:
     """0 only for a collision-free formation; formed through collisions is 3, not formed is 1."""
     if status != Status.FORMED:
         return ExitCode.NOT_FORMED

@@ -122,7 +122,17 @@ def check_algorithm(obj: object, ref: str) -> Algorithm[Any]:
             f"--algorithm {ref}: its name must be 1-64 letters, digits, '-', "
             f"'_' or '.', got {name!r}"
         )
-    params = candidate.parameters
+    _check_parameters(candidate.parameters, ref)
+    for method in ("make_params", "compute", "goal"):
+        if not callable(getattr(obj, method)):
+            raise AlgorithmError(f"--algorithm {ref}: {method} is not callable")
+    assert isinstance(obj, Algorithm)
+    return obj
+
+
+def _check_parameters(params: Any, ref: str) -> None:
+    """Refuse an algorithm's `parameters` unless a short tuple of ParamSpec with plain, distinct
+    names and plain defaults (AlgorithmError)."""
     if (
         not isinstance(params, tuple)
         or len(params) > MAX_PARAMS
@@ -142,11 +152,6 @@ def check_algorithm(obj: object, ref: str) -> Algorithm[Any]:
                 f"--algorithm {ref}: parameter {p.name} needs a bool, int, "
                 "float or short str default"
             )
-    for method in ("make_params", "compute", "goal"):
-        if not callable(getattr(obj, method)):
-            raise AlgorithmError(f"--algorithm {ref}: {method} is not callable")
-    assert isinstance(obj, Algorithm)
-    return obj
 
 
 __all__ = ["BUILTIN", "DEFAULT", "GROUP", "available", "check_algorithm", "load_algorithm"]

@@ -12,9 +12,9 @@ from __future__ import annotations
 import math
 import os
 import traceback
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol, TypeVar, runtime_checkable
+from typing import Any, Protocol, TypeVar, cast, runtime_checkable
 
 from fatswarm.domain.path import Path, Points
 
@@ -180,6 +180,17 @@ def checked(compute: Callable[[Points], Path]) -> Callable[[Points], Path]:
     return run
 
 
+class RoundPlanner(Protocol):
+    """An algorithm's optional fast path for a lock step: every robot of a round at once."""
+
+    def paths(
+        self, positions: Points, robots: Sequence[int], flips: Sequence[bool]
+    ) -> Mapping[int, Path]:
+        """Each of `robots`' path in its own frame (X mirrored where `flips[robot]`), from the
+        world positions (n, 2): the very paths its `compute` would return for its view."""
+        ...
+
+
 @dataclass(frozen=True, slots=True, eq=False)
 class Configured:
     """An algorithm with its parameters for a run of n robots: what the world and agents hold."""
@@ -219,6 +230,11 @@ class Configured:
         if hook is not None:
             hook(positions, self.params)
 
+    def round_planner(self) -> RoundPlanner | None:
+        """The algorithm's round planner for these parameters, if it has the hook."""
+        hook = getattr(self.algorithm, "round_planner", None)
+        return None if hook is None else cast(RoundPlanner, hook(self.params))
+
     def figures(self, positions: Points) -> dict[str, float]:
         """The algorithm's finite figures for the dashboard (none if it has no hook); raises
         AlgorithmFailure if the hook raises or gives something that is not a map of numbers."""
@@ -249,6 +265,7 @@ __all__ = [
     "ParamSpec",
     "ParamValue",
     "Points",
+    "RoundPlanner",
     "checked",
     "parse_assignments",
     "resolve_values",

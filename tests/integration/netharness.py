@@ -18,7 +18,8 @@ from fatswarm.deploy.net.children import Children
 from fatswarm.deploy.net.zconf import loopback_endpoint, make_config
 from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.protocol import WorldState, state_key
-from fatswarm.world.record import RecordWriter, RunRecord, read_record
+from fatswarm.world.record import RecordWriter, RunRecord
+from fatswarm.world.record_read import read_record
 
 DEADLINE_S = 120.0  # generous: the machine is shared; tests wait on predicates, never on sleeps
 

@@ -10,7 +10,7 @@ import pytest
 from netharness import assert_same_run
 
 import fatswarm
-from fatswarm.world.record import read_record
+from fatswarm.world.record_read import read_record
 
 pytestmark = pytest.mark.integration
 EXAMPLE = str(Path(__file__).resolve().parents[2] / "examples" / "spread_out.py") + ":ALGORITHM"

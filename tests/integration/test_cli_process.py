@@ -20,7 +20,7 @@ from typing import IO
 import pytest
 from netharness import descendants_of, running
 
-from fatswarm.world.record import read_record
+from fatswarm.world.record_read import read_record
 
 pytestmark = pytest.mark.integration
 

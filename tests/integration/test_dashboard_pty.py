@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from fatswarm.domain.outcome import Status
 from fatswarm.world.protocol import AgentInfo, WorldState, state_key
 
 pytestmark = pytest.mark.integration
@@ -164,7 +165,7 @@ def world_state(round_no: int, n: int, status: str, swarm: str) -> WorldState:
         algorithm="uniform-circle", params={"a": 4.0}, figures={"target radius": r},
         scheduler="fsync", swarm=swarm, positions=positions,
         active=tuple(range(n)), open_round=0, moved=(), stopped=(), collisions_total=0,
-        status=status,
+        status=Status(status),
         agents=agents,
     )  # fmt: skip
 

@@ -5,6 +5,7 @@ run with one line and exit 4; freed, --resume ends it exactly as an uninterrupte
 
 from __future__ import annotations
 
+import os
 import resource
 import signal
 import subprocess
@@ -15,7 +16,7 @@ from pathlib import Path
 import pytest
 from netharness import assert_same_run
 
-from fatswarm.world.record import read_record
+from fatswarm.world.record_read import read_record
 
 pytestmark = pytest.mark.integration
 
@@ -31,12 +32,17 @@ def _limited(size: int) -> Callable[[], None]:
 
 
 def _fatswarm(*argv: str, limit: int | None = None) -> subprocess.CompletedProcess[str]:
+    env = dict(os.environ)
+    if limit is not None:  # coverage (a measured test run) could not save its data either
+        for name in ("COVERAGE_PROCESS_CONFIG", "COVERAGE_PROCESS_START"):
+            env.pop(name, None)
     return subprocess.run(
         [sys.executable, "-m", "fatswarm.deploy.cli", "run", "-q", *argv],
         capture_output=True,
         text=True,
         timeout=240,
         check=False,
+        env=env,
         preexec_fn=None if limit is None else _limited(limit),
     )
 

@@ -13,7 +13,7 @@ from netharness import Swarm, assert_same_run, lockstep_record
 from fatswarm.deploy.net.zconf import make_config
 from fatswarm.domain.wire import PROTOCOL_VERSION
 from fatswarm.world.protocol import Hello
-from fatswarm.world.record import read_record
+from fatswarm.world.record_read import read_record
 
 pytestmark = pytest.mark.integration
 SEED = 11

@@ -27,7 +27,7 @@ from fatswarm.world.protocol import (
     snapshot_key,
     state_key,
 )
-from fatswarm.world.record import read_record
+from fatswarm.world.record_read import read_record
 
 pytestmark = pytest.mark.integration
 
@@ -388,7 +388,7 @@ def test_run_resume_continues_a_cut_record_as_its_own_run(tmp_path: Path) -> Non
 def test_a_robot_dead_for_good_counts_as_crashed_and_the_run_ends(
     make_swarm: Callable[..., Swarm],
 ) -> None:
-    from fatswarm.world.core import crash_after
+    from fatswarm.world.faults import crash_after
 
     sw = make_swarm(6, SEED)
     sw.start_all(pace=0.02)

@@ -10,7 +10,7 @@ from netharness import Swarm, assert_one_line, assert_same_run, lockstep_record,
 
 from fatswarm.coordinator.protocol import alive_key as coordinator_alive_key
 from fatswarm.world.protocol import alive_key as world_alive_key
-from fatswarm.world.record import read_record
+from fatswarm.world.record_read import read_record
 
 pytestmark = pytest.mark.integration
 

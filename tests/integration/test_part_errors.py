@@ -165,21 +165,21 @@ def test_agents_say_every_few_seconds_that_they_wait_for_a_router_and_where(
                 children.start(name, argv, stdout=out, stderr=out)
         for name, (_, who) in hosts.items():
             notice = f"{who}: still waiting for a Zenoh router at {endpoint} ("
-            _wait_for(
-                f"{name}'s second notice",
-                lambda notice=notice, name=name: log(name).count(notice) >= 2,
-                logs,
-            )
+
+            def noticed_twice(notice: str = notice, name: str = name) -> bool:
+                return log(name).count(notice) >= 2
+
+            _wait_for(f"{name}'s second notice", noticed_twice, logs)
         assert not children.exited(), logs()  # waiting, by design: not giving up
         with open(tmp_path / "router.log", "wb") as out:
             children.start("router", part("router", "--listen", endpoint), stdout=out, stderr=out)
         for name, (_, who) in hosts.items():
             answered = f"{who}: the router at {endpoint} answered after"
-            _wait_for(
-                f"{name} to connect",
-                lambda answered=answered, name=name: answered in log(name),
-                logs,
-            )
+
+            def connected(answered: str = answered, name: str = name) -> bool:
+                return answered in log(name)
+
+            _wait_for(f"{name} to connect", connected, logs)
     for name, (_, who) in hosts.items():
         lines = log(name).splitlines()
         assert all(f"] WARNING {who}: " in line for line in lines), logs()  # one speaks per host

@@ -26,7 +26,8 @@ from netharness import assert_same_run, lockstep_record, part
 
 from fatswarm.deploy.net.children import Children
 from fatswarm.deploy.secure.plan import Plan
-from fatswarm.world.record import RecordFormatError, RunRecord, read_record
+from fatswarm.world.record import RecordFormatError, RunRecord
+from fatswarm.world.record_read import read_record
 
 pytestmark = [pytest.mark.integration, pytest.mark.slow]
 
@@ -231,7 +232,11 @@ def test_a_secured_swarm_on_three_hosts_forms_refuses_rogues_and_survives_a_part
                 f"router-{h}", h, "router", f"router-{hosts.addr[h]}", "--log-level", "info"
             )
         for h in "abc":
-            parts.wait_for(f"router {h}", lambda h=h: "listening" in parts.log(f"router-{h}"))
+
+            def listening(h: str = h) -> bool:
+                return "listening" in parts.log(f"router-{h}")
+
+            parts.wait_for(f"router {h}", listening)
 
         # --- run 1: rogues on B and C while the swarm forms --------------------------------
         first = tmp_path / "run1.jsonl"
@@ -272,7 +277,11 @@ def test_a_secured_swarm_on_three_hosts_forms_refuses_rogues_and_survives_a_part
             parts.rogue("rogue-dashboard", "c", "dashboard-0"),
         ]
         for name in ("rogue-robot", "rogue-dashboard"):
-            parts.wait_for(f"{name} armed", lambda name=name: "armed" in parts.log(name))
+
+            def armed(name: str = name) -> bool:
+                return "armed" in parts.log(name)
+
+            parts.wait_for(f"{name} armed", armed)
         for host, robots in (("b", ON_B), ("c", ON_C)):  # each agent its own identity
             parts.client(
                 f"agents-{host}",

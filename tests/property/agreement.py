@@ -37,7 +37,7 @@ def assert_observers_agree(pts: np.ndarray, params: Params) -> None:
     grid = snap(pts)
     keys = set()
     for robot in range(len(grid)):
-        (k0, e0), (k1, e1) = (world_end(grid, robot, flip, params, robot) for flip in (0, 1))
+        (k0, e0), (k1, e1) = (world_end(grid, robot, flip, params, robot) for flip in (False, True))
         keys |= {k0, k1}
         assert (e0 is None) == (e1 is None), f"robot {robot} moves in one frame only"
         if e0 is not None and e1 is not None and not np.allclose(e0, e1, atol=1e-9):

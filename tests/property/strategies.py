@@ -16,7 +16,7 @@ from hypothesis import assume
 from hypothesis import strategies as st
 from numpy.typing import NDArray
 
-from fatswarm.deploy.scenarios import adversarial as adv
+from fatswarm.deploy.scenarios import shapes as adv
 from fatswarm.domain.path import Points
 
 CELL: Final = 2.5  # grid spacing of jittered cells

@@ -15,13 +15,15 @@ from fatswarm.agent.geometry import is_uniform_circle, sec
 from fatswarm.deploy.scenarios.adversarial import (
     FAMILIES,
     FAMILY_TABLE,
-    NEAR_RANGE,
-    PERTURB_RANGE,
     SIDES,
     adversarial_cases,
     adversarial_start,
     build_adversarial,
     family_range,
+)
+from fatswarm.deploy.scenarios.shapes import (
+    NEAR_RANGE,
+    PERTURB_RANGE,
     hex_row_height,
     min_separation,
     mirror_configuration,

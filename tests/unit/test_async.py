@@ -30,11 +30,12 @@ from fatswarm.domain.adversary import (
     NotRoundBasedError,
     make_async,
 )
-from fatswarm.domain.draws import crash_plan
+from fatswarm.domain.draws import crash_plan, view_order
 from fatswarm.domain.path import Line, Path, Point, path_length, point_at, remainder, truncate
 from fatswarm.world import core
 from fatswarm.world.asynchrony import AsyncWorld, CycleDone, Phase
-from fatswarm.world.record import RecordWriter, read_record
+from fatswarm.world.record import RecordWriter
+from fatswarm.world.record_read import read_record
 
 PATHS = [
     Path((Line((3.0, 0.0)),)),
@@ -265,7 +266,7 @@ def test_async_decisions_do_not_depend_on_frames_or_view_order(
     base = final(lambda r: False)
     assert final(lambda r: True) == base
     assert final(lambda r: r % 2 == 1) == base
-    original = core.view_order
+    original = view_order
     monkeypatch.setattr(core, "view_order", lambda *a: original(*a)[::-1].copy())
     assert final(lambda r: False) == base
 
@@ -353,11 +354,13 @@ def test_plot_and_replay_draw_each_async_move_from_where_it_started(
 
 
 def _async_world(n: int = 3) -> Any:
-    from fatswarm.world.async_core import AsyncWorldCore
-    from fatswarm.world.core import WorldSetup
+    from fatswarm.world.core import WorldCore
+    from fatswarm.world.journal import load_configured
+    from fatswarm.world.setup import WorldSetup
 
     start = np.array([[3.0 * i, 0.0] for i in range(n)])
-    core_ = AsyncWorldCore(WorldSetup("t", n, 0, "async", start, 100))
+    setup = WorldSetup("t", n, 0, "async", start, 100)
+    core_ = WorldCore(setup, load_configured(setup))
     for robot in range(n):
         core_.set_alive(robot, True)
     return core_
@@ -397,7 +400,8 @@ def test_the_async_coordinator_plans_the_first_looks_then_follows_the_world() ->
         (ask,) = actions
         assert isinstance(ask, Ask)
         request = ask.request
-        known = dict(world.clock.looks()[0])
+        known = dict(world.reply(True).looks)  # the Looks the world knows of
+        opened = world.active
         reply, _ = world.control(request)
         if isinstance(request, Begin):
             begins.append(request)
@@ -405,7 +409,7 @@ def test_the_async_coordinator_plans_the_first_looks_then_follows_the_world() ->
             assert request.at == min(looks.values())  # the earliest Look the world had said
         if isinstance(request, Commit):  # the adversary's delays, for the instant's robots
             assert [(r, c, w) for r, c, w in request.delays] == [
-                (r, *dataclasses.astuple(model.cycle(r, 1))) for r in world.last_commit.active
+                (r, *dataclasses.astuple(model.cycle(r, 1))) for r in opened
             ]
         actions = coordinator.on_reply(reply, 0.0)
         if world.open_round:
@@ -452,28 +456,19 @@ def test_the_smallest_enclosing_circle_is_right_far_from_the_origin() -> None:
 
 
 def test_a_cycle_with_no_move_in_time_is_marked_timed_out() -> None:
-    from fatswarm.world.core import NullJournal
+    from fatswarm.world.effects import Committed
     from fatswarm.world.protocol import Begin, Commit
 
-    lines: list[dict[str, Any]] = []
-
-    class Keep(NullJournal):
-        def round(
-            self,
-            round_no: int,
-            active: Any,
-            moves: Any,
-            positions: Any,
-            collisions: Any = (),
-            **extra: Any,
-        ) -> None:
-            lines.append({"active": tuple(active), **extra})
-
     world = _async_world()
-    world.journal = Keep()
+    world.take_effects()  # the header
     world.control(Begin(1, (1,), at=1.0, looks=((0, 5.0), (1, 1.0), (2, 9.0))))
     reply, _ = world.control(Commit(1, (1,), delays=((1, 0.5, 2.0),)))  # robot 1 sent nothing
     assert reply.ok
+    lines = [
+        {"active": e.entry.active, **e.entry.extra}
+        for e in world.take_effects()
+        if isinstance(e, Committed)
+    ]
     assert lines == [
         {
             "active": (1,),

@@ -16,7 +16,8 @@ from fatswarm.deploy import cli
 from fatswarm.deploy.commands import run
 from fatswarm.deploy.engine import estimate
 from fatswarm.deploy.view import summary
-from fatswarm.world.record import read_record
+from fatswarm.domain.outcome import ExitCode
+from fatswarm.world.record_read import read_record
 
 MODES = pytest.mark.parametrize("mode", [["--lockstep"], []], ids=["lockstep", "networked"])
 
@@ -47,7 +48,7 @@ def test_version_prints_the_package_version_and_exits_zero(
 
 
 def test_a_usage_error_exits_two_without_raising(capsys: pytest.CaptureFixture[str]) -> None:
-    assert fatswarm(["run", "-n", "many"]) == run.ExitCode.BAD_INPUT
+    assert fatswarm(["run", "-n", "many"]) == ExitCode.BAD_INPUT
     assert "invalid int value" in capsys.readouterr().err
 
 
@@ -61,7 +62,7 @@ def test_an_existing_record_is_kept_unless_force(
     target = tmp_path / "run.jsonl"
     target.write_text("precious\n")
     code = fatswarm(["run", *mode, "-n", "3", "--seed", "1", "-q", "--record", str(target)])
-    assert code == run.ExitCode.BAD_INPUT
+    assert code == ExitCode.BAD_INPUT
     one_line_refusal(capsys, f"--record {target} exists; pass --force to overwrite it")
     assert target.read_text() == "precious\n"
 
@@ -72,7 +73,7 @@ def test_force_overwrites_an_existing_record(
     target = tmp_path / "run.jsonl"
     target.write_text("old\n")
     argv = ["run", "--lockstep", "-n", "3", "--seed", "1", "-q", "--record", str(target)]
-    assert fatswarm([*argv, "--force"]) == run.ExitCode.FORMED
+    assert fatswarm([*argv, "--force"]) == ExitCode.FORMED
     assert read_record(target).header.n == 3
     assert f"record: {target}" in capsys.readouterr().out
 
@@ -99,7 +100,7 @@ def test_an_output_that_cannot_be_written_is_refused_before_the_run(
     given = str(tmp_path / path)
     extra = [] if flag == "--record" else ["--record", str(record)]
     code = fatswarm(["run", *mode, "-n", "3", "--seed", "1", "-q", flag, given, *extra])
-    assert code == run.ExitCode.BAD_INPUT
+    assert code == ExitCode.BAD_INPUT
     one_line_refusal(capsys, message)
     assert not record.exists()  # nothing ran
 
@@ -112,7 +113,7 @@ def test_resume_and_force_together_are_refused(
     code = fatswarm(
         ["run", "-n", "3", "--seed", "1", "--record", str(target), "--resume", "--force"]
     )
-    assert code == run.ExitCode.BAD_INPUT
+    assert code == ExitCode.BAD_INPUT
     one_line_refusal(capsys, "pass one of them")
 
 
@@ -134,7 +135,7 @@ def test_resume_and_force_together_are_refused(
 def test_a_duration_that_is_not_finite_and_in_range_is_refused(
     flag: str, value: str, bound: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    assert fatswarm(["run", "-n", "3", "--seed", "1", flag, value]) == run.ExitCode.BAD_INPUT
+    assert fatswarm(["run", "-n", "3", "--seed", "1", flag, value]) == ExitCode.BAD_INPUT
     one_line_refusal(capsys, f"{flag} must be a finite number of seconds {bound}")
 
 
@@ -174,7 +175,7 @@ def test_lockstep_refuses_a_networked_only_flag_naming_it(
     flag: list[str], capsys: pytest.CaptureFixture[str]
 ) -> None:
     code = fatswarm(["run", "--lockstep", "-n", "3", "--seed", "1", "-q", *flag])
-    assert code == run.ExitCode.BAD_INPUT
+    assert code == ExitCode.BAD_INPUT
     one_line_refusal(capsys, f"{flag[0]} is for networked runs only")
 
 
@@ -182,7 +183,7 @@ def test_lockstep_names_every_networked_only_flag_given(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     code = fatswarm(["run", "--lockstep", "-n", "3", "--pace", "1", "--spawn", "exec"])
-    assert code == run.ExitCode.BAD_INPUT
+    assert code == ExitCode.BAD_INPUT
     one_line_refusal(capsys, "--pace, --spawn are for networked runs only: drop them")
 
 
@@ -204,7 +205,7 @@ def test_lockstep_accepts_networked_flags_left_at_their_defaults(
             "5",
         ]
     )
-    assert code == run.ExitCode.FORMED
+    assert code == ExitCode.FORMED
     assert capsys.readouterr().err == ""
 
 
@@ -268,7 +269,7 @@ def test_a_large_lockstep_run_prints_an_estimate_before_it_starts(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     code = fatswarm(["run", "--lockstep", "-n", "200", "--seed", "1", "--max-rounds", "1"])
-    assert code == run.ExitCode.NOT_FORMED
+    assert code == ExitCode.NOT_FORMED
     err = capsys.readouterr().err
     assert "estimate for n=200 (a rough model, not a measurement): ~1 rounds" in err
     assert "a --record would take ~" in err
@@ -322,12 +323,12 @@ def test_a_closed_stdout_ends_quietly_with_141(
 ) -> None:
     monkeypatch.setattr("sys.stdout", ClosedPipe())
     code = fatswarm(["run", "--lockstep", "-n", "3", "--seed", "1", "-q"])
-    assert code == run.ExitCode.BROKEN_PIPE == 141
+    assert code == ExitCode.BROKEN_PIPE.value == 141
     assert capsys.readouterr().err == ""
 
 
 def test_a_watched_run_paces_itself_to_about_fifteen_seconds() -> None:
-    from fatswarm.deploy.net.launcher import (
+    from fatswarm.deploy.net.run_flags import (
         MAX_WATCH_PACE_S,
         MIN_WATCH_PACE_S,
         WATCH_S,

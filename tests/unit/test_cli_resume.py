@@ -11,10 +11,10 @@ from pathlib import Path
 import pytest
 
 from fatswarm.deploy import cli
-from fatswarm.deploy.commands import run
 from fatswarm.deploy.engine.config import RunSetup
 from fatswarm.deploy.net import launcher
-from fatswarm.world.record import read_record
+from fatswarm.domain.outcome import ExitCode
+from fatswarm.world.record_read import read_record
 
 MODES = pytest.mark.parametrize("mode", [["--lockstep"], []], ids=["lockstep", "networked"])
 
@@ -53,7 +53,7 @@ def whole_run(tmp_path: Path, scheduler: str, *flags: str) -> Path:
             *flags,
         ]
     )
-    assert code == run.ExitCode.FORMED
+    assert code == ExitCode.FORMED
     return target
 
 
@@ -89,7 +89,7 @@ def test_lockstep_resume_ends_as_the_uninterrupted_run(
     part = cut(whole, at)
     code = fatswarm(["--lockstep", "--record", str(part), "--resume", "-q", *extra])
     out = capsys.readouterr().out
-    assert code == run.ExitCode.FORMED
+    assert code == ExitCode.FORMED
     assert out == f"{summary}record: {part}\n"  # same verdict, n, a, seed and figures
     done, expected = read_record(part), read_record(whole)
     assert done.result is not None and expected.result is not None
@@ -122,7 +122,7 @@ def test_flags_that_agree_with_the_record_are_fine(
             "720",
         ]
     )
-    assert code == run.ExitCode.FORMED, capsys.readouterr().err
+    assert code == ExitCode.FORMED, capsys.readouterr().err
     assert read_record(ssync_cut).result is not None
 
 
@@ -157,7 +157,7 @@ def test_a_flag_that_contradicts_the_record_is_refused_naming_both_values(
 ) -> None:
     before = ssync_cut.read_text()
     code = fatswarm([*mode, "--record", str(ssync_cut), "--resume", "-q", *flags])
-    assert code == run.ExitCode.BAD_INPUT
+    assert code == ExitCode.BAD_INPUT
     one_line_refusal(capsys, *words, f"drop {flags[0]} to resume it")
     assert ssync_cut.read_text() == before
 
@@ -171,14 +171,14 @@ def test_an_init_file_that_contradicts_the_record_is_refused(
     moved = [[x + 0.5, y] for x, y in header.initial.tolist()]  # the same start, elsewhere
     init.write_text(json.dumps({"positions": moved}))
     argv = [*mode, "--record", str(ssync_cut), "--resume", "-q", "--init", str(init)]
-    assert fatswarm(argv) == run.ExitCode.BAD_INPUT
+    assert fatswarm(argv) == ExitCode.BAD_INPUT
     one_line_refusal(capsys, f"--init {init} contradicts", "robot 0 at")
     init.write_text(json.dumps({"positions": moved[:5]}))
-    assert fatswarm(argv) == run.ExitCode.BAD_INPUT
+    assert fatswarm(argv) == ExitCode.BAD_INPUT
     one_line_refusal(capsys, "n=8 (the file 5 robots)")
     init.write_text(json.dumps({"positions": header.initial.tolist()}))  # the same start: fine
     if mode:
-        assert fatswarm(argv) == run.ExitCode.FORMED
+        assert fatswarm(argv) == ExitCode.FORMED
         assert read_record(ssync_cut).result is not None
 
 
@@ -208,7 +208,7 @@ def test_a_record_that_cannot_be_resumed_is_refused_with_one_line(
 
 @MODES
 def test_resume_needs_a_record(mode: list[str], capsys: pytest.CaptureFixture[str]) -> None:
-    assert fatswarm([*mode, "--resume", "-q"]) == run.ExitCode.BAD_INPUT
+    assert fatswarm([*mode, "--resume", "-q"]) == ExitCode.BAD_INPUT
     one_line_refusal(capsys, "--resume continues a run record: name it with --record PATH")
 
 
@@ -261,10 +261,10 @@ def test_networked_resume_runs_the_records_seed_scheduler_and_robots(
         args: argparse.Namespace, setup: RunSetup, record: str, pace: float, swarm: str
     ) -> int:
         launched.append((setup, record))
-        return run.ExitCode.NOT_FORMED
+        return ExitCode.NOT_FORMED
 
     monkeypatch.setattr(launcher, "_launch", launch)
-    assert fatswarm(["--record", str(ssync_cut), "--resume", "-q"]) == run.ExitCode.NOT_FORMED
+    assert fatswarm(["--record", str(ssync_cut), "--resume", "-q"]) == ExitCode.NOT_FORMED
     ((setup, record),) = launched
     assert (
         setup.seed,

@@ -15,7 +15,8 @@ from fatswarm.domain.draws import crash_plan
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.seam import Configured
 from fatswarm.world import core
-from fatswarm.world.record import read_record
+from fatswarm.world.record_read import read_record
+from fatswarm.world.setup import WorldSetup, setup_from_header
 
 
 @pytest.mark.parametrize("n", [2, 5, 8, 12])
@@ -97,8 +98,8 @@ def test_the_goal_is_judged_on_the_live_robots(monkeypatch: pytest.MonkeyPatch) 
     angles = np.arange(5) * 2 * np.pi / 5
     pentagon = np.column_stack((r * np.cos(angles), r * np.sin(angles)))
     positions = np.vstack((pentagon, [[0.0, 0.0]]))
-    setup = core.WorldSetup("s", 6, 0, "fsync", positions, None)
-    world = core.WorldCore(setup, algorithm=setting)
+    setup = WorldSetup("s", 6, 0, "fsync", positions, None)
+    world = core.WorldCore(setup, setting)
     assert not world._goal(positions)
     world.stuck = frozenset({5})
     assert world._goal(positions)
@@ -158,10 +159,10 @@ def test_the_world_reads_f_back_from_the_header_and_a_run_without_says_nothing(
 ) -> None:
     record = tmp_path / "run.jsonl"
     fatswarm.run(n=6, seed=1, scheduler="fsync", crash=2, max_rounds=2, record=record)
-    setup = core.setup_from_header(read_record(str(record)).header, "s", None)
+    setup = setup_from_header(read_record(str(record)).header, "s", None)
     assert setup.crash == 2 and "crash" not in setup.extra
     plain = tmp_path / "plain.jsonl"
     fatswarm.run(n=6, seed=1, scheduler="fsync", max_rounds=2, record=plain)
     rec = read_record(str(plain))
     assert "crash" not in rec.header.extra
-    assert core.setup_from_header(rec.header, "s", None).crash is None
+    assert setup_from_header(rec.header, "s", None).crash is None

@@ -6,6 +6,7 @@ import argparse
 import io
 import math
 import re
+from typing import Any
 
 import numpy as np
 import pytest
@@ -63,12 +64,13 @@ def hook_figures(algorithm: str, positions: np.ndarray, **params: object) -> dic
     return Configured.of(load_algorithm(algorithm), len(positions), params).figures(positions)
 
 
-def paper_frame(**fields: object) -> Frame:
-    """A frame of the paper's algorithm (a = 4 unless given), with the figures its hook gives."""
+def paper_frame(**fields: Any) -> Frame:
+    """A frame of the paper's algorithm (a = 4 unless given), with the figures its hook gives;
+    `fields` are Frame's own."""
     positions = np.asarray(fields["positions"], dtype=np.float64)
     a = fields.pop("a", 4.0)
     figures = hook_figures("uniform-circle", positions, a=a)
-    return Frame(params={"a": a}, figures=figures, **fields)  # type: ignore[arg-type]
+    return Frame(params={"a": a}, figures=figures, **fields)
 
 
 SAMPLE_POSITIONS = np.array([[0.0, 0.0], [8.0, 0.0], [0.0, 8.0], [-6.0, -5.0]])
@@ -332,7 +334,7 @@ def test_frame_from_world_state_carries_every_field() -> None:
         scheduler="centralized", swarm="s",
         positions=np.array([[0.0, 0.0], [3.0, 0.0], [0.0, 3.0]]), active=(2,), open_round=0,
         moved=(2,),
-        stopped=(), collisions_total=0, status="running", agents=agents,
+        stopped=(), collisions_total=0, status=Status.RUNNING, agents=agents,
     )  # fmt: skip
     frame = frame_from_state(WorldState.decode(state.encode()), rounds_per_second=3.0)
     assert (frame.round, frame.n, frame.a, frame.seed, frame.scheduler) == (
@@ -423,7 +425,7 @@ def state(round_no: int, status: str = "running") -> WorldState:
         figures=hook_figures("uniform-circle", positions, a=4.0),
         scheduler="fsync", swarm="w",
         positions=positions, active=(0, 1, 2), open_round=0, moved=(),
-        stopped=(), collisions_total=0, status=status, agents=agents,
+        stopped=(), collisions_total=0, status=Status(status), agents=agents,
     )  # fmt: skip
 
 

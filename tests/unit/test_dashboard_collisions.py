@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from fatswarm.deploy.view.dashboard import Frame, outcome_text
+from fatswarm.domain.outcome import Status
 
 SQUARE = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]])
 
@@ -16,7 +17,7 @@ def formed(collisions: int) -> Frame:
         a=4.0,
         scheduler="ssync",
         positions=SQUARE,
-        status="formed",
+        status=Status.FORMED,
         collisions_total=collisions,
     )
 

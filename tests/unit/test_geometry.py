@@ -11,7 +11,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fatswarm.agent.geometry import (
-    CONTACT,
     Circle,
     arc_distances,
     is_free,
@@ -25,6 +24,7 @@ from fatswarm.agent.geometry import (
     targets_on,
 )
 from fatswarm.domain.path import Arc, Line, Path
+from fatswarm.domain.tolerance import CONTACT
 
 
 def brute_force_sec(pts: np.ndarray) -> float:

@@ -10,7 +10,7 @@ import pytest
 import zenoh
 
 from fatswarm.domain.path import STAY
-from fatswarm.world.core import WorldCore, WorldSetup
+from fatswarm.world.core import WorldCore
 from fatswarm.world.journal import open_world
 from fatswarm.world.protocol import (
     Begin,
@@ -21,6 +21,7 @@ from fatswarm.world.protocol import (
     snapshot_key,
 )
 from fatswarm.world.service import HOLD_LOOK_S, HeldLooks
+from fatswarm.world.setup import WorldSetup
 
 SWARM = "t"
 START = np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]])
@@ -60,11 +61,11 @@ class FakeQuery:
 @pytest.fixture
 def world(tmp_path: FsPath) -> Iterator[WorldCore]:
     setup = WorldSetup(SWARM, 3, 1, "ssync", START, 50, params={"a": 4.0})
-    core = open_world(str(tmp_path / "state.jsonl"), lambda: setup, SWARM, None, epoch=7)
+    core, journal = open_world(str(tmp_path / "state.jsonl"), lambda: setup, SWARM, None, epoch=7)
     for robot in range(3):
         core.set_alive(robot, True)
     yield core
-    core.journal.close()
+    journal.close()
 
 
 def _open(core: WorldCore, *active: int) -> None:

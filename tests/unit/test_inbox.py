@@ -8,7 +8,7 @@ import threading
 
 import pytest
 
-from fatswarm.deploy.net.parts import MAX_LOG_CHARS, ShortLines
+from fatswarm.deploy.net.part_common import MAX_LOG_CHARS, ShortLines
 from fatswarm.world.inbox import Inbox
 
 

@@ -24,7 +24,8 @@ from fatswarm.domain.draws import draw_flip
 from fatswarm.domain.path import STAY, Line, Path, Points
 from fatswarm.domain.tolerance import GRID, UnsupportedInputError
 from fatswarm.world.physics import InvalidConfigurationError
-from fatswarm.world.record import RecordWriter, RoundEntry, read_record
+from fatswarm.world.record import RecordWriter, RoundEntry
+from fatswarm.world.record_read import read_record
 
 
 def polygon(n: int, side: float) -> Points:
@@ -154,8 +155,8 @@ def test_callback_sees_every_round() -> None:
         on_round=reports.append,
         compute=north,
     )
-    assert [r.round for r in reports] == [1, 2, 3]
-    assert reports[-1].progress.status == "max_rounds" and len(reports[0].paths) == 4
+    assert [r.entry.round for r in reports] == [1, 2, 3]
+    assert reports[-1].progress.status == "max_rounds" and len(reports[0].entry.moves) == 4
 
 
 def test_same_seed_same_run() -> None:
@@ -220,7 +221,9 @@ def test_shared_plans_equal_every_robot_computing_its_own(
             report: RoundReport,
             rounds: list[tuple[int, tuple[int, ...], bytes]] = rounds,
         ) -> None:
-            rounds.append((report.round, report.active, report.outcome.positions.tobytes()))
+            rounds.append(
+                (report.entry.round, report.entry.active, report.entry.positions.tobytes())
+            )
 
         result = run_lockstep(
             start,

@@ -1,30 +1,11 @@
-"""One import name is installed: fatswarm (its parts are fatswarm.agent, .world, ...)."""
+"""One import name is installed: fatswarm (its parts are fatswarm.agent, .world, ...); the checks
+that ask a fresh interpreter are in tests/integration/test_namespace_installed.py."""
 
 from __future__ import annotations
 
-import subprocess
 import sys
-from pathlib import Path
 
 GENERIC = ("agent", "world", "coordinator", "deploy")
-
-
-def test_only_the_fatswarm_name_is_installed(tmp_path: Path) -> None:
-    # Run away from the checkout (whose folders would be importable from its own directory).
-    probe = (
-        "import importlib.util, fatswarm, fatswarm.deploy.cli, fatswarm.agent.algorithm;"
-        f"print([n for n in {GENERIC!r} if importlib.util.find_spec(n) is not None])"
-    )
-    done = subprocess.run(
-        [sys.executable, "-c", probe],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.strip() == "[]"
 
 
 def test_importing_every_part_loads_no_generic_top_level_module() -> None:
@@ -33,37 +14,3 @@ def test_importing_every_part_loads_no_generic_top_level_module() -> None:
     import fatswarm.deploy.net.parts  # noqa: F401
 
     assert not [name for name in sys.modules if name.split(".")[0] in GENERIC]
-
-
-def test_the_installed_package_registers_its_algorithms_as_entry_points(tmp_path: Path) -> None:
-    probe = (
-        "from importlib.metadata import entry_points;"
-        "print(sorted((e.name, e.value) for e in entry_points(group='fatswarm.algorithms')))"
-    )
-    done = subprocess.run(
-        [sys.executable, "-c", probe],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.strip() == str(
-        [
-            ("gathering", "fatswarm.agent.gathering:ALGORITHM"),
-            ("uniform-circle", "fatswarm.agent.uniform_circle:ALGORITHM"),
-            ("uniform-circle-stepped", "fatswarm.agent.stepped:ALGORITHM"),
-        ]
-    )
-
-
-def test_the_api_is_reached_from_the_package_without_loading_it_on_import() -> None:
-    probe = (
-        "import sys, fatswarm; assert 'fatswarm.deploy.engine.api' not in sys.modules;"
-        "assert callable(fatswarm.run) and callable(fatswarm.read_record)"
-    )
-    done = subprocess.run(
-        [sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=False
-    )
-    assert done.returncode == 0, done.stderr

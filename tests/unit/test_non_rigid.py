@@ -14,9 +14,10 @@ import fatswarm
 from fatswarm.deploy import cli
 from fatswarm.domain.draws import cut_fraction
 from fatswarm.domain.path import Arc, Line, Path, Point, end_point, path_length, point_at
-from fatswarm.world import core
-from fatswarm.world.core import cut_path
-from fatswarm.world.record import read_record
+from fatswarm.world import rounds
+from fatswarm.world.faults import cut_path
+from fatswarm.world.record_read import read_record
+from fatswarm.world.setup import setup_from_header
 
 START: Point = (1.0, 2.0)
 LONG = Path((Line((4.0, 2.0)), Arc((4.0, 3.0), math.pi / 2)))  # 3 + pi/2 long
@@ -63,7 +64,7 @@ def test_the_paper_algorithm_forms_under_non_rigid_moves_and_records_the_cut_pat
         seen.append((start, path, delta, u, out))
         return out
 
-    monkeypatch.setattr(core, "cut_path", spy)
+    monkeypatch.setattr(rounds, "cut_path", spy)
     record = tmp_path / "run.jsonl"
     result = fatswarm.run(n=6, seed=seed, scheduler=scheduler, non_rigid=1.0, record=record)
     assert (result.status, result.collisions) == ("formed", 0)
@@ -153,7 +154,7 @@ def test_a_delta_that_is_not_a_finite_positive_distance_is_refused(
 def test_the_world_reads_delta_back_from_the_header(tmp_path: FsPath) -> None:
     record = tmp_path / "run.jsonl"
     fatswarm.run(n=6, seed=1, scheduler="fsync", non_rigid=0.5, max_rounds=2, record=record)
-    setup = core.setup_from_header(read_record(str(record)).header, "s", None)
+    setup = setup_from_header(read_record(str(record)).header, "s", None)
     assert setup.non_rigid == 0.5
     assert "non_rigid" not in setup.extra
     kept: dict[str, Any] = dict(setup.extra)

@@ -18,7 +18,8 @@ from fatswarm.deploy.view.plot import (
     main,
     trajectories,
 )
-from fatswarm.world.record import Header, read_record
+from fatswarm.world.record import Header
+from fatswarm.world.record_read import read_record
 
 RECORD = pathlib.Path(__file__).resolve().parents[1] / "data" / "replay-small.jsonl"
 

@@ -8,14 +8,8 @@ import numpy as np
 import pytest
 
 from fatswarm.agent.geometry import is_formed
-from fatswarm.world.progress import (
-    FORMED,
-    MAX_ROUNDS,
-    MOVE_TOLERANCE,
-    STALLED,
-    ProgressTracker,
-    configuration_changed,
-)
+from fatswarm.domain.outcome import Status
+from fatswarm.world.progress import MOVE_TOLERANCE, ProgressTracker, configuration_changed
 
 _goal_holds: bool | None = None  # the fixtures below decide the goal, else the paper's does
 
@@ -68,40 +62,40 @@ def test_formed_needs_everyone_active_with_empty_path_after_last_change(uniform:
     t = ProgressTracker(3, CIRCLE)
     assert t.observe([0], [0], P0, P1) is None  # change: nobody has looked at P1 yet
     assert t.observe([0, 1], [], P1, P1) is None
-    assert t.observe([2], [], P1, P1) == FORMED
-    assert t.done and t.snapshot().status == FORMED
+    assert t.observe([2], [], P1, P1) == Status.FORMED
+    assert t.done and t.snapshot().status == Status.FORMED
 
 
 def test_robots_active_in_the_changing_round_must_look_again(uniform: None) -> None:
     t = ProgressTracker(3, CIRCLE)
     t.observe([0, 1, 2], [0], P0, P1)
     assert t.status is None
-    assert t.observe([0, 1, 2], [], P1, P1) == FORMED
+    assert t.observe([0, 1, 2], [], P1, P1) == Status.FORMED
 
 
 def test_uniform_but_someone_blocked_is_stalled(uniform: None) -> None:
     t = ProgressTracker(3, CIRCLE)
-    assert t.observe([0, 1, 2], [1], P0, P0) == STALLED
+    assert t.observe([0, 1, 2], [1], P0, P0) == Status.STALLED
 
 
 def test_unchanged_and_not_uniform_is_stalled(not_uniform: None) -> None:
     t = ProgressTracker(3, CIRCLE)
     t.observe([0, 1], [], P0, P0)
-    assert t.observe([2], [], P0, P0) == STALLED
+    assert t.observe([2], [], P0, P0) == Status.STALLED
 
 
 def test_max_rounds_ends_a_run_that_keeps_moving(not_uniform: None) -> None:
     t = ProgressTracker(3, CIRCLE, max_rounds=3)
     positions = [P0 + k for k in range(4)]
     results = [t.observe([0, 1, 2], [0], positions[k], positions[k + 1]) for k in range(3)]
-    assert results == [None, None, MAX_ROUNDS]
+    assert results == [None, None, Status.MAX_ROUNDS]
     with pytest.raises(RuntimeError, match="already ended"):
         t.observe([0], [], positions[3], positions[3])
 
 
 def test_a_final_round_that_forms_wins_over_max_rounds(uniform: None) -> None:
     t = ProgressTracker(3, CIRCLE, max_rounds=1)
-    assert t.observe([0, 1, 2], [], P0, P0) == FORMED
+    assert t.observe([0, 1, 2], [], P0, P0) == Status.FORMED
 
 
 def test_moves_below_tolerance_do_not_change_the_configuration() -> None:

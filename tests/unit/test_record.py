@@ -10,15 +10,8 @@ import pytest
 
 from fatswarm.domain.path import Arc, Line, Path
 from fatswarm.world.physics import Collision
-from fatswarm.world.record import (
-    Header,
-    RecordFormatError,
-    RecordWriter,
-    Result,
-    RoundEntry,
-    iter_record,
-    read_record,
-)
+from fatswarm.world.record import Header, RecordFormatError, RecordWriter, Result, RoundEntry
+from fatswarm.world.record_read import iter_record, read_record
 
 INITIAL = np.array([[0.0, 0.0], [3.0, 0.0]])
 AFTER = np.array([[0.0, 1.0], [3.0, 0.0]])

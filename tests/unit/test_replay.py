@@ -19,7 +19,7 @@ from fatswarm.deploy.view.replay import (
     main,
     parse_keys,
 )
-from fatswarm.world.record import read_record
+from fatswarm.world.record_read import read_record
 
 RECORD = pathlib.Path(__file__).resolve().parents[1] / "data" / "replay-small.jsonl"
 

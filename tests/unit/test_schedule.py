@@ -14,7 +14,7 @@ from fatswarm.coordinator.schedule import (
     load_script,
     make_scheduler,
 )
-from fatswarm.world.record import read_record
+from fatswarm.world.record_read import read_record
 
 
 def run(name: str, n: int, seed: int, rounds: int, **kw: object) -> list[list[int]]:

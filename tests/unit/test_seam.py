@@ -24,7 +24,7 @@ from fatswarm.domain.seam import (
     resolve_values,
 )
 from fatswarm.world.protocol import Snapshot
-from fatswarm.world.record import read_record
+from fatswarm.world.record_read import read_record
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -307,19 +307,20 @@ def test_a_goal_that_raises_ends_the_lockstep_run_with_one_line_naming_its_line(
 def test_figures_that_fail_leave_the_world_without_them_and_drop_non_finite_ones(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
-    from fatswarm.world.core import WorldCore, WorldSetup
+    from fatswarm.world.core import WorldCore
+    from fatswarm.world.journal import load_configured, perform
+    from fatswarm.world.setup import WorldSetup
 
     source = tmp_path / "faulty.py"
     source.write_text(FAULTY)
     ref = f"{source}:ALGORITHM"
     start = np.array([[0.0, 0.0], [5.0, 0.0], [0.0, 5.0]])
-    fine = WorldCore(
-        WorldSetup("s", 3, 1, "fsync", start, 10, algorithm=ref, params={"mode": "stay"})
-    )
+    setup = WorldSetup("s", 3, 1, "fsync", start, 10, algorithm=ref, params={"mode": "stay"})
+    fine = WorldCore(setup, load_configured(setup))
     assert fine.state().figures == {"y": 1.0}
-    broken = WorldCore(
-        WorldSetup("s", 3, 1, "fsync", start, 10, algorithm=ref, params={"mode": "badfigures"})
-    )
+    setup = WorldSetup("s", 3, 1, "fsync", start, 10, algorithm=ref, params={"mode": "badfigures"})
+    broken = WorldCore(setup, load_configured(setup))
     assert broken.state().figures == {} and broken.state().figures == {}
+    perform(broken.take_effects(), None)  # its notes, as the world's shell logs them
     warned = [r for r in caplog.records if "figures of algorithm faulty raised" in r.getMessage()]
     assert len(warned) == 1

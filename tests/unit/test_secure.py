@@ -15,7 +15,7 @@ import pytest
 import zenoh
 
 from fatswarm.deploy import cli
-from fatswarm.deploy.net.parts import config_for
+from fatswarm.deploy.net.part_common import config_for
 from fatswarm.deploy.net.zconf import (
     ZenohSetupError,
     connect_endpoints,
@@ -244,7 +244,7 @@ def test_no_message_on_the_wire_carries_a_seed_or_a_frame() -> None:
         c
         for m in (world_wire,)
         for c in vars(m).values()
-        if dataclasses.is_dataclass(c) and c.__module__ == m.__name__
+        if isinstance(c, type) and dataclasses.is_dataclass(c) and c.__module__ == m.__name__
     ]
     assert {c.__name__ for c in messages} >= {"WorldState", "Snapshot", "MoveSubmitted"}
     for message in messages:

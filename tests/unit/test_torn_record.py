@@ -9,7 +9,8 @@ from types import ModuleType
 import pytest
 
 from fatswarm.deploy.view import plot, replay
-from fatswarm.world.record import RecordFormatError, iter_record, read_record
+from fatswarm.world.record import RecordFormatError
+from fatswarm.world.record_read import iter_record, read_record
 
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data"
 LOCKSTEP = DATA / "lockstep-n6-seed1.jsonl"  # header, 17 rounds, result

@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Arc, Line, Path
 from fatswarm.domain.wire import (
     MAX_ROBOTS,
@@ -57,7 +58,7 @@ def _state(n: int = 3) -> WorldState:
         moved=(2,),
         stopped=(),
         collisions_total=1,
-        status="running",
+        status=Status.RUNNING,
         agents=tuple(AgentInfo(i != 1, i - 1, 0.5 * i, i) for i in range(n)),
     )
 
@@ -119,23 +120,27 @@ def test_async_control_fields_round_trip_and_stay_optional() -> None:
     assert decode_control(begin.encode()) == begin
     commit = Commit(3, (4,), delays=((0, 0.5, 1.75), (4, 0.0, 2.0)))
     assert decode_control(commit.encode()) == commit
-    reply = ControlReply(True, "", 5, 2, 0, "running", now=7.5, looks=((1, 8.0),), unset=(2, 3))
+    reply = ControlReply(
+        True, "", 5, 2, 0, Status.RUNNING, now=7.5, looks=((1, 8.0),), unset=(2, 3)
+    )
     assert ControlReply.decode(reply.encode()) == reply
     assert "at" not in msgpack.unpackb(Begin(3, (0,)).encode())  # round models send none
     assert "delays" not in msgpack.unpackb(Commit(3, ()).encode())
-    assert "now" not in msgpack.unpackb(ControlReply(True, "", 5, 2, 3, "running").encode())
+    assert "now" not in msgpack.unpackb(ControlReply(True, "", 5, 2, 3, Status.RUNNING).encode())
 
 
 def test_notices_and_replies_name_their_world_process() -> None:
     assert MovesHeld.decode(MovesHeld(3, (0, 1), 2**63 - 1).encode()).epoch == 2**63 - 1
-    reply = ControlReply(True, "", 5, 2, 3, "running", epoch=42)
+    reply = ControlReply(True, "", 5, 2, 3, Status.RUNNING, epoch=42)
     assert ControlReply.decode(reply.encode()) == reply
 
 
 def test_a_commits_reply_names_the_robots_that_timed_out_and_only_then_carries_the_key() -> None:
-    reply = ControlReply(True, "", 5, 2, 3, "running", timed_out=(1, 4))
+    reply = ControlReply(True, "", 5, 2, 3, Status.RUNNING, timed_out=(1, 4))
     assert ControlReply.decode(reply.encode()) == reply
-    assert "timed_out" not in msgpack.unpackb(ControlReply(True, "", 5, 2, 3, "running").encode())
+    assert "timed_out" not in msgpack.unpackb(
+        ControlReply(True, "", 5, 2, 3, Status.RUNNING).encode()
+    )
 
 
 @pytest.mark.parametrize(
@@ -163,7 +168,7 @@ def test_control_messages_round_trip() -> None:
     assert decode_control(Commit(3, (4,)).encode()) == Commit(3, (4,))
     chained = Commit(3, (4,), then_active=(0, 2))
     assert decode_control(chained.encode()) == chained
-    r = ControlReply(True, "", 5, 2, 3, "running")
+    r = ControlReply(True, "", 5, 2, 3, Status.RUNNING)
     assert ControlReply.decode(r.encode()) == r
     assert MovesHeld.decode(MovesHeld(3, (0, 1)).encode()) == MovesHeld(3, (0, 1))
     assert MovesHeld.decode(MovesHeld(3, ()).encode()) == MovesHeld(3, ())
@@ -207,7 +212,7 @@ def test_the_largest_commit_and_moves_notice_fit_under_their_size_limits() -> No
         MAX_ROBOTS,
         2**62,
         2**62,
-        "running",
+        Status.RUNNING,
         2**62,
         everyone,
         late,

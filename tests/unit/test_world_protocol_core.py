@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from fatswarm.domain.path import STAY, Line, Path
-from fatswarm.world.core import WorldCore, WorldSetup, crash_after
-from fatswarm.world.journal import open_world
+from fatswarm.world.core import WorldCore
+from fatswarm.world.faults import crash_after
+from fatswarm.world.journal import open_world, perform
 from fatswarm.world.protocol import (
     Begin,
     Commit,
@@ -23,8 +24,10 @@ from fatswarm.world.protocol import (
     move_key,
     snapshot_key,
 )
-from fatswarm.world.record import read_record
+from fatswarm.world.record import RecordWriter
+from fatswarm.world.record_read import read_record
 from fatswarm.world.service import control_bytes, look_bytes, move_bytes
+from fatswarm.world.setup import WorldSetup
 
 SWARM = "t"
 START = np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]])
@@ -34,12 +37,24 @@ def _setup(max_rounds: int | None = 50) -> WorldSetup:
     return WorldSetup(SWARM, 3, 1, "ssync", START, max_rounds, params={"a": 4.0})
 
 
-OPENED: list[WorldCore] = []
+OPENED: dict[int, tuple[WorldCore, RecordWriter]] = {}
+
+
+def _keep(opened: tuple[WorldCore, RecordWriter]) -> WorldCore:
+    """The core of a world opened on a state file; its record is closed after the test."""
+    OPENED[id(opened[0])] = opened
+    return opened[0]
+
+
+def _close(world: WorldCore) -> None:
+    """Do what the core still asks (record lines) and close its record, as the world's shell."""
+    core, journal = OPENED.pop(id(world))
+    perform(core.take_effects(), journal)
+    journal.close()
 
 
 def _world(tmp_path: FsPath) -> WorldCore:
-    w = open_world(str(tmp_path / "state.jsonl"), _setup, SWARM, None)
-    OPENED.append(w)
+    w = _keep(open_world(str(tmp_path / "state.jsonl"), _setup, SWARM, None))
     return w
 
 
@@ -47,11 +62,13 @@ def _world(tmp_path: FsPath) -> WorldCore:
 def _close_journals() -> Iterator[None]:
     yield
     while OPENED:
-        OPENED.pop().journal.close()
+        _close(next(iter(OPENED.values()))[0])
 
 
 def _ctl(world: WorldCore, data: bytes) -> ControlReply:
-    return control_bytes(world, data)[0]
+    reply = control_bytes(world, data)[0]
+    perform(world.take_effects(), OPENED[id(world)][1])  # durable before the reply, as the shell
+    return reply
 
 
 def _move(world: WorldCore, key_robot: int, robot: int, round_no: int, path: Path) -> bool:
@@ -182,7 +199,7 @@ def test_a_world_restarted_mid_round_waits_for_the_moves_of_the_reopened_round(
     w = _live(_world(tmp_path), 0, 1)
     assert _ctl(w, Begin(1, (0, 1)).encode()).ok
     _looked_and_moved(w, 0, 1)
-    w.journal.close()
+    _close(w)
     again = _live(_world(tmp_path), 0, 1)  # the open round and its moves are lost
     assert _ctl(again, Begin(1, (0, 1)).encode()).ok
     assert again.moves_notice() is None
@@ -235,7 +252,7 @@ def test_a_commit_with_the_next_active_set_commits_and_opens_the_next_round(
     assert w.moves_notice() == MovesHeld(2, (1, 2))
     last = _ctl(w, Commit(2).encode())
     assert last.committed == 2 and last.timed_out == ()
-    w.journal.close()
+    _close(w)
     assert [(r.round, r.active) for r in read_record(tmp_path / "state.jsonl").rounds] == [
         (1, (0, 1)),
         (2, (1, 2)),
@@ -243,8 +260,7 @@ def test_a_commit_with_the_next_active_set_commits_and_opens_the_next_round(
 
 
 def test_a_commit_that_ends_the_run_opens_no_next_round(tmp_path: FsPath) -> None:
-    w = open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=1), SWARM, None)
-    OPENED.append(w)
+    w = _keep(open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=1), SWARM, None))
     assert _ctl(w, Begin(1, (0, 1, 2)).encode()).ok
     reply = _ctl(w, Commit(1, then_active=(0, 1, 2)).encode())
     assert reply.ok and reply.status != "running"
@@ -285,7 +301,7 @@ def test_committed_rounds_survive_a_restart_and_a_torn_line(tmp_path: FsPath) ->
         _move(w, 0, 0, r, Path((Line((1.0, 0.0)),)))
         _ctl(w, Commit(r).encode())
     _ctl(w, Begin(3, (0,)).encode())  # open but never committed: not durable, not announced
-    w.journal.close()
+    _close(w)
     state = tmp_path / "state.jsonl"
     with open(state, "a", encoding="utf-8") as f:
         f.write('{"type":"round","rou')  # died mid-write
@@ -295,19 +311,18 @@ def test_committed_rounds_survive_a_restart_and_a_torn_line(tmp_path: FsPath) ->
     assert again.last_active[0] == 2
     assert _ctl(again, Begin(3, (1,)).encode()).ok
     assert _ctl(again, Commit(3).encode()).ok
-    again.journal.close()
+    _close(again)
     record = read_record(state)
     assert [r.round for r in record.rounds] == [1, 2, 3]
 
 
 def test_the_run_ends_at_max_rounds_with_a_result_line(tmp_path: FsPath) -> None:
-    w = open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=1), SWARM, None)
-    OPENED.append(w)
+    w = _keep(open_world(str(tmp_path / "s.jsonl"), lambda: _setup(max_rounds=1), SWARM, None))
     _ctl(w, Begin(1, (0, 1, 2)).encode())
     reply = _ctl(w, Commit(1).encode())
     assert reply.status in ("stalled", "max_rounds")
     assert not _ctl(w, Begin(2, (0,)).encode()).ok
-    w.journal.close()
+    _close(w)
     result = read_record(tmp_path / "s.jsonl").result
     assert result is not None and result.status == reply.status
 
@@ -322,8 +337,7 @@ def test_liveliness_shows_in_the_state(tmp_path: FsPath, alive: bool) -> None:
 
 def _opened(path: FsPath) -> WorldCore:
     """The world of the state file `path` (resumed if it holds rounds), closed after the test."""
-    w = open_world(str(path), lambda: _setup(max_rounds=200), SWARM, None)
-    OPENED.append(w)
+    w = _keep(open_world(str(path), lambda: _setup(max_rounds=200), SWARM, None))
     return w
 
 
@@ -352,7 +366,7 @@ def test_a_robot_whose_agent_stays_gone_counts_as_crashed_and_is_not_waited_for(
     assert w.tracker.crashed == {2}
     # robots 0 and 1 stay, robot 2 counts as staying: everyone has been seen since the last change
     assert w.status == "stalled"  # START is no uniform circle
-    w.journal.close()
+    _close(w)
     rounds = read_record(tmp_path / "s.jsonl").rounds
     assert [r.round for r in rounds if "crashed" in r.extra] == [limit]
     assert rounds[limit - 1].extra["crashed"] == [2]
@@ -370,7 +384,7 @@ def test_a_crashed_robot_whose_agent_comes_back_is_waited_for_again(tmp_path: Fs
     w.set_alive(2, True)
     _rounds(w, 1, active=(0,))
     assert not w.tracker.crashed
-    w.journal.close()
+    _close(w)
     assert read_record(tmp_path / "s.jsonl").rounds[-1].extra["recovered"] == [2]
 
 
@@ -381,7 +395,7 @@ def test_a_world_that_never_hears_of_agents_does_not_crash_them_on_resume(
     for robot in (0, 1, 2):
         w.set_alive(robot, True)
     _rounds(w, crash_after(3) + 2, active=(0,))
-    w.journal.close()
+    _close(w)
     # its agents' tokens have not come yet: they are not gone since round 0
     again = _opened(tmp_path / "s.jsonl")
     _rounds(again, 1, active=(0,))

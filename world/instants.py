@@ -1,0 +1,239 @@
+"""The world's model for the async models: robots on their own clocks (world/asynchrony.py)
+instead of rounds of physics.
+
+A protocol round is one instant of virtual time at which some robots Look (the coordinator, as
+the adversary and the clock, names them and the instant in its Begin); their moves come back as
+in a round, and the Commit hands the world each one's delays (compute, then wait). Between those
+instants the world runs every move on its own: it commits each ended cycle as one record line
+and goes on, event by event, to the next instant at which a Look is due, which its reply names.
+The lock step drives this very model, so a networked async run and a lock-step one agree.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+from fatswarm.domain.adversary import ASYNC_NAMES, make_async
+from fatswarm.domain.draws import cut_fraction
+from fatswarm.domain.outcome import Status
+from fatswarm.domain.path import Path, transform
+from fatswarm.world.asynchrony import AsyncWorld, CycleDone
+from fatswarm.world.effects import Committed
+from fatswarm.world.faults import cut_path
+from fatswarm.world.model import Books
+from fatswarm.world.progress import MOVE_TOLERANCE
+from fatswarm.world.protocol import Begin, Commit, ControlReply
+from fatswarm.world.record import Move, RoundEntry, RunRecord
+from fatswarm.world.setup import WorldSetup
+
+
+class AsyncResumeError(ValueError):
+    """An async run's record to resume: not supported (its moves in flight are not recorded)."""
+
+
+def is_async(setup: WorldSetup) -> bool:
+    """Whether `setup` runs an async model."""
+    return setup.scheduler in ASYNC_NAMES
+
+
+def async_setup(setup: WorldSetup, history: RunRecord | None) -> WorldSetup:
+    """`setup` with the async model's fairness bound among its header fields; raises
+    AsyncResumeError for a history with rounds (an async run cannot be resumed yet)."""
+    if history is not None and (history.rounds or history.result is not None):
+        raise AsyncResumeError(
+            f"a {setup.scheduler} run cannot be resumed (yet): run it again with its seed"
+        )
+    model = make_async(setup.scheduler, setup.n, setup.seed)
+    return dataclasses.replace(setup, extra={"fairness_time": model.bound(), **setup.extra})
+
+
+class Instants:
+    """Async robots: `committed` counts instants; the record counts ended cycles."""
+
+    def __init__(self, books: Books) -> None:
+        self.books = books
+        self.clock = AsyncWorld(books.positions, [math.inf] * books.setup.n)
+        self._last = books.positions.copy()
+        self._delays: dict[int, tuple[float, float]] = {}
+
+    def reply_fields(self) -> dict[str, Any]:
+        known, unset = self.clock.looks()
+        return {"now": self.clock.now, "looks": tuple(known), "unset": tuple(unset)}
+
+    def result_fields(self) -> dict[str, Any]:
+        return {"time": self.clock.now}
+
+    def time(self) -> float | None:
+        return self.clock.now
+
+    def begin(self, req: Begin) -> tuple[ControlReply, bool]:
+        """Open the instant `req.at` for the robots due then, once the world has got there."""
+        w = self.books
+        if req.round != w.committed + 1:
+            return w.reply(False, f"next round is {w.committed + 1}, not {req.round}"), False
+        if w.open_round == req.round and w.active == req.active:
+            return w.reply(True), False  # a coordinator retrying: keep what is held
+        if w.open_round:
+            return w.reply(False, f"round {w.open_round} is open"), False
+        if req.at is None:
+            return w.reply(False, "an async world opens instants: Begin needs `at`"), False
+        refused = self._set_looks(req)
+        if refused is not None:
+            return w.reply(False, refused), False
+        changed = self._settle()
+        due = tuple(self.clock.looking())
+        if w.status != Status.RUNNING or not due or due != req.active or self.clock.now != req.at:
+            return w.reply(True), changed  # not opened: the reply says what is due, and when
+        self._open(req.round, due)
+        return w.reply(True), True
+
+    def _set_looks(self, req: Begin) -> str | None:
+        """Set the first Looks `req` gives; why not, if a robot or a time is refused."""
+        for robot, t in req.looks:
+            if not 0 <= robot < self.books.setup.n:
+                return f"robot {robot} is not of this run"
+            try:
+                self.clock.set_look(robot, t)
+            except ValueError as exc:
+                return str(exc)
+        return None
+
+    def _open(self, round_no: int, due: tuple[int, ...]) -> None:
+        """Open the instant for the robots `due`: those the crash adversary crashes now stay."""
+        w = self.books
+        crashing = {r for r in due if w.crash_plan.get(r) == self.clock.cycle_of(r) + 1}
+        for robot in sorted(crashing):
+            self.clock.crash(robot)
+            w.tracker.crash([robot])
+        w.stuck = w.stuck | frozenset(crashing)
+        for robot in due:
+            if robot not in crashing:
+                self.clock.begin_cycle(robot)
+        w.open_round, w.active = round_no, due
+        w.active_set = frozenset(due)
+        # a crashed robot is held as staying: nobody waits for its agent
+        w.looked, w.held, w.noticed = set(), {r: Path() for r in crashing}, None
+        w.missing = {r for r in due if w.alive[r] and r not in crashing}
+
+    def commit(self, req: Commit) -> tuple[ControlReply, bool]:
+        w = self.books
+        if req.round == w.committed and not w.open_round:
+            return w.reply(True), False  # the reply to a commit was lost: it is done
+        if req.round != w.open_round:
+            return w.reply(False, f"round {req.round} is not open"), False
+        delays = {int(r): (float(c), float(wait)) for r, c, wait in req.delays}
+        missing = [r for r in w.active if r not in w.stuck and r not in delays]
+        if missing:
+            return w.reply(False, f"no delays for robots {missing}"), False
+        self._delays = delays
+        self.commit_open_round()
+        return w.reply(True), True
+
+    def commit_open_round(self) -> None:
+        """Hand the instant's moves to the clock, each with its delays (a robot with no move
+        stays), commit the cycles that end at once, and go on to the next instant."""
+        w = self.books
+        round_no, here = w.open_round, w.positions
+        delays, self._delays = self._delays, {}
+        moved = []
+        for robot in w.active:
+            if robot in w.stuck:
+                continue
+            compute, wait = delays.get(robot, (0.0, 0.0))
+            path = w.held.get(robot, Path())
+            origin = (float(here[robot, 0]), float(here[robot, 1]))
+            world = transform(path, origin, False) if path else Path()
+            cut = False
+            if world and w.setup.non_rigid is not None:
+                cycle = self.clock.cycle_of(robot)
+                short = cut_path(
+                    origin, world, w.setup.non_rigid, cut_fraction(w.setup.seed, cycle, robot)
+                )
+                world, cut = short, short is not world
+            if world:
+                moved.append(robot)
+            if robot not in w.held:
+                w.timeouts[robot] += 1
+            w.last_active[robot] = round_no
+            done = self.clock.submit(robot, world, compute, wait, cut=cut)
+            if done is not None and self._cycle(done, timed_out=robot not in w.held):
+                break
+        w.committed, w.moved = round_no, tuple(moved)
+        w.open_round, w.looked, w.held, w.missing = 0, set(), {}, set()
+        w.views_changed()
+        if w.status == Status.RUNNING:
+            self._settle()
+
+    def _settle(self) -> bool:
+        """Run the clock on until some Look is due (or the adversary has yet to say when the
+        first ones are), committing the cycles that end on the way; True if any did."""
+        w = self.books
+        clock, changed = self.clock, False
+        while w.status == Status.RUNNING:
+            clock.start_moves()
+            if clock.looking():
+                break
+            t = clock.next_time()
+            if not math.isfinite(t):
+                break
+            clock.advance(t)
+            w.positions = clock.positions
+            for done in clock.end_moves():
+                changed = True
+                if self._cycle(done):
+                    break
+        w.positions = clock.positions
+        return changed
+
+    def _cycle(self, done: CycleDone, timed_out: bool = False) -> bool:
+        """Record and account one ended cycle (`timed_out`: no move came for it in time, so the
+        robot stayed); True once the run has ended."""
+        w = self.books
+        k = w.tracker.snapshot().rounds + 1
+        extra: dict[str, Any] = {
+            "look": done.look,
+            "start": done.start,
+            "end": done.end,
+            "origin": [done.origin[0], done.origin[1]],
+        }
+        if done.cut:
+            extra["cut"] = [done.robot]
+        if timed_out:
+            extra["timed_out"] = [done.robot]
+        entry = RoundEntry(
+            k,
+            (done.robot,),
+            (Move(done.robot, done.path, done.traveled),) if done.path else (),
+            done.positions,
+            tuple(done.collisions),
+            extra,
+        )
+        traveled = {done.robot: done.traveled} if done.path else {}
+        # its move changed the configuration even when the line before is of the same instant
+        moved = done.traveled > MOVE_TOLERANCE or None
+        try:  # the cycle is the record's even when the goal raises while it is booked
+            w.tracker.observe(
+                [done.robot],
+                traveled.keys(),
+                self._last,
+                done.positions,
+                traveled,
+                len(done.collisions),
+                changed=moved,
+            )
+        finally:
+            w.emit(Committed(entry, w.tracker.snapshot()))
+        self._last = done.positions
+        w.positions = done.positions
+        w.collisions_total += len(done.collisions)
+        w.last_length[done.robot] = done.traveled
+        w.stopped = tuple(sorted({c.robot for c in done.collisions}))
+        if w.tracker.status is None:
+            return False
+        w.finish()
+        return True
+
+
+__all__ = ["AsyncResumeError", "Instants", "async_setup", "is_async"]

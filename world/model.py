@@ -1,0 +1,97 @@
+"""How the world core is joined to its model of time: rounds of physics (`world.rounds`) or async
+robots on their own clocks (`world.instants`).
+
+The core keeps the books (positions, the open round, who looked and moved, agents, the tracker) and
+answers looks and moves; a model opens and commits what the coordinator asks, through `Books`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Sequence
+from typing import Any, Protocol
+
+from fatswarm.domain.outcome import Status
+from fatswarm.domain.path import Path, Points
+from fatswarm.world.effects import Effect
+from fatswarm.world.physics import Collision
+from fatswarm.world.progress import ProgressTracker
+from fatswarm.world.protocol import Begin, Commit, ControlReply
+from fatswarm.world.setup import WorldSetup
+
+
+class Books(Protocol):
+    """What a model sees and keeps of the world core's state (`world.core.WorldCore`)."""
+
+    setup: WorldSetup
+    positions: Points  # (n, 2), world frame
+    status: Status
+    committed: int  # the last committed round (an async run: instant)
+    open_round: int  # 0 while none is open
+    active: tuple[int, ...]
+    active_set: frozenset[int]
+    looked: set[int]
+    held: dict[int, Path]  # moves of the open round, in each robot's translation-only frame
+    missing: set[int]  # live active robots of the open round without a move
+    noticed: tuple[int, tuple[int, ...]] | None  # the last moves notice sent
+    alive: list[bool]
+    gone_since: list[int | None]
+    last_active: list[int]
+    last_length: list[float]
+    timeouts: list[int]
+    moved: tuple[int, ...]
+    stopped: tuple[int, ...]
+    collisions_total: int
+    stuck: frozenset[int]  # robots the crash adversary crashed, for good
+    crash_plan: dict[int, int]  # robot -> the round (an async run: cycle) it crashes in
+    tracker: ProgressTracker
+    last_timed_out: tuple[int, ...]
+
+    def reply(self, ok: bool, reason: str = "") -> ControlReply: ...
+
+    def emit(self, effect: Effect) -> None: ...
+
+    def views_changed(self) -> None: ...
+
+    def account(
+        self,
+        round_no: int,
+        active: Sequence[int],
+        paths: dict[int, Path],
+        timed_out: Collection[int],
+        before: Points,
+        after: Points,
+        traveled: dict[int, float],
+        collisions: Sequence[Collision],
+        crashed: Collection[int] = (),
+        recovered: Collection[int] = (),
+        stuck: Collection[int] = (),
+    ) -> None: ...
+
+    def finish(self) -> None: ...
+
+
+class Model(Protocol):
+    """What the world core asks of its model: open and commit, and the fields it adds."""
+
+    def begin(self, req: Begin) -> tuple[ControlReply, bool]:
+        """Open what `req` asks; the reply, and whether the state changed."""
+        ...
+
+    def commit(self, req: Commit) -> tuple[ControlReply, bool]:
+        """Commit what `req` asks; the reply, and whether the state changed."""
+        ...
+
+    def reply_fields(self) -> dict[str, Any]:
+        """Fields of every control reply beyond the core's (an async run's clock)."""
+        ...
+
+    def result_fields(self) -> dict[str, Any]:
+        """Fields of the record's result line beyond the core's (an async run's end time)."""
+        ...
+
+    def time(self) -> float | None:
+        """The virtual time now (async models), else None."""
+        ...
+
+
+__all__ = ["Books", "Model"]

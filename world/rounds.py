@@ -1,0 +1,150 @@
+"""The world's model for the round schedulers: a round opens for an active set, its held moves are
+applied at once through physics when it commits, and the round becomes one record line.
+
+The non-rigid adversary cuts moves and the crash adversary stops robots here (`world.faults`);
+a robot whose agent stays gone counts as crashed by the rule of the record's `crashed` field.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from fatswarm.domain.draws import cut_fraction
+from fatswarm.domain.path import Path, Points, transform
+from fatswarm.world.effects import Committed
+from fatswarm.world.faults import crash_after, cut_path, stuck_in
+from fatswarm.world.model import Books
+from fatswarm.world.physics import RoundOutcome, apply_round
+from fatswarm.world.protocol import Begin, Commit, ControlReply
+from fatswarm.world.record import Move, RoundEntry
+
+
+class Rounds:
+    """Rounds of physics: `begin` opens round k for its active set, `commit` applies its moves."""
+
+    def __init__(self, books: Books) -> None:
+        self.books = books
+
+    def begin(self, req: Begin) -> tuple[ControlReply, bool]:
+        w = self.books
+        if req.round != w.committed + 1:
+            return w.reply(False, f"next round is {w.committed + 1}, not {req.round}"), False
+        if not req.active or req.active[-1] >= w.setup.n:
+            return w.reply(False, "active set empty or not robots of this run"), False
+        if w.open_round == req.round and w.active == req.active:
+            return w.reply(True), False  # a coordinator retrying: keep what is held
+        w.open_round, w.active = req.round, req.active
+        w.active_set = frozenset(req.active)
+        w.looked, w.held, w.noticed = set(), {}, None
+        w.missing = {r for r in req.active if w.alive[r]}
+        return w.reply(True), True
+
+    def commit(self, req: Commit) -> tuple[ControlReply, bool]:
+        w = self.books
+        if req.round == w.committed and not w.open_round:
+            return w.reply(True), False  # the reply to a commit was lost: it is durable
+        if req.round != w.open_round:
+            return w.reply(False, f"round {req.round} is not open"), False
+        self.commit_open_round()
+        return w.reply(True), True
+
+    def reply_fields(self) -> dict[str, Any]:
+        return {}
+
+    def result_fields(self) -> dict[str, Any]:
+        return {}
+
+    def time(self) -> float | None:
+        return None
+
+    def commit_open_round(self) -> None:
+        """Apply the held moves through physics, emit the round's record line, then book it."""
+        w = self.books
+        round_no, before = w.open_round, w.positions
+        paths = {  # the lockstep runner applies and records non-empty paths only: so do we
+            robot: transform(path, (float(before[robot, 0]), float(before[robot, 1])), False)
+            for robot, path in sorted(w.held.items())
+            if path
+        }
+        stuck = stuck_in(w.crash_plan, round_no)
+        for robot in w.stuck | frozenset(stuck):  # a crashed robot's moves are not applied
+            paths.pop(robot, None)
+        cut = self._cut(round_no, before, paths)
+        outcome = apply_round(before, paths) if paths else RoundOutcome(before.copy())
+        after = np.asarray(outcome.positions, dtype=np.float64)
+        traveled = {r: float(outcome.traveled.get(r, 0.0)) for r in paths}
+        timed_out = [r for r in w.active if r not in w.held]
+        w.last_timed_out = tuple(timed_out)
+        down, back = self._crashes(round_no)
+        extra: dict[str, list[int]] = {}
+        for key, robots in (
+            ("timed_out", timed_out),
+            ("crashed", down),
+            ("recovered", back),
+            ("cut", cut),
+            ("crash", stuck),
+        ):
+            if robots:
+                extra[key] = robots
+        entry = RoundEntry(
+            round_no,
+            w.active,
+            tuple(Move(r, p, traveled[r]) for r, p in sorted(paths.items())),
+            after,
+            tuple(outcome.collisions),
+            extra,
+        )
+        try:  # the round is the record's even when the goal raises while it is booked
+            w.account(
+                round_no,
+                w.active,
+                paths,
+                timed_out,
+                before,
+                after,
+                traveled,
+                outcome.collisions,
+                down,
+                back,
+                stuck,
+            )
+        finally:
+            w.emit(Committed(entry, w.tracker.snapshot()))
+        w.open_round, w.looked, w.held, w.missing = 0, set(), {}, set()
+        if w.tracker.status is not None:
+            w.finish()
+
+    def _cut(self, round_no: int, before: Points, paths: dict[int, Path]) -> list[int]:
+        """Non-rigid moves: the adversary stops each path of `paths` (world frame, replaced in
+        place) where `cut_path` says; returns the robots it stopped short."""
+        setup = self.books.setup
+        delta = setup.non_rigid
+        if delta is None:
+            return []
+        cut = []
+        for robot, path in paths.items():
+            start = (float(before[robot, 0]), float(before[robot, 1]))
+            short = cut_path(start, path, delta, cut_fraction(setup.seed, round_no, robot))
+            if short is not path:
+                paths[robot] = short
+                cut.append(robot)
+        return cut
+
+    def _crashes(self, round_no: int) -> tuple[list[int], list[int]]:
+        """(robots that count as crashed from this round, crashed robots whose agent is back):
+        the rule of the record's `crashed` and `recovered` round fields (README, "Faults")."""
+        w = self.books
+        limit = crash_after(w.setup.n)
+        crashed = w.tracker.crashed
+        down = [
+            r
+            for r, since in enumerate(w.gone_since)
+            if since is not None and round_no - since >= limit and r not in crashed
+        ]
+        back = sorted(r for r in crashed if w.alive[r] and r not in w.stuck)
+        return down, back
+
+
+__all__ = ["Rounds"]
