@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures.process import BrokenProcessPool
 from typing import Final
 
-from fatswarm.deploy.engine.config import RunConfig
+from fatswarm.deploy.engine.config import RunConfig, RunSetup
 from fatswarm.deploy.engine.lockstep import default_max_rounds, run_lockstep
 from fatswarm.deploy.sweep.grid import Key, RunSpec, SweepInputError, values_text
 from fatswarm.deploy.sweep.table import (
@@ -74,6 +74,21 @@ def init_worker() -> None:
     logging.getLogger("fatswarm").propagate = False
 
 
+def _resolved(spec: RunSpec) -> RunSetup:
+    """The run `spec` describes, checked and built exactly as `fatswarm run --lockstep` does."""
+    return RunConfig(
+        n=spec.n,
+        algorithm=spec.algorithm,
+        params=dict(spec.params),
+        seed=spec.seed,
+        start=spec.start,
+        scheduler=spec.scheduler,
+        max_rounds=spec.max_rounds,
+        non_rigid=spec.non_rigid,
+        crash=spec.crash,
+    ).resolve()
+
+
 def run_spec(spec: RunSpec) -> RunFigures:
     """Run `spec` in lock step and measure it; a run that raises is an ERROR row, not a crash."""
     logger = logging.getLogger("fatswarm")
@@ -85,17 +100,7 @@ def run_spec(spec: RunSpec) -> RunFigures:
         # the parameters and the cap first, so that a row of a run refused below still has them
         values = values_text(resolve_values(load_algorithm(spec.algorithm), dict(spec.params)))
         cap = spec.max_rounds or default_max_rounds(spec.n, spec.scheduler)
-        setup = RunConfig(
-            n=spec.n,
-            algorithm=spec.algorithm,
-            params=dict(spec.params),
-            seed=spec.seed,
-            start=spec.start,
-            scheduler=spec.scheduler,
-            max_rounds=spec.max_rounds,
-            non_rigid=spec.non_rigid,
-            crash=spec.crash,
-        ).resolve()
+        setup = _resolved(spec)
         values, cap = values_text(setup.params.values), setup.max_rounds
         result = run_lockstep(
             setup.initial,
