@@ -147,25 +147,38 @@ class MoveSubmitted:
     def decode(data: bytes | bytearray | memoryview) -> MoveSubmitted:
         """Parse and validate (finite, bounded coordinates); raises ProtocolError."""
         obj = unpack(data, "move")
-        try:
-            path = from_record(obj.get("path"))
-        except PathFormatError as exc:
-            raise ProtocolError(f"bad path: {exc}") from None
-        for x, y in vertices((0.0, 0.0), path):
-            if not (abs(x) <= MAX_COORD and abs(y) <= MAX_COORD):
-                raise ProtocolError("path leaves the bounded plane")
-        for seg in path.segments:
-            if isinstance(seg, Arc) and not (
-                abs(seg.center[0]) <= MAX_COORD
-                and abs(seg.center[1]) <= MAX_COORD
-                and abs(seg.sweep) <= MAX_SWEEP
-            ):
-                raise ProtocolError("arc centre or sweep out of range")
+        path = checked_path(obj.get("path"))
         return MoveSubmitted(
             robot=get_int(obj, "robot", 0, MAX_ROBOTS - 1),
             round=get_int(obj, "round", 1, 2**62),
             path=path,
         )
+
+    @staticmethod
+    def of(robot: int, round_no: int, path: Path) -> MoveSubmitted:
+        """The move as the world receives it from an agent, without the bytes: its path through
+        the same record form and the same checks as `decode`; raises ProtocolError."""
+        return MoveSubmitted(robot, round_no, checked_path(to_record(path)))
+
+
+def checked_path(record: Any) -> Path:
+    """A move's path from its record form (`to_record`), checked as the world checks every move:
+    well formed, inside the bounded plane, arcs of bounded sweep; raises ProtocolError."""
+    try:
+        path = from_record(record)
+    except PathFormatError as exc:
+        raise ProtocolError(f"bad path: {exc}") from None
+    for x, y in vertices((0.0, 0.0), path):
+        if not (abs(x) <= MAX_COORD and abs(y) <= MAX_COORD):
+            raise ProtocolError("path leaves the bounded plane")
+    for seg in path.segments:
+        if isinstance(seg, Arc) and not (
+            abs(seg.center[0]) <= MAX_COORD
+            and abs(seg.center[1]) <= MAX_COORD
+            and abs(seg.sweep) <= MAX_SWEEP
+        ):
+            raise ProtocolError("arc centre or sweep out of range")
+    return path
 
 
 # --- world -> observers -----------------------------------------------------------------------

@@ -289,7 +289,8 @@ class _Bus:
         del notes  # a lock step keeps the coordinator's notes to itself, as it always has
 
     def _act(self, round_no: int, active: Sequence[int]) -> None:
-        """Every active robot's Look, Compute and Move."""
+        """Every active robot's Look, Compute and Move; a move reaches the world one way only,
+        through the wire codec (`_delivered`), as a networked agent's does."""
         world = self.world
         planned = None
         if self.planner is not None:
@@ -300,35 +301,40 @@ class _Bus:
             if planned is not None:
                 if not world.admit_look(robot):
                     continue
-                path = path_to_world(planned[robot], (0.0, 0.0), self.flips[robot])
+                path: Path | None = path_to_world(planned[robot], (0.0, 0.0), self.flips[robot])
             else:
                 snapshot = world.look(robot)
                 if snapshot is None:
                     continue
-                self.looks += 1
-                msg = self._computed(world, robot, round_no, snapshot.view)
-                if msg is None:
-                    continue  # as a networked agent whose compute failed: it stays, timed out
-                world.move(robot, msg)
-                continue
+                path = self._computed(robot, round_no, snapshot.view)
             self.looks += 1
-            world.move(robot, MoveSubmitted(robot=robot, round=round_no, path=path))
+            msg = None if path is None else self._delivered(robot, round_no, path)
+            if msg is not None:  # else as a networked agent whose compute failed: it stays
+                world.move(robot, msg)
 
-    def _computed(
-        self, world: WorldCore, robot: int, round_no: int, view: Points
-    ) -> MoveSubmitted | None:
-        """Robot `robot`'s move as the world would receive it over the wire (encoded and decoded,
-        so the same checks apply), or None where a networked agent would send none: its compute
-        raised, or returned something that is not a path (said on the log, first ones in full)."""
+    def _computed(self, robot: int, round_no: int, view: Points) -> Path | None:
+        """Robot `robot`'s path for `view` (its private frame undone), or None where a networked
+        agent would send none: its compute raised, or returned something that is not a path."""
         try:
-            path = compute_in_frame(view, self.flips[robot], checked(self.compute))
-            wire = MoveSubmitted(robot=robot, round=round_no, path=path).encode()
-            return MoveSubmitted.decode(wire)
-        except ProtocolError as exc:
-            world.reject("move-garbage", f"robot {robot} round {round_no}: {exc}")
-            problem = f"sent a move the world refuses: {exc}"
+            return compute_in_frame(view, self.flips[robot], checked(self.compute))
         except Exception as exc:  # a bug in the algorithm: the robot stays put, as networked
-            problem = f"compute raised {type(exc).__name__}: {exc}"
+            self._fault(robot, round_no, f"compute raised {type(exc).__name__}: {exc}")
+            return None
+
+    def _delivered(self, robot: int, round_no: int, path: Path) -> MoveSubmitted | None:
+        """The move as the world receives it from an agent (the wire's checks, `MoveSubmitted.of`),
+        or None if the world would refuse it (counted, said on the log)."""
+        try:
+            return MoveSubmitted.of(robot, round_no, path)
+        except ProtocolError as exc:
+            self.world.reject("move-garbage", f"robot {robot} round {round_no}: {exc}")
+            self._fault(robot, round_no, f"sent a move the world refuses: {exc}")
+        except Exception as exc:  # a path that cannot even be encoded: the algorithm's bug
+            self._fault(robot, round_no, f"compute raised {type(exc).__name__}: {exc}")
+        return None
+
+    def _fault(self, robot: int, round_no: int, problem: str) -> None:
+        """Count a robot that stays put for its algorithm's fault; the first ones in full."""
         self.faults += 1
         if self.faults <= SHOWN_FAULTS:
             log.warning(
@@ -338,7 +344,6 @@ class _Bus:
                 problem,
                 "; further faults are only counted" if self.faults == SHOWN_FAULTS else "",
             )
-        return None
 
     def perform(self) -> None:
         """Do what the world asked: its record lines to the run record, its notes to the log,

@@ -115,6 +115,30 @@ def test_move_round_trips(robot: int, round_no: int, pts: list[tuple[float, floa
     assert MoveSubmitted.decode(msg.encode()) == msg
 
 
+@given(
+    pts=st.lists(
+        st.tuples(st.floats(-2e9, 2e9), st.floats(-2e9, 2e9), st.floats(-40.0, 40.0)),
+        max_size=4,
+    ),
+)
+def test_a_lock_step_move_passes_the_checks_of_the_wire(
+    pts: list[tuple[float, float, float]],
+) -> None:
+    # The lock step hands the world its moves through `MoveSubmitted.of`: what the wire would
+    # give the world, or the same refusal, for every path (out-of-range ones included).
+    segs = tuple(Line((x, y)) if i % 2 else Arc((x, y), w) for i, (x, y, w) in enumerate(pts))
+    path = Path(segs)
+    try:
+        wire: MoveSubmitted | str = MoveSubmitted.decode(MoveSubmitted(3, 9, path).encode())
+    except ProtocolError as exc:
+        wire = str(exc)
+    try:
+        direct: MoveSubmitted | str = MoveSubmitted.of(3, 9, path)
+    except ProtocolError as exc:
+        direct = str(exc)
+    assert direct == wire
+
+
 def test_async_control_fields_round_trip_and_stay_optional() -> None:
     begin = Begin(3, (0, 4), at=12.5, looks=((0, 1.25), (4, 12.5)))
     assert decode_control(begin.encode()) == begin
