@@ -25,11 +25,10 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
-from fatswarm.agent.frames import compute_in_frame
-from fatswarm.domain.draws import draw_flip
+from fatswarm.domain.lights import glance_of
 from fatswarm.domain.path import Path
 from fatswarm.domain.registry import DEFAULT, load_algorithm
-from fatswarm.domain.seam import Algorithm, AlgorithmParamsError, Configured, checked
+from fatswarm.domain.seam import Algorithm, AlgorithmParamsError, Configured
 from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.protocol import (
     LookRequest,
@@ -66,16 +65,17 @@ class WrongAlgorithmError(ValueError):
 
 class Robot:
     """One robot's Compute: the algorithm, configured by what each snapshot says (n and the
-    parameters), kept while they do not change."""
+    parameters), kept while they do not change. Its frame is the world's secret: the view comes
+    in it, and the path goes back in it."""
 
-    def __init__(self, algorithm: Algorithm[Any], flip_x: bool) -> None:
+    def __init__(self, algorithm: Algorithm[Any]) -> None:
         self.algorithm = algorithm
-        self.flip_x = flip_x
         self._setting: Configured | None = None
 
-    def look_compute(self, snapshot: Snapshot) -> Path:
-        """The path relative to the robot, world axes; raises WrongAlgorithmError or
-        AlgorithmParamsError for a snapshot it cannot act on."""
+    def look_compute(self, snapshot: Snapshot) -> tuple[Path, int | None]:
+        """The path relative to the robot in its frame, and the colour it shows next (a luminous
+        algorithm's, else None); raises WrongAlgorithmError or AlgorithmParamsError for a
+        snapshot it cannot act on, TypeError or LightsError for an algorithm's bad answer."""
         if snapshot.algorithm != self.algorithm.name:
             raise WrongAlgorithmError(
                 f"the world runs algorithm {snapshot.algorithm!r}, this "
@@ -84,8 +84,14 @@ class Robot:
         setting = self._setting
         if setting is None or setting.n != snapshot.n or dict(setting.values) != snapshot.params:
             setting = self._setting = Configured.of(self.algorithm, snapshot.n, snapshot.params)
-        path = compute_in_frame(snapshot.view, self.flip_x, checked(setting.compute))
-        return path
+        return act(setting, snapshot)
+
+
+def act(setting: Configured, snapshot: Snapshot) -> tuple[Path, int | None]:
+    """One Compute on a snapshot, as every agent and the lock step make it: the path in the
+    robot's frame and its next colour (None without lights)."""
+    glance = glance_of(setting.colours, snapshot.own, snapshot.colours)
+    return setting.decide(snapshot.view, glance)
 
 
 def open_session(conf: Any, stop: threading.Event, waiting: str | None = None) -> Any:
@@ -163,7 +169,7 @@ def serve(
     import zenoh  # the CLI imports this module for its flags: zenoh loads when a robot runs
 
     stop = stop or threading.Event()
-    robot = Robot(algorithm or load_algorithm(cfg.algorithm), draw_flip(cfg.seed, cfg.robot))
+    robot = Robot(algorithm or load_algorithm(cfg.algorithm))
     os.environ.setdefault("ZENOH_RUNTIME", ONE_WORKER_RUNTIME)
     session = open_session(conf, stop, waiting)
     if session is None:
@@ -338,8 +344,8 @@ def _move(cfg: AgentConfig, snapshot: Snapshot, robot: Robot) -> bytes:
     t0, cpu0 = time.perf_counter(), time.thread_time()
     round_no = snapshot.round
     try:
-        path = robot.look_compute(snapshot)
-        move = MoveSubmitted(robot=cfg.robot, round=round_no, path=path).encode()
+        path, colour = robot.look_compute(snapshot)
+        move = MoveSubmitted(robot=cfg.robot, round=round_no, path=path, colour=colour).encode()
     except (WrongAlgorithmError, AlgorithmParamsError) as exc:
         log.error("round %d: staying put: %s", round_no, exc)
         return b""

@@ -15,18 +15,20 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Collection, Sequence
 from dataclasses import replace
-from typing import Final
+from typing import Any, Final
 
 import numpy as np
 
-from fatswarm.domain.draws import crash_plan, view_order
+from fatswarm.domain.draws import crash_plan
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path, Points, path_length
+from fatswarm.domain.robot_model import RobotModel
 from fatswarm.domain.seam import AlgorithmFailure, Configured
 from fatswarm.domain.tolerance import snap
 from fatswarm.world.effects import Effect, Level, Note
 from fatswarm.world.faults import crash_after, stuck_in
 from fatswarm.world.instants import Instants, async_setup, is_async
+from fatswarm.world.looks import Looks
 from fatswarm.world.model import Model
 from fatswarm.world.physics import Collision
 from fatswarm.world.progress import ProgressTracker
@@ -47,6 +49,17 @@ from fatswarm.world.rounds import Rounds
 from fatswarm.world.setup import WorldSetup
 
 FIRST_LOOK: Final = LookRequest()  # an agent's first Look: any round
+
+
+def outside_assumption(algorithm: Configured, model: RobotModel) -> str:
+    """One line if the run's frames are not among those the algorithm assumes, else ''."""
+    if model.frames in algorithm.frames:
+        return ""
+    assumed = ", ".join(f.value for f in algorithm.frames)
+    return (
+        f"algorithm {algorithm.name} assumes frames {assumed}; this run gives it "
+        f"{model.frames.value} (outside its assumption)"
+    )
 
 
 class WorldCore:
@@ -93,7 +106,9 @@ class WorldCore:
         self.active: tuple[int, ...] = ()
         self.active_set: frozenset[int] = frozenset()  # the same, for O(1) membership
         self.looked: set[int] = set()
-        self.held: dict[int, Path] = {}
+        self.held: dict[int, Path] = {}  # world axes, relative to the robot
+        self.held_colours: dict[int, int] = {}  # the colours of the held moves (luminous)
+        self.looks = Looks(setup.robot_model, algorithm, n, setup.seed, setup.record_views)
         self.missing: set[int] = set()  # live active robots of the open round without a move
         self.noticed: tuple[int, tuple[int, ...]] | None = None  # last moves notice sent
         self.moved: tuple[int, ...] = ()
@@ -133,9 +148,24 @@ class WorldCore:
                 "swarm": setup.swarm,
                 **({} if setup.non_rigid is None else {"non_rigid": setup.non_rigid}),
                 **({} if setup.crash is None else {"crash": setup.crash}),
+                **self._model_fields(),
                 **setup.extra,
             },
         )
+
+    def _model_fields(self) -> dict[str, Any]:
+        """The header's robot-model fields: the model (if not the paper's), whether views are
+        recorded, and a note if the algorithm assumes other frames than the run's."""
+        setup, fields = self.setup, dict[str, Any]()
+        model = setup.robot_model
+        if not model.is_paper:
+            fields["model"] = model.to_header()
+        if setup.record_views:
+            fields["record_views"] = True
+        outside = outside_assumption(self.algorithm, model)
+        if outside:
+            fields["assumption"] = outside
+        return fields
 
     # -- effects --------------------------------------------------------------------------------
 
@@ -172,6 +202,7 @@ class WorldCore:
         timed_out = {int(r) for r in entry.extra.get("timed_out", [])}
         traveled = {m.robot: m.traveled for m in entry.moves}
         paths = {m.robot: m.path for m in entry.moves}
+        relit = self.looks.restore(entry.extra.get("lights"))
         self.account(
             entry.round,
             entry.active,
@@ -184,6 +215,7 @@ class WorldCore:
             entry.extra.get("crashed", ()),
             entry.extra.get("recovered", ()),
             stuck_in(self.crash_plan, entry.round),
+            relit,
         )
 
     def account(
@@ -199,9 +231,11 @@ class WorldCore:
         crashed: Collection[int] = (),
         recovered: Collection[int] = (),
         stuck: Collection[int] = (),
+        relit: bool = False,
     ) -> None:
         """Book one committed round (live or replayed) into the state and the progress tracker.
-        `stuck`: the robots the crash adversary crashes in this round (for good)."""
+        `stuck`: the robots the crash adversary crashes in this round (for good). `relit`: a
+        colour changed (the configuration changed, though no robot may have moved)."""
         if stuck:
             self._note(
                 Level.INFO,
@@ -236,6 +270,7 @@ class WorldCore:
             after,
             traveled,
             len(collisions),
+            changed=True if relit else None,
         )
         self.positions, self.committed = after, round_no
         self.active = tuple(active)
@@ -266,16 +301,16 @@ class WorldCore:
             self.reject("look-not-active", f"robot {robot} round {self.open_round}")
             return None
         self.looked.add(robot)
-        pos = self.positions
-        others = np.concatenate((pos[:robot], pos[robot + 1 :])) - pos[robot]
-        others = others[view_order(self.setup.seed, self.open_round, robot, len(others))]
+        view, colours, own = self.looks.view(self.positions, robot, self.open_round)
         return Snapshot(
             round=self.open_round,
             n=self.setup.n,
             algorithm=self.algorithm.name,
             params=dict(self.algorithm.values),
-            view=others,
+            view=view,
             epoch=self.epoch,
+            colours=colours,
+            own=own,
         )
 
     def admit_look(self, robot: int) -> bool:
@@ -300,11 +335,19 @@ class WorldCore:
             self.reject("move-without-look", f"robot {robot} round {msg.round}")
         elif robot in self.held:
             self.reject("move-duplicate", f"robot {robot} round {msg.round}")
+        elif not self._colour_ok(msg.colour):
+            self.reject("move-bad-colour", f"robot {robot} colour {msg.colour}")
         else:
-            self.held[robot] = msg.path
+            self.held[robot] = self.looks.to_world(robot, msg.round, msg.path)
+            if msg.colour is not None:
+                self.held_colours[robot] = msg.colour
             self.missing.discard(robot)
             return True
         return False
+
+    def _colour_ok(self, colour: int | None) -> bool:
+        """Whether a move may carry `colour`: none, or one of a luminous algorithm's palette."""
+        return colour is None or colour < len(self.algorithm.colours)
 
     def moves_notice(self) -> MovesHeld | None:
         """The notice to send the coordinator when every live active robot of the open round has

@@ -57,6 +57,9 @@ class Instants:
         self.clock = AsyncWorld(books.positions, [math.inf] * books.setup.n)
         self._last = books.positions.copy()
         self._delays: dict[int, tuple[float, float]] = {}
+        # robot -> (when, colour): a luminous robot's colour shows at the end of its Compute
+        self._showing: dict[int, tuple[float, int]] = {}
+        self._relit = False  # a colour changed since the last cycle line
 
     def reply_fields(self) -> dict[str, Any]:
         known, unset = self.clock.looks()
@@ -137,11 +140,14 @@ class Instants:
         w = self.books
         round_no, here = w.open_round, w.positions
         delays, self._delays = self._delays, {}
+        colours, w.held_colours = w.held_colours, {}
         moved = []
         for robot in w.active:
             if robot in w.stuck:
                 continue
             compute, wait = delays.get(robot, (0.0, 0.0))
+            if robot in colours:
+                self._showing[robot] = (self.clock.now + compute, colours[robot])
             path = w.held.get(robot, Path())
             origin = (float(here[robot, 0]), float(here[robot, 1]))
             world = transform(path, origin, False) if path else Path()
@@ -173,12 +179,14 @@ class Instants:
         clock, changed = self.clock, False
         while w.status == Status.RUNNING:
             clock.start_moves()
+            self._show_due()
             if clock.looking():
                 break
             t = clock.next_time()
             if not math.isfinite(t):
                 break
             clock.advance(t)
+            self._show_due()
             w.positions = clock.positions
             for done in clock.end_moves():
                 changed = True
@@ -187,10 +195,19 @@ class Instants:
         w.positions = clock.positions
         return changed
 
+    def _show_due(self) -> None:
+        """The colours whose Compute has ended by now show (a Look at that very time sees them)."""
+        due = {r: c for r, (t, c) in self._showing.items() if t <= self.clock.now}
+        if due:
+            self._relit |= self.books.looks.show(due, skip=self.books.stuck)
+            for robot in due:
+                del self._showing[robot]
+
     def _cycle(self, done: CycleDone, timed_out: bool = False) -> bool:
         """Record and account one ended cycle (`timed_out`: no move came for it in time, so the
         robot stayed); True once the run has ended."""
         w = self.books
+        self._show_due()
         k = w.tracker.snapshot().rounds + 1
         extra: dict[str, Any] = {
             "look": done.look,
@@ -202,6 +219,7 @@ class Instants:
             extra["cut"] = [done.robot]
         if timed_out:
             extra["timed_out"] = [done.robot]
+        extra.update(w.looks.round_fields([done.robot]))
         entry = RoundEntry(
             k,
             (done.robot,),
@@ -212,7 +230,8 @@ class Instants:
         )
         traveled = {done.robot: done.traveled} if done.path else {}
         # its move changed the configuration even when the line before is of the same instant
-        moved = done.traveled > MOVE_TOLERANCE or None
+        moved = done.traveled > MOVE_TOLERANCE or self._relit or None
+        self._relit = False
         try:  # the cycle is the record's even when the goal raises while it is booked
             w.tracker.observe(
                 [done.robot],

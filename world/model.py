@@ -13,6 +13,7 @@ from typing import Any, Protocol
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path, Points
 from fatswarm.world.effects import Effect
+from fatswarm.world.looks import Looks
 from fatswarm.world.physics import Collision
 from fatswarm.world.progress import ProgressTracker
 from fatswarm.world.protocol import Begin, Commit, ControlReply
@@ -30,7 +31,9 @@ class Books(Protocol):
     active: tuple[int, ...]
     active_set: frozenset[int]
     looked: set[int]
-    held: dict[int, Path]  # moves of the open round, in each robot's translation-only frame
+    held: dict[int, Path]  # moves of the open round, world axes, relative to each robot
+    held_colours: dict[int, int]  # the colours of the held moves (a luminous algorithm's)
+    looks: Looks  # what each robot sees, and every robot's colour
     missing: set[int]  # live active robots of the open round without a move
     noticed: tuple[int, tuple[int, ...]] | None  # the last moves notice sent
     alive: list[bool]
@@ -65,6 +68,7 @@ class Books(Protocol):
         crashed: Collection[int] = (),
         recovered: Collection[int] = (),
         stuck: Collection[int] = (),
+        relit: bool = False,
     ) -> None: ...
 
     def finish(self) -> None: ...

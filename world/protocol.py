@@ -1,10 +1,11 @@
 """The world's wire protocol: its key expressions and every message to or from it (no zenoh).
 
-The agents are the world's clients: their moves and liveliness tokens are defined here too. A move
-travels in the robot's translation-only frame: the path starts at the robot's centre (origin), axes
-are the world's (the private mirroring is already undone), so the agent never needs and never
-learns a global coordinate; the world translates it by the robot's position. The coordinator's
-control messages (`Hello`, `Begin`, `Commit`) live here as well: it is the world's client too.
+The agents are the world's clients: their moves and liveliness tokens are defined here too. A view
+and a move travel in the robot's private frame: the path starts at the robot's centre (origin), in
+the axes the world drew for it (docs/model.md, "Frames"), so the agent never needs and never learns
+a global coordinate nor its frame; the world brings the path to world axes and translates it.
+The coordinator's control messages (`Hello`, `Begin`, `Commit`) live here as well: it is the
+world's client too.
 The codec and field checks are `fatswarm.domain.wire`.
 """
 
@@ -16,6 +17,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from fatswarm.domain.lights import MAX_COLOURS
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import (
     Arc,
@@ -130,18 +132,25 @@ def robot_of_alive_key(key: str) -> int | None:
 
 @dataclass(frozen=True, slots=True)
 class MoveSubmitted:
-    """Robot `robot` wants to follow `path` in round `round` (relative to itself, world axes)."""
+    """Robot `robot` wants to follow `path` in round `round` (relative to itself, in its private
+    frame: the world brings it to world axes) and, for a luminous algorithm, to show `colour`
+    (an index in its palette) from the start of the move."""
 
     robot: int
     round: int
     path: Path
+    colour: int | None = None
 
     def encode(self) -> bytes:
         """msgpack bytes."""
-        return pack(
-            "move",
-            {"robot": int(self.robot), "round": int(self.round), "path": to_record(self.path)},
-        )
+        body: dict[str, Any] = {
+            "robot": int(self.robot),
+            "round": int(self.round),
+            "path": to_record(self.path),
+        }
+        if self.colour is not None:
+            body["colour"] = int(self.colour)
+        return pack("move", body)
 
     @staticmethod
     def decode(data: bytes | bytearray | memoryview) -> MoveSubmitted:
@@ -152,13 +161,16 @@ class MoveSubmitted:
             robot=get_int(obj, "robot", 0, MAX_ROBOTS - 1),
             round=get_int(obj, "round", 1, 2**62),
             path=path,
+            colour=None if "colour" not in obj else get_int(obj, "colour", 0, MAX_COLOURS - 1),
         )
 
     @staticmethod
-    def of(robot: int, round_no: int, path: Path) -> MoveSubmitted:
+    def of(robot: int, round_no: int, path: Path, colour: int | None = None) -> MoveSubmitted:
         """The move as the world receives it from an agent, without the bytes: its path through
         the same record form and the same checks as `decode`; raises ProtocolError."""
-        return MoveSubmitted(robot, round_no, checked_path(to_record(path)))
+        if colour is not None and not 0 <= colour < MAX_COLOURS:
+            raise ProtocolError(f"'colour' must be an integer in [0, {MAX_COLOURS - 1}]")
+        return MoveSubmitted(robot, round_no, checked_path(to_record(path)), colour)
 
 
 def checked_path(record: Any) -> Path:
@@ -297,8 +309,10 @@ class WorldState:
 
 @dataclass(frozen=True, slots=True, eq=False)  # holds arrays: compare fields
 class Snapshot:
-    """The others' positions relative to the asker (translation only, shuffled, no ids), n and
-    the algorithm's name and parameters.
+    """What one Look shows: the positions of the robots the asker sees, relative to it in its
+    private frame (shuffled, no ids, nothing of the robots it does not see, not even how many),
+    their colours and its own as the lights model lets it read them, and the run's n, algorithm
+    and parameters (what the algorithm is configured with).
 
     Never holds global coordinates: the asker learns where others are from itself, not where it is.
     """
@@ -307,35 +321,51 @@ class Snapshot:
     n: int
     algorithm: str  # the name of the algorithm the run is for: an agent running another stays
     params: dict[str, ParamValue]
-    view: Points  # (n-1, 2): other centre minus asker's centre, world axes
+    view: Points  # (k, 2), k <= n - 1: other centre minus asker's centre, the asker's frame
     epoch: int = 0  # the world process that answered (see LookRequest)
+    colours: tuple[int, ...] | None = None  # palette indices lined up with `view`, if shown
+    own: int | None = None  # the asker's own colour, if shown
 
     def encode(self) -> bytes:
         """msgpack bytes."""
-        return pack(
-            "snapshot",
-            {
-                "round": int(self.round),
-                "n": int(self.n),
-                "algorithm": self.algorithm,
-                "params": dict(self.params),
-                "view": points_to_bytes(self.view),
-                "epoch": int(self.epoch),
-            },
-        )
+        body: dict[str, Any] = {
+            "round": int(self.round),
+            "n": int(self.n),
+            "algorithm": self.algorithm,
+            "params": dict(self.params),
+            "view": points_to_bytes(self.view),
+            "epoch": int(self.epoch),
+        }
+        if self.colours is not None:
+            body["colours"] = bytes(self.colours)
+        if self.own is not None:
+            body["own"] = int(self.own)
+        return pack("snapshot", body)
 
     @staticmethod
     def decode(data: bytes | bytearray | memoryview) -> Snapshot:
         """Parse and validate; raises ProtocolError."""
         obj = unpack(data, "snapshot")
         n = get_int(obj, "n", 1, MAX_ROBOTS)
+        raw = obj.get("view")
+        rows = len(raw) // 16 if isinstance(raw, bytes) and len(raw) <= (n - 1) * 16 else n - 1
+        view = get_points(obj, "view", rows)
+        colours = obj.get("colours")
+        if colours is not None and (
+            not isinstance(colours, bytes)
+            or len(colours) != rows
+            or any(c >= MAX_COLOURS for c in colours)
+        ):
+            raise ProtocolError(f"'colours' must be {rows} palette indices below {MAX_COLOURS}")
         return Snapshot(
             round=get_int(obj, "round", 1, 2**62),
             n=n,
             algorithm=get_str(obj, "algorithm"),
             params=get_params(obj, "params"),
-            view=get_points(obj, "view", n - 1),
+            view=view,
             epoch=get_int(obj, "epoch", 0, 2**63 - 1),
+            colours=None if colours is None else tuple(colours),
+            own=None if "own" not in obj else get_int(obj, "own", 0, MAX_COLOURS - 1),
         )
 
 

@@ -72,13 +72,15 @@ class Rounds:
         for robot in w.stuck | frozenset(stuck):  # a crashed robot's moves are not applied
             paths.pop(robot, None)
         cut = self._cut(round_no, before, paths)
+        colours, w.held_colours = w.held_colours, {}
+        relit = w.looks.show(colours, skip=w.stuck | frozenset(stuck))  # as the moves start
         outcome = apply_round(before, paths) if paths else RoundOutcome(before.copy())
         after = np.asarray(outcome.positions, dtype=np.float64)
         traveled = {r: float(outcome.traveled.get(r, 0.0)) for r in paths}
         timed_out = [r for r in w.active if r not in w.held]
         w.last_timed_out = tuple(timed_out)
         down, back = self._crashes(round_no)
-        extra: dict[str, list[int]] = {}
+        extra: dict[str, Any] = {}
         for key, robots in (
             ("timed_out", timed_out),
             ("crashed", down),
@@ -88,6 +90,7 @@ class Rounds:
         ):
             if robots:
                 extra[key] = robots
+        extra.update(w.looks.round_fields(w.looked))
         entry = RoundEntry(
             round_no,
             w.active,
@@ -109,6 +112,7 @@ class Rounds:
                 down,
                 back,
                 stuck,
+                relit,
             )
         finally:
             w.emit(Committed(entry, w.tracker.snapshot()))

@@ -10,6 +10,7 @@ import numpy as np
 
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT
+from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
 from fatswarm.domain.seam import ParamValue
 from fatswarm.world.record import Header
 
@@ -29,6 +30,8 @@ class WorldSetup:
     extra: Mapping[str, Any] = field(default_factory=dict)  # more header fields (how it was run)
     non_rigid: float | None = None  # the adversary's delta (non-rigid moves); None: rigid moves
     crash: int | None = None  # f: robots the adversary crashes for good (`crash_plan`); None: 0
+    robot_model: RobotModel = PAPER_MODEL  # sight, obstruction, lights, frames (docs/model.md)
+    record_views: bool = False  # each record line names the robots each looker saw
 
 
 def header_non_rigid(header: Header) -> float | None:
@@ -58,8 +61,10 @@ def setup_from_header(header: Header, swarm: str, max_rounds: int | None) -> Wor
         extra={
             k: v
             for k, v in header.extra.items()
-            if k not in ("max_rounds", "swarm", "non_rigid", "crash")
+            if k not in ("max_rounds", "swarm", "non_rigid", "crash", "model", "record_views")
         },
         non_rigid=header_non_rigid(header),
         crash=header_crash(header),
+        robot_model=RobotModel.from_header(header.extra.get("model")),
+        record_views=header.extra.get("record_views") is True,
     )

@@ -8,11 +8,18 @@ import os
 from typing import TYPE_CHECKING, Any
 
 from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy.engine.config import RunInputError, RunSetup, check_crash, check_non_rigid
+from fatswarm.deploy.engine.config import (
+    MODEL_FLAGS,
+    RunInputError,
+    RunSetup,
+    check_crash,
+    check_non_rigid,
+)
 from fatswarm.deploy.flags import flag_given
 from fatswarm.deploy.scenarios.starts import load_init, random_start
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.robot_model import RobotModel
 from fatswarm.domain.seam import Configured, parse_assignments
 from fatswarm.world.physics import validate_configuration
 from fatswarm.world.record import RecordFormatError
@@ -66,7 +73,29 @@ def resolve_resume(args: argparse.Namespace) -> RunSetup:
         h.algorithm_ref,
         non_rigid=recorded_non_rigid(args, h, path),
         crash=recorded_crash(args, h, path),
+        robot_model=recorded_model(args, h, path),
+        record_views=h.extra.get("record_views") is True,
     )
+
+
+def recorded_model(args: argparse.Namespace, header: Header, path: str) -> RobotModel:
+    """The header's robot model (none: the paper's); RunInputError for a model flag that says
+    otherwise than the record (or a --record-views the record was not made with)."""
+    recorded = RobotModel.from_header(header.extra.get("model"))
+    says = recorded.to_header()
+    for key in MODEL_FLAGS:
+        given = getattr(args, key, None)
+        if given is not None and given != says[key]:
+            flag = "--" + key.replace("_", "-")
+            raise RunInputError(
+                f"{flag} {given} contradicts {path}, whose run has {key}={says[key]}; "
+                f"drop {flag} to resume it"
+            )
+    if getattr(args, "record_views", False) and header.extra.get("record_views") is not True:
+        raise RunInputError(
+            f"--record-views contradicts {path}, whose run does not record views; drop it"
+        )
+    return recorded
 
 
 def _recorded_cap(header: Header) -> int | None:
@@ -260,6 +289,7 @@ __all__ = [
     "read_resumable",
     "recorded_crash",
     "recorded_fairness",
+    "recorded_model",
     "recorded_non_rigid",
     "resolve_resume",
 ]

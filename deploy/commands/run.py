@@ -36,7 +36,12 @@ from fatswarm.deploy.engine.estimate import (
     estimate_text,
     eta_text,
 )
-from fatswarm.deploy.flags import StoreGiven, add_algorithm_arguments, check_writable
+from fatswarm.deploy.flags import (
+    StoreGiven,
+    add_algorithm_arguments,
+    add_robot_model_arguments,
+    check_writable,
+)
 from fatswarm.deploy.net.run_flags import add_network_arguments
 from fatswarm.deploy.scenarios.starts import KINDS
 from fatswarm.deploy.view import dashboard
@@ -72,6 +77,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.epilog = EXIT_CODES_HELP
     _add_start_arguments(p)
     _add_model_arguments(p)
+    add_robot_model_arguments(p)
     _add_output_arguments(p)
     add_network_arguments(p)
     # The dashboard's run flags (--no-dashboard, --svg): `add_run_arguments`, because the CLI
@@ -377,6 +383,8 @@ def _run_setup(
             ),
             non_rigid=setup.non_rigid,
             crash=setup.crash,
+            robot_model=setup.robot_model,
+            record_views=setup.record_views,
         )
     except InvalidConfigurationError as exc:
         return _fail(f"invalid start: {exc}")

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from fatswarm.deploy.engine.config import DEFAULT_SCHEDULER, DEFAULT_START, RunConfig
 from fatswarm.deploy.engine.lockstep import RoundReport, RunResult, run_lockstep
 from fatswarm.domain.path import Points
+from fatswarm.domain.robot_model import RobotModel
 from fatswarm.world.record import RecordWriter, RunRecord
 from fatswarm.world.record_read import read_record
 
@@ -41,6 +42,12 @@ def run(
     max_rounds: int | None = None,
     non_rigid: float | None = None,
     crash: int | None = None,
+    visibility: str = "transparent",
+    sight: float | None = None,
+    lights: str = "full",
+    frames: str = "y-axis",
+    frame_change: str = "fixed",
+    record_views: bool = False,
     record: str | os.PathLike[str] | None = None,
     on_round: Callable[[RoundReport], None] | None = None,
 ) -> RunResult:
@@ -52,6 +59,8 @@ def run(
     may be stopped anywhere after the robot travelled delta, drawn from `seed`); None: rigid.
     `crash`: f robots the adversary crashes for good (which and when drawn from `seed`,
     `world.core.crash_plan`; the goal is then judged on the live robots); None: no crashes.
+    `visibility`, `sight`, `lights`, `frames`, `frame_change`: the robot model, as the flags of
+    `fatswarm run` (docs/model.md); `record_views`: each record line names what each looker saw.
     Raises one of `fatswarm.deploy.engine.config.input_errors()` (a ValueError) for a configuration
     it refuses.
     """
@@ -69,6 +78,8 @@ def run(
         max_rounds=max_rounds,
         non_rigid=non_rigid,
         crash=crash,
+        model=RobotModel.of(visibility, sight, lights, frames, frame_change),
+        record_views=record_views,
     )
     return _run_config(config, record, on_round)
 
@@ -94,6 +105,8 @@ def _run_config(
             header_extra=config.header_extra(networked=False, n=setup.params.n),
             non_rigid=setup.non_rigid,
             crash=setup.crash,
+            robot_model=setup.robot_model,
+            record_views=setup.record_views,
         )
     finally:
         if writer is not None:

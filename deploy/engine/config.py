@@ -22,6 +22,7 @@ from fatswarm import __version__
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.robot_model import PAPER_MODEL, Lights, ModelError, RobotModel
 from fatswarm.domain.seam import AlgorithmError, AlgorithmParamsError, Configured, parse_assignments
 from fatswarm.domain.tolerance import UnsupportedInputError, check_supported
 
@@ -61,6 +62,8 @@ class RunConfig:
     max_rounds: int | None = None
     non_rigid: float | None = None  # the adversary's delta: moves may stop after it (None: rigid)
     crash: int | None = None  # f robots the adversary crashes for good (None: none)
+    model: RobotModel = PAPER_MODEL  # sight, obstruction, lights, frames (docs/model.md)
+    record_views: bool = False  # each record line names what each looker saw
     move_timeout_s: float = DEFAULT_MOVE_TIMEOUT_S
     pace_s: float = 0.0
     command: tuple[str, ...] = ()
@@ -86,6 +89,8 @@ class RunConfig:
             max_rounds=args.max_rounds,
             non_rigid=getattr(args, "non_rigid", None),
             crash=getattr(args, "crash", None),
+            model=model_from_args(args),
+            record_views=bool(getattr(args, "record_views", False)),
             move_timeout_s=float(getattr(args, "move_timeout", DEFAULT_MOVE_TIMEOUT_S)),
             pace_s=float(getattr(args, "pace", None) or 0.0),
             command=tuple(getattr(args, "_argv", None) or sys.argv),
@@ -119,6 +124,7 @@ class RunConfig:
         )
         max_rounds = self.max_rounds or default_max_rounds(setting.n, self.scheduler)
         check_crash(self.crash, setting.n)
+        check_lights(self.model, setting)
         return RunSetup(
             self.seed,
             setting,
@@ -129,6 +135,8 @@ class RunConfig:
             config=self,
             non_rigid=self.non_rigid,
             crash=self.crash,
+            robot_model=self.model,
+            record_views=self.record_views,
         )
 
     def header_extra(self, *, networked: bool, n: int) -> dict[str, Any]:
@@ -167,6 +175,26 @@ class RunSetup:
     config: RunConfig | None = None  # what was asked for (None: a resumed record's run)
     non_rigid: float | None = None  # the adversary's delta (world.faults.cut_path); None: rigid
     crash: int | None = None  # f robots crashed for good (world.core.crash_plan); None: none
+    robot_model: RobotModel = PAPER_MODEL  # sight, obstruction, lights, frames (docs/model.md)
+    record_views: bool = False  # each record line names what each looker saw
+
+
+MODEL_FLAGS: Final = ("visibility", "sight", "lights", "frames", "frame_change")
+
+
+def model_from_args(args: argparse.Namespace) -> RobotModel:
+    """The robot model that `--visibility`, `--sight`, `--lights`, `--frames` and `--frame-change`
+    ask for (unset ones: the paper's); raises ModelError."""
+    given = {key: getattr(args, key, None) for key in MODEL_FLAGS}
+    return RobotModel.of(**{k: v for k, v in given.items() if v is not None})
+
+
+def check_lights(model: RobotModel, setting: Configured) -> None:
+    """Refuse `--lights` other than the default for an algorithm without lights (RunInputError)."""
+    if model.lights is not Lights.FULL and not setting.luminous:
+        raise RunInputError(
+            f"--lights {model.lights} needs an algorithm with lights; {setting.name} has none"
+        )
 
 
 def check_non_rigid(delta: float | None) -> None:
@@ -199,6 +227,7 @@ def input_errors() -> tuple[type[Exception], ...]:
         InvalidConfigurationError,
         UnsupportedInputError,
         RunInputError,
+        ModelError,
     )
 
 
@@ -284,11 +313,14 @@ __all__ = [
     "DEFAULT_N",
     "DEFAULT_SCHEDULER",
     "DEFAULT_START",
+    "MODEL_FLAGS",
     "RunConfig",
     "RunInputError",
     "RunSetup",
     "check_crash",
+    "check_lights",
     "check_non_rigid",
     "input_errors",
+    "model_from_args",
     "resolve_start",
 ]

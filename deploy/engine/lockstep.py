@@ -4,7 +4,7 @@ bus, with every robot's Look-Compute-Move done in turn.
 Nothing of the round is written here: `world.core.WorldCore` serves the looks, holds the moves,
 commits through physics and keeps the record; `coordinator.rounds.CoordinatorCore` picks the
 active sets and opens and closes the rounds, exactly as in a networked run. Each active robot
-Looks (its snapshot, in its private frame with the seeded X flip, as an agent) and Moves. An
+Looks (the world's snapshot, in the robot's private frame, as an agent's) and Moves. An
 algorithm with a `round_planner` (the paper's: `SharedPlans`) makes the round's paths at once,
 the very paths each robot's own `compute` returns; a `compute` passed in is called per robot.
 """
@@ -18,24 +18,24 @@ from typing import Any, Final
 
 import numpy as np
 
-from fatswarm.agent.frames import compute_in_frame, path_to_world
 from fatswarm.agent.params import Params
+from fatswarm.agent.service import act
 from fatswarm.agent.uniform_circle import ALGORITHM as UNIFORM_CIRCLE
 from fatswarm.coordinator.async_rounds import coordinator_core
 from fatswarm.coordinator.driver import Event, drive
 from fatswarm.coordinator.rounds import Finished, Note, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
 from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel
-from fatswarm.domain.draws import draw_flip
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path, Points
+from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
 from fatswarm.domain.seam import Configured, checked
 from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.core import WorldCore
 from fatswarm.world.effects import Committed
 from fatswarm.world.journal import Journal, perform
 from fatswarm.world.physics import validate_configuration
-from fatswarm.world.protocol import ControlReply, ControlRequest, MoveSubmitted
+from fatswarm.world.protocol import ControlReply, ControlRequest, MoveSubmitted, Snapshot
 from fatswarm.world.record import Header, RoundEntry, RunRecord
 from fatswarm.world.setup import WorldSetup
 
@@ -109,6 +109,8 @@ def run_lockstep(
     header_extra: dict[str, Any] | None = None,
     non_rigid: float | None = None,
     crash: int | None = None,
+    robot_model: RobotModel = PAPER_MODEL,
+    record_views: bool = False,
 ) -> RunResult:
     """Run until formed, stalled or `max_rounds` (default `default_max_rounds`).
 
@@ -121,7 +123,9 @@ def run_lockstep(
     break. `algorithm_ref` (how to load the algorithm again; default its name) and
     `header_extra` go into the record's header. `non_rigid`: the adversary's delta (moves may be
     stopped after delta, `world.faults.cut_path`); None for rigid moves. `crash`: f robots the
-    adversary crashes for good (`world.core.crash_plan`); None for none.
+    adversary crashes for good (`world.core.crash_plan`); None for none. `robot_model`: sight,
+    obstruction, lights and frames (docs/model.md); `record_views`: each record line names what
+    each looker saw.
     Raises InvalidConfigurationError for an invalid start, the algorithm's refusal of the start
     (UnsupportedInputError for the paper's, outside the supported range), ValueError if n
     disagrees with params, HistoryMismatchError for a history this run would not have produced.
@@ -144,13 +148,13 @@ def run_lockstep(
         extra=dict(header_extra or {}),
         non_rigid=non_rigid,
         crash=crash,
+        robot_model=robot_model,
+        record_views=record_views,
     )
     world, checked = _open(setup, setting, scheduler, history)
     if history is not None:
         log.info("resumed %s after round %d", getattr(record, "path", "a run"), world.committed)
-    bus = _Bus(
-        world, setting, compute, [draw_flip(seed, robot) for robot in range(n)], record, on_round
-    )
+    bus = _Bus(world, setting, compute, record, on_round)
     finished = bus.run(checked)
     looks = bus.looks + sum(len(entry.active) for entry in history or ())
     return _result(world, finished, looks, positions)
@@ -211,26 +215,28 @@ class _Bus:
         world: WorldCore,
         setting: Configured,
         compute: ComputeFn | None,
-        flips: list[bool],
         record: Journal | None,
         on_round: Callable[[RoundReport], None] | None,
     ) -> None:
         self.world = world
         self.setting = setting
-        self.flips = flips
         self.record = record
         self.on_round = on_round
         self.clock = 0.0  # virtual time: it moves only to a deadline nothing else can meet first
         self.events: list[Event] = []  # for the coordinator: the open round's moves notice
         self.looks = 0
         self.faults = 0  # computes that raised or gave no valid path (the robot stayed)
-        self.compute: Callable[[Points], Path]
+        self.compute: Callable[[Snapshot], tuple[Path, int | None]]
         if compute is not None:
             user, own = compute, setting.params
-            self.compute = lambda view: user(view, own)
+            self.compute = lambda snapshot: (checked(lambda v: user(v, own))(snapshot.view), None)
         else:
-            self.compute = setting.compute
-        self.planner = setting.round_planner() if compute is None else None
+            self.compute = lambda snapshot: act(setting, snapshot)
+        # the round planner gives the paper's model's paths: every view whole, fixed frames
+        setup = world.setup
+        plain = setup.robot_model.is_paper and not setting.luminous and not setup.record_views
+        self.planner = setting.round_planner() if compute is None and plain else None
+        self.flips = [world.looks.frame(robot, 0).mirror for robot in range(setup.n)]
 
     def run(self, scheduler: Scheduler) -> Finished:
         """Every robot's agent up for the whole run, the coordinator's core driven on this bus
@@ -301,31 +307,35 @@ class _Bus:
             if planned is not None:
                 if not world.admit_look(robot):
                     continue
-                path: Path | None = path_to_world(planned[robot], (0.0, 0.0), self.flips[robot])
+                decided: tuple[Path, int | None] | None = (planned[robot], None)
             else:
                 snapshot = world.look(robot)
                 if snapshot is None:
                     continue
-                path = self._computed(robot, round_no, snapshot.view)
+                decided = self._computed(robot, round_no, snapshot)
             self.looks += 1
-            msg = None if path is None else self._delivered(robot, round_no, path)
+            msg = None if decided is None else self._delivered(robot, round_no, *decided)
             if msg is not None:  # else as a networked agent whose compute failed: it stays
                 world.move(robot, msg)
 
-    def _computed(self, robot: int, round_no: int, view: Points) -> Path | None:
-        """Robot `robot`'s path for `view` (its private frame undone), or None where a networked
-        agent would send none: its compute raised, or returned something that is not a path."""
+    def _computed(
+        self, robot: int, round_no: int, snapshot: Snapshot
+    ) -> tuple[Path, int | None] | None:
+        """Robot `robot`'s path in its frame and next colour, or None where a networked agent
+        would send none: its compute raised, or returned something that is not a path."""
         try:
-            return compute_in_frame(view, self.flips[robot], checked(self.compute))
+            return self.compute(snapshot)
         except Exception as exc:  # a bug in the algorithm: the robot stays put, as networked
             self._fault(robot, round_no, f"compute raised {type(exc).__name__}: {exc}")
             return None
 
-    def _delivered(self, robot: int, round_no: int, path: Path) -> MoveSubmitted | None:
+    def _delivered(
+        self, robot: int, round_no: int, path: Path, colour: int | None
+    ) -> MoveSubmitted | None:
         """The move as the world receives it from an agent (the wire's checks, `MoveSubmitted.of`),
         or None if the world would refuse it (counted, said on the log)."""
         try:
-            return MoveSubmitted.of(robot, round_no, path)
+            return MoveSubmitted.of(robot, round_no, path, colour)
         except ProtocolError as exc:
             self.world.reject("move-garbage", f"robot {robot} round {round_no}: {exc}")
             self._fault(robot, round_no, f"sent a move the world refuses: {exc}")

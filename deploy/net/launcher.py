@@ -138,6 +138,8 @@ def write_header(setup: RunSetup, record: str, swarm: str) -> None:
         extra=extra,
         non_rigid=setup.non_rigid,
         crash=setup.crash,
+        robot_model=setup.robot_model,
+        record_views=setup.record_views,
     )
     with RecordWriter(record, fsync=True) as journal:
         perform(WorldCore(world, setup.params).take_effects(), journal)

@@ -21,6 +21,8 @@ CASES_STREAM: Final = 0xCA5E  # the hunt's mix of adversarial cases
 LOOK_STREAM: Final = 0x5A0F  # orders the others in a view; compute must not depend on the order
 CUT_STREAM: Final = 0xC07A  # where the non-rigid adversary stops a move
 CRASH_STREAM: Final = 0xC4A5  # which robots the crash adversary stops for good, and when
+ROTATION_STREAM: Final = 0x2074  # each private frame's rotation (--frames chirality, disoriented)
+FRAME_LOOK_STREAM: Final = 0xF1A5  # mirrors drawn by key (disoriented, --frame-change every-look)
 
 
 def view_order(seed: int, round_no: int, robot: int, k: int) -> np.ndarray:

@@ -126,6 +126,10 @@ def check_algorithm(obj: object, ref: str) -> Algorithm[Any]:
     for method in ("make_params", "compute", "goal"):
         if not callable(getattr(obj, method)):
             raise AlgorithmError(f"--algorithm {ref}: {method} is not callable")
+    if getattr(obj, "colours", ()) != () and not callable(getattr(obj, "compute_lit", None)):
+        raise AlgorithmError(
+            f"--algorithm {ref}: it declares colours but has no compute_lit(view, glance, params)"
+        )
     assert isinstance(obj, Algorithm)
     return obj
 

@@ -16,7 +16,9 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol, TypeVar, cast, runtime_checkable
 
+from fatswarm.domain.lights import Glance, LightsError, Lit, colour_index, palette
 from fatswarm.domain.path import Path, Points
+from fatswarm.domain.robot_model import Frames, ModelError
 
 ParamValue = bool | int | float | str  # what a parameter can hold: it travels on the wire
 MAX_PARAMS = 32  # parameters an algorithm may declare (bounds what a peer can make us parse)
@@ -119,6 +121,12 @@ class Algorithm(Protocol[P]):
       holds. A run is `formed` when the goal holds and every robot, activated since the last
       change, asked to stay; `stalled` when all stay but the goal does not hold.
 
+    A luminous algorithm declares `colours` (a tuple of names, the first every robot's at the
+    start) and `compute_lit(view, glance, params) -> Lit` (fatswarm/domain/lights.py), which
+    fatswarm calls instead of `compute`. `frames`, a tuple of `Frames` names, says which frames the
+    algorithm assumes (default: the paper's, `("y-axis",)`); a run under others goes ahead and
+    says so.
+
     Optional hooks, looked up by name: `check_start(positions, params)` refuses a start the
     algorithm does not support (raise AlgorithmParamsError or a ValueError subclass);
     `figures(positions, params) -> Mapping[str, float]` for the dashboard;
@@ -168,6 +176,21 @@ def parse_assignments(texts: list[str] | tuple[str, ...]) -> dict[str, str]:
     return out
 
 
+def assumed_frames(algorithm: object) -> tuple[Frames, ...]:
+    """The frames `algorithm` declares it assumes (default the paper's); raises AlgorithmError."""
+    declared = getattr(algorithm, "frames", (Frames.Y_AXIS,))
+    try:
+        if not isinstance(declared, tuple) or not declared:
+            raise ModelError(f"got {declared!r}")
+        return tuple(Frames(name) for name in declared)
+    except (ModelError, ValueError):
+        choices = ", ".join(f.value for f in Frames)
+        raise AlgorithmError(
+            f"algorithm {getattr(algorithm, 'name', '?')}: frames must be a non-empty tuple of "
+            f"{choices}, got {declared!r}"
+        ) from None
+
+
 def checked(compute: Callable[[Points], Path]) -> Callable[[Points], Path]:
     """`compute`, refusing (TypeError) anything but a Path: an algorithm's bug is said plainly."""
 
@@ -199,14 +222,44 @@ class Configured:
     n: int
     values: Mapping[str, ParamValue]
     params: Any  # the algorithm's own parameter object
+    colours: tuple[str, ...] = ()  # its palette (fatswarm/domain/lights.py); () if not luminous
+    frames: tuple[Frames, ...] = (Frames.Y_AXIS,)  # the frames it assumes
 
     @staticmethod
     def of(
         algorithm: Algorithm[Any], n: int, given: Mapping[str, object] | None = None
     ) -> Configured:
-        """Resolve, check and build the parameters; raises AlgorithmParamsError."""
+        """Resolve, check and build the parameters; raises AlgorithmParamsError, or
+        AlgorithmError for a palette or frames declaration fatswarm cannot use."""
         values = resolve_values(algorithm, given)
-        return Configured(algorithm, n, values, algorithm.make_params(n, values))
+        try:
+            colours = palette(algorithm)
+        except LightsError as exc:
+            raise AlgorithmError(str(exc)) from None
+        params = algorithm.make_params(n, values)
+        return Configured(algorithm, n, values, params, colours, assumed_frames(algorithm))
+
+    @property
+    def luminous(self) -> bool:
+        """Whether the algorithm has lights (declares colours)."""
+        return bool(self.colours)
+
+    def decide(self, view: Points, glance: Glance | None = None) -> tuple[Path, int | None]:
+        """One robot's Compute in its private frame: its path and, for a luminous algorithm, the
+        index of the colour it shows next (None otherwise). Raises TypeError or LightsError for
+        an answer that is not a Path (a Lit, in a palette colour)."""
+        if not self.colours:
+            path = self.algorithm.compute(view, self.params)
+            colour = None
+        else:
+            luminous: Any = self.algorithm  # checked by the registry: it has compute_lit
+            lit = luminous.compute_lit(view, glance, self.params)
+            if not isinstance(lit, Lit):
+                raise TypeError(f"compute_lit returned {type(lit).__name__}, not a Lit")
+            path, colour = lit.path, colour_index(self.colours, lit.colour, "compute_lit")
+        if not isinstance(path, Path):
+            raise TypeError(f"compute returned {type(path).__name__}, not a Path")
+        return path, colour
 
     @property
     def name(self) -> str:
@@ -266,6 +319,7 @@ __all__ = [
     "ParamValue",
     "Points",
     "RoundPlanner",
+    "assumed_frames",
     "checked",
     "parse_assignments",
     "resolve_values",

@@ -6,10 +6,10 @@ import numpy as np
 
 from fatswarm.agent.algorithm import canonical_view, compute
 from fatswarm.agent.canonical import canonical
-from fatswarm.agent.frames import path_to_world, to_local
 from fatswarm.agent.geometry import sec
 from fatswarm.agent.params import Params
-from fatswarm.domain.path import end_point
+from fatswarm.domain.frames import Frame
+from fatswarm.domain.path import end_point, transform
 from fatswarm.domain.tolerance import snap
 
 
@@ -20,12 +20,14 @@ def world_end(
     path ends in the world frame (None: it stays)."""
     others = np.delete(pts, robot, axis=0)
     others = others[np.random.default_rng(seed).permutation(len(others))]
-    view = to_local(others, (float(pts[robot, 0]), float(pts[robot, 1])), flip)
+    view = Frame(0.0, flip).to_local(others - pts[robot])
     key = canonical_view(view, params).key()
     path = compute(view, params)
     if not path:
         return key, None
-    world = path_to_world(path, (float(pts[robot, 0]), float(pts[robot, 1])), flip)
+    world = transform(
+        Frame(0.0, flip).path_to_world(path), (float(pts[robot, 0]), float(pts[robot, 1])), False
+    )
     return key, end_point((float(pts[robot, 0]), float(pts[robot, 1])), world)
 
 

@@ -15,9 +15,9 @@ import fatswarm.agent.algorithm as algorithm_module
 import fatswarm.agent.geometry as geometry_module
 from fatswarm.agent.algorithm import canonical_view, compute, plan
 from fatswarm.agent.canonical import SharedForm, canonical
-from fatswarm.agent.frames import to_local
 from fatswarm.agent.geometry import mirror_matched, sec
 from fatswarm.agent.params import Params
+from fatswarm.domain.frames import Frame
 from fatswarm.domain.path import Path, end_point, mirror, path_length
 from fatswarm.domain.tolerance import snap
 
@@ -180,7 +180,7 @@ def test_the_shared_form_gives_every_robot_its_own_canonical_form(
         flip = data.draw(st.booleans())
         others = np.delete(world, robot, axis=0)
         others = others[data.draw(st.permutations(range(len(others))))]
-        own = canonical_view(to_local(others, (world[robot, 0], world[robot, 1]), flip), params)
+        own = canonical_view(Frame(0.0, flip).to_local(others - world[robot]), params)
         mine = shared.for_robot(robot, flip)
         assert mine.key() == own.key()
         assert (mine.observer, mine.flip, mine.mirror_symmetric) == (

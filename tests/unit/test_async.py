@@ -18,9 +18,9 @@ import pytest
 from fatswarm.agent.params import Params
 from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy import cli
-from fatswarm.deploy.engine import lockstep
 from fatswarm.deploy.engine.lockstep import configured, run_lockstep
 from fatswarm.deploy.scenarios.starts import random_start
+from fatswarm.domain import frames
 from fatswarm.domain.adversary import (
     ASYNC_NAMES,
     RANDOM_MAX,
@@ -32,7 +32,7 @@ from fatswarm.domain.adversary import (
 )
 from fatswarm.domain.draws import crash_plan, view_order
 from fatswarm.domain.path import Line, Path, Point, path_length, point_at, remainder, truncate
-from fatswarm.world import core
+from fatswarm.world import looks
 from fatswarm.world.asynchrony import AsyncWorld, CycleDone, Phase
 from fatswarm.world.record import RecordWriter
 from fatswarm.world.record_read import read_record
@@ -257,7 +257,7 @@ def test_async_decisions_do_not_depend_on_frames_or_view_order(
     compute = None if planner else (lambda view, params: setting.compute(view))
 
     def final(flips: Callable[[int], bool]) -> tuple[int, list[list[float]]]:
-        monkeypatch.setattr(lockstep, "draw_flip", lambda _seed, robot: flips(robot))
+        monkeypatch.setattr(frames, "draw_flip", lambda _seed, robot: flips(robot))
         result = run_lockstep(
             random_start(n, seed), setting, make_async(name, n, seed), seed=seed, compute=compute
         )
@@ -267,7 +267,7 @@ def test_async_decisions_do_not_depend_on_frames_or_view_order(
     assert final(lambda r: True) == base
     assert final(lambda r: r % 2 == 1) == base
     original = view_order
-    monkeypatch.setattr(core, "view_order", lambda *a: original(*a)[::-1].copy())
+    monkeypatch.setattr(looks, "view_order", lambda *a: original(*a)[::-1].copy())
     assert final(lambda r: False) == base
 
 

@@ -102,7 +102,7 @@ def _snapshot(algorithm: str, params: dict[str, float | int | str | bool]) -> Sn
 
 
 def test_an_agent_stays_put_for_a_world_running_another_algorithm() -> None:
-    robot = Robot(load_algorithm("uniform-circle"), flip_x=False)
+    robot = Robot(load_algorithm("uniform-circle"))
     with pytest.raises(WrongAlgorithmError, match="the world runs algorithm 'gathering'"):
         robot.look_compute(_snapshot("gathering", {"tolerance": 0.001}))
     with pytest.raises(AlgorithmParamsError, match="a must be > 3"):
@@ -110,9 +110,9 @@ def test_an_agent_stays_put_for_a_world_running_another_algorithm() -> None:
 
 
 def test_an_agent_follows_the_parameters_each_snapshot_carries() -> None:
-    robot = Robot(load_algorithm("gathering"), flip_x=True)
-    loose = robot.look_compute(_snapshot("gathering", {"tolerance": 1e-3}))
-    strict = robot.look_compute(_snapshot("gathering", {"tolerance": 100.0}))
+    robot = Robot(load_algorithm("gathering"))
+    loose, _ = robot.look_compute(_snapshot("gathering", {"tolerance": 1e-3}))
+    strict, _ = robot.look_compute(_snapshot("gathering", {"tolerance": 100.0}))
     assert loose and not strict  # a tolerance above every step: the robot stays
 
 

@@ -17,6 +17,7 @@ from fatswarm.domain.wire import (
     PROTOCOL_VERSION,
     ProtocolError,
     check_swarm,
+    pack,
     robot_of_key,
 )
 from fatswarm.world.protocol import (
@@ -254,9 +255,14 @@ def test_snapshot_round_trips_and_checks_its_size() -> None:
     d = Snapshot.decode(Snapshot(2, 3, "uniform-circle", {"a": 4.0}, view, epoch=9).encode())
     assert np.array_equal(d.view, view)
     assert (d.round, d.n, d.algorithm, d.params, d.epoch) == (2, 3, "uniform-circle", {"a": 4.0}, 9)
-    wrong = Snapshot(2, 4, "uniform-circle", {"a": 4.0}, view).encode()  # n = 4 needs 3 rows
+    fewer = Snapshot(2, 4, "uniform-circle", {"a": 4.0}, view).encode()  # 2 of 3 seen: fine
+    assert Snapshot.decode(fewer).view.shape == (2, 2)
+    wrong = Snapshot(2, 2, "uniform-circle", {"a": 4.0}, view).encode()  # n = 2: 1 row at most
     with pytest.raises(ProtocolError, match="bytes"):
         Snapshot.decode(wrong)
+    body = {"round": 2, "n": 4, "algorithm": "u", "params": {}, "view": b"\x00" * 24, "epoch": 0}
+    with pytest.raises(ProtocolError, match="bytes"):  # not a whole number of (x, y) pairs
+        Snapshot.decode(pack("snapshot", body))
 
 
 def test_look_request_round_trips_and_refuses_garbage() -> None:

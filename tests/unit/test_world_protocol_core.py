@@ -8,7 +8,7 @@ from pathlib import Path as FsPath
 import numpy as np
 import pytest
 
-from fatswarm.domain.path import STAY, Line, Path
+from fatswarm.domain.path import STAY, Line, Path, mirror
 from fatswarm.world.core import WorldCore
 from fatswarm.world.faults import crash_after
 from fatswarm.world.journal import open_world, perform
@@ -72,8 +72,10 @@ def _ctl(world: WorldCore, data: bytes) -> ControlReply:
 
 
 def _move(world: WorldCore, key_robot: int, robot: int, round_no: int, path: Path) -> bool:
+    """Send `path` (world axes) as robot `robot` would: in its private frame (a mirror or none)."""
+    mine = mirror(path) if world.looks.frame(robot, round_no).mirror else path
     return move_bytes(
-        world, move_key(SWARM, key_robot), MoveSubmitted(robot, round_no, path).encode()
+        world, move_key(SWARM, key_robot), MoveSubmitted(robot, round_no, mine).encode()
     )
 
 

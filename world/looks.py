@@ -1,0 +1,110 @@
+"""What each robot is shown, and the lights it shows: the world's side of the robot model.
+
+The world alone decides what a robot sees (sight, obstruction: `world.sight`), in which frame
+(`fatswarm.domain.frames`), and which colours it reads (`--lights`); it keeps every robot's colour
+and the views it served when `--record-views` asks. Pure: the world core holds one of these.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Iterable, Mapping
+from typing import Any
+
+import numpy as np
+
+from fatswarm.domain.draws import view_order
+from fatswarm.domain.frames import Frame, draw_frame
+from fatswarm.domain.path import Path, Points
+from fatswarm.domain.robot_model import FrameChange, Lights, RobotModel
+from fatswarm.domain.seam import Configured
+from fatswarm.world.sight import seen
+
+
+class Looks:
+    """Builds each Look's view in the looker's frame; keeps the colours and the views served."""
+
+    def __init__(
+        self, model: RobotModel, setting: Configured, n: int, seed: int, record_views: bool
+    ) -> None:
+        self.model, self.n, self.seed = model, n, seed
+        self.palette = setting.colours
+        self.record_views = record_views
+        self._fixed: list[Frame] | None = (
+            [draw_frame(model, seed, r, 0) for r in range(n)]
+            if model.frame_change is FrameChange.FIXED
+            else None
+        )
+        # every robot's colour (palette index; the first at the start); none without lights
+        self.colours: list[int] | None = [0] * n if self.palette else None
+        self.views: dict[int, list[int]] = {}  # robot -> the ids it saw, of Looks not recorded yet
+
+    def frame(self, robot: int, look_round: int) -> Frame:
+        """Robot `robot`'s frame for its Look of round `look_round`."""
+        if self._fixed is not None:
+            return self._fixed[robot]
+        return draw_frame(self.model, self.seed, robot, look_round)
+
+    def view(
+        self, positions: Points, robot: int, look_round: int
+    ) -> tuple[Points, tuple[int, ...] | None, int | None]:
+        """Robot `robot`'s view in its frame, the colours it reads of those it sees (lined up
+        with the view; None if it reads none) and its own (None if it cannot read it)."""
+        if self.model.sees_all and self.colours is None and not self.record_views:
+            # the paper's model: every other robot (the fast path of every Look of every run)
+            others = np.concatenate((positions[:robot], positions[robot + 1 :]))
+            others -= positions[robot]
+            order = view_order(self.seed, look_round, robot, len(others))
+            return self.frame(robot, look_round).to_local(others[order]), None, None
+        ids = self.seen_by(positions, robot)
+        ids = ids[view_order(self.seed, look_round, robot, len(ids))]
+        if self.record_views:
+            self.views[robot] = sorted(int(i) for i in ids)
+        view = self.frame(robot, look_round).to_local(positions[ids] - positions[robot])
+        if self.colours is None:
+            return view, None, None
+        lights = self.model.lights
+        shown = None if lights is Lights.INTERNAL else tuple(self.colours[i] for i in ids)
+        own = None if lights is Lights.EXTERNAL else self.colours[robot]
+        return view, shown, own
+
+    def seen_by(self, positions: Points, robot: int) -> np.ndarray:
+        """The ids of the robots `robot` sees now, ascending."""
+        if self.model.sees_all:
+            return np.delete(np.arange(self.n), robot)
+        return seen(positions, robot, self.model.visibility, self.model.sight)
+
+    def to_world(self, robot: int, look_round: int, path: Path) -> Path:
+        """A path robot `robot` computed in the frame of its Look, in world axes."""
+        return self.frame(robot, look_round).path_to_world(path)
+
+    def show(self, colours: Mapping[int, int], skip: Collection[int] = ()) -> bool:
+        """The robots of `colours` show their new colour now (a move starts), but those of
+        `skip` (crashed: they act no more); True if any colour changed (the configuration did)."""
+        changed = False
+        if self.colours is not None:
+            for robot, colour in colours.items():
+                if robot not in skip and self.colours[robot] != colour:
+                    self.colours[robot], changed = colour, True
+        return changed
+
+    def restore(self, names: object) -> bool:
+        """Every robot's colour as a resumed record's line gives it (`lights`), if it does; True
+        if any changed."""
+        if self.colours is None or not isinstance(names, list) or len(names) != self.n:
+            return False
+        colours = [self.palette.index(c) if c in self.palette else 0 for c in names]
+        changed, self.colours = colours != self.colours, colours
+        return changed
+
+    def round_fields(self, lookers: Iterable[int]) -> dict[str, Any]:
+        """A record line's model fields: every robot's colour now (`lights`), and the views the
+        robots of `lookers` were served (`views`, with --record-views), which are then dropped."""
+        extra: dict[str, Any] = {}
+        if self.colours is not None:
+            extra["lights"] = [self.palette[c] for c in self.colours]
+        if self.record_views:
+            extra["views"] = {str(r): self.views.pop(r, []) for r in sorted(lookers)}
+        return extra
+
+
+__all__ = ["Looks"]
