@@ -87,6 +87,8 @@ class Gathering:
             "a robot stays when its step would be at most this (> 0)",
         ),
     )
+    # the centre of gravity and the nearest gap are the same in any frame: no agreement needed
+    frames: tuple[str, ...] = ("y-axis", "chirality", "disoriented")
 
     def make_params(self, n: int, values: Mapping[str, ParamValue]) -> GatheringParams:
         tol = values.get("tolerance", DEFAULT_TOLERANCE)

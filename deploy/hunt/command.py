@@ -17,7 +17,8 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Final
 
 from fatswarm.coordinator.schedule import NAMES
-from fatswarm.deploy.engine.config import check_non_rigid, input_errors
+from fatswarm.deploy.engine.config import check_lights, check_non_rigid, input_errors
+from fatswarm.deploy.flags import add_robot_model_arguments
 from fatswarm.deploy.hunt.report import make_progress, print_summary
 from fatswarm.deploy.hunt.search import (
     SEED_BOUND,
@@ -28,7 +29,14 @@ from fatswarm.deploy.hunt.search import (
 )
 from fatswarm.deploy.hunt.shrink import DEFAULT_SHRINK_RUNS
 from fatswarm.deploy.sweep.command import _jobs, _stop_on_signals
-from fatswarm.deploy.sweep.grid import SweepInputError, params_text, parse_ints, split_values
+from fatswarm.deploy.sweep.grid import (
+    SweepInputError,
+    model_suffix,
+    params_text,
+    parse_ints,
+    robot_models_of,
+    split_values,
+)
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
@@ -43,12 +51,13 @@ DEFAULT_FAILURES: Final = 5
 DEFAULT_OUT: Final = "hunt"
 DESCRIPTION: Final = (
     "Search for counterexamples to an algorithm: lock-step runs from random and adversarial "
-    "starts (near-symmetric, touching, lattices...), under the schedulers asked for, drawn from "
-    "a seed, on every core. A failure is a collision, a stall, a run past its round cap, or a "
-    "broken invariant (overlap; for uniform-circle, a robot leaving the smallest enclosing "
-    "circle in FormUCircle). Each failure is shrunk (fewer robots, a shorter schedule, simpler "
-    "coordinates) and saved in a folder of --out: start.json, schedule.json, the command that "
-    "replays it with `fatswarm run`, its record and summary.json. Docs: docs/hunt.md."
+    "starts (near-symmetric, touching, lattices...), under the schedulers and robot models "
+    "asked for, drawn from a seed, on every core. A failure is a collision, a stall, a run "
+    "past its round cap, or a broken invariant (overlap; for uniform-circle, a robot leaving "
+    "the smallest enclosing circle in FormUCircle). Each failure is shrunk (fewer robots, a "
+    "shorter schedule, simpler coordinates) and saved in a folder of --out: start.json, "
+    "schedule.json, the command that replays it with `fatswarm run`, its record and "
+    "summary.json. Docs: docs/hunt.md."
 )
 EPILOG: Final = (
     "Without a budget the hunt runs for 60 s. exit codes: 0 nothing found; 1 failures found (each "
@@ -76,6 +85,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="a parameter of the algorithm, the same in every run (repeatable)",
     )
     _add_search_arguments(p)
+    add_robot_model_arguments(p, lists=True)
     _add_budget_arguments(p)
     _add_hunt_run_arguments(p)
 
@@ -204,10 +214,20 @@ def build_hunt(args: argparse.Namespace) -> Hunt:
         raise HuntInputError(f"--crash must be at least 1, got {args.crash}")
     if args.max_rounds is not None and args.max_rounds < 1:
         raise HuntInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
+    robot_models = robot_models_of(args)
     algorithm = load_algorithm(args.algorithm)
     texts = params_text(algorithm, args.param)
     hunt = Hunt(
-        args.algorithm, texts, families, sizes, models, args.non_rigid, args.crash, args.max_rounds
+        args.algorithm,
+        texts,
+        families,
+        sizes,
+        models,
+        args.non_rigid,
+        args.crash,
+        args.max_rounds,
+        robot_models,
+        bool(getattr(args, "record_views", False)),
     )
     choices = hunt.choices()
     if not choices:
@@ -217,8 +237,13 @@ def build_hunt(args: argparse.Namespace) -> Hunt:
             f"no start family asked for builds an n of -n {asked} that is at "
             f"least {least}; widen -n"
         )
-    for n in sorted({n for _, ns in choices for n in ns}):  # an n the algorithm refuses: now
+    # an n the algorithm refuses, --lights for an algorithm without lights: now
+    settings = [
         Configured.of(algorithm, n, dict(texts))
+        for n in sorted({n for _, ns in choices for n in ns})
+    ]
+    for robot_model in robot_models:
+        check_lights(robot_model, settings[0])
     return hunt
 
 
@@ -320,6 +345,7 @@ def _plan_text(hunt: Hunt, budget: Budget, seed: int, jobs: int, out: str) -> st
         [
             f", non-rigid {hunt.non_rigid:g}" if hunt.non_rigid is not None else "",
             f", crash {hunt.crash}" if hunt.crash is not None else "",
+            _robot_models_text(hunt),
         ]
     )
     return (
@@ -328,6 +354,14 @@ def _plan_text(hunt: Hunt, budget: Budget, seed: int, jobs: int, out: str) -> st
         f"{' or '.join(limits)}, at most {budget.failures} failures into {out}/; "
         f"{jobs} worker processes"
     )
+
+
+def _robot_models_text(hunt: Hunt) -> str:
+    """The robot models of the plan line (`model_suffix`'s words), "" for the paper's alone."""
+    if all(m.is_paper for m in hunt.robot_models):
+        return ""
+    words = [model_suffix(m).lstrip("+") or "paper" for m in hunt.robot_models]
+    return f"; robot model{'s' if len(words) > 1 else ''} {', '.join(words)}"
 
 
 def _sizes(sizes: Sequence[int]) -> str:

@@ -12,6 +12,7 @@ from typing import Any
 from fatswarm import __version__
 from fatswarm.deploy.hunt.search import KINDS, Candidate, Case, Failure, Hunt, configure
 from fatswarm.deploy.hunt.shrink import Shrunk, case_decimals
+from fatswarm.deploy.sweep.grid import model_argv
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 
 
@@ -37,7 +38,8 @@ def replay_argv(
     hunt: Hunt, case: Case, folder: str = ".", record: str = "replay.jsonl"
 ) -> list[str]:
     """`fatswarm run --lockstep` repeating the case from the files in `folder`: the same seed
-    (it fixes the private frames too), cap and adversary. A file algorithm is named absolutely."""
+    (it fixes the private frames too), cap, adversary and robot model (its axes that are not the
+    paper's), and `--record-views` if the hunt has it. A file algorithm is named absolutely."""
 
     def inside(name: str) -> str:
         return name if folder == "." else os.path.join(folder, name)
@@ -56,6 +58,9 @@ def replay_argv(
         argv += ["--non-rigid", repr(hunt.non_rigid)]
     if hunt.crash is not None:
         argv += ["--crash", str(hunt.crash)]
+    argv += model_argv(case.robot_model)
+    if hunt.record_views:
+        argv.append("--record-views")
     return [*argv, "--no-dashboard", "--record", inside(record), "--force"]
 
 
@@ -81,7 +86,10 @@ def summary_data(
     original: Case,
     replayed: Failure | None,
 ) -> dict[str, Any]:
-    """summary.json: what failed, where the hunt drew it, how it was shrunk and how to replay."""
+    """summary.json: what failed, where the hunt drew it (its robot model as a record's header
+    says it, when not the paper's), how it was shrunk and how to replay."""
+    model = {} if candidate.robot_model.is_paper else {"model": candidate.robot_model.to_header()}
+    views = {"record_views": True} if hunt.record_views else {}
     return {
         "kind": shrunk.failure.kind,
         "detail": shrunk.failure.detail,
@@ -95,6 +103,7 @@ def summary_data(
             "family": candidate.family,
             "n": candidate.n,
             "scheduler": candidate.model,
+            **model,
             "seed": candidate.seed,
             "kind": found.kind,
             "detail": found.detail,
@@ -118,6 +127,7 @@ def summary_data(
             "params": dict(hunt.params),
             "non_rigid": hunt.non_rigid,
             "crash": hunt.crash,
+            **views,
         },
         "command": replay_command(hunt, shrunk.case),
         "fatswarm_version": __version__,

@@ -121,6 +121,8 @@ def replay_files(hunt: Hunt, case: Case, folder: str) -> Failure | None:
         max_rounds=case.max_rounds,
         non_rigid=hunt.non_rigid,
         crash=hunt.crash,
+        model=case.robot_model,
+        record_views=hunt.record_views,
         command=tuple(argv),
     )
     setup = config.resolve()
@@ -136,6 +138,7 @@ def replay_files(hunt: Hunt, case: Case, folder: str) -> Failure | None:
             stop_early=False,
             record=writer,
             header_extra=config.header_extra(networked=False, n=setup.params.n),
+            robot_model=setup.robot_model,
         )
     finally:
         writer.close()

@@ -14,6 +14,8 @@ from rich.console import Console
 from rich.table import Table
 
 from fatswarm.deploy.hunt.files import kind_counts
+from fatswarm.deploy.sweep.grid import model_label
+from fatswarm.domain.robot_model import RobotModel
 
 if TYPE_CHECKING:
     from fatswarm.deploy.hunt.pool import Budget, Saved, Tally
@@ -122,8 +124,9 @@ def make_progress(budget: Budget, *, quiet: bool) -> _Progress:
 
 def summary_table(saved: Sequence[Saved]) -> Table:
     """One line per saved failure: its folder (index and kind), where the hunt found it (family,
-    scheduler, n) and what shrinking left (n, script rounds, decimals), the runs shrinking took,
-    and whether the saved files replay to the same kind."""
+    scheduler and robot model as a sweep labels them, n) and what shrinking left (n, script
+    rounds, decimals), the runs shrinking took, and whether the saved files replay to the same
+    kind."""
     table = Table(box=box.SIMPLE_HEAD, pad_edge=False, show_edge=False)
     table.add_column("failure (folder)", no_wrap=True)
     table.add_column("found in")  # the one column that wraps on a narrow terminal
@@ -135,9 +138,12 @@ def summary_table(saved: Sequence[Saved]) -> Table:
         found, small = s["found"], s["shrunk"]
         rounds = "-" if small["script_rounds"] is None else str(small["script_rounds"])
         replays = s["replayed"] is not None and s["replayed"]["kind"] == s["kind"]
+        label = model_label(
+            found["scheduler"], None, None, RobotModel.from_header(found.get("model"))
+        )
         table.add_row(
             os.path.basename(item.folder),
-            f"{found['family']} {found['scheduler']}",
+            f"{found['family']} {label}",
             f"{found['n']}->{small['n']}",
             rounds,
             f"{found['decimals']}->{small['decimals']}",

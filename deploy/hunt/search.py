@@ -27,6 +27,7 @@ from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
 from fatswarm.domain.seam import Configured
 from fatswarm.world.physics import (
     InvalidConfigurationError,
@@ -88,7 +89,8 @@ def family_sizes(family: str, sizes: Sequence[int]) -> tuple[int, ...]:
 
 @dataclass(frozen=True, slots=True)
 class Hunt:
-    """What every run of a hunt shares: the algorithm, its parameters and the adversary."""
+    """What every run of a hunt shares: the algorithm, its parameters and the adversary; and what
+    its candidates are drawn from."""
 
     algorithm: str = DEFAULT_ALGORITHM  # a registered name, module:attribute or file.py:attribute
     params: ParamText = ()  # canonical `--param` texts; the others take their defaults
@@ -98,6 +100,8 @@ class Hunt:
     non_rigid: float | None = None  # the adversary's delta (None: rigid moves)
     crash: int | None = None  # robots the adversary crashes (None: none)
     max_rounds: int | None = None  # None: the scheduler's default cap for each n
+    robot_models: tuple[RobotModel, ...] = (PAPER_MODEL,)  # robot models to draw from
+    record_views: bool = False  # a saved failure's records name what each looker saw
 
     def choices(self) -> list[tuple[str, tuple[int, ...]]]:
         """(family, the n it may be drawn with) for every family that has one: sizes the family
@@ -121,18 +125,21 @@ class Hunt:
 
 @dataclass(frozen=True, slots=True)
 class Candidate:
-    """One drawn run: the `index`-th of the hunt, its start family, n, model and run seed."""
+    """One drawn run: the `index`-th of the hunt, its start family, n, model (scheduler), run
+    seed and robot model."""
 
     index: int
     family: str
     n: int
     model: str
     seed: int
+    robot_model: RobotModel = PAPER_MODEL
 
 
 def draw_candidate(hunt: Hunt, hunt_seed: int, index: int) -> Candidate:
     """The `index`-th candidate of the hunt seeded `hunt_seed`: a function of both alone, so the
-    hunt is reproducible whichever worker runs which candidate."""
+    hunt is reproducible whichever worker runs which candidate. The robot model is drawn last,
+    and only from more than one: a hunt of the paper's model draws what it always drew."""
     choices = hunt.choices()
     if not choices or not hunt.models:
         raise HuntInputError("no start family builds any n of the range asked for; widen -n")
@@ -140,7 +147,14 @@ def draw_candidate(hunt: Hunt, hunt_seed: int, index: int) -> Candidate:
     family, sizes = choices[int(rng.integers(len(choices)))]
     n = sizes[int(rng.integers(len(sizes)))]
     model = hunt.models[int(rng.integers(len(hunt.models)))]
-    return Candidate(index, family, n, model, int(rng.integers(SEED_BOUND)))
+    seed = int(rng.integers(SEED_BOUND))
+    robot_models = hunt.robot_models
+    robot_model = (
+        robot_models[int(rng.integers(len(robot_models)))]
+        if len(robot_models) > 1
+        else robot_models[0]
+    )
+    return Candidate(index, family, n, model, seed, robot_model)
 
 
 # -- one run and its failure -------------------------------------------------------------------
@@ -160,9 +174,9 @@ class Failure:
 class Case:
     """A run replayed exactly: the start, the active sets of the first rounds (`after` the
     script: "fsync" or "repeat"), the run seed (the private frames, view orders and the
-    adversary's draws), the round cap, and the model it was found under (for its cap). A run
-    under a model without semi-synchronous rounds (async) has no script (`rounds` None): it is
-    replayed under that model and the same seed."""
+    adversary's draws), the round cap, the model it was found under (for its cap) and its robot
+    model. A run under a model without semi-synchronous rounds (async) has no script (`rounds`
+    None): it is replayed under that model and the same seed."""
 
     positions: tuple[tuple[float, float], ...]
     rounds: tuple[tuple[int, ...], ...] | None  # None: under `model` itself (not scriptable)
@@ -170,6 +184,7 @@ class Case:
     seed: int
     max_rounds: int
     model: str
+    robot_model: RobotModel = PAPER_MODEL  # sight, obstruction, lights, frames
 
     @property
     def n(self) -> int:
@@ -267,11 +282,15 @@ def sec_invariant(setting: Configured) -> InvariantCheck:
     return check
 
 
-def invariants(hunt: Hunt, setting: Configured, model: str) -> list[InvariantCheck]:
+def invariants(
+    hunt: Hunt, setting: Configured, model: str, robot_model: RobotModel = PAPER_MODEL
+) -> list[InvariantCheck]:
     """The checks a run is held to besides physics: the SEC promise for the paper's algorithm,
-    with rigid moves under a semi-synchronous model (the paper's; a cut move may stop a detour
-    outside the SEC, which G9 checks only at the path's end)."""
-    if setting.name == PAPER and hunt.non_rigid is None and model in SSYNC_ROUNDS:
+    with rigid moves under a semi-synchronous model and the paper's robot model (a cut move may
+    stop a detour outside the SEC, which G9 checks only at the path's end; the paper promises
+    nothing to robots that see less, or share no Y axis)."""
+    paper_run = hunt.non_rigid is None and robot_model.is_paper
+    if setting.name == PAPER and paper_run and model in SSYNC_ROUNDS:
         return [sec_invariant(setting)]
     return []
 
@@ -296,8 +315,9 @@ def run_case(
     stop_early: bool = True,
     record: Any = None,
     header_extra: dict[str, Any] | None = None,
+    robot_model: RobotModel = PAPER_MODEL,
 ) -> Outcome:
-    """Run one start under `scheduler` in lock step and classify it.
+    """Run one start under `scheduler` and `robot_model` in lock step and classify it.
 
     The first collision or broken invariant (overlap, the SEC promise) is the failure, at its
     round (a collision first within one round: an invariant after a stopped move means
@@ -305,7 +325,8 @@ def run_case(
     is the failure; a run formed with no collision is none. A start or parameters the algorithm
     or the supported range refuse is `refused`, not a failure; once running, an overlap physics
     raises is an INVARIANT failure, anything else the run raises an ERROR failure. `record`: a
-    journal to write the run to (`world.record.RecordWriter`), with `header_extra` in its header.
+    journal to write the run to (`world.record.RecordWriter`), with `header_extra` in its header
+    (and, with the hunt's `record_views`, what each looker saw).
     """
     # the whole lock-step engine: the CLI imports this module (through deploy.hunt.command)
     # to build its parser
@@ -316,7 +337,7 @@ def run_case(
         setting.check_start(validate_configuration(positions))
     except input_errors() as exc:
         return Outcome(None, refused=f"{type(exc).__name__}: {exc}")
-    watch = _RoundWatch(invariants(hunt, setting, model), positions, stop_early)
+    watch = _RoundWatch(invariants(hunt, setting, model, robot_model), positions, stop_early)
     try:
         result = run_lockstep(
             positions,
@@ -330,6 +351,8 @@ def run_case(
             crash=hunt.crash,
             record=record,
             header_extra=header_extra,
+            robot_model=robot_model,
+            record_views=hunt.record_views and record is not None,
         )
     except _Found as stop:
         return Outcome(stop.failure, tuple(watch.active), rounds=len(watch.active))
@@ -405,8 +428,9 @@ def _ended_failure(status: str, rounds: int) -> Failure | None:
 
 
 def run_candidate(hunt: Hunt, candidate: Candidate) -> tuple[Outcome, Case | None]:
-    """Run a drawn candidate under its model; with a failure, also the Case that replays it: its
-    start and its rounds' active sets as a script (then fsync), its seed and its cap."""
+    """Run a drawn candidate under its models; with a failure, also the Case that replays it: its
+    start and its rounds' active sets as a script (then fsync), its seed, its cap and its robot
+    model."""
     try:
         positions = candidate_start(hunt, candidate)
         scheduler = make_scheduler(candidate.model, candidate.n, candidate.seed)
@@ -414,7 +438,13 @@ def run_candidate(hunt: Hunt, candidate: Candidate) -> tuple[Outcome, Case | Non
         return Outcome(None, refused=f"{type(exc).__name__}: {exc}"), None
     cap = hunt.cap(candidate.n, candidate.model)
     outcome = run_case(
-        hunt, positions, scheduler, candidate.model, seed=candidate.seed, max_rounds=cap
+        hunt,
+        positions,
+        scheduler,
+        candidate.model,
+        seed=candidate.seed,
+        max_rounds=cap,
+        robot_model=candidate.robot_model,
     )
     if outcome.failure is None:
         return outcome, None
@@ -428,6 +458,7 @@ def run_candidate(hunt: Hunt, candidate: Candidate) -> tuple[Outcome, Case | Non
         candidate.seed,
         cap,
         candidate.model,
+        candidate.robot_model,
     )
     return outcome, case
 

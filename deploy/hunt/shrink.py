@@ -42,8 +42,8 @@ def replay(
     record: Any = None,
     max_rounds: int | None = None,
 ) -> Outcome:
-    """Run a Case under its scripted schedule (or its own model, when it has no script), up to
-    its cap or the lower `max_rounds`."""
+    """Run a Case under its scripted schedule (or its own model, when it has no script) and its
+    robot model, up to its cap or the lower `max_rounds`."""
     if case.rounds is None:
         scheduler: Any = make_scheduler(case.model, case.n, case.seed)
         model = case.model
@@ -59,6 +59,7 @@ def replay(
         max_rounds=cap,
         stop_early=stop_early,
         record=record,
+        robot_model=case.robot_model,
     )
 
 

@@ -20,8 +20,8 @@ from typing import TYPE_CHECKING, Final
 
 from fatswarm import __version__
 from fatswarm.coordinator.schedule import NAMES
-from fatswarm.deploy.engine.config import DEFAULT_START, input_errors
-from fatswarm.deploy.flags import check_writable
+from fatswarm.deploy.engine.config import DEFAULT_START, check_lights, input_errors
+from fatswarm.deploy.flags import add_robot_model_arguments, check_writable
 from fatswarm.deploy.scenarios.starts import KINDS
 from fatswarm.deploy.sweep.figures import draw_figures
 from fatswarm.deploy.sweep.grid import (
@@ -34,6 +34,7 @@ from fatswarm.deploy.sweep.grid import (
     parse_ints,
     parse_non_rigid,
     parse_seeds,
+    robot_models_of,
     split_values,
     sweep_schedulers,
 )
@@ -62,7 +63,8 @@ MISSING_SCIPY: Final = (
 )
 DESCRIPTION: Final = (
     "Run a grid of lock-step runs (algorithm x n x start kind x scheduler x non-rigid delta x "
-    "crash count x seeds) on every core, appending one CSV row per run (outcome, cost, the "
+    "robot model (visibility x sight x lights x frames x frame change) x crash count x seeds) "
+    "on every core, appending one CSV row per run (outcome, cost, the "
     "distance's ratio to the optimal-assignment bound, the virtual time of async runs, wall "
     "time, the configuration and the `fatswarm run --lockstep` command that repeats it). "
     "Resumable: interrupted (Ctrl-C), the same command goes on where it stopped, as rows already "
@@ -96,6 +98,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="R",
         help="round cap of every run (default: the scheduler's, as fatswarm run)",
     )
+    add_robot_model_arguments(p, lists=True)
     _add_output_arguments(p)
 
 
@@ -181,8 +184,8 @@ def _add_output_arguments(p: argparse.ArgumentParser) -> None:
         "--summary-md",
         metavar="PATH",
         help="write the summary over every n as a Markdown table to PATH (replaced "
-        "if it exists), a line per algorithm, scheduler, non-rigid delta and crash "
-        "count",
+        "if it exists), a line per algorithm, scheduler, non-rigid delta, crash "
+        "count and robot model",
     )
     p.add_argument(
         "-q",
@@ -203,15 +206,31 @@ def build_grid(args: argparse.Namespace) -> Grid:
         raise SweepInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
     non_rigids = parse_non_rigid(args.non_rigid)
     crashes = parse_crash(args.crash)
+    models = robot_models_of(args)
+    if getattr(args, "record_views", False):
+        raise SweepInputError(
+            "--record-views: a sweep keeps no records; add it to a row's command to see "
+            "what each robot saw"
+        )
     algorithms = []
     for ref in split_values(args.algorithm) or (DEFAULT_ALGORITHM,):
         algorithm = load_algorithm(ref)
         texts = params_text(algorithm, args.param)
-        for n in sizes:  # refuse an n the algorithm refuses now, not once per run
-            Configured.of(algorithm, n, dict(texts))
+        # refuse an n the algorithm refuses now, not once per run; and --lights without lights
+        settings = [Configured.of(algorithm, n, dict(texts)) for n in sizes]
+        for model in models:
+            check_lights(model, settings[0])
         algorithms.append((ref, texts))
     return Grid(
-        tuple(algorithms), sizes, starts, schedulers, seeds, args.max_rounds, non_rigids, crashes
+        tuple(algorithms),
+        sizes,
+        starts,
+        schedulers,
+        seeds,
+        args.max_rounds,
+        non_rigids,
+        crashes,
+        models,
     )
 
 
@@ -249,7 +268,7 @@ def main(args: argparse.Namespace) -> int:
         jobs = _jobs(args.jobs)
         _check_plot(args.plot)
         _check_summary_md(args.summary_md)
-        table = RunTable.open(args.out)
+        table = RunTable.open(args.out, models=grid.has_models)
     except refused as exc:
         return _fail(str(exc))
     try:

@@ -6,6 +6,8 @@ configuration and key. The CSV schema is `deploy/sweep/table.py`, the summary of
 
 from __future__ import annotations
 
+import argparse
+import enum
 import itertools
 import math
 import re
@@ -16,6 +18,15 @@ from typing import Any, Final
 
 from fatswarm.coordinator.schedule import NAMES, ScheduleError, make_scheduler
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
+from fatswarm.domain.robot_model import (
+    MODEL_KEYS,
+    PAPER_MODEL,
+    FrameChange,
+    Frames,
+    Lights,
+    RobotModel,
+    Visibility,
+)
 from fatswarm.domain.seam import Algorithm, ParamValue, parse_assignments, resolve_values
 
 MAX_RUNS: Final = 1_000_000  # a larger grid is a typo (`--seeds 0..10000000`), not a sweep
@@ -36,9 +47,22 @@ KEY_COLUMNS: Final = (
     "max_rounds",
     "non_rigid",
     "crash",
+    *MODEL_KEYS,  # visibility, sight, lights, frames, frame_change: the robot model
 )
+# The robot model's key columns, blank for an axis at the paper's value: a table of the paper's
+# model alone has none of them (the table's schema, `deploy/sweep/table.py`).
+MODEL_COLUMNS: Final = MODEL_KEYS
 RIGID: Final = "rigid"  # --non-rigid's word for rigid moves (the default)
 NO_CRASH: Final = ("0", "none")  # --crash's words for no crash (the default)
+UNLIMITED: Final = "unlimited"  # --sight's word for unlimited sight (the default)
+# The robot model's axes of words (--sight is of distances), by key; the first value of each is
+# the paper's.
+MODEL_CHOICES: Final[Mapping[str, type[enum.StrEnum]]] = {
+    "visibility": Visibility,
+    "lights": Lights,
+    "frames": Frames,
+    "frame_change": FrameChange,
+}
 
 
 class SweepInputError(ValueError):
@@ -136,15 +160,123 @@ def parse_crash(texts: Iterable[str]) -> tuple[int | None, ...]:
     return tuple(out) or (None,)
 
 
-def model_label(scheduler: str, non_rigid: float | None, crash: int | None) -> str:
-    """The model a run ran under, in one word: the scheduler, `+nrDELTA` for non-rigid moves and
-    `+crashF` for crash faults (`fsync`, `ssync+nr0.1`, `async+crash2`, `fsync+nr1+crash1`)."""
+def model_flag(key: str) -> str:
+    """The flag of a robot-model key: `--frame-change` for frame_change."""
+    return "--" + key.replace("_", "-")
+
+
+def parse_sight(texts: Iterable[str]) -> tuple[float | None, ...]:
+    """`--sight`: distances (finite, > 0, robot radii) and/or `unlimited` (None), in the order
+    given, without repeats (`6` and `6.0` are one); default (None,), unlimited sight only."""
+    out: dict[float | None, None] = {}
+    for item in split_values(texts):
+        if item.lower() == UNLIMITED:
+            out.setdefault(None, None)
+            continue
+        try:
+            distance = float(item)
+        except ValueError:
+            distance = math.nan
+        if not (math.isfinite(distance) and distance > 0):
+            raise SweepInputError(
+                f"--sight takes distances > 0 (robot radii) or {UNLIMITED}, got {item!r}"
+            )
+        out.setdefault(distance, None)
+    return tuple(out) or (None,)
+
+
+def parse_choices(texts: Iterable[str], key: str) -> tuple[str, ...]:
+    """A robot-model axis of words (`MODEL_CHOICES`: `--visibility`, `--lights`, `--frames`,
+    `--frame-change`): its values in the order given, without repeats; default the paper's."""
+    choices = [member.value for member in MODEL_CHOICES[key]]
+    values = split_values(texts)
+    for value in values:
+        if value not in choices:
+            raise SweepInputError(
+                f"{model_flag(key)} takes {', '.join(choices)} (a comma list), got {value!r}"
+            )
+    return values or (choices[0],)
+
+
+def parse_robot_models(given: Mapping[str, Iterable[str] | None]) -> tuple[RobotModel, ...]:
+    """The robot models of the flags' texts by key (MODEL_KEYS; a key missing or None: the
+    paper's value): every combination, visibility slowest, then sight, lights, frames and frame
+    change, each axis in the order given. One model, the paper's, when no axis is given."""
+    axes: list[Sequence[Any]] = [
+        parse_sight(given.get(key) or ())
+        if key == "sight"
+        else parse_choices(given.get(key) or (), key)
+        for key in MODEL_KEYS
+    ]
+    return tuple(RobotModel.of(*values) for values in itertools.product(*axes))
+
+
+def robot_models_of(args: argparse.Namespace) -> tuple[RobotModel, ...]:
+    """The robot models of `add_robot_model_arguments(p, lists=True)`'s flags
+    (`parse_robot_models`); raises SweepInputError."""
+    return parse_robot_models({key: getattr(args, key, None) for key in MODEL_KEYS})
+
+
+def model_suffix(robot_model: RobotModel) -> str:
+    """The robot model's axes that are not the paper's, each as `+WORD`: the visibility
+    (`+opaque`, `+opaque-centres`), `+sightV`, `+lights-internal` / `+lights-external`, the
+    frames (`+chirality`, `+disoriented`) and `+every-look`; "" for the paper's model."""
+    m, paper = robot_model, PAPER_MODEL
+    words = [
+        str(m.visibility) if m.visibility != paper.visibility else "",
+        "" if m.sight is None else f"sight{m.sight:g}",
+        f"lights-{m.lights}" if m.lights != paper.lights else "",
+        str(m.frames) if m.frames != paper.frames else "",
+        str(m.frame_change) if m.frame_change != paper.frame_change else "",
+    ]
+    return "".join(f"+{word}" for word in words if word)
+
+
+def model_label(
+    scheduler: str,
+    non_rigid: float | None,
+    crash: int | None,
+    robot_model: RobotModel = PAPER_MODEL,
+) -> str:
+    """The model a run ran under, in one word: the scheduler, `+nrDELTA` for non-rigid moves,
+    `+crashF` for crash faults, then the robot model's axes that are not the paper's
+    (`model_suffix`): `fsync`, `ssync+nr0.1`, `async+crash2`, `fsync+nr1+crash1`,
+    `fsync+opaque+sight5+chirality`."""
     label = scheduler
     if non_rigid is not None:
         label += f"+nr{non_rigid:g}"
     if crash is not None:
         label += f"+crash{crash}"
-    return label
+    return label + model_suffix(robot_model)
+
+
+def model_cells(robot_model: RobotModel) -> dict[str, str]:
+    """The robot model's columns (MODEL_COLUMNS) of a run: each axis as its flag takes it back
+    (sight by repr), blank where it is the paper's (so a run of the paper's model has the key of
+    a row of a table without these columns)."""
+    paper = PAPER_MODEL.to_header()
+    return {
+        key: "" if value == paper[key] else value_text(value) if key == "sight" else str(value)
+        for key, value in robot_model.to_header().items()
+    }
+
+
+def model_of_cells(cells: Mapping[str, str]) -> RobotModel:
+    """The robot model of a row's MODEL_COLUMNS cells (`model_cells` read back; blank or missing:
+    the paper's value); raises ModelError or ValueError for a cell no model writes."""
+    given: dict[str, Any] = {key: cells.get(key, "") for key in MODEL_KEYS}
+    if given["sight"]:
+        given["sight"] = float(given["sight"])
+    return RobotModel.of(**{key: value for key, value in given.items() if value})
+
+
+def model_argv(robot_model: RobotModel) -> list[str]:
+    """The `fatswarm run` flags of the robot model's axes that are not the paper's."""
+    argv: list[str] = []
+    for key, text in model_cells(robot_model).items():
+        if text:
+            argv += [model_flag(key), text]
+    return argv
 
 
 def sweep_schedulers() -> tuple[str, ...]:
@@ -195,11 +327,13 @@ class RunSpec:
     max_rounds: int | None = None  # None: the scheduler's default cap
     non_rigid: float | None = None  # the non-rigid adversary's delta; None: rigid moves
     crash: int | None = None  # f robots crashed for good (0 < f < n); None: no crash
+    robot_model: RobotModel = PAPER_MODEL  # sight, obstruction, lights, frames (docs/model.md)
 
     @property
     def model(self) -> str:
-        """The model label (`model_label`): the scheduler, non-rigid moves and crash faults."""
-        return model_label(self.scheduler, self.non_rigid, self.crash)
+        """The model label (`model_label`): the scheduler, non-rigid moves, crash faults and the
+        robot model."""
+        return model_label(self.scheduler, self.non_rigid, self.crash, self.robot_model)
 
     def key(self) -> Key:
         """The row's KEY_COLUMNS, as the CSV holds them: equal keys are the same run."""
@@ -217,6 +351,7 @@ class RunSpec:
             "max_rounds": "" if self.max_rounds is None else str(self.max_rounds),
             "non_rigid": non_rigid_cell(self.non_rigid),
             "crash": crash_cell(self.crash),
+            **model_cells(self.robot_model),
         }
 
     def command(self) -> str:
@@ -244,6 +379,7 @@ class RunSpec:
             argv += ["--non-rigid", value_text(self.non_rigid)]  # repr: reads back exactly
         if self.crash is not None:
             argv += ["--crash", str(self.crash)]
+        argv += model_argv(self.robot_model)
         return shlex.join(argv)
 
 
@@ -259,10 +395,10 @@ def crash_cell(f: int | None) -> str:
 
 @dataclass(frozen=True, slots=True)
 class Grid:
-    """algorithms x starts x schedulers x non-rigid deltas x crash counts x sizes x seeds, each
-    algorithm with its parameters. A crash count f needs f < n robots: the (n, f) cells with
-    f >= n are left out of the grid (`left_out` counts their runs), not refused, so that one
-    `-n 3..12 --crash 0,1,2` asks for every cell that exists."""
+    """algorithms x starts x schedulers x non-rigid deltas x robot models x crash counts x sizes x
+    seeds, each algorithm with its parameters. A crash count f needs f < n robots: the (n, f)
+    cells with f >= n are left out of the grid (`left_out` counts their runs), not refused, so
+    that one `-n 3..12 --crash 0,1,2` asks for every cell that exists."""
 
     algorithms: tuple[tuple[str, ParamText], ...]  # (reference, canonical --param texts)
     sizes: tuple[int, ...]
@@ -272,6 +408,7 @@ class Grid:
     max_rounds: int | None = None
     non_rigids: tuple[float | None, ...] = (None,)  # None: rigid moves
     crashes: tuple[int | None, ...] = (None,)  # None: no crash
+    models: tuple[RobotModel, ...] = (PAPER_MODEL,)  # `parse_robot_models`
 
     def __post_init__(self) -> None:
         if self.size > MAX_RUNS:
@@ -291,6 +428,12 @@ class Grid:
         return self._others() * len(self._pairs())
 
     @property
+    def has_models(self) -> bool:
+        """Whether a run of the grid is under a robot model other than the paper's (its table
+        needs the MODEL_COLUMNS)."""
+        return any(not m.is_paper for m in self.models)
+
+    @property
     def left_out(self) -> int:
         """The runs left out of the grid because their crash count f is >= their n."""
         return self._others() * len(self.sizes) * len(self.crashes) - self.size
@@ -298,7 +441,14 @@ class Grid:
     def _others(self) -> int:
         return math.prod(
             len(axis)
-            for axis in (self.algorithms, self.starts, self.schedulers, self.non_rigids, self.seeds)
+            for axis in (
+                self.algorithms,
+                self.starts,
+                self.schedulers,
+                self.non_rigids,
+                self.models,
+                self.seeds,
+            )
         )
 
     def _pairs(self) -> list[tuple[int | None, int]]:
@@ -308,33 +458,47 @@ class Grid:
     def runs(self) -> list[RunSpec]:
         """Every run, seed by seed: a sweep stopped early has every other cell equally deep."""
         return [
-            RunSpec(algorithm, n, start, scheduler, seed, params, self.max_rounds, delta, f)
-            for seed, (algorithm, params), start, scheduler, delta, (f, n) in itertools.product(
-                self.seeds,
-                self.algorithms,
-                self.starts,
-                self.schedulers,
-                self.non_rigids,
-                self._pairs(),
+            RunSpec(algorithm, n, start, scheduler, seed, params, self.max_rounds, delta, f, model)
+            for seed, (algorithm, params), start, scheduler, delta, model, (f, n) in (
+                itertools.product(
+                    self.seeds,
+                    self.algorithms,
+                    self.starts,
+                    self.schedulers,
+                    self.non_rigids,
+                    self.models,
+                    self._pairs(),
+                )
             )
         ]
 
 
 __all__ = [
     "KEY_COLUMNS",
+    "MODEL_COLUMNS",
+    "UNLIMITED",
     "Grid",
     "Key",
     "ParamText",
     "RunSpec",
     "SweepInputError",
     "crash_cell",
+    "model_argv",
+    "model_cells",
+    "model_flag",
     "model_label",
+    "model_of_cells",
+    "model_suffix",
     "non_rigid_cell",
     "params_text",
+    "parse_choices",
     "parse_crash",
     "parse_ints",
     "parse_non_rigid",
+    "parse_robot_models",
     "parse_seeds",
+    "parse_sight",
+    "robot_models_of",
     "split_values",
     "sweep_schedulers",
     "value_text",

@@ -19,16 +19,17 @@ from fatswarm.deploy.engine.config import RunConfig, RunSetup
 from fatswarm.deploy.engine.lockstep import default_max_rounds, run_lockstep
 from fatswarm.deploy.sweep.grid import Key, RunSpec, SweepInputError, values_text
 from fatswarm.deploy.sweep.table import (
+    COLUMNS,
     ERROR,
     RunFigures,
     TableError,
     assignment_bound,
-    header_error,
     header_line,
     kept_length,
     parse_table,
     row_key,
     row_line,
+    table_columns,
 )
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.seam import resolve_values
@@ -86,6 +87,7 @@ def _resolved(spec: RunSpec) -> RunSetup:
         max_rounds=spec.max_rounds,
         non_rigid=spec.non_rigid,
         crash=spec.crash,
+        model=spec.robot_model,
     ).resolve()
 
 
@@ -111,6 +113,7 @@ def run_spec(spec: RunSpec) -> RunFigures:
             algorithm_ref=setup.algorithm_ref,
             non_rigid=setup.non_rigid,
             crash=setup.crash,
+            robot_model=setup.robot_model,
         )
         wall = time.perf_counter() - t0
         try:
@@ -247,19 +250,30 @@ class RunTable:
 
     Opening it cuts a torn last row (a crash mid-write) and reads the rows there. Each row is
     appended with one write and no buffer: a Ctrl-C, which this process only acts on between
-    Python steps, cannot leave half a row.
+    Python steps, cannot leave half a row. Its `columns` are its header's (`table.SCHEMAS`): a
+    table of the paper's robot model alone has no model columns.
     """
 
-    def __init__(self, path: str, fd: int, rows: list[dict[str, str]], cut: int) -> None:
+    def __init__(
+        self,
+        path: str,
+        fd: int,
+        rows: list[dict[str, str]],
+        cut: int,
+        columns: tuple[str, ...] = COLUMNS,
+    ) -> None:
         self.path = path
         self._fd = fd
         self.rows = rows  # the rows there when opened, then every row appended
         self.cut = cut  # bytes of a torn last row cut on opening (0: none)
+        self.columns = columns
 
     @staticmethod
-    def open(path: str) -> RunTable:
-        """Open (or create) the table at `path`; raises SweepInputError (TableError for a file
-        that is not a sweep table of this schema, or one another sweep holds)."""
+    def open(path: str, *, models: bool = False) -> RunTable:
+        """Open (or create) the table at `path`, for a grid with robot `models` other than the
+        paper's (`Grid.has_models`: a new table gets the model columns) or without; raises
+        SweepInputError (TableError for a file that is not a sweep table, a table without the
+        model columns when `models`, or one another sweep holds)."""
         _check_output(path)
         try:
             fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_APPEND | os.O_CLOEXEC, 0o644)
@@ -268,28 +282,27 @@ class RunTable:
         try:
             _lock(fd, path)
             data = _read_all(fd)
-            header = header_line().encode()
-            if not (data.startswith(header) or header.startswith(data)):  # ours, or torn header
-                first = data.split(b"\n", 1)[0].decode("utf-8", errors="replace")
-                raise header_error(first, path)
+            columns = table_columns(data, path, models=models)  # ours, or a torn header
             keep = kept_length(data)
             if keep < len(data):
                 os.ftruncate(fd, keep)
             rows = parse_table(data[:keep].decode("utf-8", errors="replace"), path)
             if keep == 0:
-                _write_all(fd, header)
+                _write_all(fd, header_line(columns).encode())
         except BaseException:
             os.close(fd)
             raise
-        return RunTable(path, fd, rows, len(data) - keep)
+        return RunTable(path, fd, rows, len(data) - keep, columns)
 
     def keys(self) -> set[Key]:
         return {row_key(row) for row in self.rows}
 
     def append(self, row: dict[str, str]) -> None:
         """Add one row at the end of the file; raises TableWriteError (a full disk...)."""
+        dropped = [c for c in COLUMNS if c not in self.columns and row.get(c)]
+        assert not dropped, f"a row with {dropped} in a table without those columns"
         try:
-            _write_all(self._fd, row_line(row).encode())
+            _write_all(self._fd, row_line(row, self.columns).encode())
         except OSError as exc:
             raise TableWriteError(f"cannot write {self.path}: {exc.strerror or exc}") from None
         self.rows.append(row)

@@ -7,21 +7,35 @@ import itertools
 import statistics
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Final
 
-from fatswarm.deploy.sweep.grid import RIGID, Grid, crash_cell, model_label, non_rigid_cell
+from fatswarm.deploy.sweep.grid import (
+    MODEL_COLUMNS,
+    RIGID,
+    Grid,
+    crash_cell,
+    model_cells,
+    model_label,
+    model_of_cells,
+    model_suffix,
+    non_rigid_cell,
+)
 from fatswarm.deploy.sweep.table import ERROR
 from fatswarm.domain.outcome import Status
+from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
 
 Quartiles = tuple[float, float, float]  # (25th percentile, median, 75th percentile)
-# What a summary groups rows by: (algorithm, start, scheduler, non_rigid, crash, n) as the CSV
-# writes them; n is None in a group over every n (the Markdown table).
-GroupKey = tuple[str, str, str, str, str, int | None]
+ModelKey = tuple[str, ...]  # a row's MODEL_COLUMNS cells
+# What a summary groups rows by: (algorithm, start, scheduler, non_rigid, crash, the robot model's
+# cells, n) as the CSV writes them; n is None in a group over every n (the Markdown table).
+GroupKey = tuple[str, str, str, str, str, ModelKey, int | None]
+PAPER: Final = "paper"  # the robot-model column of the Markdown table for the paper's model
 
 
 @dataclass(frozen=True, slots=True)
 class Cell:
-    """The runs of one (algorithm, start, scheduler, non-rigid delta, crash count, n), summed up;
-    `n` is None for a cell over every n (whose sizes are `sizes`)."""
+    """The runs of one (algorithm, start, scheduler, non-rigid delta, crash count, robot model, n),
+    summed up; `n` is None for a cell over every n (whose sizes are `sizes`)."""
 
     algorithm: str
     start: str
@@ -40,6 +54,7 @@ class Cell:
     crash: str = ""  # the crash column: f, "" for no crash
     time: Quartiles | None = None  # virtual time of the formed runs (async models only)
     sizes: tuple[int, ...] = ()  # the n of its runs, in the grid's order
+    robot_model: RobotModel = PAPER_MODEL  # sight, obstruction, lights, frames
 
     @property
     def model(self) -> str:
@@ -48,6 +63,7 @@ class Cell:
             self.scheduler,
             float(self.non_rigid) if self.non_rigid else None,
             int(self.crash) if self.crash else None,
+            self.robot_model,
         )
 
 
@@ -71,22 +87,31 @@ def group_key(row: Mapping[str, str], *, by_n: bool) -> GroupKey:
         row["scheduler"],
         row["non_rigid"],
         row["crash"],
+        tuple(row[c] for c in MODEL_COLUMNS),
         int(row["n"]) if by_n else None,
     )
 
 
 def summarize(rows: Iterable[Mapping[str, str]], grid: Grid, *, by_n: bool = True) -> list[Cell]:
-    """One Cell per (algorithm, start, scheduler, non-rigid delta, crash count, n) of `grid` with
-    rows, in the grid's order; with `by_n` false, one per the same less n, over every n."""
+    """One Cell per (algorithm, start, scheduler, non-rigid delta, robot model, crash count, n)
+    of `grid` with rows, in the grid's order; with `by_n` false, one per the same less n, over
+    every n."""
     groups: dict[GroupKey, list[Mapping[str, str]]] = {}
     for row in rows:
         groups.setdefault(group_key(row, by_n=by_n), []).append(row)
     sizes: tuple[int | None, ...] = grid.sizes if by_n else (None,)
     cells = []
-    for (algorithm, _), start, scheduler, delta, f, n in itertools.product(
-        grid.algorithms, grid.starts, grid.schedulers, grid.non_rigids, grid.crashes, sizes
+    for (algorithm, _), start, scheduler, delta, model, f, n in itertools.product(
+        grid.algorithms,
+        grid.starts,
+        grid.schedulers,
+        grid.non_rigids,
+        grid.models,
+        grid.crashes,
+        sizes,
     ):
-        key = (algorithm, start, scheduler, non_rigid_cell(delta), crash_cell(f), n)
+        model_key = tuple(model_cells(model).values())
+        key = (algorithm, start, scheduler, non_rigid_cell(delta), crash_cell(f), model_key, n)
         group = groups.get(key)
         if group:
             ns = {int(r["n"]) for r in group}
@@ -95,7 +120,7 @@ def summarize(rows: Iterable[Mapping[str, str]], grid: Grid, *, by_n: bool = Tru
 
 
 def _cell(key: GroupKey, group: Sequence[Mapping[str, str]], sizes: tuple[int, ...]) -> Cell:
-    algorithm, start, scheduler, non_rigid, crash, n = key
+    algorithm, start, scheduler, non_rigid, crash, model_key, n = key
     status = [r["status"] for r in group]
     formed = [r for r in group if r["status"] == Status.FORMED]
     return Cell(
@@ -116,6 +141,7 @@ def _cell(key: GroupKey, group: Sequence[Mapping[str, str]], sizes: tuple[int, .
         crash=crash,
         time=quartiles([float(r["time"]) for r in formed if r["time"]]),
         sizes=sizes,
+        robot_model=model_of_cells(dict(zip(MODEL_COLUMNS, model_key, strict=True))),
     )
 
 
@@ -158,15 +184,18 @@ def markdown_table(cells: Sequence[Cell]) -> str:
     by_n=False)`: the configuration (a start column only when there are several), the sizes, the
     counts of runs, formed, collided (with at least one collision), stalled, max_rounds (stopped
     at the round cap) and errors, then the median rounds (cycles under an async model) and the
-    median virtual time (async models; `-` for round models) of the formed runs. Text only, so
-    that a results page can include it as it is."""
+    median virtual time (async models; `-` for round models) of the formed runs. A robot-model
+    column (`model_suffix`'s words, `paper` for the paper's model) only when some cell has
+    another model. Text only, so that a results page can include it as it is."""
     several_start = len({c.start for c in cells}) > 1
+    models = any(not c.robot_model.is_paper for c in cells)
     head = [
         "algorithm",
         *(["start"] if several_start else []),
         "scheduler",
         "non-rigid",
         "crash",
+        *(["robot model"] if models else []),
         "n",
         "runs",
         "formed",
@@ -182,19 +211,26 @@ def markdown_table(cells: Sequence[Cell]) -> str:
         "|" + "|".join("---" if i < head.index("n") else "--:" for i in range(len(head))) + "|",
     ]
     for c in cells:
-        row = [
-            c.algorithm,
-            *([c.start] if several_start else []),
-            c.scheduler,
-            f"{float(c.non_rigid):g}" if c.non_rigid else RIGID,
-            c.crash or "none",
-            ",".join(map(str, c.sizes)) if c.n is None else str(c.n),
-            *map(str, (c.runs, c.formed, c.collided, c.stalled, c.capped, c.errors)),
-            "-" if c.rounds is None else f"{c.rounds[1]:g}",
-            "-" if c.time is None else f"{c.time[1]:.1f}",
-        ]
+        row = _markdown_row(c, start=several_start, model=models)
         lines.append("| " + " | ".join(cell.replace("|", "\\|") for cell in row) + " |")
     return "\n".join(lines) + "\n"
+
+
+def _markdown_row(c: Cell, *, start: bool, model: bool) -> list[str]:
+    """The cells of one line of `markdown_table`, with the start and robot-model columns when
+    asked for."""
+    return [
+        c.algorithm,
+        *([c.start] if start else []),
+        c.scheduler,
+        f"{float(c.non_rigid):g}" if c.non_rigid else RIGID,
+        c.crash or "none",
+        *([model_suffix(c.robot_model).lstrip("+") or PAPER] if model else []),
+        ",".join(map(str, c.sizes)) if c.n is None else str(c.n),
+        *map(str, (c.runs, c.formed, c.collided, c.stalled, c.capped, c.errors)),
+        "-" if c.rounds is None else f"{c.rounds[1]:g}",
+        "-" if c.time is None else f"{c.time[1]:.1f}",
+    ]
 
 
 def is_clean(row: Mapping[str, str]) -> bool:
@@ -205,6 +241,7 @@ def is_clean(row: Mapping[str, str]) -> bool:
 __all__ = [
     "Cell",
     "GroupKey",
+    "ModelKey",
     "Quartiles",
     "cell_label",
     "curves",

@@ -13,7 +13,7 @@ from typing import Final
 
 import numpy as np
 
-from fatswarm.deploy.sweep.grid import KEY_COLUMNS, Key, RunSpec, SweepInputError
+from fatswarm.deploy.sweep.grid import KEY_COLUMNS, MODEL_COLUMNS, Key, RunSpec, SweepInputError
 from fatswarm.domain.path import Points
 
 ERROR: Final = "error"  # the status of a run that raised instead of ending (the `error` column)
@@ -43,9 +43,16 @@ CONTEXT_COLUMNS: Final = (
     "command",
 )
 COLUMNS: Final = KEY_COLUMNS + RESULT_COLUMNS + CONTEXT_COLUMNS
+# The columns of a table of the paper's robot model alone: COLUMNS less the MODEL_COLUMNS. A grid
+# without a robot-model axis writes (and resumes) this table, as sweeps did before those axes; a
+# row read from it has the MODEL_COLUMNS blank (the paper's model).
+PLAIN_COLUMNS: Final = tuple(c for c in COLUMNS if c not in MODEL_COLUMNS)
 # The header of the tables written before the non_rigid, crash and time columns (fatswarm 0.1
 # sweeps): refused with a line of its own, as appending rows of another shape would mix schemas.
-PRE_MODEL_COLUMNS: Final = tuple(c for c in COLUMNS if c not in ("non_rigid", "crash", "time"))
+PRE_MODEL_COLUMNS: Final = tuple(
+    c for c in PLAIN_COLUMNS if c not in ("non_rigid", "crash", "time")
+)
+SCHEMAS: Final = (COLUMNS, PLAIN_COLUMNS)  # the tables a sweep appends to
 
 
 class TableError(SweepInputError):
@@ -142,12 +149,32 @@ def format_line(cells: Sequence[str]) -> str:
     return out.getvalue()
 
 
-def header_line() -> str:
-    return format_line(COLUMNS)
+def header_line(columns: Sequence[str] = COLUMNS) -> str:
+    return format_line(columns)
 
 
-def row_line(row: Mapping[str, str]) -> str:
-    return format_line([row.get(column, "") for column in COLUMNS])
+def row_line(row: Mapping[str, str], columns: Sequence[str] = COLUMNS) -> str:
+    return format_line([row.get(column, "") for column in columns])
+
+
+def table_columns(data: bytes, name: str, *, models: bool) -> tuple[str, ...]:
+    """The columns (SCHEMAS) of the table file `name` whose bytes are `data`: its header's, or,
+    for a new, empty or torn-header file, those of a grid with robot `models` (COLUMNS) or
+    without (PLAIN_COLUMNS). Raises TableError for a file that is no sweep table, or a table
+    without the model columns when `models` are asked for."""
+    for columns in SCHEMAS:
+        if data.startswith(header_line(columns).encode()):
+            if models and columns is PLAIN_COLUMNS:
+                raise TableError(
+                    f"{name} has no robot-model columns (a sweep of the paper's model only); "
+                    "a grid with --visibility, --sight, --lights, --frames or --frame-change "
+                    "needs a new --out"
+                )
+            return columns
+    if any(header_line(columns).encode().startswith(data) for columns in SCHEMAS):
+        return COLUMNS if models else PLAIN_COLUMNS  # a header is (re)written
+    first = data.split(b"\n", 1)[0].decode("utf-8", errors="replace")
+    raise header_error(first, name)
 
 
 def kept_length(data: bytes) -> int:
@@ -157,23 +184,26 @@ def kept_length(data: bytes) -> int:
 
 
 def parse_table(text: str, name: str) -> list[dict[str, str]]:
-    """The rows of a table's text (whole lines only); raises TableError if its header is not this
-    schema's, or a row is malformed."""
+    """The rows of a table's text (whole lines only), each with every one of COLUMNS (those its
+    schema lacks blank); raises TableError if its header is not one of SCHEMAS, or a row is
+    malformed."""
     lines = text.split("\n")  # rows are single lines (one_line); not splitlines: \r, \x1c...
     if lines[-1] == "":
         lines.pop()
     if not lines:
         return []
-    if lines[0] != header_line().rstrip("\n"):
+    columns = next((c for c in SCHEMAS if lines[0] == header_line(c).rstrip("\n")), None)
+    if columns is None:
         raise header_error(lines[0], name)
+    blank = dict.fromkeys(COLUMNS, "")
     rows: list[dict[str, str]] = []
     for number, cells in enumerate(csv.reader(lines[1:]), start=2):
-        if len(cells) != len(COLUMNS):
+        if len(cells) != len(columns):
             raise TableError(
                 f"{name} line {number}: {len(cells)} cells where the header has "
-                f"{len(COLUMNS)}; mend or remove that line"
+                f"{len(columns)}; mend or remove that line"
             )
-        rows.append(dict(zip(COLUMNS, cells, strict=True)))
+        rows.append({**blank, **dict(zip(columns, cells, strict=True))})
     return rows
 
 
@@ -200,6 +230,7 @@ __all__ = [
     "COLUMNS",
     "CONTEXT_COLUMNS",
     "ERROR",
+    "PLAIN_COLUMNS",
     "PRE_MODEL_COLUMNS",
     "RESULT_COLUMNS",
     "RunFigures",
@@ -215,4 +246,5 @@ __all__ = [
     "parse_table",
     "row_key",
     "row_line",
+    "table_columns",
 ]

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from fatswarm.deploy import cli
-from fatswarm.deploy.sweep.table import COLUMNS, header_line
+from fatswarm.deploy.sweep.table import PLAIN_COLUMNS, header_line
 
 pytestmark = pytest.mark.integration
 ROOT = Path(__file__).resolve().parents[2]
@@ -58,7 +58,7 @@ def test_a_small_sweep_writes_one_row_per_run_and_a_second_one_adds_none(
     assert sweep(argv) == 0
     summary = capsys.readouterr().out
     rows = rows_of(out)
-    assert list(rows[0]) == list(COLUMNS)
+    assert list(rows[0]) == list(PLAIN_COLUMNS)  # no robot-model axis: no model columns
     assert sorted((r["n"], r["scheduler"], r["seed"]) for r in rows) == sorted(
         (n, s, seed) for n in ("4", "5") for s in ("fsync", "ssync") for seed in ("0", "1")
     )
@@ -274,4 +274,4 @@ def test_a_worker_that_dies_ends_the_sweep_with_one_line(
     )
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "a worker process died" in err, err
-    assert out.read_text() == header_line()
+    assert out.read_text() == header_line(PLAIN_COLUMNS)

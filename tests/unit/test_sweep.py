@@ -33,6 +33,7 @@ from fatswarm.deploy.sweep.summary import markdown_table, success_rates, summari
 from fatswarm.deploy.sweep.table import (
     COLUMNS,
     ERROR,
+    PLAIN_COLUMNS,
     PRE_MODEL_COLUMNS,
     RunFigures,
     TableError,
@@ -188,7 +189,9 @@ def test_parameters_are_canonical_so_one_run_is_one_key() -> None:
 
 def test_key_cells_are_the_first_columns_and_the_command_repeats_the_run() -> None:
     spec = RunSpec("gathering", 6, "dense", "ssync", 3, (("tolerance", "0.01"),), 50)
-    assert spec.key() == ("gathering", "6", "dense", "ssync", "3", "tolerance=0.01", "50", "", "")
+    assert spec.key() == (
+        ("gathering", "6", "dense", "ssync", "3", "tolerance=0.01", "50", "", "") + ("",) * 5
+    )
     assert COLUMNS[: len(KEY_COLUMNS)] == KEY_COLUMNS
     assert shlex.split(spec.command()) == [
         "fatswarm",
@@ -321,6 +324,9 @@ def test_a_torn_header_is_written_again(tmp_path: Path) -> None:
     out = tmp_path / "runs.csv"
     out.write_text(header_line()[:10])
     RunTable.open(str(out)).close()
+    assert out.read_text() == header_line(PLAIN_COLUMNS)  # a grid of the paper's model alone
+    out.write_text(header_line()[:10])
+    RunTable.open(str(out), models=True).close()
     assert out.read_text() == header_line()
 
 
