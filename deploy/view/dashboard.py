@@ -27,6 +27,16 @@ from rich.text import Text
 
 from fatswarm.agent import geometry
 from fatswarm.deploy.view.canvas import Canvas, Mode, Viewport
+from fatswarm.deploy.view.lights import (
+    FOCUS_STYLE,
+    LIGHT_HEX,
+    SIGHT_STYLE,
+    UNSEEN_STYLE,
+    Focus,
+    focus_legend,
+    light_number,
+    palette_legend,
+)
 from fatswarm.domain import tolerance
 from fatswarm.domain.outcome import ENDED, Status
 from fatswarm.domain.path import Points
@@ -38,20 +48,28 @@ if TYPE_CHECKING:
 
 TARGET_RADIUS = "target radius"  # the figure that draws the paper's target points (see `Frame`)
 
-# Canvas layers: where several meet in one cell, the highest number wins.
-LAYER_SEC, LAYER_TARGET_CIRCLE, LAYER_TRAIL, LAYER_TARGET = 1, 2, 3, 4
-LAYER_ROBOT, LAYER_ACTIVE, LAYER_STOPPED = 5, 6, 7
+# Canvas layers: where several meet in one cell, the highest number wins. A robot in a colour
+# (lights) is drawn on LAYER_LIGHT + k, k its colour's number (`lights.light_number`).
+LAYER_SEC, LAYER_TARGET_CIRCLE, LAYER_SIGHT, LAYER_TRAIL, LAYER_TARGET = 1, 2, 3, 4, 5
+LAYER_UNSEEN, LAYER_ROBOT, LAYER_ACTIVE, LAYER_STOPPED = 6, 7, 8, 9
+LAYER_LIGHT = 10
+LAYER_FOCUS = LAYER_LIGHT + len(LIGHT_HEX)
 LAYER_STYLES: dict[int, str] = {
     LAYER_SEC: "grey50",
     LAYER_TARGET_CIRCLE: "blue",
+    LAYER_SIGHT: SIGHT_STYLE,
     LAYER_TRAIL: "magenta",
     LAYER_TARGET: "bold yellow",
+    LAYER_UNSEEN: UNSEEN_STYLE,
     LAYER_ROBOT: "green",
     LAYER_ACTIVE: "bold cyan",
     LAYER_STOPPED: "bold red",
+    **{LAYER_LIGHT + k: colour for k, colour in enumerate(LIGHT_HEX)},
+    LAYER_FOCUS: FOCUS_STYLE,
 }
 _LAYER_STYLES = {layer: Style.parse(style) for layer, style in LAYER_STYLES.items()}
-LEGEND = "[green]idle[/] [bold cyan]active[/] [bold red]stopped[/] [magenta]path[/] [grey50]SEC[/]"
+LEGEND_ROBOTS = "[green]idle[/] [bold cyan]active[/] [bold red]stopped[/] "  # without lights
+LEGEND = LEGEND_ROBOTS + "[magenta]path[/] [grey50]SEC[/]"
 LEGEND_TARGETS = " [blue]circle r[/] [bold yellow]targets[/]"
 ROBOT_RADIUS = 1.0  # robots are unit discs
 SIDE_WIDTH = 46  # columns of the counters and agents column
@@ -90,6 +108,9 @@ class Frame:
     max_rounds: int | None = None
     last_round: int | None = None  # replay: the record's last round
     trails: tuple[Points, ...] = ()  # replay: sampled world paths (k, 2) of this round's moves
+    lights: tuple[str, ...] = ()  # replay: each robot's colour name (empty: none known)
+    palette: tuple[str, ...] = ()  # replay: the record's colour names, in the order drawn
+    focus: Focus | None = None  # replay --robot: what the chosen robot saw in this round
     source: str = "live"
 
     def __post_init__(self) -> None:
@@ -180,11 +201,32 @@ def build_canvas(
         canvas.polyline(trail, LAYER_TRAIL)
     for x, y in derived.targets:
         canvas.marker(float(x), float(y), LAYER_TARGET)
-    active, stopped = set(frame.active), set(frame.stopped)
-    for i, (x, y) in enumerate(pts):
-        layer = LAYER_STOPPED if i in stopped else LAYER_ACTIVE if i in active else LAYER_ROBOT
+    for (x, y), layer in zip(pts, robot_layers(frame, len(pts)), strict=True):
         canvas.disc(float(x), float(y), ROBOT_RADIUS, layer)
+    focus = frame.focus
+    if focus is not None and focus.looked and focus.origin is not None and focus.sight:
+        canvas.circle(*focus.origin, focus.sight, LAYER_SIGHT)
+    if focus is not None and 0 <= focus.robot < len(pts):
+        x, y = pts[focus.robot]
+        canvas.circle(float(x), float(y), 1.6 * ROBOT_RADIUS, LAYER_FOCUS)
     return canvas
+
+
+def robot_layers(frame: Frame, count: int) -> list[int]:
+    """The layer of each robot's disc: its colour when the frame has lights, else stopped, active
+    or idle; the unseen layer when the chosen robot Looked this round and did not see it."""
+    active, stopped = set(frame.active), set(frame.stopped)
+    layers = []
+    for i in range(count):
+        colour = light_number(frame.palette, frame.lights[i] if i < len(frame.lights) else None)
+        if frame.focus is not None and frame.focus.dims(i):
+            layers.append(LAYER_UNSEEN)
+        elif colour is not None:
+            layers.append(LAYER_LIGHT + colour)
+        else:
+            idle = LAYER_ACTIVE if i in active else LAYER_ROBOT
+            layers.append(LAYER_STOPPED if i in stopped else idle)
+    return layers
 
 
 class CanvasView:
@@ -274,6 +316,8 @@ def counters_table(frame: Frame, derived: Derived) -> Table:
     counts = f"{len(frame.active)} active  {len(frame.moved)} moved  {len(frame.stopped)} stopped"
     grid.add_row("this round", counts)
     grid.add_row("collisions", str(frame.collisions_total))
+    if frame.focus is not None:
+        grid.add_row(f"robot {frame.focus.robot}", frame.focus.line())
     grid.add_row("rounds/s", _fmt_rate(frame.rounds_per_second))
     if frame.alive is not None:
         grid.add_row("alive", f"{sum(frame.alive)} / {frame.n}")
@@ -349,7 +393,12 @@ def render_frame(frame: Frame, *, footer: str | None = None, mode: Mode = "brail
             size=3,
         ),
     )
-    legend = Text.from_markup(LEGEND + (LEGEND_TARGETS if len(derived.targets) else ""))
+    legend = Text.from_markup(LEGEND)
+    if frame.lights:  # the colours instead of idle, active and stopped
+        legend = palette_legend(frame.palette) + Text.from_markup(LEGEND[len(LEGEND_ROBOTS) :])
+    legend += focus_legend(frame.focus)
+    if len(derived.targets):
+        legend += Text.from_markup(LEGEND_TARGETS)
     canvas = Panel(
         CanvasView(frame, derived, mode), title="swarm, to scale", subtitle=legend, padding=0
     )

@@ -9,10 +9,19 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from typing import Any
 
 import numpy as np
 
 from fatswarm.deploy.view.dashboard import algorithm_text, enclosing_circle
+from fatswarm.deploy.view.lights import (
+    LookScene,
+    light_hex,
+    lights_of,
+    look_scene,
+    record_palette,
+)
+from fatswarm.deploy.view.summary import model_notes
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.path import Points, sample, truncate
 from fatswarm.world.record import RecordFormatError, RunRecord, move_origin
@@ -20,6 +29,7 @@ from fatswarm.world.record_read import read_record, torn_end_note
 
 FORMATS = (".svg", ".png")
 TRAIL_STEP = 0.1  # world units between samples of a drawn path
+NO_LIGHT = "#808080"  # a robot whose colour the record does not say (the start)
 MISSING_MATPLOTLIB = (
     "fatswarm plot needs matplotlib: install it with `pip install 'fatswarm[plot]'` "
     "(or `pip install matplotlib`)"
@@ -55,10 +65,37 @@ def default_title(record: RunRecord, rc: float) -> str:
     header = record.header
     status = record.result.status if record.result is not None else "unfinished"
     rounds = record.rounds[-1].round if record.rounds else 0
+    model, _ = model_notes(header.extra)
     return (
         f"{algorithm_text(header.algorithm, header.params)}, n={header.n}, {header.scheduler}, "
         f"seed {header.seed}: {status} after {rounds} rounds (final SEC r_c={rc:.3f})"
+        + ("" if model is None else f"\nmodel: {model}")
     )
+
+
+def lit_routes(record: RunRecord, palette: tuple[str, ...]) -> list[tuple[Points, str]]:
+    """Each move of the run as a finely sampled (k, 2) polyline and the colour it is drawn in: the
+    light its robot showed during it (the round line's `lights`), NO_LIGHT where none is known."""
+    n = record.header.n
+    here = np.array(record.header.initial, dtype=np.float64)
+    out: list[tuple[Points, str]] = []
+    for rr in record.rounds:
+        lights = lights_of(rr, n)
+        for move in rr.moves:
+            start = move_origin(rr, move.robot, here)
+            covered = truncate(start, move.path, move.traveled)
+            if covered:
+                name = lights[move.robot] if lights is not None else None
+                out.append(
+                    (sample(start, covered, TRAIL_STEP), light_hex(palette, name) or NO_LIGHT)
+                )
+        here = np.array(rr.positions, dtype=np.float64)
+    return out
+
+
+def final_lights(record: RunRecord) -> tuple[str, ...] | None:
+    """Every robot's colour at the end: the last round line's lights (None if it has none)."""
+    return lights_of(record.rounds[-1], record.header.n) if record.rounds else None
 
 
 def draw(record: RunRecord, out: str, title: str | None = None) -> None:
@@ -75,13 +112,19 @@ def draw(record: RunRecord, out: str, title: str | None = None) -> None:
     end = final_positions(record)
     fig, ax = plt.subplots(figsize=(7, 7))
     ax.set_aspect("equal")
-    cmap = plt.get_cmap("tab20")
-    for i, route in enumerate(trajectories(record)):
-        color = cmap(i % 20)
-        ax.plot(route[:, 0], route[:, 1], "-", color=color, linewidth=0.8, alpha=0.9)
-        start = header.initial[i]
-        ax.add_patch(Circle((start[0], start[1]), 1.0, fill=False, ls="--", ec=color, lw=0.7))
-        ax.add_patch(Circle((end[i, 0], end[i, 1]), 1.0, fc=color, ec="black", lw=0.5, alpha=0.6))
+    palette = record_palette(record)
+    if palette:
+        _draw_lit(ax, record, end, palette)
+    else:
+        cmap = plt.get_cmap("tab20")
+        for i, route in enumerate(trajectories(record)):
+            color = cmap(i % 20)
+            ax.plot(route[:, 0], route[:, 1], "-", color=color, linewidth=0.8, alpha=0.9)
+            start = header.initial[i]
+            ax.add_patch(Circle((start[0], start[1]), 1.0, fill=False, ls="--", ec=color, lw=0.7))
+            ax.add_patch(
+                Circle((end[i, 0], end[i, 1]), 1.0, fc=color, ec="black", lw=0.5, alpha=0.6)
+            )
     (cx, cy), rc = enclosing_circle(end)
     ax.add_patch(Circle((cx, cy), rc, fill=False, ec="black", lw=1.0, label="final SEC"))
     ax.plot([cx], [cy], "k+", markersize=6)
@@ -98,11 +141,99 @@ def draw(record: RunRecord, out: str, title: str | None = None) -> None:
     plt.close(fig)
 
 
+def _draw_lit(ax: Any, record: RunRecord, end: Points, palette: tuple[str, ...]) -> None:
+    """Moves in the colour each robot showed during them, start discs dashed grey (no line
+    records the start's colours), end discs in the final colours, a legend naming the colours."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.patches import Circle, Patch
+
+    routes = lit_routes(record, palette)
+    if routes:
+        lines = LineCollection([r for r, _ in routes], colors=[c for _, c in routes], lw=0.9)
+        ax.add_collection(lines)
+    lights = final_lights(record)
+    for i, (x, y) in enumerate(record.header.initial):
+        ax.add_patch(Circle((x, y), 1.0, fill=False, ls="--", ec=NO_LIGHT, lw=0.7))
+        name = lights[i] if lights is not None else None
+        fc = light_hex(palette, name) or NO_LIGHT
+        ax.add_patch(Circle((end[i, 0], end[i, 1]), 1.0, fc=fc, ec="black", lw=0.5, alpha=0.6))
+    handles = [Patch(color=light_hex(palette, name), label=name) for name in palette]
+    handles.append(Patch(fill=False, ls="--", ec=NO_LIGHT, label="start"))
+    ax.legend(handles=handles, fontsize=7, loc="best", title="lights", title_fontsize=7)
+
+
+def draw_look(record: RunRecord, scene: LookScene, out: str, title: str | None = None) -> None:
+    """Render one Look to `out`: every robot where it was then, the looker ringed with its sight
+    circle and the move it made, the robots it saw in their colours, the others pale."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Circle, Patch
+
+    palette, robot = record_palette(record), scene.robot
+    fig, ax = plt.subplots(figsize=(7, 7))
+    ax.set_aspect("equal")
+    for i, (x, y) in enumerate(scene.positions):
+        name = scene.lights[i] if scene.lights is not None else None
+        fc = light_hex(palette, name) or NO_LIGHT
+        if i != robot and i not in scene.seen:
+            ax.add_patch(Circle((x, y), 1.0, fc="#e8e8e8", ec="#b0b0b0", lw=0.5, ls=":"))
+        else:
+            ax.add_patch(Circle((x, y), 1.0, fc=fc, ec="black", lw=2.0 if i == robot else 0.5))
+        ax.annotate(str(i), (x, y), ha="center", va="center", fontsize=8)
+    x0, y0 = scene.positions[robot]
+    reach = scene.sight or 0.0
+    if scene.sight is not None:
+        ax.add_patch(Circle((x0, y0), scene.sight, fill=False, ls="--", ec="black", lw=0.8))
+    if scene.move is not None:
+        origin, path, traveled = scene.move
+        route = sample(origin, truncate(origin, path, traveled), TRAIL_STEP)
+        ax.plot(route[:, 0], route[:, 1], "-", color="black", lw=1.2)
+    lo = np.minimum(scene.positions.min(axis=0), [x0 - reach, y0 - reach]) - 1.5
+    hi = np.maximum(scene.positions.max(axis=0), [x0 + reach, y0 + reach]) + 1.5
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    shown = sorted({n for n in scene.lights or () if n in palette})
+    handles: list[Any] = [Patch(color=light_hex(palette, n), label=n) for n in shown]
+    handles.append(Patch(fc="#e8e8e8", ec="#b0b0b0", ls=":", label="not seen"))
+    if scene.sight is not None:
+        handles.append(Line2D([], [], ls="--", color="black", lw=0.8, label="sight"))
+    ax.legend(handles=handles, fontsize=7, loc="best")
+    ax.set_title(title or look_title(record, scene), fontsize=9)
+    ax.set_xlabel("x (robot radii)")
+    ax.set_ylabel("y (robot radii)")
+    ax.grid(True, lw=0.3, alpha=0.5)
+    fig.tight_layout()
+    fig.savefig(out)
+    plt.close(fig)
+
+
+def look_title(record: RunRecord, scene: LookScene) -> str:
+    """`robot 2's Look in round 5: saw 3 of 5 (--visibility opaque --sight 6)` and the run."""
+    header = record.header
+    model = model_notes(header.extra)[0] or "paper model"
+    return (
+        f"robot {scene.robot}'s Look in round {scene.round}: saw {len(scene.seen)} of "
+        f"{header.n - 1} ({model})\n{algorithm_text(header.algorithm, header.params)}, "
+        f"n={header.n}, {header.scheduler}, seed {header.seed}"
+    )
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm plot`."""
     p.add_argument("record", metavar="RECORD", help="run record (JSON Lines)")
     p.add_argument("out", metavar="OUT", help="picture to write: OUT.svg or OUT.png")
     p.add_argument("--title", help="title instead of the run's parameters")
+    p.add_argument(
+        "--robot",
+        type=int,
+        metavar="I",
+        help="with --round K: draw robot I's Look in round K instead (what it saw, where all "
+        "robots were then, its move; needs a record made with --record-views)",
+    )
+    p.add_argument("--round", type=int, metavar="K", help="the round of --robot's Look")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -124,9 +255,29 @@ def main(args: argparse.Namespace) -> int:
     except ImportError:
         print(MISSING_MATPLOTLIB, file=sys.stderr)
         return ExitCode.BAD_INPUT
+    scene = _look_of(args, record)
+    if isinstance(scene, str):
+        print(f"fatswarm plot: {scene}", file=sys.stderr)
+        return ExitCode.BAD_INPUT
     try:
-        draw(record, args.out, args.title)
+        if scene is None:
+            draw(record, args.out, args.title)
+        else:
+            draw_look(record, scene, args.out, args.title)
     except OSError as exc:
         print(f"fatswarm plot: cannot write {args.out}: {exc.strerror or exc}", file=sys.stderr)
         return ExitCode.BAD_INPUT
     return ExitCode.OK
+
+
+def _look_of(args: argparse.Namespace, record: RunRecord) -> LookScene | str | None:
+    """The Look that --robot and --round ask for (None: neither is given), or why it cannot be
+    drawn."""
+    robot, round_no = getattr(args, "robot", None), getattr(args, "round", None)
+    if robot is None and round_no is None:
+        return None
+    if robot is None or round_no is None:
+        return "--robot I and --round K go together: robot I's Look in round K"
+    if not 0 <= robot < record.header.n:
+        return f"--robot must be a robot number between 0 and {record.header.n - 1}, got {robot}"
+    return look_scene(record, robot, round_no)

@@ -21,6 +21,14 @@ from typing import Any
 from rich.console import Console
 
 from fatswarm.deploy.view.dashboard import Frame, print_frame, render_frame, save_svg
+from fatswarm.deploy.view.lights import (
+    NO_VIEWS,
+    focus_per_round,
+    has_views,
+    lights_of,
+    record_palette,
+)
+from fatswarm.deploy.view.summary import model_notes
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.path import Points, sample, truncate
 from fatswarm.domain.registry import load_algorithm
@@ -43,13 +51,14 @@ def build_frames(record: RunRecord, source: str = "replay") -> list[Frame]:
     collisions_total = 0
     positions = run.initial
     last_round = record.rounds[-1].round if record.rounds else 0
+    palette = record_palette(record)
 
     def frame(**fields: Any) -> Frame:
         return Frame(
             n=n, algorithm=run.algorithm, params=dict(run.params), scheduler=run.scheduler,
             seed=run.seed, source=source,
             last_active=tuple(last_active), last_path_length=tuple(last_length),
-            last_round=last_round, **fields,
+            last_round=last_round, palette=palette, **fields,
         )  # fmt: skip
 
     frames = [frame(round=0, positions=positions)]
@@ -75,11 +84,20 @@ def build_frames(record: RunRecord, source: str = "replay") -> list[Frame]:
                 stopped=tuple(sorted({c.robot for c in rr.collisions})),
                 collisions_total=collisions_total,
                 trails=tuple(trails),
+                lights=lights_of(rr, n) or (),
             )
         )
     if record.result is not None:
         frames[-1] = replace(frames[-1], status=record.result.status)
     return frames
+
+
+def focus_on(frames: Sequence[Frame], record: RunRecord, robot: int) -> list[Frame]:
+    """The frames of `build_frames` with what `robot` saw in each round (`--robot`)."""
+    return [
+        replace(frame, focus=focus)
+        for frame, focus in zip(frames, focus_per_round(record, robot), strict=True)
+    ]
 
 
 def figures_of(header: Header, warn: Callable[[str], None]) -> FiguresOf | None:
@@ -135,10 +153,11 @@ class Player:
     playing: bool = True
     speed: float = 10.0  # rounds per second while playing
     quit: bool = False
+    marks: tuple[int, ...] = ()  # frames `[` and `]` jump between: the chosen robot's Looks
     _carry: float = 0.0  # fraction of a round accumulated between ticks
 
     def key(self, key: str) -> None:
-        """Apply one key: space, left/right, up/down, +/-, home/end, g/G, q."""
+        """Apply one key: space, left/right, up/down, +/-, home/end, g/G, [/], q."""
         if key in ("q", "Q", "esc"):
             self.quit = True
         elif key == " ":
@@ -157,6 +176,17 @@ class Player:
             self.index = 0
         elif key in ("end", "G"):
             self.index = self.count - 1
+        elif key in ("[", "]"):
+            self._jump(forward=key == "]")
+
+    def _jump(self, forward: bool) -> None:
+        """Pause at the next (previous) marked frame, if there is one."""
+        after = [m for m in self.marks if m > self.index]
+        before = [m for m in self.marks if m < self.index]
+        if forward and after:
+            self.playing, self.index = False, after[0]
+        elif not forward and before:
+            self.playing, self.index = False, before[-1]
 
     def tick(self, seconds: float) -> None:
         """Advance playback by `seconds` of wall time; stops at the last frame."""
@@ -175,7 +205,7 @@ class Player:
         state = "playing" if self.playing else "paused"
         return (
             f"[{state} x{self.speed:g} rounds/s]  space play/pause  ←/→ step  "
-            "+/- speed  g/G first/last  q quit"
+            "+/- speed  g/G first/last  " + ("[/] its Looks  " if self.marks else "") + "q quit"
         )
 
 
@@ -283,6 +313,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="print one frame (round K, else the last) instead of playing",
     )
+    p.add_argument(
+        "--robot",
+        type=int,
+        metavar="I",
+        help="highlight robot I and, in each round it Looked, the robots it saw (others dimmed; "
+        "needs a record made with --record-views); keys [ and ] jump between its Looks",
+    )
 
 
 def main(args: argparse.Namespace) -> int:
@@ -304,6 +341,10 @@ def main(args: argparse.Namespace) -> int:
     if refused is not None:
         print(f"fatswarm replay: {refused}", file=sys.stderr)
         return ExitCode.BAD_INPUT
+    for line in _notes(args, record):
+        warn(line)
+    if args.robot is not None:
+        frames = focus_on(frames, record, args.robot)
     index = len(frames) - 1
     if args.round is not None:
         index = next(i for i, f in enumerate(frames) if f.round >= args.round)
@@ -317,12 +358,26 @@ def main(args: argparse.Namespace) -> int:
     return ExitCode.OK
 
 
+def _notes(args: argparse.Namespace, record: RunRecord) -> list[str]:
+    """Lines to say before the record shows: its robot model when it is not the paper's, the
+    header's `assumption`, and that --robot needs views the record does not hold."""
+    model, assumption = model_notes(record.header.extra)
+    notes = [f"model: {model}"] if model else []
+    notes += [assumption] if assumption else []
+    if args.robot is not None and not has_views(record):
+        notes.append(NO_VIEWS)
+    return notes
+
+
 def _refused(args: argparse.Namespace, frames: Sequence[Frame]) -> str | None:
     """Why --round or --speed cannot be used with these frames (None: they can)."""
     if args.round is not None and not 0 <= args.round <= frames[-1].round:
         return f"--round must be between 0 and {frames[-1].round}, got {args.round}"
     if not (args.speed > 0 and math.isfinite(args.speed)):
         return "--speed must be a positive number"
+    n = frames[0].n
+    if args.robot is not None and not 0 <= args.robot < n:
+        return f"--robot must be a robot number between 0 and {n - 1}, got {args.robot}"
     return None
 
 
@@ -334,8 +389,13 @@ def _show(
     interactive = not args.no_play and sys.stdin.isatty() and sys.stdout.isatty()
     if interactive:
         start = index if args.round is not None else 0
+        marks = tuple(i for i, f in enumerate(frames) if f.focus is not None and f.focus.looked)
         player = Player(
-            count=len(frames), index=start, playing=args.round is None, speed=args.speed
+            count=len(frames),
+            index=start,
+            playing=args.round is None,
+            speed=args.speed,
+            marks=marks,
         )
         return play(frames, player, shown_as)
     frame = shown_as(frames[index])

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, TextIO
+from typing import Any, TextIO
 
 from fatswarm.domain.outcome import ExitCode, Status, exit_code_for
-
-if TYPE_CHECKING:
-    pass
+from fatswarm.domain.robot_model import ModelError, RobotModel
 
 
 def print_outcome(
@@ -24,6 +23,8 @@ def print_outcome(
 ) -> None:
     """Print the end of a run to `out`: the text summary and the files written, or (`as_json`)
     one JSON object. `outcome` None: the run ended without a result in its record."""
+    if outcome is not None and record and outcome.model is None and outcome.assumption is None:
+        outcome = outcome.noted(record_header(record))
     if as_json:
         print(summary_json(outcome, code, record=record, svg=svg), file=out)
         return
@@ -52,6 +53,39 @@ class Outcome:
     algorithm: str = "uniform-circle"
     params: dict[str, Any] = dataclasses.field(default_factory=dict)
     time: float | None = None  # async models: the virtual time the run ended at
+    model: str | None = None  # the robot model as flags, when it is not the paper's
+    assumption: str | None = None  # the record header's line: frames outside the algorithm's
+
+    def noted(self, header: Mapping[str, Any]) -> Outcome:
+        """This outcome with the `model` and `assumption` a record header's fields give (its
+        `Header.extra`, or the JSON header line): the model as its flags when it is not the
+        paper's, and the header's `assumption` line."""
+        model, assumption = model_notes(header)
+        return dataclasses.replace(self, model=model, assumption=assumption)
+
+
+def model_notes(header: Mapping[str, Any]) -> tuple[str | None, str | None]:
+    """`model` and `assumption` of an `Outcome` from a record header's fields (None: not there,
+    or the paper's model)."""
+    try:
+        robot_model = RobotModel.from_header(header.get("model"))
+    except ModelError as exc:
+        model: str | None = f"unreadable ({exc})"
+    else:
+        model = None if robot_model.is_paper else robot_model.describe()
+    line = header.get("assumption")
+    assumption = " ".join(line.split()) if isinstance(line, str) else ""  # one line, whatever
+    return model, assumption or None
+
+
+def record_header(path: str) -> dict[str, Any]:
+    """The header line of the record at `path` as JSON fields ({} if it cannot be read)."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            fields = json.loads(f.readline())
+    except (OSError, ValueError):
+        return {}
+    return fields if isinstance(fields, dict) else {}
 
 
 def side_of(values: Any) -> float | None:
@@ -101,6 +135,8 @@ def summary(outcome: Outcome) -> str:
         f"rounds {o.rounds}  epochs {epochs}  moves {o.moves} ({o.moves / o.n:.2f} per robot)  "
         f"total distance {o.total_distance:.3f}  collisions {o.collisions}"
         + ("" if o.time is None else f"  virtual time {o.time:.3f}")
+        + ("" if o.model is None else f"\nmodel: {o.model}")
+        + ("" if o.assumption is None else f"\n{o.assumption}")
     )
 
 
@@ -112,5 +148,8 @@ def summary_json(
     fields: dict[str, Any] = {"status": "unfinished"}
     if outcome is not None:
         fields = {**dataclasses.asdict(outcome), "verdict": verdict(outcome)}
+        for key in ("model", "assumption"):  # only when there: the paper's runs' JSON as before
+            if fields[key] is None:
+                del fields[key]
     fields.update(exit_code=int(code), record=record or None, svg=svg or None)
     return json.dumps(fields, allow_nan=False)
