@@ -462,6 +462,8 @@ class WorldCore:
             collisions_total=self.collisions_total,
             status=self.status,
             agents=self._agent_infos(),
+            lights=self.looks.names(),
+            palette=self.algorithm.colours,
         )
 
     def _algorithm_figures(self) -> dict[str, float]:

@@ -148,6 +148,8 @@ class Instants:
             compute, wait = delays.get(robot, (0.0, 0.0))
             if robot in colours:
                 self._showing[robot] = (self.clock.now + compute, colours[robot])
+                # a change to come counts now: a staying robot's cycle line comes before it shows
+                self._relit |= colours[robot] != w.looks.colour(robot)
             path = w.held.get(robot, Path())
             origin = (float(here[robot, 0]), float(here[robot, 1]))
             world = transform(path, origin, False) if path else Path()

@@ -87,6 +87,14 @@ class Looks:
                     self.colours[robot], changed = colour, True
         return changed
 
+    def colour(self, robot: int) -> int | None:
+        """Robot `robot`'s colour now (None without lights)."""
+        return None if self.colours is None else self.colours[robot]
+
+    def names(self) -> tuple[str, ...]:
+        """Every robot's colour name now (() without lights)."""
+        return () if self.colours is None else tuple(self.palette[c] for c in self.colours)
+
     def restore(self, names: object) -> bool:
         """Every robot's colour as a resumed record's line gives it (`lights`), if it does; True
         if any changed."""
@@ -101,7 +109,7 @@ class Looks:
         robots of `lookers` were served (`views`, with --record-views), which are then dropped."""
         extra: dict[str, Any] = {}
         if self.colours is not None:
-            extra["lights"] = [self.palette[c] for c in self.colours]
+            extra["lights"] = list(self.names())
         if self.record_views:
             extra["views"] = {str(r): self.views.pop(r, []) for r in sorted(lookers)}
         return extra

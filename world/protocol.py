@@ -225,6 +225,8 @@ class WorldState:
     collisions_total: int
     status: Status
     agents: tuple[AgentInfo, ...]  # one per robot
+    lights: tuple[str, ...] = ()  # each robot's colour name (a luminous algorithm's), else ()
+    palette: tuple[str, ...] = ()  # the algorithm's colour names, else ()
 
     @property
     def a(self) -> float:
@@ -255,6 +257,11 @@ class WorldState:
                 "last_active": [int(g.last_active) for g in self.agents],
                 "last_path_length": [float(g.last_path_length) for g in self.agents],
                 "timeouts": [int(g.timeouts) for g in self.agents],
+                **(
+                    {"lights": list(self.lights), "palette": list(self.palette)}
+                    if self.lights
+                    else {}
+                ),
             },
         )
 
@@ -301,7 +308,25 @@ class WorldState:
             collisions_total=get_int(obj, "collisions_total", 0, 2**62),
             status=Status(status),
             agents=agents,
+            **_state_lights(obj, n),
         )
+
+
+def _state_lights(obj: dict[str, Any], n: int) -> dict[str, tuple[str, ...]]:
+    """A state's `lights` (n colour names) and `palette` (at most MAX_COLOURS), if it has them."""
+    if "lights" not in obj:
+        return {}
+    lights, palette = obj.get("lights"), obj.get("palette")
+    if (
+        not isinstance(palette, list)
+        or len(palette) > MAX_COLOURS
+        or not all(isinstance(c, str) and len(c) <= 32 for c in palette)
+        or not isinstance(lights, list)
+        or len(lights) != n
+        or not all(c in palette for c in lights)
+    ):
+        raise ProtocolError(f"'lights' must be {n} names of a palette of at most {MAX_COLOURS}")
+    return {"lights": tuple(lights), "palette": tuple(palette)}
 
 
 # --- world -> agent: the snapshot -------------------------------------------------------------

@@ -477,6 +477,8 @@ def frame_from_state(
         rounds_per_second=rounds_per_second,
         max_rounds=max_rounds,
         source="live",
+        lights=state.lights,
+        palette=tuple(sorted(state.palette)),  # names sorted, as replay and plot colour them
     )
 
 

@@ -114,9 +114,10 @@ class Algorithm(Protocol[P]):
     - `parameters`: what `--param NAME=VALUE` may set, with defaults.
     - `make_params(n, values)`: the parameter object for n robots and the complete, typed values
       (defaults filled in); raises AlgorithmParamsError for a value it refuses.
-    - `compute(view, params)`: the path of the robot that sees `view`, (n-1, 2) positions of the
-      others relative to itself in its private frame (X possibly flipped, order arbitrary). Pure:
-      no state survives a call. Must not depend on the order of `view`.
+    - `compute(view, params)`: the path of the robot that sees `view`, (k, 2) positions of the
+      others it sees (k = n - 1 under the paper's model) relative to itself in its private frame
+      (docs/model.md; order arbitrary). Pure: no state survives a call. Must not depend on the
+      order of `view`.
     - `goal(positions, params)`: the world's test, on (n, 2) world positions, that the run's goal
       holds. A run is `formed` when the goal holds and every robot, activated since the last
       change, asked to stay; `stalled` when all stay but the goal does not hold.

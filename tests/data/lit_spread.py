@@ -49,7 +49,9 @@ class LitSpread:
         if not near.any():
             return Lit(Path(), "still")
         others = glance.others if glance is not None else None
-        if others is not None and any(c == "moving" for c, k in zip(others, near, strict=True) if k):
+        if others is not None and any(
+            c == "moving" for c, k in zip(others, near, strict=True) if k
+        ):
             return Lit(Path(), "waiting")
         nearest = view[int(np.argmin(dist))]
         away = -nearest / float(np.hypot(*nearest)) * params.step

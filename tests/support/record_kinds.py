@@ -158,6 +158,18 @@ def lockstep(*flags: str) -> Callable[[Path], None]:
     return lambda record: fatswarm_lockstep(record, *flags)
 
 
+LIT_SPREAD = f"{ROOT / 'tests' / 'data' / 'lit_spread.py'}:ALGORITHM"  # a luminous test algorithm
+
+
+def luminous(flags: str) -> Callable[[Path], None]:
+    """A lock-step run of the luminous test algorithm with these (space-separated) flags."""
+    return lockstep("--algorithm", LIT_SPREAD, *flags.split())
+
+
+def header_has(*keys: str) -> Callable[[list[RecordLine]], bool]:
+    return lambda lines: all(key in lines[0] for key in keys)
+
+
 def rounds_with(key: str) -> Callable[[list[RecordLine]], bool]:
     return lambda lines: any(line["type"] == "round" and key in line for line in lines)
 
@@ -220,6 +232,51 @@ KINDS: dict[str, tuple[Callable[[Path], None], Callable[[list[RecordLine]], bool
     "world-faults": (
         faults,
         lambda lines: all(rounds_with(key)(lines) for key in ("timed_out", "crashed", "recovered")),
+    ),
+    "lights-views-opaque": (
+        luminous(
+            "-n 6 --seed 3 --scheduler fsync --record-views --sight 6 --visibility opaque"
+            " --frames disoriented"
+        ),
+        lambda lines: (
+            header_has("model", "record_views")(lines)
+            and rounds_with("lights")(lines)
+            and rounds_with("views")(lines)
+        ),
+    ),
+    "lights-views-async": (
+        luminous(
+            "-n 6 --seed 3 --scheduler async --record-views --sight 6 --visibility opaque-centres"
+            " --frames chirality --frame-change every-look"
+        ),
+        lambda lines: (
+            header_has("model", "record_views", "fairness_time")(lines)
+            and rounds_with("look")(lines)
+            and rounds_with("lights")(lines)
+            and rounds_with("views")(lines)
+        ),
+    ),
+    "lights-crash-external": (
+        luminous("-n 8 --seed 4 --scheduler ssync --crash 2 --visibility opaque --lights external"),
+        lambda lines: (
+            header_has("model")(lines)
+            and rounds_with("crash")(lines)
+            and rounds_with("lights")(lines)
+            and not rounds_with("views")(lines)
+        ),
+    ),
+    "paper-model-views": (
+        lockstep("-n", "5", "--seed", "1", "--record-views"),
+        lambda lines: (
+            header_has("record_views")(lines)
+            and header_without("model")(lines)
+            and rounds_with("views")(lines)
+            and not rounds_with("lights")(lines)
+        ),
+    ),
+    "outside-assumption": (
+        lockstep("-n", "5", "--seed", "1", "--frames", "chirality"),
+        lambda lines: header_has("model", "assumption")(lines) and status("stalled")(lines),
     ),
 }
 

@@ -1,9 +1,9 @@
 """docs/record.schema.json: every kind of line fatswarm writes (every scheduler, non-rigid moves,
 crashes, faults of a networked world, resumed and capped runs, collisions, another algorithm, the
-committed test records) validates against it, and it refuses lines that break the format, so that
-docs/record.md and the writer cannot drift apart unnoticed. The records of every kind are made in
-tests/support/record_kinds.py; tests/integration/test_record_schema_networked.py adds a real
-networked run's."""
+robot models with lights and recorded views, the committed test records) validates against it,
+and it refuses lines that break the format, so that docs/record.md and the writer cannot drift
+apart unnoticed. The records of every kind are made in tests/support/record_kinds.py;
+tests/integration/test_record_schema_networked.py adds a real networked run's."""
 
 from __future__ import annotations
 
@@ -135,6 +135,43 @@ BROKEN: dict[str, tuple[str, Callable[[RecordLine], None]]] = {
     ),
     "round-with-a-short-arc": ("round", first_segment({"arc": [0.0, 1.0]})),
     "round-with-a-three-number-point": ("round", lambda line: line["positions"][0].append(0.0)),
+    "header-with-an-unknown-visibility": (
+        "header",
+        put(
+            "model",
+            {
+                "visibility": "foggy",
+                "sight": None,
+                "lights": "full",
+                "frames": "y-axis",
+                "frame_change": "fixed",
+            },
+        ),
+    ),
+    "header-with-a-zero-sight": (
+        "header",
+        put(
+            "model",
+            {
+                "visibility": "opaque",
+                "sight": 0,
+                "lights": "full",
+                "frames": "y-axis",
+                "frame_change": "fixed",
+            },
+        ),
+    ),
+    "header-with-a-model-missing-an-axis": ("header", put("model", {"visibility": "opaque"})),
+    "header-with-record-views-false": ("header", put("record_views", False)),
+    "header-with-an-empty-assumption": ("header", put("assumption", "")),
+    "round-with-a-colour-by-index": ("round", put("lights", [0, 1])),
+    "round-with-no-lights": ("round", put("lights", [])),
+    "round-with-a-colour-with-a-space": ("round", put("lights", ["dark red"])),
+    "round-with-views-as-a-list": ("round", put("views", [[1, 2]])),
+    "round-with-views-keyed-by-name": ("round", put("views", {"r0": [1]})),
+    "round-with-views-keyed-with-a-zero": ("round", put("views", {"01": [1]})),
+    "round-with-a-robot-seen-twice": ("round", put("views", {"0": [1, 1]})),
+    "round-with-a-negative-robot-seen": ("round", put("views", {"0": [-1]})),
     "result-still-running": ("result", put("status", "running")),
     "result-with-an-unknown-key": ("result", put("verdict", "fine")),
     "result-with-fractional-rounds": ("result", put("rounds", 2.5)),
@@ -161,6 +198,31 @@ def test_a_line_that_breaks_the_format_is_refused(
     assert validator.is_valid(line)
     damage(line)
     assert not validator.is_valid(line)
+
+
+def test_the_robot_model_fields_validate_on_any_record(
+    validator: Draft202012Validator, records: dict[str, Path]
+) -> None:
+    """The model's header fields and round fields, as the writer writes them (docs/record.md):
+    an unlimited sight is null, a robot that Looked and saw nobody has an empty list."""
+    lines = sample_lines(records)
+    header = {
+        **lines["header"],
+        "model": {
+            "visibility": "opaque-centres",
+            "sight": None,
+            "lights": "internal",
+            "frames": "disoriented",
+            "frame_change": "every-look",
+        },
+        "record_views": True,
+        "assumption": "algorithm a assumes frames y-axis; this run gives it disoriented",
+    }
+    assert validator.is_valid(header)
+    line = lines["round"]
+    n = len(line["positions"])
+    round_line = {**line, "lights": ["still"] * n, "views": {"0": [], str(n - 1): [0]}}
+    assert validator.is_valid(round_line)
 
 
 def test_a_header_may_carry_fields_of_its_own(

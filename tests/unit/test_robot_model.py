@@ -4,6 +4,7 @@ what a Look shows, and a luminous Compute's answer checked."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -189,3 +190,23 @@ def test_a_move_carries_its_colour_and_an_unpalettable_one_is_refused() -> None:
 
     with pytest.raises(ProtocolError):
         MoveSubmitted.of(1, 2, Path(), 99)
+
+
+def test_the_observers_state_carries_every_robots_colour_for_the_live_dashboard() -> None:
+    from fatswarm.deploy.view.dashboard import frame_from_state
+    from fatswarm.domain.outcome import Status
+    from fatswarm.domain.wire import ProtocolError
+    from fatswarm.world.protocol import AgentInfo, WorldState
+
+    agents = (AgentInfo(True, 0, 0.0, 0),) * 2
+    state = WorldState(
+        3, 2, "x", {}, {}, "fsync", "s", np.zeros((2, 2)), (), 0, (), (), 0, Status.RUNNING,
+        agents, ("on", "off"), ("off", "on"),
+    )  # fmt: skip
+    back = WorldState.decode(state.encode())
+    assert (back.lights, back.palette) == (("on", "off"), ("off", "on"))
+    assert frame_from_state(back).lights == ("on", "off")
+    plain = WorldState.decode(replace(state, lights=(), palette=()).encode())
+    assert (plain.lights, plain.palette) == ((), ())
+    with pytest.raises(ProtocolError, match="lights"):
+        WorldState.decode(replace(state, lights=("on", "red")).encode())
