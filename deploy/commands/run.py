@@ -15,7 +15,7 @@ import secrets
 import sys
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Final, TextIO
+from typing import TYPE_CHECKING, Any, Final, TextIO
 
 from fatswarm.coordinator.schedule import NAMES
 from fatswarm.deploy.commands.resume import resolve_resume
@@ -318,7 +318,7 @@ def run_lockstep_command(args: argparse.Namespace, out: TextIO | None = None) ->
         algorithm=params.name,
         params=dict(params.values),
         time=result.time,
-    )
+    ).noted(model_fields(setup))
     code = exit_code(outcome)
     svg: str | None = getattr(args, "svg", None)  # the dashboard's flag, when it is there
     if svg and not _save_final_frame(result, setup, svg):
@@ -341,6 +341,19 @@ def _lockstep_setup(args: argparse.Namespace, seed: int) -> tuple[RunSetup, Reco
     # --resume appends after the committed rounds: nothing there is ever cut or rewritten
     record = RecordWriter(args.record, append=resumed is not None) if args.record else None
     return setup, record
+
+
+def model_fields(setup: RunSetup) -> dict[str, Any]:
+    """The header fields a run's summary names: its model (if not the paper's) and the line saying
+    that its frames are outside the algorithm's assumption (if they are)."""
+    # here, not at the top: the CLI imports this module to build its parser
+    from fatswarm.world.core import outside_assumption
+
+    model = setup.robot_model
+    return {
+        "model": None if model.is_paper else model.to_header(),
+        "assumption": outside_assumption(setup.params, model) or None,
+    }
 
 
 def _announce(

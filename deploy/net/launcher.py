@@ -478,7 +478,7 @@ def read_outcome(record: str) -> Outcome | None:
         algorithm=h.algorithm,
         params=dict(h.params),
         time=float(x["time"]) if isinstance(x.get("time"), (int, float)) else None,
-    )
+    ).noted(h.extra)
 
 
 __all__ = ["StopSignal", "read_outcome", "run_networked"]

@@ -26,6 +26,8 @@ from fatswarm.deploy.scenarios.families import (
     draw_near_symmetric,
     draw_near_touching,
     draw_rim,
+    draw_rows,
+    draw_stacked_rows,
     draw_vertical_line,
 )
 from fatswarm.deploy.scenarios.shapes import OFFSET_RANGE, exact_translation, min_separation
@@ -93,6 +95,19 @@ FAMILY_TABLE: Final = (
         "formed",
         "an already formed regular n-gon of side >= 4, rotated at random, possibly "
         "offset by up to 1e5",
+        2,
+    ),
+    # appended last: the families above keep their index (their seeds), so their draws stay
+    Family(
+        "rows",
+        "1-3 horizontal rows of robots touching (2 apart), near touching or mixed, rows 2-8 "
+        "apart, shifted sideways at random",
+        2,
+    ),
+    Family(
+        "stacked-rows",
+        "2 or more rows of touching robots, each row touching the one below: square, brick "
+        "wall or slanted stacks, a short top row, some with one robot nudged by 1e-9..1e-6",
         2,
     ),
 )
@@ -165,6 +180,8 @@ _BUILDERS: Final[Mapping[str, Callable[[np.random.Generator, int], Built]]] = Ma
         "offset": _offset,
         "rim": draw_rim,
         "formed": draw_formed,
+        "rows": draw_rows,
+        "stacked-rows": draw_stacked_rows,
         "cluster": draw_cluster,
     }
 )

@@ -20,6 +20,8 @@ from fatswarm.deploy.scenarios.shapes import (
     SAFE_SQUEEZE,
     TIE_MIN_N,
     grid_walk,
+    hex_row_height,
+    horizontal_rows,
     is_clear,
     lattice_points,
     mirror_configuration,
@@ -341,6 +343,76 @@ def draw_cluster(rng: np.random.Generator, n: int) -> Built:
 
 
 # ---------------------------------------------------------------------------------------------
+# Horizontal rows
+
+
+def _split(rng: np.random.Generator, n: int, parts: int) -> list[int]:
+    """n robots in `parts` rows of at least one each, the cuts drawn at random."""
+    cuts = sorted(int(c) for c in rng.choice(np.arange(1, n), size=parts - 1, replace=False))
+    return [b - a for a, b in zip([0, *cuts], [*cuts, n], strict=True)]
+
+
+def _row_gaps(rng: np.random.Generator, count: int, kind: str) -> list[float]:
+    """The gaps between `count` + 1 neighbours of a row: touching, near touching, or mixed."""
+    if kind == "touching":
+        return [CONTACT] * count
+    if kind == "near":
+        return [_contact_distance(rng) for _ in range(count)]
+    return [
+        CONTACT if rng.random() < 0.5 else CONTACT + float(rng.uniform(0.0, 2.0))
+        for _ in range(count)
+    ]
+
+
+def draw_rows(rng: np.random.Generator, n: int) -> Built:
+    """One to three horizontal rows of touching (or near-touching) robots, each at least 2 above
+    the one below, shifted sideways at random."""
+    count = min(n, (1, 2, 3)[int(rng.choice(3, p=[0.5, 0.3, 0.2]))])
+    kind = ("touching", "near", "mixed")[int(rng.choice(3, p=[0.5, 0.25, 0.25]))]
+    y, rows = 0.0, []
+    for size in _split(rng, n, count):
+        shift = float(rng.integers(-n, n + 1)) if rng.random() < 0.5 else rng.uniform(-n, n)
+        rows.append((float(shift), y, _row_gaps(rng, size - 1, kind)))
+        y += CONTACT if rng.random() < 0.4 else float(rng.uniform(CONTACT, 4.0 * CONTACT))
+    pts = horizontal_rows(rows)
+    return f"{count}-row-{kind}", pts + rng.integers(-20, 21, size=2).astype(np.float64), None
+
+
+def _stack_step(rng: np.random.Generator, kind: str) -> tuple[float, float]:
+    """(sideways shift, height) of one row over the one below, touching it: a square stack, a
+    brick wall (hex rows, the height written to 3-7 decimals) or a slant by up to 1."""
+    if kind == "square":
+        return 0.0, CONTACT
+    if kind == "brick":
+        return 1.0, hex_row_height(DECIMALS[int(rng.integers(len(DECIMALS)))])
+    shift = float(rng.uniform(0.0, 1.0))  # (shift, h) and (shift - 2, h): both >= 2 away
+    return shift, math.sqrt(CONTACT * CONTACT - shift * shift)
+
+
+def draw_stacked_rows(rng: np.random.Generator, n: int) -> Built:
+    """Two or more rows of touching robots stacked on one another, each row touching the one
+    below: square, brick wall or slanted; the top row may be short (left, centred or right)."""
+    count = int(rng.integers(2, max(2, (n + 1) // 2) + 1))
+    width = -(-n // count)
+    count = -(-n // width)
+    kind = ("square", "brick", "slant")[int(rng.integers(3))]
+    shift, height = _stack_step(rng, kind)
+    align = ("left", "centre", "right")[int(rng.integers(3))]
+    rows = []
+    for k in range(count):
+        size = min(width, n - k * width)
+        lead = {"left": 0.0, "centre": 0.5, "right": 1.0}[align] * CONTACT * (width - size)
+        offset = shift * (k % 2) if kind == "brick" else shift * k
+        rows.append((offset + lead, k * height, [CONTACT] * (size - 1)))
+    pts = horizontal_rows(rows)
+    variant = f"{kind}-{count}x{width}-{align}"
+    if rng.random() < 0.3:
+        pts, _ = nudge(rng, pts, _log_uniform(rng, NEAR_RANGE))
+        variant += "+nudged"
+    return variant, pts + rng.integers(-20, 21, size=2).astype(np.float64), None
+
+
+# ---------------------------------------------------------------------------------------------
 # Rims and formed polygons
 
 
@@ -401,5 +473,7 @@ __all__ = [
     "draw_near_symmetric",
     "draw_near_touching",
     "draw_rim",
+    "draw_rows",
+    "draw_stacked_rows",
     "draw_vertical_line",
 ]

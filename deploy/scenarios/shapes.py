@@ -243,6 +243,16 @@ def vertical_line(n: int) -> Points:
     return np.column_stack([np.zeros(n), CONTACT * np.arange(n)])
 
 
+def horizontal_rows(rows: Sequence[tuple[float, float, Sequence[float]]]) -> Points:
+    """Robots in horizontal rows: each row is (x of its first robot, its y, the gaps between
+    neighbouring centres along it, one fewer than its robots)."""
+    out: list[tuple[float, float]] = []
+    for x0, y, gaps in rows:
+        xs = x0 + np.concatenate([[0.0], np.cumsum(np.asarray(gaps, dtype=np.float64))])
+        out.extend((float(x), float(y)) for x in xs)
+    return np.asarray(out, dtype=np.float64).reshape(-1, 2)
+
+
 def grid_walk(steps: Sequence[int]) -> Points:
     """An exactly touching chain on the square lattice of pitch 2: step codes 0..3 are E, N, W, S.
 
@@ -440,6 +450,7 @@ __all__ = [
     "exact_translation",
     "grid_walk",
     "hex_row_height",
+    "horizontal_rows",
     "is_clear",
     "lattice_points",
     "min_separation",

@@ -23,8 +23,6 @@ def print_outcome(
 ) -> None:
     """Print the end of a run to `out`: the text summary and the files written, or (`as_json`)
     one JSON object. `outcome` None: the run ended without a result in its record."""
-    if outcome is not None and record and outcome.model is None and outcome.assumption is None:
-        outcome = outcome.noted(record_header(record))
     if as_json:
         print(summary_json(outcome, code, record=record, svg=svg), file=out)
         return
@@ -76,16 +74,6 @@ def model_notes(header: Mapping[str, Any]) -> tuple[str | None, str | None]:
     line = header.get("assumption")
     assumption = " ".join(line.split()) if isinstance(line, str) else ""  # one line, whatever
     return model, assumption or None
-
-
-def record_header(path: str) -> dict[str, Any]:
-    """The header line of the record at `path` as JSON fields ({} if it cannot be read)."""
-    try:
-        with open(path, encoding="utf-8") as f:
-            fields = json.loads(f.readline())
-    except (OSError, ValueError):
-        return {}
-    return fields if isinstance(fields, dict) else {}
 
 
 def side_of(values: Any) -> float | None:
