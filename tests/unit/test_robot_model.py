@@ -152,7 +152,7 @@ def test_a_luminous_compute_gives_a_palette_index_and_a_foreign_colour_is_refuse
 
 def test_a_palette_that_is_not_a_tuple_of_distinct_names_is_refused() -> None:
     lamp = _Lamp()
-    lamp.colours = ("on", "on")  # type: ignore[assignment]
+    lamp.colours = ("on", "on")
     with pytest.raises(LightsError):
         palette(lamp)
     with pytest.raises(AlgorithmError, match="colours must be a tuple"):

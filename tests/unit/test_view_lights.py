@@ -381,23 +381,24 @@ def test_summary_names_a_model_that_is_not_the_papers_and_the_assumption_once() 
     assert model_notes({"assumption": "two\nlines "}) == (None, "two lines")
 
 
-def test_the_summary_of_a_record_reads_its_header_and_json_adds_keys_only_when_there(
+def test_the_summary_names_the_model_and_assumption_and_json_adds_keys_only_when_there(
     tmp_path: pathlib.Path,
 ) -> None:
     path = lit_record(tmp_path)
+    noted = outcome().noted(read_record(str(path)).header.extra)
     out = io.StringIO()
-    print_outcome(outcome(), 0, out, as_json=False, record=str(path), svg=None)
+    print_outcome(noted, 0, out, as_json=False, record=str(path), svg=None)
     lines = out.getvalue().splitlines()
     assert lines[3:] == ["model: --visibility opaque --sight 5.0", ASSUMES, f"record: {path}"]
     out = io.StringIO()
-    print_outcome(outcome(), 0, out, as_json=True, record=str(path), svg=None)
+    print_outcome(noted, 0, out, as_json=True, record=str(path), svg=None)
     fields = json.loads(out.getvalue())
     assert (fields["model"], fields["assumption"]) == ("--visibility opaque --sight 5.0", ASSUMES)
     plain = json.loads(summary_json(outcome(), 0))
     assert "model" not in plain and "assumption" not in plain
-    out = io.StringIO()  # a record that cannot be read: the summary as it is
-    print_outcome(outcome(), 0, out, as_json=False, record=str(tmp_path / "gone"), svg=None)
-    assert out.getvalue() == summary(outcome()) + f"\nrecord: {tmp_path / 'gone'}\n"
+    out = io.StringIO()  # the paper's model: the summary as it always was
+    print_outcome(outcome(), 0, out, as_json=False, record=None, svg=None)
+    assert out.getvalue() == summary(outcome()) + "\n"
 
 
 def test_focus_of_a_robot_that_never_looked_dims_nobody() -> None:
