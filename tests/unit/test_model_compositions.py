@@ -45,7 +45,7 @@ def test_a_model_axis_composes_with_every_scheduler_and_fault(
             record=path,
             record_views=True,
             **MODELS[model],  # type: ignore[arg-type]
-            **FAULTS[fault],  # type: ignore[arg-type]
+            **FAULTS[fault],
         )
     assert paths[0].read_bytes() == paths[1].read_bytes()
     assert problems(validator, paths[0]) == []
