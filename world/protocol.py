@@ -11,7 +11,6 @@ The codec and field checks are `fatswarm.domain.wire`.
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -20,27 +19,27 @@ from typing import Any
 from fatswarm.domain.lights import MAX_COLOURS
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import (
-    Arc,
     Path,
-    PathFormatError,
     Points,
-    from_record,
     to_record,
-    vertices,
 )
 from fatswarm.domain.seam import ParamValue
 from fatswarm.domain.wire import (
     MAX_COORD,
     MAX_ROBOTS,
+    MAX_TIME,
     ProtocolError,
+    checked_path,
     get_bool,
     get_figures,
     get_float,
     get_int,
+    get_lights,
     get_params,
     get_points,
     get_robots,
     get_str,
+    get_times,
     pack,
     points_to_bytes,
     prefix,
@@ -95,9 +94,6 @@ def snapshot_any_key(swarm: str) -> str:
 
 
 # --- an agent: its move and its liveliness token ----------------------------------------------
-
-
-MAX_SWEEP = 8 * math.pi  # an arc never needs more than a few turns; bounds physics work
 
 
 def move_key(swarm: str, robot: int) -> str:
@@ -171,26 +167,6 @@ class MoveSubmitted:
         if colour is not None and not 0 <= colour < MAX_COLOURS:
             raise ProtocolError(f"'colour' must be an integer in [0, {MAX_COLOURS - 1}]")
         return MoveSubmitted(robot, round_no, checked_path(to_record(path)), colour)
-
-
-def checked_path(record: Any) -> Path:
-    """A move's path from its record form (`to_record`), checked as the world checks every move:
-    well formed, inside the bounded plane, arcs of bounded sweep; raises ProtocolError."""
-    try:
-        path = from_record(record)
-    except PathFormatError as exc:
-        raise ProtocolError(f"bad path: {exc}") from None
-    for x, y in vertices((0.0, 0.0), path):
-        if not (abs(x) <= MAX_COORD and abs(y) <= MAX_COORD):
-            raise ProtocolError("path leaves the bounded plane")
-    for seg in path.segments:
-        if isinstance(seg, Arc) and not (
-            abs(seg.center[0]) <= MAX_COORD
-            and abs(seg.center[1]) <= MAX_COORD
-            and abs(seg.sweep) <= MAX_SWEEP
-        ):
-            raise ProtocolError("arc centre or sweep out of range")
-    return path
 
 
 # --- world -> observers -----------------------------------------------------------------------
@@ -308,25 +284,8 @@ class WorldState:
             collisions_total=get_int(obj, "collisions_total", 0, 2**62),
             status=Status(status),
             agents=agents,
-            **_state_lights(obj, n),
+            **get_lights(obj, n),
         )
-
-
-def _state_lights(obj: dict[str, Any], n: int) -> dict[str, tuple[str, ...]]:
-    """A state's `lights` (n colour names) and `palette` (at most MAX_COLOURS), if it has them."""
-    if "lights" not in obj:
-        return {}
-    lights, palette = obj.get("lights"), obj.get("palette")
-    if (
-        not isinstance(palette, list)
-        or len(palette) > MAX_COLOURS
-        or not all(isinstance(c, str) and len(c) <= 32 for c in palette)
-        or not isinstance(lights, list)
-        or len(lights) != n
-        or not all(c in palette for c in lights)
-    ):
-        raise ProtocolError(f"'lights' must be {n} names of a palette of at most {MAX_COLOURS}")
-    return {"lights": tuple(lights), "palette": tuple(palette)}
 
 
 # --- world -> agent: the snapshot -------------------------------------------------------------
@@ -443,27 +402,8 @@ class Hello:
         return pack("hello", {})
 
 
-MAX_TIME = 1e15  # virtual times (async models) are finite and below this
-
-
 def _times(pairs: Sequence[tuple[int, float]]) -> list[list[float]]:
     return [[int(r), float(t)] for r, t in pairs]
-
-
-def get_times(obj: dict[str, Any], key: str, width: int = 2) -> tuple[tuple[Any, ...], ...]:
-    """An optional list of [robot, t, ...] rows (robot an int, then `width` - 1 finite times in
-    [0, MAX_TIME]); () when absent."""
-    rows = obj.get(key, [])
-    if not isinstance(rows, list) or len(rows) > MAX_ROBOTS:
-        raise ProtocolError(f"{key!r} must be a list of at most {MAX_ROBOTS} rows")
-    out = []
-    for row in rows:
-        if not isinstance(row, list) or len(row) != width:
-            raise ProtocolError(f"{key!r} rows must be [robot, {width - 1} times], got {row!r}")
-        cells = {"robot": row[0], **{f"t{k}": v for k, v in enumerate(row[1:])}}
-        robot = get_int(cells, "robot", 0, MAX_ROBOTS - 1)
-        out.append((robot, *(get_float(cells, f"t{k}", 0.0, MAX_TIME) for k in range(width - 1))))
-    return tuple(out)
 
 
 @dataclass(frozen=True, slots=True)

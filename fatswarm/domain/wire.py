@@ -17,7 +17,8 @@ from typing import Any
 import msgpack
 import numpy as np
 
-from fatswarm.domain.path import Points
+from fatswarm.domain.lights import MAX_COLOURS
+from fatswarm.domain.path import Arc, Path, PathFormatError, Points, from_record, vertices
 from fatswarm.domain.seam import MAX_PARAMS, MAX_TEXT, ParamValue
 
 PROTOCOL_VERSION = 5  # 3: the held Look is the activation; one moves notice a round; no seed;
@@ -191,3 +192,61 @@ def get_points(obj: dict[str, Any], key: str, rows: int) -> Points:
 
 def robot_list(values: Sequence[int]) -> list[int]:
     return [int(r) for r in values]
+
+
+MAX_TIME = 1e15  # virtual times (async models) are finite and below this
+MAX_SWEEP = 8 * math.pi  # an arc never needs more than a few turns; bounds physics work
+
+
+def checked_path(record: Any) -> Path:
+    """A move's path from its record form (`to_record`), checked as the world checks every move:
+    well formed, inside the bounded plane, arcs of bounded sweep; raises ProtocolError."""
+    try:
+        path = from_record(record)
+    except PathFormatError as exc:
+        raise ProtocolError(f"bad path: {exc}") from None
+    for x, y in vertices((0.0, 0.0), path):
+        if not (abs(x) <= MAX_COORD and abs(y) <= MAX_COORD):
+            raise ProtocolError("path leaves the bounded plane")
+    for seg in path.segments:
+        if isinstance(seg, Arc) and not (
+            abs(seg.center[0]) <= MAX_COORD
+            and abs(seg.center[1]) <= MAX_COORD
+            and abs(seg.sweep) <= MAX_SWEEP
+        ):
+            raise ProtocolError("arc centre or sweep out of range")
+    return path
+
+
+def get_times(obj: dict[str, Any], key: str, width: int = 2) -> tuple[tuple[Any, ...], ...]:
+    """An optional list of [robot, t, ...] rows (robot an int, then `width` - 1 finite times in
+    [0, MAX_TIME]); () when absent."""
+    rows = obj.get(key, [])
+    if not isinstance(rows, list) or len(rows) > MAX_ROBOTS:
+        raise ProtocolError(f"{key!r} must be a list of at most {MAX_ROBOTS} rows")
+    out = []
+    for row in rows:
+        if not isinstance(row, list) or len(row) != width:
+            raise ProtocolError(f"{key!r} rows must be [robot, {width - 1} times], got {row!r}")
+        cells = {"robot": row[0], **{f"t{k}": v for k, v in enumerate(row[1:])}}
+        robot = get_int(cells, "robot", 0, MAX_ROBOTS - 1)
+        out.append((robot, *(get_float(cells, f"t{k}", 0.0, MAX_TIME) for k in range(width - 1))))
+    return tuple(out)
+
+
+def get_lights(obj: dict[str, Any], n: int) -> dict[str, tuple[str, ...]]:
+    """An observers' state's `lights` (n colour names) and `palette` (at most MAX_COLOURS), if
+    it has them ({} if not)."""
+    if "lights" not in obj:
+        return {}
+    lights, palette = obj.get("lights"), obj.get("palette")
+    if (
+        not isinstance(palette, list)
+        or len(palette) > MAX_COLOURS
+        or not all(isinstance(c, str) and len(c) <= 32 for c in palette)
+        or not isinstance(lights, list)
+        or len(lights) != n
+        or not all(c in palette for c in lights)
+    ):
+        raise ProtocolError(f"'lights' must be {n} names of a palette of at most {MAX_COLOURS}")
+    return {"lights": tuple(lights), "palette": tuple(palette)}
