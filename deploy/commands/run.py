@@ -439,6 +439,8 @@ def _save_final_frame(result: RunResult, setup: RunSetup, svg: str) -> bool:
         seed=setup.seed,
         max_rounds=setup.max_rounds,
         source="lockstep",
+        lights=result.lights,
+        palette=tuple(sorted(params.colours)),  # names sorted, as replay and plot colour them
     )
     try:
         save_svg(final, svg)

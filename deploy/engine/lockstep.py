@@ -85,6 +85,7 @@ class RunResult:
     positions: Points
     moves_by_robot: tuple[int, ...]
     time: float | None = None  # async models: the virtual time the run ended at
+    lights: tuple[str, ...] = ()  # each robot's final colour (a luminous algorithm's), else ()
 
 
 def configured(params: Params | Configured) -> Configured:
@@ -176,6 +177,7 @@ def _result(world: WorldCore, finished: Finished, looks: int, initial: Points) -
         positions=world.positions,
         moves_by_robot=progress.moves_by_robot,
         time=world.model.time(),
+        lights=world.looks.names(),
     )
 
 
