@@ -9,12 +9,13 @@ flags and runs the hunt; `deploy/hunt/report.py` shows its progress and summary.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import secrets
 import signal
 import sys
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Final
+from typing import TYPE_CHECKING, Final, TypeVar
 
 from fatswarm.coordinator.schedule import NAMES
 from fatswarm.deploy.engine.config import check_lights, check_non_rigid, input_errors
@@ -24,6 +25,7 @@ from fatswarm.deploy.hunt.search import (
     SEED_BOUND,
     Hunt,
     HuntInputError,
+    default_families,
     hunt_models,
     start_families,
 )
@@ -33,7 +35,9 @@ from fatswarm.deploy.sweep.grid import (
     SweepInputError,
     model_suffix,
     params_text,
+    parse_crash,
     parse_ints,
+    parse_non_rigid,
     robot_models_of,
     split_values,
 )
@@ -44,6 +48,8 @@ from fatswarm.domain.seam import Configured
 
 if TYPE_CHECKING:
     from fatswarm.deploy.hunt.pool import Budget, Tally
+
+T = TypeVar("T")
 
 DEFAULT_SIZES: Final = "3..12"
 DEFAULT_SECONDS: Final = 60.0  # the budget when neither --budget-runs nor --budget-seconds is given
@@ -56,13 +62,19 @@ DESCRIPTION: Final = (
     "past its round cap, or a broken invariant (overlap; for uniform-circle, a robot leaving "
     "the smallest enclosing circle in FormUCircle). Each failure is shrunk (fewer robots, a "
     "shorter schedule, simpler coordinates) and saved in a folder of --out: start.json, "
-    "schedule.json, the command that replays it with `fatswarm run`, its record and "
-    "summary.json. Docs: docs/hunt.md."
+    "schedule.json (round models: the active sets; an async case replays from its --seed, the "
+    "adversary's delays being drawn from it), the command that replays it with `fatswarm "
+    "run`, its record and summary.json. Docs: docs/hunt.md."
 )
 EPILOG: Final = (
-    "Without a budget the hunt runs for 60 s. exit codes: 0 nothing found; 1 failures found (each "
-    "saved in --out), or a worker process died; 2 bad input (one line on stderr says what to "
-    "fix); 130 interrupted (Ctrl-C: the failures saved so far stay); 143 terminated."
+    "Without a budget the hunt runs for 60 s. Lists: -n, --scheduler and --starts take a comma "
+    "list and can be repeated (numbers also LOW..HIGH ranges), as in fatswarm sweep; --non-rigid "
+    "and --crash take the sweep's values but one of them (every run of a hunt has it). exit "
+    "codes: 0 nothing found (and no --out folder left behind); 1 failures found (each saved in "
+    "--out), or a worker process died; 2 bad input, or an --out that cannot be written (one "
+    "line on stderr says what to fix); 4 a failure could not be saved (a full disk); 130 "
+    "interrupted (Ctrl-C: the failures saved so far stay); 141 standard output closed early; "
+    "143 terminated."
 )
 
 
@@ -101,17 +113,19 @@ def _add_search_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--non-rigid",
-        type=float,
-        default=None,
+        action="append",
+        default=[],
         metavar="DELTA",
-        help="non-rigid moves in every run: the adversary may stop a move after DELTA",
+        help="non-rigid moves in every run: the adversary may stop a move after DELTA (> 0, "
+        "robot radii), or 'rigid' (default rigid: rigid moves)",
     )
     p.add_argument(
         "--crash",
-        type=int,
-        default=None,
+        action="append",
+        default=[],
         metavar="F",
-        help="F robots crash for good in every run (n is then drawn above F)",
+        help="F robots crash for good in every run (n is then drawn above F), or 0 or 'none' "
+        "(default none)",
     )
     p.add_argument(
         "-n",
@@ -124,10 +138,13 @@ def _add_search_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--starts",
+        "--start",
         action="append",
         default=[],
         metavar="FAMILIES",
-        help=f"start families to draw from: {', '.join(start_families())} (default: all of them)",
+        help=f"start families to draw from: {', '.join(start_families())} (default: all but "
+        "rows and stacked-rows, so that earlier hunts draw what they drew; --start, sweep's "
+        "name, is the same flag)",
     )
     p.add_argument(
         "--max-rounds",
@@ -145,7 +162,8 @@ def _add_budget_arguments(p: argparse.ArgumentParser) -> None:
         type=int,
         default=None,
         metavar="K",
-        help="stop drawing after K candidate runs (reproducible from --seed)",
+        help="stop drawing after K candidate runs (reproducible from --seed; default none: "
+        "the seconds' budget)",
     )
     p.add_argument(
         "--budget-seconds",
@@ -209,9 +227,9 @@ def build_hunt(args: argparse.Namespace) -> Hunt:
     sizes = parse_ints(args.n or [DEFAULT_SIZES], "-n", least=1)
     models = _models(args.scheduler)
     families = _families(args.starts)
-    check_non_rigid(args.non_rigid)
-    if args.crash is not None and args.crash < 1:
-        raise HuntInputError(f"--crash must be at least 1, got {args.crash}")
+    non_rigid = _one("--non-rigid", args.non_rigid, parse_non_rigid(args.non_rigid))
+    check_non_rigid(non_rigid)
+    crash = _one("--crash", args.crash, parse_crash(args.crash))
     if args.max_rounds is not None and args.max_rounds < 1:
         raise HuntInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
     robot_models = robot_models_of(args)
@@ -223,15 +241,15 @@ def build_hunt(args: argparse.Namespace) -> Hunt:
         families,
         sizes,
         models,
-        args.non_rigid,
-        args.crash,
+        non_rigid,
+        crash,
         args.max_rounds,
         robot_models,
         bool(getattr(args, "record_views", False)),
     )
     choices = hunt.choices()
     if not choices:
-        least = max(2, (args.crash or 0) + 1)
+        least = max(2, (crash or 0) + 1)
         asked = ",".join(args.n) or DEFAULT_SIZES
         raise HuntInputError(
             f"no start family asked for builds an n of -n {asked} that is at "
@@ -247,6 +265,17 @@ def build_hunt(args: argparse.Namespace) -> Hunt:
     return hunt
 
 
+def _one(flag: str, given: Sequence[str], values: tuple[T, ...]) -> T:
+    """The one value of a flag that takes the sweep's lists but one value in a hunt (every run
+    has it); HuntInputError for more."""
+    if len(values) > 1:
+        raise HuntInputError(
+            f"{flag} takes one value in a hunt (every run has it), got {','.join(given)}: "
+            "hunt once per value (a sweep takes the list)"
+        )
+    return values[0]
+
+
 def _models(given: Sequence[str]) -> tuple[str, ...]:
     """The --scheduler models asked for (default: every one a hunt takes); HuntInputError."""
     usable = hunt_models()
@@ -259,9 +288,9 @@ def _models(given: Sequence[str]) -> tuple[str, ...]:
 
 
 def _families(given: Sequence[str]) -> tuple[str, ...]:
-    """The --starts families asked for (default: all of them); HuntInputError."""
+    """The --starts families asked for (default: `default_families`); HuntInputError."""
     known = start_families()
-    families = split_values(given) or known
+    families = split_values(given) or default_families()
     for family in families:
         if family not in known:
             raise HuntInputError(
@@ -291,11 +320,11 @@ def build_budget(args: argparse.Namespace) -> Budget:
 
 
 def main(args: argparse.Namespace) -> int:
-    """`fatswarm hunt`: hunt, save the failures, print the summary; the exit code."""
+    """`fatswarm hunt`: hunt, save the failures, print the summary; the exit code. An --out the
+    hunt created and left empty (nothing found) is removed."""
     # the pools bring the whole lock-step engine and multiprocessing: the CLI imports this
     # module to build its parser
-    from fatswarm.deploy.hunt.pool import check_out, run_hunt
-    from fatswarm.deploy.sweep.pool import WorkerDiedError
+    from fatswarm.deploy.hunt.pool import check_out
 
     refused: tuple[type[Exception], ...] = (SweepInputError, *input_errors())
     try:
@@ -305,10 +334,45 @@ def main(args: argparse.Namespace) -> int:
         if args.seed is not None and not 0 <= args.seed < 2**63:
             raise HuntInputError(f"--seed must be a whole number >= 0, got {args.seed}")
         check_out(args.out)
+        created = make_out(args.out)
     except refused as exc:
         return _fail(str(exc))
+    try:
+        return _hunt(args, hunt, budget, jobs)
+    finally:
+        if created:
+            drop_if_empty(args.out)
+
+
+def make_out(out: str) -> bool:
+    """Make the --out directory if it is missing (True: made here); HuntInputError, one line,
+    if it cannot be made or written in."""
+    made = not os.path.isdir(out)
+    try:
+        os.makedirs(out, exist_ok=True)
+    except OSError as exc:
+        where = os.path.dirname(os.path.abspath(out))
+        raise HuntInputError(
+            f"--out {out}: cannot make it in {where}: {exc.strerror or exc}; name a directory "
+            "you can write in"
+        ) from None
+    if not os.access(out, os.W_OK | os.X_OK):
+        raise HuntInputError(f"--out {out}: cannot write in it; name a directory you can write in")
+    return made
+
+
+def drop_if_empty(out: str) -> None:
+    """Remove the --out directory if nothing was saved in it."""
+    with contextlib.suppress(OSError):  # not empty (or gone): it stays as it is
+        os.rmdir(out)
+
+
+def _hunt(args: argparse.Namespace, hunt: Hunt, budget: Budget, jobs: int) -> int:
+    """Run the hunt the flags asked for, into the --out directory; the exit code."""
+    from fatswarm.deploy.hunt.pool import run_hunt
+    from fatswarm.deploy.sweep.pool import WorkerDiedError
+
     seed = args.seed if args.seed is not None else secrets.randbelow(SEED_BOUND)
-    os.makedirs(args.out, exist_ok=True)
     if not args.quiet:
         _say(_plan_text(hunt, budget, seed, jobs, args.out))
     progress = make_progress(budget, quiet=args.quiet)
@@ -373,8 +437,9 @@ def _sizes(sizes: Sequence[int]) -> str:
 def _end_text(tally: Tally, seed: int, out: str) -> str:
     if not tally.saved:
         return (
-            f"nothing found in {tally.runs} runs ({tally.refused} starts refused as "
-            f"unsupported); hunt seed {seed}"
+            f"nothing found in {tally.runs} run{'' if tally.runs == 1 else 's'} "
+            f"({tally.refused} start{'' if tally.refused == 1 else 's'} refused as unsupported); "
+            f"hunt seed {seed}"
         )
     first = tally.saved[0]
     return (

@@ -18,7 +18,12 @@ import numpy as np
 from fatswarm.agent.geometry import sec, target_radius
 from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy.engine.config import DEFAULT_A, input_errors
-from fatswarm.deploy.scenarios.adversarial import FAMILIES, adversarial_start, family_range
+from fatswarm.deploy.scenarios.adversarial import (
+    DEFAULT_FAMILIES,
+    FAMILIES,
+    adversarial_start,
+    family_range,
+)
 from fatswarm.deploy.scenarios.starts import KINDS as RANDOM_KINDS
 from fatswarm.deploy.scenarios.starts import overlapping_pair, random_start
 from fatswarm.deploy.sweep.grid import ParamText, SweepInputError, sweep_schedulers
@@ -77,6 +82,12 @@ def start_families() -> tuple[str, ...]:
     """Random start kinds (`deploy/scenarios/starts.py`), then the adversarial families
     (`deploy/scenarios/adversarial.py`)."""
     return (*RANDOM_KINDS, *FAMILIES)
+
+
+def default_families() -> tuple[str, ...]:
+    """The families a hunt draws from when none is named: every random kind and the adversarial
+    families drawn by default (the newer `rows` and `stacked-rows` are named with --starts)."""
+    return (*RANDOM_KINDS, *DEFAULT_FAMILIES)
 
 
 def family_sizes(family: str, sizes: Sequence[int]) -> tuple[int, ...]:
@@ -484,6 +495,7 @@ __all__ = [
     "Outcome",
     "candidate_start",
     "configure",
+    "default_families",
     "draw_candidate",
     "hunt_models",
     "invariants",

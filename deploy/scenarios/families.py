@@ -401,7 +401,8 @@ def draw_stacked_rows(rng: np.random.Generator, n: int) -> Built:
     rows = []
     for k in range(count):
         size = min(width, n - k * width)
-        lead = {"left": 0.0, "centre": 0.5, "right": 1.0}[align] * CONTACT * (width - size)
+        spare = width - size  # the top row's robots sit on whole cells, touching the row below
+        lead = CONTACT * {"left": 0, "centre": spare // 2, "right": spare}[align]
         offset = shift * (k % 2) if kind == "brick" else shift * k
         rows.append((offset + lead, k * height, [CONTACT] * (size - 1)))
     pts = horizontal_rows(rows)

@@ -287,7 +287,8 @@ def _coordinate(value: Any, path: str, i: int) -> float:
 
 
 def load_init(path: str) -> tuple[Points, float | None]:
-    """Read `{"positions": [[x, y], ...], "a": 4.0}` (a optional) -> ((n, 2) positions, a or None).
+    """Read `{"positions": [[x, y], ...], "a": 4.0}` (a optional: absent, not null) -> ((n, 2)
+    positions, a or None).
 
     Raises InitFileError with a one-line message saying what to fix.
     """
@@ -301,11 +302,14 @@ def load_init(path: str) -> tuple[Points, float | None]:
         raise InitFileError(
             f"init file {path}: robots {i} and {j} overlap (centres {dist:.6g} apart, need >= 2)"
         )
-    a = data.get("a")
-    if a is None:
+    if "a" not in data:
         return pts, None
+    a = data["a"]  # present: a number, whatever else it is ("4", true or null alike)
     if isinstance(a, bool) or not isinstance(a, (int, float)) or not math.isfinite(a):
-        raise InitFileError(f"init file {path}: 'a' must be a number, got {a!r}")
+        shown = json.dumps(a) if a is None or isinstance(a, bool) else repr(a)
+        raise InitFileError(
+            f"init file {path}: 'a' must be a number, got {shown} (leave 'a' out for the default)"
+        )
     return pts, float(a)
 
 

@@ -24,6 +24,7 @@ BUILTIN = {
     "uniform-circle": "fatswarm.agent.uniform_circle:ALGORITHM",
     "gathering": "fatswarm.agent.gathering:ALGORITHM",
     "uniform-circle-stepped": "fatswarm.agent.stepped:ALGORITHM",
+    "uniform-circle-lights": "fatswarm.agent.luminous:ALGORITHM",
 }
 _NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
 

@@ -53,8 +53,12 @@ class LitSpread:
             c == "moving" for c, k in zip(others, near, strict=True) if k
         ):
             return Lit(Path(), "waiting")
-        nearest = view[int(np.argmin(dist))]
-        away = -nearest / float(np.hypot(*nearest)) * params.step
+        # away from the nearest ones together: the same whatever the order of the view or frame
+        nearest = view[dist <= dist.min() + 1e-9].sum(axis=0)
+        norm = float(np.hypot(*nearest))
+        if norm < 1e-6:  # nearest ones all around it: no way out by this rule
+            return Lit(Path(), "waiting")
+        away = -nearest / norm * params.step
         return Lit(Path((Line((float(away[0]), float(away[1]))),)), "moving")
 
     def goal(self, positions: Points, params: SpreadParams) -> bool:
