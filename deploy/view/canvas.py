@@ -1,7 +1,8 @@
-"""A sub-cell drawing surface for the terminal: discs, circles and points to scale.
+"""A sub-cell drawing surface for the terminal: discs, circles and points to scale, and labels.
 
 Each terminal cell holds 2 x 4 dots (braille) or 1 x 2 dots (half blocks); a cell is about twice
 as tall as wide, so dots are square and circles stay round. World y points up, screen rows down.
+A label is text in whole cells, on a disc (reverse video) or just beside it, where there is room.
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ from rich.text import Text
 
 Mode = Literal["braille", "half"]
 DOTS_PER_CELL: dict[str, tuple[int, int]] = {"braille": (2, 4), "half": (1, 2)}
+
+LABEL_ON = 128  # a label cell drawn on its disc has layer LABEL_ON + the disc's layer (reverse)
 
 # Braille dot bits by (column, row) inside a cell (Unicode block U+2800).
 _BRAILLE_BITS = np.array([[0x01, 0x02, 0x04, 0x40], [0x08, 0x10, 0x20, 0x80]], dtype=np.int64)
@@ -91,6 +94,7 @@ class Canvas:
         self.dots: NDArray[np.uint8] = np.zeros(
             (viewport.dots_high, viewport.dots_wide), dtype=np.uint8
         )
+        self.labels: dict[tuple[int, int], tuple[str, int]] = {}  # (row, col) -> (char, layer)
 
     def _set(self, rows: NDArray[np.int64], cols: NDArray[np.int64], layer: int) -> None:
         keep = (rows >= 0) & (rows < self.dots.shape[0]) & (cols >= 0) & (cols < self.dots.shape[1])
@@ -140,6 +144,58 @@ class Canvas:
             np.column_stack((x + radius * np.cos(theta), y + radius * np.sin(theta))), layer
         )
 
+    def clear_discs(self, centres: NDArray[np.float64], radius: float, below: int) -> None:
+        """Unlight the dots of layers under `below` whose centres lie within `radius` of any of
+        the world points (k, 2): a margin that keeps what is drawn next (the robots) apart from
+        the lines through them (a circle, a path). One pass over the lit dots, not one per disc."""
+        vp = self.viewport
+        rows, cols = np.nonzero((self.dots > 0) & (self.dots < below))
+        if not len(rows) or not len(centres):
+            return
+        ci = (np.asarray(centres)[:, 0] - vp.left) / vp.units_per_dot  # dot coordinates
+        cj = (vp.top - np.asarray(centres)[:, 1]) / vp.units_per_dot
+        rd2 = (radius / vp.units_per_dot) ** 2
+        near = np.zeros(len(rows), dtype=bool)
+        for start in range(0, len(ci), 256):  # in slices: (dots x 256) at a time
+            di = cols[:, None] + 0.5 - ci[None, start : start + 256]
+            dj = rows[:, None] + 0.5 - cj[None, start : start + 256]
+            near |= (di * di + dj * dj <= rd2).any(axis=1)
+        self.dots[rows[near], cols[near]] = 0
+
+    def label(self, x: float, y: float, radius: float, text: str, layer: int) -> bool:
+        """Write `text` on the disc about (x, y) if it fits inside it, else just right of it if
+        those cells (and one more) are blank; False when there is no room for it."""
+        vp = self.viewport
+        dx, dy = DOTS_PER_CELL[vp.mode]
+        rd = radius / vp.units_per_dot
+        col, row = vp.to_cell(x, y)
+        if rd >= (len(text) / 2 + 0.5) * dx and rd >= 0.75 * dy:  # the disc holds it
+            first = col - (len(text) - 1) // 2
+            if self._place(row, first, text, LABEL_ON + layer, blank=False):
+                return True
+        after, _ = vp.to_cell(x + radius + vp.units_per_dot, y)
+        return self._place(row, after + 1, text, layer, blank=True)
+
+    def _place(self, row: int, first: int, text: str, layer: int, blank: bool) -> bool:
+        """Put `text` in cells (row, first...) unless one is off the canvas or labelled already,
+        or (`blank`) one of them or the cell after them has a dot lit."""
+        vp = self.viewport
+        cells = [(row, first + k) for k in range(len(text) + (1 if blank else 0))]
+        if not 0 <= row < vp.rows or first < 0 or first + len(text) > vp.cols:
+            return False
+        if any(cell in self.labels for cell in cells):
+            return False
+        if blank and self._lit_cells(row, first, min(first + len(cells), vp.cols)):
+            return False
+        for k, char in enumerate(text):
+            self.labels[(row, first + k)] = (char, layer)
+        return True
+
+    def _lit_cells(self, row: int, first: int, end: int) -> bool:
+        """Whether any dot of the cells (row, first..end-1) is lit."""
+        dx, dy = DOTS_PER_CELL[self.viewport.mode]
+        return bool(self.dots[row * dy : (row + 1) * dy, first * dx : end * dx].any())
+
     def polyline(self, pts: NDArray[np.float64], layer: int) -> None:
         """Draw the world points (k, 2) joined by straight strokes (open), half a dot apart."""
         if len(pts) == 0:
@@ -180,9 +236,20 @@ class Canvas:
         return ["".join(row) for row in table[top * 2 + bottom]]
 
     def runs(self) -> list[list[tuple[str, int]]]:
-        """Each cell row as runs of (text, layer) where the shown layer stays the same."""
+        """Each cell row as runs of (text, layer) where the shown layer stays the same; a label's
+        cells show its characters, on layer LABEL_ON + the disc's when it sits on its disc."""
         out: list[list[tuple[str, int]]] = []
-        for row, row_layers in zip(self.glyphs(), self.cell_layers().tolist(), strict=True):
+        labelled: dict[int, list[tuple[int, str, int]]] = {}
+        for (r, c), (char, layer) in self.labels.items():
+            labelled.setdefault(r, []).append((c, char, layer))
+        for row_no, (row, row_layers) in enumerate(
+            zip(self.glyphs(), self.cell_layers().tolist(), strict=True)
+        ):
+            if row_no in labelled:
+                chars = list(row)
+                for c, char, layer in labelled[row_no]:
+                    chars[c], row_layers[c] = char, layer
+                row = "".join(chars)
             cuts = [0] + [c for c in range(1, len(row)) if row_layers[c] != row_layers[c - 1]]
             cuts.append(len(row))
             out.append([(row[a:b], row_layers[a]) for a, b in itertools.pairwise(cuts)])
@@ -195,12 +262,25 @@ class Canvas:
             if row_no:
                 text.append("\n")
             for chunk, layer in runs:
-                text.append(chunk, style=styles.get(layer, "") if layer else "")
+                text.append(chunk, style=_style_of(styles, layer) or "")
         return text
 
     def segments(self, styles: Mapping[int, Style]) -> Iterator[Segment]:
         """The canvas as rich Segments, one line per cell row (fast path for live frames)."""
         for runs in self.runs():
             for chunk, layer in runs:
-                yield Segment(chunk, styles.get(layer) if layer else None)
+                style = _style_of(styles, layer)
+                yield Segment(chunk, style if isinstance(style, Style) else None)
             yield Segment.line()
+
+
+_ON_DISC = Style(reverse=True, bold=True)
+
+
+def _style_of(styles: Mapping[int, str | Style], layer: int) -> str | Style | None:
+    """The style of a layer (None for blank cells); a label on its disc: the disc's, reversed."""
+    if layer >= LABEL_ON:
+        base = styles.get(layer - LABEL_ON)
+        base = Style.parse(base) if isinstance(base, str) else base
+        return _ON_DISC if base is None else base + _ON_DISC
+    return styles.get(layer) if layer else None

@@ -1,10 +1,11 @@
 """Terminal dashboard: pure renderers from a `Frame` plus the thin shells that feed them.
 
 `render_frame(frame)` builds a rich renderable (canvas to scale, counters, agents, outcome) from a
-plain dataclass, so tests and replay need no network. `StateWatcher` follows the world's published
-state (`fatswarm/<swarm>/world/state`) through a ring channel of one: it never slows the round.
-It knows no algorithm: it shows the run's algorithm by name, its parameters and its figures.
-"""
+plain dataclass, so tests and replay need no network; the text around the canvas (and the `Frame`
+itself) lives in deploy/view/panels.py, and is taken from here as well. `StateWatcher` follows
+the world's published state (`fatswarm/<swarm>/world/state`) through a ring channel of one: it
+never slows the round. It knows no algorithm: it shows the run's algorithm by name, its
+parameters and its figures."""
 
 from __future__ import annotations
 
@@ -12,41 +13,50 @@ import argparse
 import io
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
-from rich.console import Console, ConsoleOptions, RenderResult
+from rich.console import Console, ConsoleOptions, RenderableType, RenderResult
 from rich.layout import Layout
 from rich.panel import Panel
-from rich.progress_bar import ProgressBar
 from rich.segment import Segment
 from rich.style import Style
-from rich.table import Table
 from rich.text import Text
 
-from fatswarm.agent import geometry
 from fatswarm.deploy.view.canvas import Canvas, Mode, Viewport
 from fatswarm.deploy.view.lights import (
     FOCUS_STYLE,
     LIGHT_HEX,
     SIGHT_STYLE,
     UNSEEN_STYLE,
-    Focus,
     focus_legend,
     light_number,
     palette_legend,
 )
-from fatswarm.domain import tolerance
+from fatswarm.deploy.view.panels import (
+    MAX_FIGURE_ROWS,
+    MIN_SIZE,
+    SIDE_WIDTH,
+    TARGET_RADIUS,
+    AgentsView,
+    Derived,
+    Frame,
+    agent_rows,
+    algorithm_text,
+    counters_table,
+    derive,
+    enclosing_circle,
+    figure_text,
+    fmt_rate,
+    footer_lines,
+    outcome_text,
+    run_lines,
+    too_small,
+)
 from fatswarm.domain.outcome import ENDED, Status
-from fatswarm.domain.path import Points
-from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
-from fatswarm.domain.seam import ParamValue
 
 if TYPE_CHECKING:
     from fatswarm.world.protocol import WorldState
-
-TARGET_RADIUS = "target radius"  # the figure that draws the paper's target points (see `Frame`)
 
 # Canvas layers: where several meet in one cell, the highest number wins. A robot in a colour
 # (lights) is drawn on LAYER_LIGHT + k, k its colour's number (`lights.light_number`).
@@ -56,7 +66,7 @@ LAYER_LIGHT = 10
 LAYER_FOCUS = LAYER_LIGHT + len(LIGHT_HEX)
 LAYER_STYLES: dict[int, str] = {
     LAYER_SEC: "grey50",
-    LAYER_TARGET_CIRCLE: "blue",
+    LAYER_TARGET_CIRCLE: "bright_blue",  # plain blue is too dim on a dark terminal
     LAYER_SIGHT: SIGHT_STYLE,
     LAYER_TRAIL: "magenta",
     LAYER_TARGET: "bold yellow",
@@ -70,110 +80,12 @@ LAYER_STYLES: dict[int, str] = {
 _LAYER_STYLES = {layer: Style.parse(style) for layer, style in LAYER_STYLES.items()}
 LEGEND_ROBOTS = "[green]idle[/] [bold cyan]active[/] [bold red]stopped[/] "  # without lights
 LEGEND = LEGEND_ROBOTS + "[magenta]path[/] [grey50]SEC[/]"
-LEGEND_TARGETS = " [blue]circle r[/] [bold yellow]targets[/]"
+LEGEND_TARGETS = " [bright_blue]circle r[/] [bold yellow]targets[/]"
 ROBOT_RADIUS = 1.0  # robots are unit discs
-SIDE_WIDTH = 46  # columns of the counters and agents column
-KEY_WIDTH = 14  # at most, of the counters' labels (an algorithm's figure may have a long one)
+GAP_DOTS = 1.5  # dots kept clear of circles and paths around each disc, so robots stand out
 PROGRESS_EVERY = 50  # rounds between two progress lines when output is not a terminal
 MAX_DUTY = 10  # the live view draws for at most a tenth of the wall time (one core)
-MAX_FIGURE_ROWS = 8  # figures shown as rows; a line says how many more there are
 BELOW_FINAL_FRAME = 6  # lines left under the final frame: the run's summary and the prompt
-
-
-@dataclass(frozen=True, slots=True, eq=False)
-class Frame:
-    """One dashboard frame, from a live `WorldState` or a record. Each of `figures` is a row; only
-    a "target radius" figure (the paper's algorithm's) draws and counts its target points."""
-
-    round: int
-    n: int
-    scheduler: str
-    positions: Points  # (n, 2) world frame
-    algorithm: str = DEFAULT_ALGORITHM  # its registered name
-    params: dict[str, ParamValue] = field(default_factory=dict)  # its parameters
-    figures: dict[str, float] = field(default_factory=dict)  # its `figures` hook, label -> value
-    a: float | None = None  # the paper's side, as before `params`: the same as params["a"]
-    active: tuple[int, ...] = ()  # robots active in `round`
-    moved: tuple[int, ...] = ()
-    stopped: tuple[int, ...] = ()  # stopped by contact in `round`
-    collisions_total: int = 0
-    status: Status = Status.RUNNING
-    swarm: str = ""
-    seed: int | None = None
-    alive: tuple[bool, ...] | None = None  # None when unknown (a record holds no liveliness)
-    last_active: tuple[int, ...] = ()  # round each robot was last active in, -1 if never
-    last_path_length: tuple[float, ...] = ()  # length covered by its last applied move
-    timeouts: tuple[int, ...] = ()  # rounds active without a move in time; empty when unknown
-    rounds_per_second: float | None = None
-    max_rounds: int | None = None
-    last_round: int | None = None  # replay: the record's last round
-    trails: tuple[Points, ...] = ()  # replay: sampled world paths (k, 2) of this round's moves
-    lights: tuple[str, ...] = ()  # replay: each robot's colour name (empty: none known)
-    palette: tuple[str, ...] = ()  # replay: the record's colour names, in the order drawn
-    focus: Focus | None = None  # replay --robot: what the chosen robot saw in this round
-    source: str = "live"
-
-    def __post_init__(self) -> None:
-        side = self.params.get("a")
-        if self.a is None and isinstance(side, (int, float)) and not isinstance(side, bool):
-            object.__setattr__(self, "a", float(side))
-        elif self.a is not None and "a" not in self.params:
-            object.__setattr__(self, "params", {**self.params, "a": self.a})
-
-
-@dataclass(frozen=True, slots=True)
-class Derived:
-    """What a frame derives from its positions: the SEC and, with a target radius, the targets."""
-
-    sec_center: tuple[float, float]
-    sec_radius: float  # r_c
-    target_radius: float | None  # r, the "target radius" figure; None: no target points
-    targets: Points  # (n, 2) target points on the current SEC, (0, 2) without a target radius
-    filled: int | None  # target points with a robot centre on them; None without targets
-
-
-def enclosing_circle(points: Points) -> tuple[tuple[float, float], float]:
-    """Centre and radius of the smallest circle enclosing the centres.
-
-    Computed relative to the first robot: the circle's rounding slack is relative to its radius,
-    so world coordinates far from the origin (1e5 and more) would swamp it.
-    """
-    if not len(points):
-        return (0.0, 0.0), 0.0
-    origin = points[0]
-    circle = geometry.sec(points - origin)
-    cx, cy = circle.center
-    return (float(cx + origin[0]), float(cy + origin[1])), float(circle.radius)
-
-
-def derive(frame: Frame) -> Derived:
-    """The SEC of the positions (any algorithm); the paper's target points and how many are filled
-    only when the frame's figures give a "target radius"."""
-    pts = np.asarray(frame.positions, dtype=np.float64).reshape(-1, 2)
-    center, rc = enclosing_circle(pts)
-    radius = frame.figures.get(TARGET_RADIUS)
-    if radius is None or not len(pts):
-        return Derived(center, rc, radius, np.zeros((0, 2)), None)
-    targets = geometry.target_points(pts - pts[0], frame.n) + pts[0]
-    tol = tolerance.EPS_AT_REL * tolerance.scale(rc)  # "a robot at the point", as the algorithm
-    dist = np.hypot(*(targets[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
-    filled = int(np.count_nonzero(dist.min(axis=1) <= tol)) if len(targets) else 0
-    return Derived(center, rc, radius, targets, filled)
-
-
-def algorithm_text(algorithm: str, params: dict[str, ParamValue]) -> str:
-    """`uniform-circle a=4`: the algorithm's name and its parameters."""
-    shown = " ".join(
-        f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in params.items()
-    )
-    return f"{algorithm} {shown}".strip()
-
-
-def figure_text(value: float) -> str:
-    """A figure as the counters show it: three decimals, or four significant digits far from 1."""
-    if value != 0 and not 1e-3 <= abs(value) < 1e6:
-        return f"{value:.4g}"
-    return f"{value:.3f}"
 
 
 # --- canvas ---------------------------------------------------------------------------------------
@@ -201,7 +113,10 @@ def build_canvas(
         canvas.polyline(trail, LAYER_TRAIL)
     for x, y in derived.targets:
         canvas.marker(float(x), float(y), LAYER_TARGET)
-    for (x, y), layer in zip(pts, robot_layers(frame, len(pts)), strict=True):
+    layers = robot_layers(frame, len(pts))
+    gap = ROBOT_RADIUS + GAP_DOTS * canvas.viewport.units_per_dot
+    canvas.clear_discs(pts, gap, below=LAYER_TARGET)  # a margin: circles and paths stop short
+    for (x, y), layer in zip(pts, layers, strict=True):
         canvas.disc(float(x), float(y), ROBOT_RADIUS, layer)
     focus = frame.focus
     if focus is not None and focus.looked and focus.origin is not None and focus.sight:
@@ -209,6 +124,8 @@ def build_canvas(
     if focus is not None and 0 <= focus.robot < len(pts):
         x, y = pts[focus.robot]
         canvas.circle(float(x), float(y), 1.6 * ROBOT_RADIUS, LAYER_FOCUS)
+    for i, ((x, y), layer) in enumerate(zip(pts, layers, strict=True)):  # ids where they fit
+        canvas.label(float(x), float(y), ROBOT_RADIUS, str(i), layer)
     return canvas
 
 
@@ -245,166 +162,40 @@ class CanvasView:
         yield from self._cache[(cols, rows)]
 
 
-# --- counters, agents, outcome -------------------------------------------------------------------
+# --- the whole frame ------------------------------------------------------------------------------
 
 
-def _fmt_rate(rate: float | None) -> str:
-    return "-" if rate is None else f"{rate:,.1f}"
-
-
-def outcome_text(frame: Frame) -> str:
-    """One line saying how the run ended, or that it still runs."""
-    k = frame.collisions_total
-    reached = f"{frame.algorithm} goal reached by {frame.n} robots after {frame.round} rounds"
-    if frame.status == Status.FORMED and k:
-        return f"FORMED WITH {k} COLLISION{'' if k == 1 else 'S'}: {reached}, not collision-free"
-    if frame.status == Status.FORMED:
-        head = f"FORMED: {reached}"
-    elif frame.status == Status.STALLED:
-        head = f"STALLED after {frame.round} rounds: no robot can make progress"
-    elif frame.status == Status.MAX_ROUNDS:
-        head = f"NOT FORMED: stopped at the round limit ({frame.round} rounds)"
-    else:
-        return f"running: round {frame.round}"
-    return f"{head}, {frame.collisions_total} collisions"
-
-
-def run_lines(frame: Frame, width: int) -> list[str]:
-    """`n=8  uniform-circle a=4`, parameters going on to further lines of at most `width`."""
-    lines = [f"n={frame.n}  {frame.algorithm}"]
-    for word in algorithm_text("", frame.params).split(" ") if frame.params else ():
-        if len(lines[-1]) + 1 + len(word) <= width:
-            lines[-1] += " " + word
-        else:
-            lines.append(word)
-    return lines
-
-
-def counters_table(frame: Frame, derived: Derived) -> Table:
-    """Round, status, scheduler, algorithm, r_c (versus r, targets filled), figures, collisions."""
-    grid = Table.grid(padding=(0, 1))
-    grid.add_column("key", style="bold", no_wrap=True, max_width=KEY_WIDTH, overflow="ellipsis")
-    grid.add_column("value", no_wrap=True, overflow="ellipsis")
-    round_text = f"{frame.round}"
-    if frame.last_round is not None:
-        round_text += f" / {frame.last_round}"
-    elif frame.max_rounds is not None:
-        round_text += f" (limit {frame.max_rounds})"
-    grid.add_row("round", round_text)
-    grid.add_row("status", frame.status)
-    grid.add_row(
-        "scheduler", frame.scheduler + (f"  seed {frame.seed}" if frame.seed is not None else "")
-    )
-    keys = min(KEY_WIDTH, max([len("this round"), *(len(k) for k in frame.figures)]))
-    for i, line in enumerate(run_lines(frame, SIDE_WIDTH - 4 - keys - 1)):  # borders, padding
-        grid.add_row("" if i else "robots", Text(line))  # Text: a user's name is no markup
-    r, rc = derived.target_radius, derived.sec_radius
-    if r is None or derived.filled is None:
-        grid.add_row("r_c", f"{rc:.3f}")
-    else:
-        grid.add_row("r_c / r", f"{rc:.3f} / {r:.3f}")
-        grid.add_row("", ProgressBar(total=max(r, 1e-9), completed=min(rc, r), width=22))
-        grid.add_row("targets", f"{derived.filled} / {frame.n} filled")
-        grid.add_row("", ProgressBar(total=max(frame.n, 1), completed=derived.filled, width=22))
-    shown = list(frame.figures.items())
-    if len(shown) > MAX_FIGURE_ROWS:  # the counters must leave the agents panel some room
-        shown = shown[: MAX_FIGURE_ROWS - 1]
-    for label, value in shown:
-        grid.add_row(Text(label), figure_text(value))  # Text: a label is no markup
-    if len(shown) < len(frame.figures):
-        grid.add_row("", Text(f"… {len(frame.figures) - len(shown)} more figures", style="dim"))
-    counts = f"{len(frame.active)} active  {len(frame.moved)} moved  {len(frame.stopped)} stopped"
-    grid.add_row("this round", counts)
-    grid.add_row("collisions", str(frame.collisions_total))
-    if frame.focus is not None:
-        grid.add_row(f"robot {frame.focus.robot}", frame.focus.line())
-    grid.add_row("rounds/s", _fmt_rate(frame.rounds_per_second))
-    if frame.alive is not None:
-        grid.add_row("alive", f"{sum(frame.alive)} / {frame.n}")
-    if frame.timeouts:
-        grid.add_row("timeouts", str(sum(frame.timeouts)))
-    return grid
-
-
-def agent_rows(frame: Frame) -> list[int]:
-    """Robots in the order the agents panel lists them: this round's active, the gone, the rest."""
-    first = [i for i in frame.active if 0 <= i < frame.n]
-    seen = set(first)
-    gone = [i for i in range(frame.n) if i not in seen and frame.alive and not frame.alive[i]]
-    seen.update(gone)
-    return first + gone + [i for i in range(frame.n) if i not in seen]
-
-
-class AgentsView:
-    """The agents list, cut to the rows that fit (with a line saying how many are left out).
-
-    Fixed-width text rather than a rich Table: a Table of a few hundred cells costs tens of
-    milliseconds a frame, and the dashboard must stay cheap next to the swarm it watches.
-    """
-
-    HEADER = f"{'robot':>5}  {'alive':<5}  {'last':>6}  {'path':>8}  {'t/o':>4}"
-
-    def __init__(self, frame: Frame) -> None:
-        self.frame = frame
-
-    def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
-        f = self.frame
-        height = options.height or 12
-        fit = max(0, height - 2)  # header row and the "more" line
-        order = agent_rows(f)
-        shown = order if len(order) <= fit + 1 else order[:fit]
-        active, stopped = set(f.active), set(f.stopped)
-        text = Text(self.HEADER, style="bold", no_wrap=True, overflow="crop")
-        for i in shown:
-            alive = "-" if f.alive is None else ("yes" if f.alive[i] else "NO")
-            last = f.last_active[i] if i < len(f.last_active) else -1
-            length = f.last_path_length[i] if i < len(f.last_path_length) else 0.0
-            timeouts = str(f.timeouts[i]) if i < len(f.timeouts) else "-"
-            last_text = "never" if last < 0 else str(last)
-            row = f"\n{i:>5}  {alive:<5}  {last_text:>6}  {length:>8.3f}  {timeouts:>4}"
-            text.append(
-                row, style="bold red" if i in stopped else "bold cyan" if i in active else ""
-            )
-        if len(shown) < len(order):
-            text.append(f"\n… {len(order) - len(shown)} more robots", style="dim")
-        yield text
-
-
-def render_frame(frame: Frame, *, footer: str | None = None, mode: Mode = "braille") -> Layout:
-    """The whole dashboard for one frame: header, canvas, counters, agents, outcome or key help."""
-    derived = derive(frame)
+def render_frame(
+    frame: Frame,
+    *,
+    footer: str | None = None,
+    mode: Mode = "braille",
+    screen: tuple[int, int] | None = None,
+) -> RenderableType:
+    """The whole dashboard for one frame: header, canvas, counters, agents, then the outcome and
+    the key help (`footer`), wrapped to the terminal's width. `screen`: the terminal's (columns,
+    rows); below MIN_SIZE the frame is a few lines saying so (`panels.too_small`)."""
     title = f"fatswarm · {frame.source}"
     if frame.swarm:
         title += f" · swarm {frame.swarm}"
-    layout = Layout(name="root")
-    bottom = outcome_text(frame)
-    if footer:
-        bottom = f"{bottom}    {footer}"
+    cols, rows = screen or (120, 40)
+    if cols < MIN_SIZE[0] or rows < MIN_SIZE[1]:
+        return too_small(frame, title, footer, (cols, rows))
+    derived = derive(frame)
     if frame.status == Status.FORMED:
         style = "bold green" if frame.collisions_total == 0 else "bold yellow"
     else:
         style = "bold" if frame.status in ENDED else ""
+    bottom = footer_lines(frame, footer, cols)
+    layout = Layout(name="root")
     layout.split_column(
         Layout(Text(title, style="bold", no_wrap=True, overflow="ellipsis"), name="header", size=1),
         Layout(name="body"),
-        Layout(
-            Panel(Text(bottom, no_wrap=True, overflow="ellipsis"), style=style),
-            name="footer",
-            size=3,
-        ),
-    )
-    legend = Text.from_markup(LEGEND)
-    if frame.lights:  # the colours instead of idle, active and stopped
-        legend = palette_legend(frame.palette) + Text.from_markup(LEGEND[len(LEGEND_ROBOTS) :])
-    legend += focus_legend(frame.focus)
-    if len(derived.targets):
-        legend += Text.from_markup(LEGEND_TARGETS)
-    canvas = Panel(
-        CanvasView(frame, derived, mode), title="swarm, to scale", subtitle=legend, padding=0
+        Layout(Panel(Text("\n").join(bottom), style=style), name="footer", size=len(bottom) + 2),
     )
     counters = counters_table(frame, derived)
     layout["body"].split_row(
-        Layout(canvas, name="canvas"),
+        Layout(canvas_panel(frame, derived, mode), name="canvas"),
         Layout(name="side", size=SIDE_WIDTH),
     )
     layout["side"].split_column(
@@ -412,6 +203,19 @@ def render_frame(frame: Frame, *, footer: str | None = None, mode: Mode = "brail
         Layout(Panel(AgentsView(frame), title="agents"), name="agents"),
     )
     return layout
+
+
+def canvas_panel(frame: Frame, derived: Derived, mode: Mode) -> Panel:
+    """The canvas in its panel, with a legend of what its colours mean."""
+    legend = Text.from_markup(LEGEND)
+    if frame.lights:  # the colours instead of idle, active and stopped
+        legend = palette_legend(frame.palette) + Text.from_markup(LEGEND[len(LEGEND_ROBOTS) :])
+    legend += focus_legend(frame.focus)
+    if len(derived.targets):
+        legend += Text.from_markup(LEGEND_TARGETS)
+    return Panel(
+        CanvasView(frame, derived, mode), title="swarm, to scale", subtitle=legend, padding=0
+    )
 
 
 def progress_line(frame: Frame) -> str:
@@ -426,16 +230,18 @@ def progress_line(frame: Frame) -> str:
     return (
         f"round {frame.round} {frame.status}: {', '.join(parts)}, "
         f"active {len(frame.active)}, collisions {frame.collisions_total}, "
-        f"{_fmt_rate(frame.rounds_per_second)} rounds/s"
+        f"{fmt_rate(frame.rounds_per_second)} rounds/s"
     )
 
 
 def print_frame(
     frame: Frame, console: Console, height: int | None = None, footer: str | None = None
 ) -> None:
-    """Print one frame at a fixed height (the final frame left on a terminal, or a test render)."""
+    """Print one frame at a fixed height (the final frame left on a terminal, or a test render);
+    laid out for the console's width and, when it is a terminal, its size."""
     h = height or min(console.size.height, 40)
-    console.print(render_frame(frame, footer=footer), height=h)
+    screen = (console.width, console.size.height if console.is_terminal else h)
+    console.print(render_frame(frame, footer=footer, screen=screen), height=h)
 
 
 def save_svg(
@@ -445,7 +251,7 @@ def save_svg(
     console = Console(
         record=True, width=width, height=height, file=io.StringIO(), color_system="truecolor"
     )
-    console.print(render_frame(frame, footer=footer), height=height)
+    console.print(render_frame(frame, footer=footer, screen=(width, height)), height=height)
     console.save_svg(path, title="fatswarm")
 
 
@@ -555,13 +361,19 @@ class LiveView:
 
     def show(self, frame: Frame) -> None:
         self.last = frame
-        self.live.update(render_frame(frame), refresh=True)
+        size = self.console.size  # the terminal's, as it is now: it may have been resized
+        self.live.update(render_frame(frame, screen=(size.width, size.height)), refresh=True)
 
     def close(self, final: Frame | None) -> None:
         self.live.stop()  # leaves the alternate screen, whose content the terminal drops
         frame = final or self.last
         if frame is not None:  # so print it on the main screen, leaving room for the summary
-            height = min(self.console.size.height, 40)
+            rows = self.console.size.height
+            # Scroll what the main screen shows (the lines printed before the dashboard) up into
+            # the scrollback, whole: the final frame then never sits under the tail of a line
+            # that wrapped and half scrolled away.
+            self.console.file.write("\n" * rows)
+            height = min(rows, 40)
             height = max(min(height, 16), height - BELOW_FINAL_FRAME)
             print_frame(frame, self.console, height)
 
@@ -581,3 +393,47 @@ def add_run_arguments(p: argparse.ArgumentParser) -> None:
         help="print a progress line every few rounds instead of the live dashboard",
     )
     p.add_argument("--svg", metavar="PATH", help="save the final dashboard frame as SVG")
+
+
+__all__ = [  # with what deploy/view/panels.py holds and callers take from here
+    "BELOW_FINAL_FRAME",
+    "LAYER_ACTIVE",
+    "LAYER_FOCUS",
+    "LAYER_LIGHT",
+    "LAYER_ROBOT",
+    "LAYER_SEC",
+    "LAYER_SIGHT",
+    "LAYER_STOPPED",
+    "LAYER_STYLES",
+    "LAYER_TARGET",
+    "LAYER_TARGET_CIRCLE",
+    "LAYER_TRAIL",
+    "LAYER_UNSEEN",
+    "LEGEND",
+    "MAX_DUTY",
+    "MAX_FIGURE_ROWS",
+    "PROGRESS_EVERY",
+    "TARGET_RADIUS",
+    "CanvasView",
+    "Derived",
+    "Frame",
+    "FrameSink",
+    "LiveView",
+    "ProgressLog",
+    "RateMeter",
+    "add_run_arguments",
+    "agent_rows",
+    "algorithm_text",
+    "build_canvas",
+    "derive",
+    "enclosing_circle",
+    "figure_text",
+    "frame_from_state",
+    "outcome_text",
+    "print_frame",
+    "progress_line",
+    "render_frame",
+    "robot_layers",
+    "run_lines",
+    "save_svg",
+]

@@ -1,4 +1,5 @@
-"""`fatswarm plot RECORD OUT.svg|OUT.png`: trajectories, start and end discs and the final circle.
+"""`fatswarm plot RECORD OUT.svg|OUT.png`: trajectories, start and end discs and the final circle;
+`OUT.gif|OUT.mp4`: the run as a video (deploy/view/animate.py).
 
 Drawn to scale (equal axes, unit discs) with matplotlib, an optional extra (`fatswarm[plot]`);
 without it the command says how to install it and exits with 2.
@@ -13,6 +14,12 @@ from typing import Any
 
 import numpy as np
 
+from fatswarm.deploy.view.animate import (
+    ANIMATIONS,
+    add_animation_arguments,
+    animation_flags_given,
+    main_animation,
+)
 from fatswarm.deploy.view.dashboard import algorithm_text, enclosing_circle
 from fatswarm.deploy.view.lights import (
     LookScene,
@@ -27,7 +34,13 @@ from fatswarm.domain.path import Points, sample, truncate
 from fatswarm.world.record import RecordFormatError, RunRecord, move_origin
 from fatswarm.world.record_read import read_record, torn_end_note
 
-FORMATS = (".svg", ".png")
+FORMATS = (".svg", ".png", *ANIMATIONS)
+DESCRIPTION = (
+    "draw a record to OUT.svg or OUT.png (trajectories, start and end discs, final circle), or "
+    "animate it into OUT.gif or OUT.mp4 (robots moving along their paths within each round, "
+    "ids on the discs, contacts marked in red, lights coloured); needs fatswarm[plot], and "
+    "ffmpeg for MP4"
+)
 TRAIL_STEP = 0.1  # world units between samples of a drawn path
 NO_LIGHT = "#808080"  # a robot whose colour the record does not say (the start)
 MISSING_MATPLOTLIB = (
@@ -130,15 +143,23 @@ def draw(record: RunRecord, out: str, title: str | None = None) -> None:
     ax.plot([cx], [cy], "k+", markersize=6)
     everything = np.vstack([header.initial, end, [[cx - rc, cy - rc], [cx + rc, cy + rc]]])
     lo, hi = everything.min(axis=0) - 1.5, everything.max(axis=0) + 1.5
+    for i, (x, y) in enumerate(end):  # ids on the end discs
+        ax.annotate(str(i), (x, y), ha="center", va="center", fontsize=7)
+    _finish(fig, ax, (lo, hi), title or default_title(record, rc), out)
+    plt.close(fig)
+
+
+def _finish(fig: Any, ax: Any, box: tuple[Points, Points], title: str, out: str) -> None:
+    """Limits, title, axis labels and grid; then write the picture to `out`."""
+    lo, hi = box
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
-    ax.set_title(title or default_title(record, rc), fontsize=9)
+    ax.set_title(title, fontsize=9)
     ax.set_xlabel("x (robot radii)")
     ax.set_ylabel("y (robot radii)")
     ax.grid(True, lw=0.3, alpha=0.5)
     fig.tight_layout()
     fig.savefig(out)
-    plt.close(fig)
 
 
 def _draw_lit(ax: Any, record: RunRecord, end: Points, palette: tuple[str, ...]) -> None:
@@ -175,14 +196,7 @@ def draw_look(record: RunRecord, scene: LookScene, out: str, title: str | None =
     palette, robot = record_palette(record), scene.robot
     fig, ax = plt.subplots(figsize=(7, 7))
     ax.set_aspect("equal")
-    for i, (x, y) in enumerate(scene.positions):
-        name = scene.lights[i] if scene.lights is not None else None
-        fc = light_hex(palette, name) or NO_LIGHT
-        if i != robot and i not in scene.seen:
-            ax.add_patch(Circle((x, y), 1.0, fc="#e8e8e8", ec="#b0b0b0", lw=0.5, ls=":"))
-        else:
-            ax.add_patch(Circle((x, y), 1.0, fc=fc, ec="black", lw=2.0 if i == robot else 0.5))
-        ax.annotate(str(i), (x, y), ha="center", va="center", fontsize=8)
+    _look_discs(ax, scene, palette)
     x0, y0 = scene.positions[robot]
     reach = scene.sight or 0.0
     if scene.sight is not None:
@@ -193,21 +207,29 @@ def draw_look(record: RunRecord, scene: LookScene, out: str, title: str | None =
         ax.plot(route[:, 0], route[:, 1], "-", color="black", lw=1.2)
     lo = np.minimum(scene.positions.min(axis=0), [x0 - reach, y0 - reach]) - 1.5
     hi = np.maximum(scene.positions.max(axis=0), [x0 + reach, y0 + reach]) + 1.5
-    ax.set_xlim(lo[0], hi[0])
-    ax.set_ylim(lo[1], hi[1])
     shown = sorted({n for n in scene.lights or () if n in palette})
     handles: list[Any] = [Patch(color=light_hex(palette, n), label=n) for n in shown]
     handles.append(Patch(fc="#e8e8e8", ec="#b0b0b0", ls=":", label="not seen"))
     if scene.sight is not None:
         handles.append(Line2D([], [], ls="--", color="black", lw=0.8, label="sight"))
     ax.legend(handles=handles, fontsize=7, loc="best")
-    ax.set_title(title or look_title(record, scene), fontsize=9)
-    ax.set_xlabel("x (robot radii)")
-    ax.set_ylabel("y (robot radii)")
-    ax.grid(True, lw=0.3, alpha=0.5)
-    fig.tight_layout()
-    fig.savefig(out)
+    _finish(fig, ax, (lo, hi), title or look_title(record, scene), out)
     plt.close(fig)
+
+
+def _look_discs(ax: Any, scene: LookScene, palette: tuple[str, ...]) -> None:
+    """Every robot at the Look, numbered: the looker ringed, the unseen pale and dotted."""
+    from matplotlib.patches import Circle
+
+    for i, (x, y) in enumerate(scene.positions):
+        name = scene.lights[i] if scene.lights is not None else None
+        fc = light_hex(palette, name) or NO_LIGHT
+        if i != scene.robot and i not in scene.seen:
+            ax.add_patch(Circle((x, y), 1.0, fc="#e8e8e8", ec="#b0b0b0", lw=0.5, ls=":"))
+        else:
+            lw = 2.0 if i == scene.robot else 0.5
+            ax.add_patch(Circle((x, y), 1.0, fc=fc, ec="black", lw=lw))
+        ax.annotate(str(i), (x, y), ha="center", va="center", fontsize=8)
 
 
 def look_title(record: RunRecord, scene: LookScene) -> str:
@@ -223,8 +245,13 @@ def look_title(record: RunRecord, scene: LookScene) -> str:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm plot`."""
+    p.description = DESCRIPTION
     p.add_argument("record", metavar="RECORD", help="run record (JSON Lines)")
-    p.add_argument("out", metavar="OUT", help="picture to write: OUT.svg or OUT.png")
+    p.add_argument(
+        "out",
+        metavar="OUT",
+        help="what to write: a picture OUT.svg or OUT.png, or a video OUT.gif or OUT.mp4",
+    )
     p.add_argument("--title", help="title instead of the run's parameters")
     p.add_argument(
         "--robot",
@@ -234,13 +261,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "robots were then, its move; needs a record made with --record-views)",
     )
     p.add_argument("--round", type=int, metavar="K", help="the round of --robot's Look")
+    add_animation_arguments(p)
 
 
 def main(args: argparse.Namespace) -> int:
     """`fatswarm plot`: exit 0 on success, 2 on bad input or without matplotlib."""
-    suffix = os.path.splitext(args.out)[1].lower()
-    if suffix not in FORMATS:
-        print(f"fatswarm plot: OUT must end in .svg or .png, got {args.out!r}", file=sys.stderr)
+    refused = _refused(args)
+    if refused is not None:
+        print(f"fatswarm plot: {refused}", file=sys.stderr)
         return ExitCode.BAD_INPUT
     try:
         record = read_record(args.record, allow_torn_end=True)  # a crashed run shows too
@@ -255,6 +283,8 @@ def main(args: argparse.Namespace) -> int:
     except ImportError:
         print(MISSING_MATPLOTLIB, file=sys.stderr)
         return ExitCode.BAD_INPUT
+    if os.path.splitext(args.out)[1].lower() in ANIMATIONS:
+        return main_animation(args, record)
     scene = _look_of(args, record)
     if isinstance(scene, str):
         print(f"fatswarm plot: {scene}", file=sys.stderr)
@@ -268,6 +298,25 @@ def main(args: argparse.Namespace) -> int:
         print(f"fatswarm plot: cannot write {args.out}: {exc.strerror or exc}", file=sys.stderr)
         return ExitCode.BAD_INPUT
     return ExitCode.OK
+
+
+def _refused(args: argparse.Namespace) -> str | None:
+    """Why OUT cannot be written, before any work: its kind, its folder, or flags it does not
+    take (None: go ahead)."""
+    suffix = os.path.splitext(args.out)[1].lower()
+    if suffix not in FORMATS:
+        return f"OUT must end in .svg, .png, .gif or .mp4, got {args.out!r}"
+    folder = os.path.dirname(os.path.abspath(args.out))
+    if not os.path.isdir(folder):
+        return f"cannot write {args.out}: no folder {folder}"
+    if os.path.isdir(args.out):
+        return f"cannot write {args.out}: it is a folder"
+    if not os.access(folder, os.W_OK):
+        return f"cannot write {args.out}: {folder} is not writable"
+    given = animation_flags_given(args)
+    if suffix not in ANIMATIONS and given:
+        return f"{', '.join(given)} go with a video: write OUT.gif or OUT.mp4"
+    return None
 
 
 def _look_of(args: argparse.Namespace, record: RunRecord) -> LookScene | str | None:

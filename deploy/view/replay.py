@@ -89,6 +89,8 @@ def build_frames(record: RunRecord, source: str = "replay") -> list[Frame]:
         )
     if record.result is not None:
         frames[-1] = replace(frames[-1], status=record.result.status)
+    else:  # the run stopped, or still runs, after its last round line: not "running" here
+        frames[-1] = replace(frames[-1], unfinished=True)
     return frames
 
 
@@ -142,6 +144,8 @@ class FrameFigures:
 # --- the player: pure state of what is shown ------------------------------------------------------
 
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 500.0)
+_STEP_KEYS = {"right": 1, "l": 1, ".": 1, "left": -1, "h": -1, ",": -1}  # a round on, back
+_SPEED_KEYS = {"up": 1, "+": 1, "=": 1, "down": -1, "-": -1, "_": -1}  # faster, slower
 
 
 @dataclass(slots=True)
@@ -164,20 +168,24 @@ class Player:
             self.playing = not self.playing
             if self.playing and self.index >= self.count - 1:
                 self.index = 0
-        elif key in ("right", "l", "."):
-            self.playing, self.index = False, min(self.count - 1, self.index + 1)
-        elif key in ("left", "h", ","):
-            self.playing, self.index = False, max(0, self.index - 1)
-        elif key in ("up", "+", "="):
-            self.speed = next((s for s in SPEEDS if s > self.speed), self.speed)
-        elif key in ("down", "-", "_"):
-            self.speed = next((s for s in reversed(SPEEDS) if s < self.speed), self.speed)
+        elif key in _STEP_KEYS:
+            step = self.index + _STEP_KEYS[key]
+            self.playing, self.index = False, min(self.count - 1, max(0, step))
+        elif key in _SPEED_KEYS:
+            self._change_speed(faster=_SPEED_KEYS[key] > 0)
         elif key in ("home", "g"):
             self.index = 0
         elif key in ("end", "G"):
             self.index = self.count - 1
         elif key in ("[", "]"):
             self._jump(forward=key == "]")
+
+    def _change_speed(self, faster: bool) -> None:
+        """One step up (down) the SPEEDS ladder, staying at its end."""
+        if faster:
+            self.speed = next((s for s in SPEEDS if s > self.speed), self.speed)
+        else:
+            self.speed = next((s for s in reversed(SPEEDS) if s < self.speed), self.speed)
 
     def _jump(self, forward: bool) -> None:
         """Pause at the next (previous) marked frame, if there is one."""
@@ -201,12 +209,20 @@ class Player:
             self.playing = False
 
     def footer(self) -> str:
-        """Key help and playback state for the bottom line."""
+        """Key help and playback state for the bottom lines (wrapped there, never cut)."""
         state = "playing" if self.playing else "paused"
         return (
             f"[{state} x{self.speed:g} rounds/s]  space play/pause  ←/→ step  "
             "+/- speed  g/G first/last  " + ("[/] its Looks  " if self.marks else "") + "q quit"
         )
+
+
+KEYS_HELP = (
+    "Keys while it plays: space play/pause; → or l or . one round on, ← or h or , one round "
+    "back; + or ↑ faster, - or ↓ slower; g or Home the start, G or End the last round; [ and ] "
+    "robot I's previous and next Look (with --robot); q or Esc quit. Off a terminal (standard "
+    "input or output not one) it prints one frame, as --no-play does."
+)
 
 
 _SEQUENCES = {
@@ -285,7 +301,13 @@ def play(
         last = time.monotonic()
         while not player.quit:
             if shown != player.index or player.playing:
-                live.update(render_frame(shown_as(frames[player.index]), footer=player.footer()))
+                size = console.size  # as it is now: the terminal may have been resized
+                shown_frame = shown_as(frames[player.index])
+                live.update(
+                    render_frame(
+                        shown_frame, footer=player.footer(), screen=(size.width, size.height)
+                    )
+                )
                 live.refresh()
                 shown = player.index
             wait = 0.05 if player.playing else 0.5
@@ -302,12 +324,17 @@ def play(
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm replay`."""
+    p.description = "play a run record in the dashboard, a frame per round. " + KEYS_HELP
     p.add_argument("record", metavar="RECORD", help="run record (JSON Lines) to play")
     p.add_argument("--round", type=int, metavar="K", help="start at round K (0 is the start)")
     p.add_argument(
         "--speed", type=float, default=10.0, metavar="R", help="rounds per second (default 10)"
     )
-    p.add_argument("--svg", metavar="PATH", help="save the frame shown at the end as SVG")
+    p.add_argument(
+        "--svg",
+        metavar="PATH",
+        help="save the frame shown at the end as SVG (PATH.svg, in a folder that exists)",
+    )
     p.add_argument(
         "--no-play",
         action="store_true",
@@ -343,6 +370,12 @@ def main(args: argparse.Namespace) -> int:
         return ExitCode.BAD_INPUT
     for line in _notes(args, record):
         warn(line)
+    if record.result is None and note is None:  # a torn end's note said why already
+        last = record.rounds[-1].round if record.rounds else 0
+        warn(
+            f"the record has no result line: the run stopped after round {last} without "
+            "finishing (interrupted, killed, or still being written)"
+        )
     if args.robot is not None:
         frames = focus_on(frames, record, args.robot)
     index = len(frames) - 1
@@ -378,6 +411,20 @@ def _refused(args: argparse.Namespace, frames: Sequence[Frame]) -> str | None:
     n = frames[0].n
     if args.robot is not None and not 0 <= args.robot < n:
         return f"--robot must be a robot number between 0 and {n - 1}, got {args.robot}"
+    return None if args.svg is None else svg_refused(args.svg)
+
+
+def svg_refused(path: str) -> str | None:
+    """Why --svg PATH cannot be written, said before the replay rather than after it."""
+    if not path.lower().endswith(".svg"):
+        return f"--svg writes SVG: PATH must end in .svg, got {path!r}"
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        return f"--svg: cannot write {path}: no folder {folder}"
+    if os.path.isdir(path):
+        return f"--svg: cannot write {path}: it is a folder"
+    if not os.access(folder, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
+        return f"--svg: cannot write {path}: permission denied"
     return None
 
 

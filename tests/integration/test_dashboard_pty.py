@@ -64,16 +64,22 @@ def screen_text(raw: bytes) -> str:
 class PtyProcess:
     """A child process whose stdin, stdout and stderr are one pseudo-terminal of ROWS x COLS."""
 
-    def __init__(self, argv: Sequence[str], env: dict[str, str] | None = None) -> None:
+    def __init__(
+        self,
+        argv: Sequence[str],
+        env: dict[str, str] | None = None,
+        size: tuple[int, int] = (ROWS, COLS),
+        stdout: int | None = None,
+    ) -> None:
         master, slave = pty.openpty()
-        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", ROWS, COLS, 0, 0))
+        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", *size, 0, 0))
         full_env = {k: v for k, v in os.environ.items() if k not in ("COLUMNS", "LINES")}
         full_env.update(TERM="xterm-256color", PYTHONUNBUFFERED="1", **(env or {}))
         full_env.pop("NO_COLOR", None)
         self.proc = subprocess.Popen(
             list(argv),
             stdin=slave,
-            stdout=slave,
+            stdout=slave if stdout is None else stdout,
             stderr=slave,
             cwd=ROOT,
             env=full_env,
@@ -215,6 +221,66 @@ def test_attached_dashboard_shows_the_published_state_and_the_outcome() -> None:
             pub.undeclare()
 
 
+@pytest.mark.parametrize(("rows", "cols"), [(24, 80), (12, 50)])
+def test_attached_dashboard_at_80x24_shows_agent_rows_and_below_says_it_is_too_small(
+    rows: int, cols: int
+) -> None:
+    swarm = "ptysmall"
+    with router_session() as (session, endpoint):
+        pub = session.declare_publisher(state_key(swarm))
+        child = PtyProcess(
+            [sys.executable, "-c", DASHBOARD_MAIN, "--connect", endpoint, "--swarm", swarm,
+             "--exit-at-end"],
+            size=(rows, cols),
+        )  # fmt: skip
+        try:
+            deadline = time.monotonic() + 30
+            if (cols, rows) == (80, 24):
+                patterns = [r"round\s+\d+", r"│\s+0\s+yes\s", r"│\s+2\s+yes\s", r"alive\s+8 / 8"]
+            else:
+                patterns = [
+                    r"too small \(50x12\): the dashboard needs 80x24",
+                    r"round \d+, 8 robots",
+                ]
+
+            def shown(text: str) -> bool:
+                return all(re.search(p, text) for p in patterns)
+
+            round_no = 0
+            while time.monotonic() < deadline and not shown(child.text):
+                round_no += 1
+                pub.put(world_state(round_no, 8, "running", swarm).encode())
+                child.pump(0.05)
+            assert shown(child.text), child.text[-3000:]
+            while child.proc.poll() is None and time.monotonic() < deadline:
+                pub.put(world_state(round_no + 1, 8, "formed", swarm).encode())
+                child.pump(0.1)
+            assert child.finish(deadline) == 0, child.text[-3000:]
+            verdict = f"FORMED: uniform-circle goal reached by 8 robots after {round_no + 1} rounds"
+            # wrapped, perhaps, but whole: no word of it cut
+            said = re.sub(r"[│\s]+", " ", child.text)
+            assert verdict in said, child.text[-3000:]
+        finally:
+            child.kill()
+            pub.undeclare()
+
+
+def test_replay_with_standard_output_not_a_terminal_prints_one_frame_at_once(
+    tmp_path: Path,
+) -> None:
+    record = ROOT / "tests" / "data" / "lockstep-n6-seed1.jsonl"
+    out = tmp_path / "out.txt"
+    with out.open("wb") as sink:  # standard input a terminal, standard output a file
+        child = PtyProcess([sys.executable, "-c", REPLAY_MAIN, str(record)], stdout=sink.fileno())
+        try:
+            assert child.finish(time.monotonic() + 60) == 0, child.text[-2000:]
+        finally:
+            child.kill()
+    text = out.read_text()
+    assert "FORMED: uniform-circle goal reached by 6 robots after 17 rounds" in text
+    assert "\x1b[?1049h" not in text  # never went to the alternate screen to play
+
+
 def test_attached_dashboard_without_a_router_says_so_and_exits_2() -> None:
     endpoint = f"tcp/127.0.0.1:{free_port()}"  # nothing listens there
     child = PtyProcess([sys.executable, "-c", DASHBOARD_MAIN, "--connect", endpoint])
@@ -236,6 +302,8 @@ def test_replay_on_a_terminal_steps_with_keys_and_quits() -> None:
         assert child.wait_for(
             lambda t: re.search(r"round\s+5 / 17", t) and "[paused" in t, deadline
         ), child.text
+        keys = "space play/pause  ←/→ step  +/- speed  g/G first/last  q quit"
+        assert keys in child.text  # at 120 columns the key help is whole
         os.write(child.master, b"..")  # two steps forward
         assert child.wait_for(lambda t: re.search(r"round\s+7 / 17", t), deadline), child.text
         os.write(child.master, b"G")  # to the end: the outcome shows

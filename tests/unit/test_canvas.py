@@ -95,3 +95,44 @@ def test_viewport_keeps_one_scale_on_both_axes() -> None:
 def test_viewport_refuses_an_empty_canvas() -> None:
     with pytest.raises(ValueError, match="at least one cell"):
         Viewport.fit(0.0, 1.0, 0.0, 1.0, 0, 5)
+
+
+def test_a_label_sits_on_a_disc_that_holds_it_in_reverse_video() -> None:
+    from fatswarm.deploy.view.canvas import LABEL_ON
+
+    c = unit_canvas(cols=20, rows=6)  # one dot, one unit; (0, 8) top left
+    c.disc(20.0, -4.0, 5.0, 3)
+    assert c.label(20.0, -4.0, 5.0, "12", 3)
+    col, row = c.viewport.to_cell(20.0, -4.0)
+    assert c.labels == {(row, col): ("1", LABEL_ON + 3), (row, col + 1): ("2", LABEL_ON + 3)}
+    text = "".join(chunk for chunk, _ in c.runs()[row])
+    assert "12" in text
+    styled = c.render({3: "green"})
+    assert any(
+        span.style and "reverse" in str(span.style) for span in styled.spans
+    )  # the digits read as a block of the disc's colour
+
+
+def test_a_label_goes_beside_a_small_disc_where_the_cells_are_blank_else_nowhere() -> None:
+    c = unit_canvas(cols=20, rows=6)
+    c.disc(4.0, 0.0, 1.0, 3)
+    assert c.label(4.0, 0.0, 1.0, "7", 3)
+    ((_, col), (char, layer)), *_ = c.labels.items()
+    assert (char, layer) == ("7", 3)
+    assert col > c.viewport.to_cell(5.0, 0.0)[0]  # right of the disc, not on it
+    crowded = unit_canvas(cols=20, rows=6)
+    crowded.disc(4.0, 0.0, 1.0, 3)
+    crowded.disc(8.0, 0.0, 1.0, 3)  # its neighbour takes the cells a label would need
+    assert not crowded.label(4.0, 0.0, 1.0, "7", 3)
+    assert crowded.labels == {}
+
+
+def test_clearing_a_disc_keeps_layers_at_or_above_the_bound() -> None:
+    c = unit_canvas(cols=20, rows=6)
+    c.circle(20.0, -4.0, 6.0, 1)
+    c.disc(26.0, -4.0, 1.0, 5)
+    c.clear_discs(np.array([[26.0, -4.0], [100.0, 100.0]]), 2.5, below=3)
+    jj, ii = np.nonzero(c.dots)
+    near = (ii + 0.5 - 26.0) ** 2 + (jj + 0.5 - 12.0) ** 2 <= 2.5**2
+    assert (c.dots[jj[near], ii[near]] == 5).all()  # only the disc is left there
+    assert (c.dots == 1).any()  # the circle elsewhere

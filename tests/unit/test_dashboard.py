@@ -180,7 +180,9 @@ def test_paper_frame_draws_its_targets_because_its_figures_give_a_target_radius(
     layers = build_canvas(frame, derived, cols=60, rows=30).cell_layers()
     assert (layers == LAYER_TARGET_CIRCLE).any() and (layers == LAYER_TARGET).any()
     text = render_text(frame)
-    assert re.search(rf"target radius\s+{derived.target_radius:.3f}\b", text)
+    # the figure is the r of `r_c / r`: not a row of its own as well
+    assert re.search(rf"r_c / r\s+\S+ / {derived.target_radius:.3f}\b", text)
+    assert "target radius" not in text
     assert "circle r" in text and "targets" in text
     # the same positions without the figure: the paper's algorithm is not assumed
     bare = derive(sample_frame(figures={}))
@@ -218,18 +220,31 @@ def test_frame_a_is_the_same_as_the_parameter_a() -> None:
     assert gathering.a is None and gathering.params == {"tolerance": 0.5}
 
 
-def test_agents_panel_lists_active_then_gone_then_the_rest() -> None:
+def test_agents_panel_lists_robots_by_number_whoever_is_active() -> None:
     alive = (True, True, True, False, True)
+    positions = polygon(5, 4.0)
+    frames = [
+        Frame(
+            round=k, n=5, a=4.0, scheduler="ssync", positions=positions, active=active, alive=alive
+        )
+        for k, active in enumerate([(4, 1), (0,), (2, 3)], start=1)
+    ]
+    for frame in frames:  # a row stays where it is from one round to the next
+        assert agent_rows(frame) == [0, 1, 2, 3, 4]
+        text = render_text(frame)
+        rows = [int(m.group(1)) for m in re.finditer(r"│\s+(\d)\s+(?:yes|NO)\b", text)]
+        assert rows == [0, 1, 2, 3, 4]
+
+
+def test_rows_left_out_say_how_many_are_active_or_gone() -> None:
+    n = 40
+    alive = tuple(i != 35 for i in range(n))
     frame = Frame(
-        round=3,
-        n=5,
-        a=4.0,
-        scheduler="ssync",
-        positions=polygon(5, 4.0),
-        active=(4, 1),
-        alive=alive,
-    )
-    assert agent_rows(frame) == [4, 1, 3, 0, 2]
+        round=2, n=n, a=4.0, scheduler="ssync", positions=polygon(n, 4.0),
+        active=(1, 30, 31), alive=alive,
+    )  # fmt: skip
+    text = render_text(frame, height=30)
+    assert re.search(r"… \d+ more robots \(2 active, 1 gone\)", text), text
 
 
 def test_agents_panel_says_how_many_rows_did_not_fit() -> None:

@@ -68,7 +68,7 @@ def test_unknown_picture_format_exits_2(
     tmp_path: pathlib.Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     assert run_plot(RECORD, tmp_path / "x.jpg") == 2
-    assert "must end in .svg or .png" in capsys.readouterr().err
+    assert "must end in .svg, .png, .gif or .mp4" in capsys.readouterr().err
 
 
 def test_unreadable_record_exits_2(

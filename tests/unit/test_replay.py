@@ -243,3 +243,64 @@ def test_figures_are_computed_once_per_round_shown() -> None:
     shown_as = FrameFigures(count, lambda line: None)
     assert shown_as(frames[2]).figures == shown_as(frames[2]).figures == {"calls": 1.0}
     assert shown_as(frames[3]).figures == {"calls": 2.0} and len(calls) == 2
+
+
+def test_a_record_without_a_result_line_says_it_is_unfinished_not_running(
+    tmp_path: pathlib.Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    cut = tmp_path / "cut.jsonl"
+    cut.write_text("".join(RECORD.read_text().splitlines(keepends=True)[:3]))  # header, 2 rounds
+    frames = build_frames(read_record(cut))
+    assert frames[-1].unfinished and not any(f.unfinished for f in frames[:-1])
+    assert run_replay(cut, "--no-play") == 0
+    captured = capsys.readouterr()
+    assert "UNFINISHED: the record stops after round 2 without a result line" in captured.out
+    assert "running: round" not in captured.out
+    assert captured.err == (
+        "fatswarm replay: the record has no result line: the run stopped after round 2 without "
+        "finishing (interrupted, killed, or still being written)\n"
+    )
+
+
+@pytest.mark.parametrize(
+    ("svg", "message"),
+    [
+        ("nowhere/last.svg", "--svg: cannot write {path}: no folder"),
+        ("last.png", "--svg writes SVG: PATH must end in .svg"),
+        ("folder.svg", "--svg: cannot write {path}: it is a folder"),
+    ],
+)
+def test_an_svg_that_cannot_be_written_is_refused_before_the_replay(
+    tmp_path: pathlib.Path, capsys: pytest.CaptureFixture[str], svg: str, message: str
+) -> None:
+    (tmp_path / "folder.svg").mkdir()
+    path = tmp_path / svg
+    assert run_replay(RECORD, "--svg", path) == 2  # not even played: refused first
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert message.format(path=path) in captured.err and captured.err.count("\n") == 1
+
+
+def test_help_lists_every_key(capsys: pytest.CaptureFixture[str]) -> None:
+    p = argparse.ArgumentParser(prog="fatswarm replay")
+    add_arguments(p)
+    with pytest.raises(SystemExit):
+        p.parse_args(["--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    for words in ("space play/pause", "one round on", "faster", "the last round", "[ and ]"):
+        assert words in help_text
+    assert "q or Esc quit" in help_text
+
+
+def test_off_a_terminal_it_prints_one_frame_as_no_play_does(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert run_replay(RECORD) == 0  # pytest's stdout is no terminal: no playing
+    out = capsys.readouterr().out
+    assert "NOT FORMED: stopped at the round limit (3 rounds)" in out
+    assert "\x1b[?1049h" not in out  # no alternate screen
+
+
+def test_the_key_help_names_the_looks_keys_only_with_marks() -> None:
+    assert "[/]" not in Player(count=3).footer()
+    assert "[/] its Looks" in Player(count=3, marks=(1,)).footer()
