@@ -6,27 +6,53 @@ fatswarm.deploy, so that no generic name is installed and nothing in a working d
 shadow them. In the checkout, fatswarm/ links to those folders.
 
 The Python API (fatswarm.deploy.engine.api) is here too: `fatswarm.run(...)`,
-`fatswarm.read_record(path)` and `fatswarm.trajectory(record)`, loaded on first use so that `import
-fatswarm` stays light.
+`fatswarm.read_record(path)`, `fatswarm.positions_at(record, t)`, `fatswarm.summary(...)`,
+`fatswarm.trajectory(record)`, loaded on first use so that `import fatswarm` stays light
+(`dir(fatswarm)` lists them all the same). docs/notebook.md shows them in a notebook.
 """
 
-from importlib import import_module
-from importlib.metadata import PackageNotFoundError, version
-from typing import Any
+import importlib as _importlib
+import importlib.metadata as _metadata
+import typing as _typing
 
-_API = ("run", "read_record", "trajectory", "moved_by_round", "summary")
+if _typing.TYPE_CHECKING:  # the API's types for type checkers and editors; loaded lazily below
+    from fatswarm.deploy.engine.api import (
+        RunRecord,
+        RunResult,
+        moved_by_round,
+        positions_at,
+        read_record,
+        run,
+        summary,
+        trajectory,
+    )
+
+__all__ = [
+    "RunRecord",
+    "RunResult",
+    "__version__",
+    "moved_by_round",
+    "positions_at",
+    "read_record",
+    "run",
+    "summary",
+    "trajectory",
+]
+_API = frozenset(__all__) - {"__version__"}  # names of fatswarm.deploy.engine.api
 
 try:
-    __version__ = version("fatswarm")
-except PackageNotFoundError:  # a checkout that was never installed
+    __version__ = _metadata.version("fatswarm")
+except _metadata.PackageNotFoundError:  # a checkout that was never installed
     __version__ = "0+unknown"
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> _typing.Any:
     """The API's functions, imported when first asked for."""
     if name in _API:
-        return getattr(import_module("fatswarm.deploy.engine.api"), name)
+        return getattr(_importlib.import_module("fatswarm.deploy.engine.api"), name)
     raise AttributeError(f"module 'fatswarm' has no attribute {name!r}")
 
 
-__all__ = ["__version__", *_API]
+def __dir__() -> list[str]:
+    """The module's names and the API's, which load on first use (for completion in notebooks)."""
+    return sorted({*globals(), *_API})  # private imports and helpers start with "_"

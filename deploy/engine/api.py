@@ -5,26 +5,52 @@
     record = fatswarm.read_record("run.jsonl")
     for rnd in record.rounds:            # each committed round; positions are (n, 2) arrays
         print(rnd.round, rnd.active, rnd.positions.mean(axis=0))
+    fatswarm.positions_at(record, 2.5)   # every centre half-way through round 3
+    record.to_dataframe()                # one row per robot per round (pandas)
 
 Runs here are lock-step runs (one process): the same world and coordinator cores as a networked
-run, so their records are the same. `fatswarm run` is the networked emulator.
+run, so their records are the same. `fatswarm run` is the networked emulator. The configuration
+is the CLI's (`RunConfig`): its refusals name flags, which `run` words as its own keywords.
 """
 
 from __future__ import annotations
 
+import numbers
 import os
+import re
+import reprlib
+import warnings
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import Final
 
 import numpy as np
 from numpy.typing import NDArray
 
-from fatswarm.deploy.engine.config import DEFAULT_SCHEDULER, DEFAULT_START, RunConfig
-from fatswarm.deploy.engine.lockstep import RoundReport, RunResult, run_lockstep
+from fatswarm.deploy.engine.config import (
+    DEFAULT_SCHEDULER,
+    DEFAULT_START,
+    RunConfig,
+    RunInputError,
+    input_errors,
+)
+from fatswarm.deploy.engine.lockstep import RoundReport, run_lockstep
+from fatswarm.deploy.engine.lockstep import RunResult as LockstepResult
+from fatswarm.deploy.engine.notebook import RunRecord, RunResult
 from fatswarm.domain.path import Points
 from fatswarm.domain.robot_model import RobotModel
-from fatswarm.world.record import RecordWriter, RunRecord
-from fatswarm.world.record_read import read_record
+from fatswarm.world import record_read
+from fatswarm.world.record import RecordWriter
+from fatswarm.world.record import RunRecord as RecordLines
+from fatswarm.world.timeline import positions_at
+
+
+class RunArgumentError(RunInputError, TypeError):
+    """A keyword of `fatswarm.run` of the wrong type (a ValueError, as every refused input, and a
+    TypeError)."""
+
+
+class TornRecordWarning(UserWarning):
+    """`read_record` left out a torn last line (a crash mid-write), as replay and plot do."""
 
 
 def run(
@@ -61,39 +87,43 @@ def run(
     `world.core.crash_plan`; the goal is then judged on the live robots); None: no crashes.
     `visibility`, `sight`, `lights`, `frames`, `frame_change`: the robot model, as the flags of
     `fatswarm run` (docs/model.md); `record_views`: each record line names what each looker saw.
-    Raises one of `fatswarm.deploy.engine.config.input_errors()` (a ValueError) for a configuration
-    it refuses.
+    Raises a ValueError in these keywords' words for what it refuses: one of `input_errors()`
+    (fatswarm.deploy.engine.config), or `RunArgumentError` for a keyword of the wrong type.
     """
-    config = RunConfig(
-        n=n,
-        algorithm=algorithm,
-        params=dict(params or {}),
-        seed=seed,
-        start=start,
-        init=None if init is None else os.fspath(init),
-        positions=None if positions is None else np.asarray(positions, dtype=np.float64),
-        scheduler=scheduler,
-        schedule=None if schedule is None else os.fspath(schedule),
-        fairness=fairness,
-        max_rounds=max_rounds,
-        non_rigid=non_rigid,
-        crash=crash,
-        model=RobotModel.of(visibility, sight, lights, frames, frame_change),
-        record_views=record_views,
-    )
-    return _run_config(config, record, on_round)
+    try:
+        config = RunConfig(
+            n=_whole("n", n),
+            algorithm=_text("algorithm", algorithm),
+            params=_params(params),
+            seed=_seed(seed),
+            start=_text("start", start),
+            init=_path("init", init),
+            positions=_positions(positions),
+            scheduler=_text("scheduler", scheduler),
+            schedule=_path("schedule", schedule),
+            fairness=_whole("fairness", fairness),
+            max_rounds=_whole("max_rounds", max_rounds),
+            non_rigid=_number("non_rigid", non_rigid),
+            crash=_whole("crash", crash),
+            model=_model(visibility, sight, lights, frames, frame_change),
+            record_views=_flag("record_views", record_views),
+        )
+        return _run_config(config, _path("record", record), _callback(on_round))
+    except input_errors() as exc:  # the CLI's words (flags) become the API's (keywords)
+        exc.args = (api_words(str(exc)), *exc.args[1:])
+        raise exc.with_traceback(None) from None
 
 
 def _run_config(
     config: RunConfig,
-    record: str | os.PathLike[str] | None,
+    record: str | None,
     on_round: Callable[[RoundReport], None] | None,
 ) -> RunResult:
     """Resolve `config` and run it in lock step, writing its record to `record` (if not None)."""
     setup = config.resolve()
     writer = None if record is None else RecordWriter(record)
     try:
-        return run_lockstep(
+        result = run_lockstep(
             setup.initial,
             setup.params,
             setup.scheduler,
@@ -111,15 +141,167 @@ def _run_config(
     finally:
         if writer is not None:
             writer.close()
+    return RunResult.of(
+        result,
+        n=setup.params.n,
+        seed=setup.seed,
+        scheduler=config.scheduler,
+        algorithm=setup.params.name,
+        params=dict(setup.params.values),
+        record=record,
+    )
 
 
-def trajectory(record: RunRecord) -> NDArray[np.float64]:
+# --- the keywords, checked in the API's words ----------------------------------------------------
+
+KEYWORDS: Final = frozenset(
+    {"n", "algorithm", "params", "seed", "start", "init", "positions", "scheduler", "schedule"}
+    | {"fairness", "max_rounds", "non_rigid", "crash", "visibility", "sight", "lights", "frames"}
+    | {"frame_change", "record_views", "record", "on_round"}
+)
+_PHRASES: Final = (  # whole phrases first, then every flag left (below) by its keyword
+    (re.compile(r"^-n (\S+) disagrees with the (\d+) robots of "),
+     r"n=\1 disagrees with the \2 robots of init "),
+    (re.compile(r"\bdrop (--[a-z][a-z-]*[a-z]|-n)\b"), r"leave \1 out"),
+    (re.compile(r"--lights (\S+) needs"), r"lights='\1' needs"),
+    (re.compile(r"--scheduler ([a-z-]+) or ([a-z-]+)\b"), r"scheduler='\1' or '\2'"),
+    (re.compile(r"--scheduler ([a-z-]+)\b"), r"scheduler='\1'"),
+    (re.compile(r"\(--schedule PATH\)"), "(schedule=PATH)"),
+    (re.compile(r"-a or --param a=\.\.\."), "params={'a': ...}"),
+)  # fmt: skip
+_FLAG: Final = re.compile(r"(?<![\w-])(--[a-z][a-z-]*[a-z]|-n)\b")
+
+
+def api_words(message: str) -> str:
+    """A refusal worded for `fatswarm run`'s flags, worded for `fatswarm.run`'s keywords:
+    `-n 5 disagrees with the 6 robots of s.json; drop -n` is `n=5 disagrees with the 6 robots of
+    init s.json; leave n out`, `--max-rounds` is `max_rounds`."""
+    for pattern, words in _PHRASES:
+        message = pattern.sub(words, message)
+
+    def keyword(match: re.Match[str]) -> str:
+        name = match[1].lstrip("-").replace("-", "_")
+        name = "params" if name == "param" else name
+        return name if name in KEYWORDS else match[1]
+
+    return _FLAG.sub(keyword, message)
+
+
+def _shown(value: object) -> str:
+    """`value` as a refusal shows it: its repr, cut short."""
+    return reprlib.repr(value)
+
+
+def _whole(name: str, value: object) -> int | None:
+    """An int keyword or None (numpy's ints too); RunArgumentError otherwise."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise RunArgumentError(f"{name} must be an int or None, got {_shown(value)}")
+    return int(value)
+
+
+def _seed(value: object) -> int:
+    if value is None or isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise RunArgumentError(f"seed must be an int, got {_shown(value)}")
+    return int(value)
+
+
+def _number(name: str, value: object) -> float | None:
+    """A number keyword or None; RunArgumentError otherwise (its range is the config's)."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise RunArgumentError(f"{name} must be a number or None, got {_shown(value)}")
+    return value if isinstance(value, (int, float)) else float(value)  # as given, for refusals
+
+
+def _text(name: str, value: object) -> str:
+    if not isinstance(value, str):
+        raise RunArgumentError(f"{name} must be a str, got {_shown(value)}")
+    return value
+
+
+def _flag(name: str, value: object) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise RunArgumentError(f"{name} must be True or False, got {_shown(value)}")
+    return bool(value)
+
+
+def _path(name: str, value: object) -> str | None:
+    """A file name keyword (str or os.PathLike) or None; RunArgumentError otherwise."""
+    if value is None:
+        return None
+    path = os.fspath(value) if isinstance(value, (str, os.PathLike)) else None
+    if not isinstance(path, str):
+        raise RunArgumentError(f"{name} must be a path (str or os.PathLike), got {_shown(value)}")
+    return path
+
+
+def _model(
+    visibility: object, sight: object, lights: object, frames: object, change: object
+) -> RobotModel:
+    """The robot model of the keywords; ModelError (its values) or RunArgumentError (types)."""
+    return RobotModel.of(
+        _text("visibility", visibility),
+        _number("sight", sight),
+        _text("lights", lights),
+        _text("frames", frames),
+        _text("frame_change", change),
+    )
+
+
+def _callback(value: object) -> Callable[[RoundReport], None] | None:
+    if value is not None and not callable(value):
+        raise RunArgumentError(f"on_round must be a function or None, got {_shown(value)}")
+    return value
+
+
+def _params(value: object) -> dict[str, object]:
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping) or not all(isinstance(k, str) for k in value):
+        raise RunArgumentError(f"params must be a dict of names to values, got {_shown(value)}")
+    return dict(value)
+
+
+def _positions(value: object) -> Points | None:
+    """The start as an array of numbers (its shape is the config's to check) or None."""
+    if value is None:
+        return None
+    try:
+        return np.array(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise RunArgumentError(
+            f"positions must be an (n, 2) array of numbers, got {_shown(value)}"
+        ) from None
+
+
+# --- records ------------------------------------------------------------------------------------
+
+
+def read_record(path: str | os.PathLike[str], *, allow_torn_end: bool = True) -> RunRecord:
+    """The whole record at `path`, validated (`RunRecord`); raises RecordFormatError naming the
+    file, line and reason. A torn last line (a run that crashed mid-write) is left out with a
+    `TornRecordWarning` saying how many complete rounds are kept, as `fatswarm replay` and
+    `fatswarm plot` do; `allow_torn_end=False` refuses it instead."""
+    name = _path("path", path)
+    if name is None:
+        raise RunArgumentError("path must be a path (str or os.PathLike), got None")
+    lines = record_read.read_record(name, allow_torn_end=allow_torn_end)
+    note = record_read.torn_end_note(name, lines)
+    if note is not None:
+        warnings.warn(note.removeprefix("note: "), TornRecordWarning, stacklevel=2)
+    return RunRecord.of(lines, name)
+
+
+def trajectory(record: RecordLines) -> NDArray[np.float64]:
     """Every robot's centre at the start and after each committed round: (rounds + 1, n, 2)."""
     frames = [record.header.initial, *(entry.positions for entry in record.rounds)]
     return np.stack([np.asarray(f, dtype=np.float64) for f in frames])
 
 
-def moved_by_round(record: RunRecord) -> NDArray[np.bool_]:
+def moved_by_round(record: RecordLines) -> NDArray[np.bool_]:
     """(rounds, n): whether each robot asked for a move (a non-empty path) in each round."""
     out = np.zeros((len(record.rounds), record.header.n), dtype=bool)
     for k, entry in enumerate(record.rounds):
@@ -127,17 +309,62 @@ def moved_by_round(record: RunRecord) -> NDArray[np.bool_]:
     return out
 
 
-def summary(result: RunResult) -> dict[str, Any]:
-    """The result's figures as a plain dict (for a table or a DataFrame row)."""
+def summary(of: LockstepResult | RecordLines) -> dict[str, str | int | float | None]:
+    """A run's figures as plain values (a row of a table or a DataFrame), from its result or its
+    record: status ("formed", "stalled", "max_rounds"; "unfinished" for a record without a
+    result line), rounds, epochs, moves, total_distance, collisions, looks, time (the virtual
+    time of an async run, else None), n, seed, scheduler and algorithm (None where unknown)."""
+    if isinstance(of, RecordLines):
+        return _record_summary(of)
+    if not isinstance(of, LockstepResult):
+        raise TypeError(f"summary takes a RunResult or a RunRecord, got {type(of).__name__}")
+    known = of if isinstance(of, RunResult) else None  # the API's results know their run
     return {
-        "status": result.status,
-        "rounds": result.rounds,
-        "epochs": result.epochs,
-        "moves": result.moves,
-        "total_distance": result.total_distance,
-        "collisions": result.collisions,
-        "looks": result.looks,
+        "status": str(of.status),
+        "rounds": int(of.rounds),
+        "epochs": int(of.epochs),
+        "moves": int(of.moves),
+        "total_distance": float(of.total_distance),
+        "collisions": int(of.collisions),
+        "looks": int(of.looks),
+        "time": None if of.time is None else float(of.time),
+        "n": len(of.positions) if known is None else known.n,
+        "seed": None if known is None else known.seed,
+        "scheduler": None if known is None else known.scheduler,
+        "algorithm": None if known is None else known.algorithm,
     }
 
 
-__all__ = ["RunResult", "moved_by_round", "read_record", "run", "summary", "trajectory"]
+def _record_summary(record: RecordLines) -> dict[str, str | int | float | None]:
+    """`summary` of a record: counted from its lines, epochs and time from its result line."""
+    extra = {} if record.result is None else record.result.extra
+    epochs, time = extra.get("epochs"), extra.get("time")
+    return {
+        "status": "unfinished" if record.result is None else str(record.result.status),
+        "rounds": len(record.rounds) if record.result is None else int(record.result.rounds),
+        "epochs": int(epochs) if isinstance(epochs, int) else None,
+        "moves": sum(len(entry.moves) for entry in record.rounds),
+        "total_distance": float(sum(m.traveled for e in record.rounds for m in e.moves)),
+        "collisions": sum(len(entry.collisions) for entry in record.rounds),
+        "looks": sum(len(entry.active) for entry in record.rounds),
+        "time": float(time) if isinstance(time, (int, float)) else None,
+        "n": record.header.n,
+        "seed": record.header.seed,
+        "scheduler": record.header.scheduler,
+        "algorithm": record.header.algorithm,
+    }
+
+
+__all__ = [
+    "RunArgumentError",
+    "RunRecord",
+    "RunResult",
+    "TornRecordWarning",
+    "api_words",
+    "moved_by_round",
+    "positions_at",
+    "read_record",
+    "run",
+    "summary",
+    "trajectory",
+]
