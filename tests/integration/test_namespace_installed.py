@@ -49,6 +49,7 @@ def test_the_installed_package_registers_its_algorithms_as_entry_points(tmp_path
         [
             ("gathering", "fatswarm.agent.gathering:ALGORITHM"),
             ("uniform-circle", "fatswarm.agent.uniform_circle:ALGORITHM"),
+            ("uniform-circle-lights", "fatswarm.agent.luminous:ALGORITHM"),
             ("uniform-circle-stepped", "fatswarm.agent.stepped:ALGORITHM"),
         ]
     )
