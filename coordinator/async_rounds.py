@@ -80,6 +80,7 @@ class AsyncCoordinatorCore(CoordinatorCore):
         """The instant `round_no`: the robots whose Look comes first, and when (first Looks for
         robots the world has none for)."""
         del round_no
+        self._plan_over_live()
         last = self._last
         if last is None:
             return ()

@@ -62,6 +62,7 @@ class Phase(enum.Enum):
     HELLO = "hello"  # Hello is out: where does the run stand?
     RETRY = "retry"  # no usable answer: Hello again at the deadline
     GATHER = "gather"  # waiting for agents: all n until the deadline, then (no deadline) anyone
+    REJOIN = "rejoin"  # before a new plan: waiting (to the deadline) for agents that went away
     BEGIN = "begin"  # Begin is out
     COLLECT = "collect"  # the round is open: waiting for the live active robots' moves
     COMMIT = "commit"  # Commit is out (carrying the next round's Begin when it may open at once)
@@ -73,7 +74,7 @@ class CoreMisuse(RuntimeError):
     """The caller broke the core's contract (a bug of the shell or driver, not of a peer)."""
 
 
-_WAITING = (Phase.RETRY, Phase.GATHER, Phase.COLLECT, Phase.PACE)  # phases with a deadline
+_WAITING = (Phase.RETRY, Phase.GATHER, Phase.REJOIN, Phase.COLLECT, Phase.PACE)  # with a deadline
 
 
 class CoordinatorCore:
@@ -82,6 +83,10 @@ class CoordinatorCore:
     A Commit carries the next round's Begin when nothing (a pace) holds that round back, so a round
     costs one request. The agents learn they are active from the world, which answers their held
     Looks when it opens a round: the coordinator never talks to them.
+
+    An agent that goes away is given the move timeout to come back before the scheduler plans a
+    round without it: a router restart takes every agent's token away for a moment, and a round
+    planned over the few agents back first would no longer be the lock-step run's.
 
     At most one request is out at a time, and an `Ask` is always the last action of a list.
     """
@@ -101,6 +106,8 @@ class CoordinatorCore:
         self._deadline: float | None = None  # of the phases in _WAITING; None in GATHER: anyone
         self._gather_s = 0.0
         self._live: set[int] = set()
+        self._planned_live: frozenset[int] = frozenset()  # live when the scheduler last planned
+        self._gone_at: dict[int, float] = {}  # robots of `_planned_live` gone since, and when
         self._held: set[int] = set()
         self._round = 0  # the round being opened, open or next (0 before the first Hello reply)
         self._planned: tuple[int, tuple[int, ...]] | None = None  # round, active: kept for retries
@@ -206,14 +213,19 @@ class CoordinatorCore:
             return []
         if alive:
             self._live.add(robot)
+            self._gone_at.pop(robot, None)
             if robot in self._active_set and robot not in self._held:
                 self._waiting.add(robot)  # (only read in COLLECT, where it is kept up to date)
         elif robot in self._live:
             self._live.discard(robot)
             self._waiting.discard(robot)
+            if robot in self._planned_live:
+                self._gone_at[robot] = now
             self._note(f"agent {robot} is gone")
         if self._phase is Phase.GATHER:
             return self._gathered(now)
+        if self._phase is Phase.REJOIN:
+            return self._open(now)
         if self._phase is Phase.COLLECT:  # a robot that died is not waited for
             return self._collected(now)
         return []
@@ -242,6 +254,8 @@ class CoordinatorCore:
         """Act on a deadline that has passed; nothing otherwise (calling it again is harmless)."""
         if self._phase is Phase.GATHER:
             return self._gathered(now)
+        if self._phase is Phase.REJOIN:
+            return self._open(now)
         if self._phase is Phase.COLLECT:
             return self._collected(now)
         if self._deadline is None or now < self._deadline:
@@ -331,18 +345,49 @@ class CoordinatorCore:
         return self._open(now)
 
     def _open(self, now: float) -> list[Action]:
+        away = self.rejoining(now)
+        if away:  # planned without them, the round would not be the one they were gone from
+            if self._phase is not Phase.REJOIN:
+                self._note(f"waiting for agents {sorted(away)} to come back (round {self._round})")
+            self._phase = Phase.REJOIN
+            self._deadline = min(self._gone_at[r] for r in away) + self.times.move_timeout_s
+            return []
+        if self._phase is Phase.REJOIN and self._gone_at:
+            self._note(
+                f"agents {sorted(self._gone_at)} did not come back within the move timeout; "
+                "going on without them",
+                warning=True,
+            )
+            self._gone_at.clear()  # (all of them past their move timeout: none is waited for)
         if not self._live:  # never a round with no live agent: wait for one
             self._phase, self._deadline = Phase.GATHER, None
             return []
         return self._begin(now)
+
+    def rejoining(self, now: float) -> frozenset[int]:
+        """Agents live when the scheduler last planned, gone since, whose move timeout (counted
+        from when they went) has not run out: no round is planned without them meanwhile."""
+        wait_s = self.times.move_timeout_s
+        return frozenset(
+            r
+            for r, gone in self._gone_at.items()
+            if r in self._planned_live and now < gone + wait_s
+        )
 
     def _plan(self, round_no: int) -> tuple[int, ...]:
         """Round `round_no`'s active set: the scheduler is asked once per round, in order."""
         if self._next is not None and self._next[0] == round_no:
             return self._next[1]
         assert self._scheduler is not None
+        self._plan_over_live()
         self._next = (round_no, tuple(self._scheduler.active(round_no, sorted(self._live))))
         return self._next[1]
+
+    def _plan_over_live(self) -> None:
+        """Note a new plan over the live agents (`_plan` calls it): the agents gone before it are
+        no longer waited for."""
+        self._planned_live = frozenset(self._live)
+        self._gone_at.clear()
 
     def _take_plan(self) -> None:
         """Make `round`'s planned active set the current one (a new round: nothing held yet)."""
@@ -378,7 +423,7 @@ class CoordinatorCore:
         timed_out = tuple(r for r in self.active if r not in self._held)
         self._phase, self._deadline = Phase.COMMIT, None
         paced = self._began_at is not None and now < self._began_at + self.times.pace_s
-        self._chained = bool(self._live) and not paced
+        self._chained = bool(self._live) and not paced and not self.rejoining(now)
         then = self._plan(self._round + 1) if self._chained else ()
         self._asked_at = now
         return [Ask(Commit(round=self._round, timed_out=timed_out, then_active=then))]

@@ -8,6 +8,7 @@ core answers. Nothing of the round's logic lives here. A Look the core cannot an
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import logging
 import queue
 import threading
@@ -23,6 +24,7 @@ from fatswarm.domain.seam import AlgorithmFailure
 from fatswarm.domain.wire import ProtocolError, robot_of_key
 from fatswarm.world.core import WorldCore
 from fatswarm.world.inbox import Inbox
+from fatswarm.world.instants import is_async
 from fatswarm.world.journal import Journal, perform
 from fatswarm.world.protocol import (
     MAX_CONTROL_BYTES,
@@ -31,6 +33,7 @@ from fatswarm.world.protocol import (
     ControlReply,
     LookRequest,
     MoveSubmitted,
+    WorldState,
     agent_alive_any_key,
     alive_key,
     control_key,
@@ -48,6 +51,7 @@ __all__ = [
     "control_bytes",
     "look_bytes",
     "move_bytes",
+    "observed_state",
     "serve",
 ]
 
@@ -136,7 +140,7 @@ class _Shell:
 
     def _publish(self) -> float:
         """Publish the observers' state (and do what making it asked); when it was published."""
-        self.state_pub.put(self.core.state().encode())
+        self.state_pub.put(observed_state(self.core).encode())
         perform(self.core.take_effects(), self.journal)
         return time.monotonic()
 
@@ -177,7 +181,7 @@ class _Shell:
         try:
             publish = _handle(core, self.journal, kind, item, self.held_pub, self.looks)
             if publish:
-                self.state_pub.put(core.state().encode())
+                self.state_pub.put(observed_state(core).encode())
             perform(core.take_effects(), self.journal)
             return publish
         except zenoh.ZError as exc:  # e.g. the asker left before its reply: not our problem
@@ -199,6 +203,16 @@ class _Shell:
                 core.open_round or core.committed,
             )
             return ExitCode.NOT_FORMED
+
+
+def observed_state(core: WorldCore) -> WorldState:
+    """The state observers are shown: the core's, its `round` counting what the record counts.
+    An async run's record counts ended cycles, and the coordinator's instants are not rounds: its
+    state says how many cycles have ended, as its progress lines and its summary do."""
+    state = core.state()
+    if is_async(core.setup):
+        return dataclasses.replace(state, round=core.tracker.snapshot().rounds)
+    return state
 
 
 def look_bytes(core: WorldCore, key: str) -> bytes | None:

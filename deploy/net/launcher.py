@@ -10,6 +10,7 @@ import argparse
 import logging
 import os
 import secrets
+import shlex
 import signal
 import sys
 import tempfile
@@ -20,6 +21,7 @@ from typing import Any
 
 from fatswarm.deploy.engine.config import RunInputError, RunSetup, input_errors
 from fatswarm.deploy.flags import check_seconds
+from fatswarm.deploy.net import capacity
 from fatswarm.deploy.net.children import STOP_GRACE_S, Children, stop_grace_s
 from fatswarm.deploy.net.part_agents import agents_command
 from fatswarm.deploy.net.run_flags import live_dashboard, watchable_pace
@@ -30,8 +32,18 @@ from fatswarm.deploy.net.zconf import (
     loopback_endpoint,
     make_config,
     open_client,
+    token_held,
 )
-from fatswarm.deploy.view.summary import Outcome, exit_code, print_outcome, side_of, summary
+from fatswarm.deploy.view.summary import (
+    Outcome,
+    counted,
+    crashes_in,
+    exit_code,
+    print_outcome,
+    side_of,
+    summary,
+    unit,
+)
 from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.wire import check_swarm
@@ -73,6 +85,10 @@ def run_networked(args: argparse.Namespace, resolve_run: Resolver) -> int:
         pace = watchable_pace(setup.params.n, setup.scheduler.name) if live_dashboard(args) else 0.0
     if setup.resumed is None and args.seed is None and not args.quiet:
         print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
+    cost, machine = capacity.estimate_networked(setup.params.n, args.spawn), capacity.this_machine()
+    if not args.quiet and capacity.worth_saying(cost, machine):
+        print(capacity.estimate_text(cost, machine), file=sys.stderr, flush=True)
+    capacity.raise_open_files(cost)  # the world's router holds a link per agent
     # The world's own router holds one swarm: the default name lets `fatswarm dashboard` attach
     # as is. On a shared router (--connect), a fresh name keeps two runs from mixing messages.
     swarm = args.swarm or (f"run-{secrets.token_hex(4)}" if args.connect else DEFAULT_SWARM)
@@ -109,10 +125,38 @@ def check_inputs(
             )
         if args.swarm is not None:
             check_swarm(args.swarm)
+        too_big = capacity.problem(
+            capacity.estimate_networked(setup.params.n, args.spawn), capacity.this_machine()
+        )
+        if too_big is not None and not args.force:
+            raise RunInputError(too_big)
         check_network(args.connect, args.listen)  # a router answers; --listen well formed, free
+        if args.connect and args.swarm is not None:
+            check_swarm_free(args.connect, args.swarm)
     except bad_input as exc:
         return str(exc), seed, setup
     return None, seed, setup
+
+
+def check_swarm_free(connect: Sequence[str], swarm: str) -> None:
+    """Raise RunInputError if `swarm` already has a world or a coordinator on the router network
+    at `connect`: nothing of this run may start then (its display would show the other run, its
+    parts would be refused one by one). The parts' own check, asked once here, before anything."""
+    # here, not at the top: the roles' key builders, only for a run on a shared router
+    from fatswarm.coordinator.protocol import alive_key as coordinator_key
+    from fatswarm.world.protocol import alive_key as world_key
+
+    session = open_client(make_config("client", connect=connect))
+    try:
+        for part, key in (("world", world_key(swarm)), ("coordinator", coordinator_key(swarm))):
+            if session is not None and token_held(session, key):
+                raise RunInputError(
+                    f"swarm {swarm!r} already has a {part} on this router network; stop it "
+                    "or pick another --swarm"
+                )
+    finally:
+        if session is not None:
+            session.close()
 
 
 def write_header(setup: RunSetup, record: str, swarm: str) -> None:
@@ -186,7 +230,37 @@ def _launch(args: argparse.Namespace, setup: RunSetup, record: str, pace: float,
             signal.signal(sig, handler)
     if code in (ExitCode.FORMED, ExitCode.NOT_FORMED):
         code = _report(args, record, code, followed)
+    elif code in (ExitCode.INTERRUPTED, ExitCode.TERMINATED):  # below the final frame, if shown
+        print(_stopped(code, record, args.record, setup), file=sys.stderr)
     return code
+
+
+def stopped_line(word: str, done: int, *, record: str | None, scheduler: str, seed: int) -> str:
+    """The line a networked run stopped by a signal (`word`: "interrupted", "terminated") prints
+    last: after which round its record stopped (`done`: its rounds; ended cycles under an async
+    model) and how to go on. Word for word the lock step's (`deploy.commands.resume.stopped_line`,
+    which this layer may not import), less its `--lockstep`."""
+    after = f"{word} after {unit(scheduler)} {done}"
+    if scheduler in ASYNC_NAMES:
+        return f"{after}; an async run cannot be resumed: run it again with --seed {seed}"
+    if not record:
+        return f"{after} (no --record: nothing to resume)"
+    return f"{after}; go on with `fatswarm run --record {shlex.quote(record)} --resume`"
+
+
+def _stopped(code: int, record: str, given: str | None, setup: RunSetup) -> str:
+    """`stopped_line` for the run of the record at `record` (`given`: as --record named it, else
+    None), read once every part has stopped."""
+    word = "terminated" if code == ExitCode.TERMINATED else "interrupted"
+    scheduler = setup.scheduler.name
+    try:
+        rec = read_record(record, allow_torn_end=True)
+    except (RecordFormatError, OSError):  # (the header is written before any part starts)
+        return f"{word} before the run started"
+    if rec.result is not None:  # the signal came as the display waited for the final state
+        rounds = counted(rec.result.rounds, unit(scheduler))
+        return f"{word} after the run ended ({rec.result.status} after {rounds})"
+    return stopped_line(word, len(rec.rounds), record=given, scheduler=scheduler, seed=setup.seed)
 
 
 def _run_parts(
@@ -317,7 +391,8 @@ def _start_world(
 
 
 def _quiet() -> list[str]:
-    return ["--log-level", "warning", "--exit-with-parent", str(os.getpid())]
+    """The flags of every part started here: warnings only, in plain lines; gone with us."""
+    return ["--log-level", "warning", "--plain-log", "--exit-with-parent", str(os.getpid())]
 
 
 def _run_children(
@@ -345,6 +420,7 @@ def _run_children(
             ),
             "--exit-with-parent",
             str(os.getpid()),
+            "--plain-log",
         ],
         stdout=STDERR_FD,
     )
@@ -399,6 +475,7 @@ def _await_end(children: Children, stop: StopSignal) -> int:
             )
             return ExitCode.NOT_FORMED
     code = stop.exit_code()
+    # at once (stopping many agents takes a while); how far the run got once all have stopped
     print(
         f"{'terminated' if code == ExitCode.TERMINATED else 'interrupted'}: stopping every "
         "process started",
@@ -478,7 +555,14 @@ def read_outcome(record: str) -> Outcome | None:
         algorithm=h.algorithm,
         params=dict(h.params),
         time=float(x["time"]) if isinstance(x.get("time"), (int, float)) else None,
+        crashes=crashes_in(rec.rounds),  # (an async record's cycles name none)
     ).noted(h.extra)
 
 
-__all__ = ["StopSignal", "read_outcome", "run_networked"]
+__all__ = [
+    "StopSignal",
+    "check_swarm_free",
+    "read_outcome",
+    "run_networked",
+    "stopped_line",
+]

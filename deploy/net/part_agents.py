@@ -226,6 +226,7 @@ def _exec_agents(args: argparse.Namespace, robots: range) -> int:
                     ),
                     "--exit-with-parent",
                     str(os.getpid()),
+                    *(["--plain-log"] if args.plain_log else []),
                 ],
             )  # a killed host: none left
         while not stop.wait(0.5):

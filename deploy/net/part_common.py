@@ -62,16 +62,26 @@ class ShortLines(logging.Filter):
         return True
 
 
+class PlainLines(logging.Formatter):
+    """A log message as one plain line for a person, "fatswarm world: <message>": the format of
+    a part that `fatswarm run` started, whose stderr is the user's terminal (`--plain-log`)."""
+
+    def formatMessage(self, record: logging.LogRecord) -> str:
+        return f"{record.name.replace('.', ' ')}: {record.getMessage()}"
+
+
+LOG_FORMAT = "%(asctime)s %(name)s[%(process)d] %(levelname)s %(message)s"
+
+
 def setup_logging(args: argparse.Namespace, default: str) -> None:
-    """Log to stderr at --log-level (else `default`), each message cut by ShortLines."""
+    """Log to stderr at --log-level (else `default`), each message cut by ShortLines, in plain
+    lines with `--plain-log` (the launcher's), else with time, process and level."""
     level = getattr(args, "log_level", None) or default
-    logging.basicConfig(
-        level=level.upper(),
-        format="%(asctime)s %(name)s[%(process)d] %(levelname)s %(message)s",
-        stream=sys.stderr,
-    )
+    logging.basicConfig(level=level.upper(), format=LOG_FORMAT, stream=sys.stderr)
     for handler in logging.getLogger().handlers:
         handler.addFilter(ShortLines())
+        if getattr(args, "plain_log", False):
+            handler.setFormatter(PlainLines())
 
 
 def fail(part: str, message: str) -> int:
@@ -107,7 +117,7 @@ def add_common_arguments(
     p: argparse.ArgumentParser, connect_note: str = "", config_note: str = ""
 ) -> None:
     """The flags every part takes: Zenoh's (`--connect`, `--listen`, `--swarm`), `--config`,
-    `--log-level` and the launcher's hidden `--exit-with-parent`."""
+    `--log-level` and the launcher's hidden `--exit-with-parent` and `--plain-log`."""
     add_zenoh_arguments(p, connect_note=connect_note)
     p.add_argument(
         "--config",
@@ -129,6 +139,9 @@ def add_common_arguments(
     p.add_argument(
         "--exit-with-parent", type=int, default=None, metavar="PID", help=argparse.SUPPRESS
     )  # the launcher's pid: stop when it is gone
+    p.add_argument(
+        "--plain-log", action="store_true", help=argparse.SUPPRESS
+    )  # the launcher's: log lines as `fatswarm world: ...`, for the person at its terminal
 
 
 def client_config(

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import math
 import queue
+import re
 import signal
 import subprocess
 import sys
@@ -12,7 +14,14 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from netharness import Swarm, assert_same_run, descendants_of, lockstep_record, running
+from netharness import (
+    Swarm,
+    assert_one_line,
+    assert_same_run,
+    descendants_of,
+    lockstep_record,
+    running,
+)
 
 from fatswarm.domain.path import Line
 from fatswarm.domain.path import Path as RobotPath
@@ -236,15 +245,20 @@ def _offer_open(opened: queue.Queue[WorldState], sample: Any) -> None:
         opened.put(state)
 
 
-def test_agents_and_world_outlive_a_router_restart(make_swarm: Callable[..., Swarm]) -> None:
-    sw = make_swarm(8, SEED)
+@pytest.mark.parametrize("seed", [1, 11])  # the seeds of issue 21's report
+def test_agents_and_world_outlive_a_router_restart_and_keep_the_lockstep_run(
+    tmp_path: Path, make_swarm: Callable[..., Swarm], seed: int
+) -> None:
+    sw = make_swarm(8, seed)
     sw.start_all(pace=0.2)
     sw.wait_for("round 3", lambda: (s := sw.state()) is not None and s.round >= 3)
     sw.kill9("router")
     sw.start_router("router again")  # on the same endpoint
     end = sw.wait_done()
-    assert end.status == "formed"
+    assert end.status == "formed", sw.logs()
     assert all(p.poll() is None for name, p in sw.children.procs.items() if name != "router")
+    # the coordinator waited for every agent to come back: no smaller active set, no time-out
+    assert_same_run(read_record(sw.state_path), lockstep_record(tmp_path / "lock.jsonl", 8, seed))
 
 
 def _wait_for_parts(proc: subprocess.Popen[bytes], n: int) -> list[int]:
@@ -290,6 +304,8 @@ def test_sigterm_to_the_launcher_stops_every_process_it_started(tmp_path: Path) 
             proc.wait()
     assert proc.returncode == 143  # 128 + SIGTERM (130 is Ctrl-C)
     assert b"did not stop on SIGTERM" not in err, err
+    last = err.decode().splitlines()[-1]  # how far it got (no --record: nothing to resume)
+    assert re.fullmatch(r"terminated after round \d+ \(no --record: nothing to resume\)", last), err
     alive = [pid for pid in children if Path(f"/proc/{pid}").exists()]
     assert not alive
 
@@ -377,12 +393,41 @@ def test_run_resume_continues_a_cut_record_as_its_own_run(tmp_path: Path) -> Non
     lock = lockstep_record(tmp_path / "lock.jsonl", 8, SEED)
     lines = (tmp_path / "lock.jsonl").read_text().splitlines(keepends=True)
     record = tmp_path / "net.jsonl"
-    record.write_text("".join(lines[:6]))  # the header and 5 rounds, no result: a crash
+    # the header and 5 rounds, no result, and half of round 6: a crash while writing it
+    record.write_text("".join(lines[:6]) + lines[6][:30])
     code, out = _fatswarm_run(["--record", str(record), "--resume", "-q"])
     assert code == 0, out
     net = read_record(record)
     assert record.read_text().startswith("".join(lines[:6]))  # appended to, nothing rewritten
     assert_same_run(net, lock)
+    # what the world says of the torn line reaches the user as a plain line, not a log record
+    said = f"fatswarm world: state file {record}: dropping a torn last line of 30 bytes"
+    assert said in out.splitlines(), out
+    assert not RAW_LOG_LINE.search(out), out
+
+
+RAW_LOG_LINE = re.compile(r"^\d{4}-\d\d-\d\d \d\d:\d\d:\d\d,\d+ fatswarm\.", re.MULTILINE)
+
+
+def test_an_async_runs_progress_lines_count_ended_cycles_as_its_record_and_summary(
+    tmp_path: Path,
+) -> None:
+    # async-slowest, n = 8, seed 1: 244 ended cycles in 202 of the coordinator's instants
+    record = tmp_path / "net.jsonl"
+    flags = ["-n", "8", "--seed", "1", "--scheduler", "async-slowest", "--no-dashboard"]
+    code, out = _fatswarm_run([*flags, "--pace", "0", "--record", str(record)])
+    assert code == 0, out
+    net = read_record(record)
+    assert net.result is not None
+    cycles = net.result.rounds
+    lines = out.splitlines()
+    assert not [line for line in lines if line.startswith("round ")], out
+    progress = [line for line in lines if re.match(r"cycle \d+ \w+: ", line)]
+    assert progress and progress[-1].startswith(f"cycle {cycles} formed: "), out
+    assert progress[-1].endswith(" cycles/s"), out
+    outcome = f"FORMED: uniform-circle goal reached by 8 robots after {cycles} cycles, 0 collisions"
+    assert outcome in lines, out
+    assert f"formed in {cycles} cycles, collision-free" in lines, out  # the summary's words
 
 
 def test_a_robot_dead_for_good_counts_as_crashed_and_the_run_ends(
@@ -525,3 +570,26 @@ def test_an_async_run_records_the_lockstep_run_instant_by_instant(
             non_rigid=non_rigid,
         )
     assert_same_run(net, read_record(str(lock)))
+
+
+def test_a_networked_run_past_this_machines_memory_is_refused_in_one_line(tmp_path: Path) -> None:
+    from fatswarm.deploy.net import capacity
+
+    available = capacity.this_machine().memory_mb
+    if available is None:
+        pytest.skip("this machine does not say how much memory it has available")
+    n = math.ceil(1.2 * available / capacity.AGENT_MB["exec"])  # 20% over what is available
+    if n > 5000:
+        pytest.skip(f"{available:.0f} MB available: a start of {n} robots takes long to draw")
+    record = tmp_path / "net.jsonl"
+    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", "-n", str(n), "--spawn", "exec"]
+    done = subprocess.run(
+        [*argv, "--record", str(record), "--no-dashboard"],
+        capture_output=True,
+        text=True,
+        timeout=240,
+        check=False,
+    )
+    assert_one_line(done, f"fatswarm run: -n {n} starts {n + 3:,} processes, about ")
+    assert done.stderr.rstrip().endswith("or pass --force to start it anyway"), done.stderr
+    assert done.stdout == "" and not record.exists()  # nothing started, nothing written

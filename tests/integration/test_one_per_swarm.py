@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
@@ -57,6 +58,32 @@ def test_a_second_world_or_coordinator_on_a_swarm_is_refused_in_one_line(
     assert_same_run(
         read_record(sw.state_path), lockstep_record(tmp_path / "lock.jsonl", sw.n, SEED)
     )
+
+
+def test_fatswarm_run_on_a_swarm_in_use_is_refused_in_one_line_before_anything(
+    tmp_path: Path, make_swarm: Callable[..., Swarm]
+) -> None:
+    sw = make_swarm(4, SEED)
+    sw.start_router()
+    sw.observe()
+    sw.start_world()
+    sw.start_coordinator(pace=0.0)  # no agents: both stay up, the world publishing its state
+    sw.wait_for(
+        "the world's and the coordinator's tokens",
+        lambda: sw.live(world_alive_key(sw.swarm)) and sw.live(coordinator_alive_key(sw.swarm)),
+    )
+    record = tmp_path / "second.jsonl"
+    (done,) = run_all(
+        [
+            sys.executable, "-m", "fatswarm.deploy.cli", "run", "--connect", sw.endpoint,
+            "--swarm", sw.swarm, "--no-dashboard", "-n", "4", "--record", str(record),
+        ]
+    )  # fmt: skip
+    # no seed line, no progress line of the other run, no refusal of each part: this one line
+    assert_one_line(done, _refusal("world", sw.swarm).replace("world", "run", 1))
+    assert done.stdout == ""
+    assert not record.exists()
+    assert not sw.children.exited(), sw.logs()  # the swarm in use goes on
 
 
 def test_a_second_swarm_on_the_same_router_runs_alongside_unmixed(

@@ -508,27 +508,64 @@ def test_the_note_of_a_round_ended_at_its_deadline_names_only_the_robots_the_wor
 
 
 @pytest.mark.parametrize("world_first", [False, True])
-def test_a_robot_that_dies_mid_round_is_not_waited_for(world_first: bool) -> None:
+def test_a_robot_that_dies_mid_round_is_not_waited_for_but_the_next_plan_waits_for_it(
+    world_first: bool,
+) -> None:
     drive = Drive(FakeWorld(3))
     drive.silent = {1}
     drive.start(0, 1, 2)
     assert drive.commits() == []
     drive.now = 1.0
     drive.alive(1, up=False, world_first=world_first)
-    assert drive.commits()[0] == Commit(round=1, timed_out=(1,), then_active=(0, 2))
+    # its round is committed at once, without planning the next one over the robots left
+    assert drive.commits() == [Commit(round=1, timed_out=(1,), then_active=())]
+    assert drive.core.phase is Phase.REJOIN and drive.core.next_deadline() == 6.0
+    assert drive.core.rejoining(1.0) == {1} and drive.scheduler.asked == [1]
+    drive.tick(6.0)  # the move timeout after it went: the next round goes on without it
     assert drive.world.opened[1] == (2, (0, 2))  # fsync over the live robots
-    assert drive.now == 1.0
+    assert (
+        Note(
+            "agents [1] did not come back within the move timeout; going on without them",
+            warning=True,
+        )
+        in drive.core.pop_notes()
+    )
 
 
-def test_a_retried_round_keeps_its_set_and_does_not_wait_for_a_robot_that_died() -> None:
+def test_agents_back_within_the_move_timeout_are_planned_with_as_if_never_gone() -> None:
+    # A router restart: every agent's token goes, and they come back one by one.
+    clean = Drive(FakeWorld(6, end_after=6), scheduler="ssync", seed=4).start(*range(6))
+    world = FakeWorld(6, end_after=6)
+    drive = Drive(world, scheduler="ssync", seed=4, times=RoundTimes(pace_s=1.0)).start(*range(6))
+    drive.now = 0.5
+    drive.alive(*range(6), up=False)  # in the pace of round 1
+    assert drive.core.next_deadline() == 1.0  # (the pace's)
+    drive.tick(1.0)
+    assert drive.core.phase is Phase.REJOIN and drive.core.next_deadline() == 5.5
+    drive.now = 2.0
+    drive.alive(3)  # the first back does not open round 2 over itself alone
+    assert len(drive.begins()) == 1 and drive.core.phase is Phase.REJOIN
+    drive.alive(0, 1, 2, 4, 5)  # the last back opens it, planned over all six
+    assert drive.begins()[1] == Begin(2, clean.scheduler.said[2])
+    drive.run()
+    assert [a for _, a in world.opened] == [a for _, a in clean.world.opened]
+    assert drive.scheduler.asked == list(range(1, 7))  # each round once (paced: none ahead)
+
+
+def test_a_retried_round_keeps_its_set_and_waits_for_a_robot_that_died_up_to_the_move_timeout() -> (
+    None
+):
     world = FakeWorld(2, end_after=1)
     world.fail("begin", "refuse")
     drive = Drive(world).start(0, 1)
     drive.alive(0, up=False)
-    drive.tick(0.25)
+    drive.tick(0.25)  # Hello: round 1 again, once robot 0 is back or its move timeout ran out
+    assert drive.begins() == [Begin(round=1, active=(0, 1))]
+    assert drive.core.phase is Phase.REJOIN and drive.core.next_deadline() == 5.0
+    drive.tick(5.0)
     assert drive.begins() == [Begin(round=1, active=(0, 1))] * 2
     assert drive.commits() == [Commit(round=1, timed_out=(0,), then_active=(1,))]
-    assert drive.now == 0.25
+    assert drive.now == 5.0
 
 
 def test_move_notices_of_another_round_or_robot_are_ignored() -> None:
@@ -854,7 +891,7 @@ OPS = st.one_of(
     st.tuples(st.just("restart")),
 )
 
-Seen = tuple[float, float, Commit, frozenset[int]]  # when, round opened, what, live
+Seen = tuple[float, float, Commit, frozenset[int], bool]  # when, round opened, what, live, rejoin
 
 
 def _check_commits(drive: Drive, seen: list[Seen]) -> None:
@@ -865,8 +902,8 @@ def _check_commits(drive: Drive, seen: list[Seen]) -> None:
     applied = {id(commit): timed_out for commit, timed_out in drive.world.applied}
     for commit, timed_out in drive.world.applied:
         assert set(timed_out) <= set(commit.timed_out)
-    for at, opened, commit, live in seen:
-        if drive.core.times.pace_s == 0 and live:  # nothing holds the next round back
+    for at, opened, commit, live, rejoining in seen:
+        if drive.core.times.pace_s == 0 and live and not rejoining:  # nothing holds it back
             assert commit.then_active
         if at < opened + drive.core.times.move_timeout_s and id(commit) in applied:
             assert not set(commit.timed_out) & live
@@ -931,7 +968,10 @@ def _any_events(
 
     def answer_and_note(req: Request) -> ControlReply | None:
         if isinstance(req, Commit) and req.round == world.open_round:
-            seen.append((drive.now, drive.collecting_since[req.round], req, drive.core.live))
+            rejoining = bool(drive.core.rejoining(drive.now))
+            seen.append(
+                (drive.now, drive.collecting_since[req.round], req, drive.core.live, rejoining)
+            )
         return answer(req)
 
     world.answer = answer_and_note  # type: ignore[method-assign]
