@@ -89,7 +89,10 @@ def main() -> None:
     for label, model in AXES.items():
         rates = [looks_per_second(n, "gathering", model, args.rounds) for n in (16, 64)]
         print(f"{label:48} {rates[0]:13.0f} {rates[1]:13.0f}", flush=True)
-    lit = {"lights full (lit-spread)": {}, "lights internal": {"lights": "internal"}}
+    lit: dict[str, dict[str, object]] = {
+        "lights full (lit-spread)": {},
+        "lights internal": {"lights": "internal"},
+    }
     for label, model in lit.items():
         rates = [looks_per_second(n, LIT, model, args.rounds) for n in (16, 64)]
         print(f"{label:48} {rates[0]:13.0f} {rates[1]:13.0f}", flush=True)

@@ -6,15 +6,19 @@ from __future__ import annotations
 import argparse
 import math
 import os
-from typing import TYPE_CHECKING, Any, Final
+from typing import Any, Final
 
 from fatswarm.deploy.engine.config import (
     RunInputError,
 )
 from fatswarm.domain.registry import DEFAULT
 
-if TYPE_CHECKING:
-    pass
+
+class Terminated(BaseException):
+    """SIGTERM arrived: unwind like Ctrl-C (closing files, stopping children), then exit 143.
+
+    A BaseException, as KeyboardInterrupt is, so that no `except Exception` swallows it.
+    """
 
 
 GIVEN: Final = "_given"  # the namespace attribute listing the flags given (`StoreGiven`)
@@ -43,6 +47,16 @@ def flag_given(args: argparse.Namespace, dest: str) -> bool:
     if dest in TRACKED:
         return dest in getattr(args, GIVEN, ())
     return getattr(args, dest, None) is not None
+
+
+def check_start_flags(args: argparse.Namespace) -> None:
+    """Refuse `--start` beside `--init` rather than ignore it: the file is the start
+    (RunInputError)."""
+    if getattr(args, "init", None) is not None and flag_given(args, "start"):
+        raise RunInputError(
+            f"--start {args.start} draws a random start, --init {args.init} gives one: "
+            "pass one of them"
+        )
 
 
 def add_algorithm_arguments(p: argparse.ArgumentParser, *, params: bool = True) -> None:

@@ -55,15 +55,23 @@ def load_configured(setup: WorldSetup) -> Configured:
 
 def cut_torn_line(path: str) -> None:
     """Drop a torn last line (the world died mid-write): it was never committed nor announced."""
+    dropped = drop_torn_line(path)
+    if dropped:
+        log.warning("state file %s: dropping a torn last line of %d bytes", path, dropped)
+
+
+def drop_torn_line(path: str) -> int:
+    """Cut what follows the last newline of the file at `path` (a torn last line), durably; the
+    number of bytes cut (0: none)."""
     with open(path, "rb") as f:
         data = f.read()
     end = data.rfind(b"\n") + 1
     if end < len(data):
-        log.warning("state file %s: dropping a torn last line of %d bytes", path, len(data) - end)
         with open(path, "r+b") as f:
             f.truncate(end)
             f.flush()
             os.fsync(f.fileno())
+    return len(data) - end
 
 
 def open_world(

@@ -36,6 +36,7 @@ class Progress:
     total_distance: float
     collisions: int
     moves_by_robot: tuple[int, ...]
+    crashed: tuple[int, ...] = ()  # the robots that count as crashed now, sorted
 
 
 class ProgressTracker:
@@ -163,6 +164,7 @@ class ProgressTracker:
             total_distance=self._distance,
             collisions=self._collisions,
             moves_by_robot=tuple(self._moves),
+            crashed=tuple(sorted(self._crashed)),
         )
 
 

@@ -26,8 +26,10 @@ def describe(ref: str) -> str:
     """An algorithm's name, summary and parameters (name, default, help), one per line."""
     algorithm = load_algorithm(ref)
     lines = [f"{algorithm.name}: {algorithm.summary}"]
-    for spec in algorithm.parameters:
-        lines.append(f"  --param {spec.name}={spec.default!r:<10} {spec.help}")
+    flags = [f"--param {spec.name}={spec.default!r}" for spec in algorithm.parameters]
+    width = max((len(flag) for flag in flags), default=0)
+    for flag, spec in zip(flags, algorithm.parameters, strict=True):
+        lines.append(f"  {flag:<{width}}  {spec.help}")
     if not algorithm.parameters:
         lines.append("  (no parameters)")
     return "\n".join(lines)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shlex
 from typing import TYPE_CHECKING, Any
 
 from fatswarm.coordinator.schedule import make_scheduler
@@ -13,10 +14,13 @@ from fatswarm.deploy.engine.config import (
     RunInputError,
     RunSetup,
     check_crash,
+    check_fairness,
     check_non_rigid,
 )
 from fatswarm.deploy.flags import flag_given
 from fatswarm.deploy.scenarios.starts import load_init, random_start
+from fatswarm.deploy.view.summary import counted, unit
+from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.robot_model import RobotModel
@@ -40,7 +44,7 @@ def resolve_resume(args: argparse.Namespace) -> RunSetup:
     from fatswarm.deploy.engine.lockstep import default_max_rounds
 
     path: str = args.record
-    record = read_resumable(path, lockstep=bool(args.lockstep))
+    record = read_resumable(path)
     h = record.header
     if h.seed is None:
         raise RunInputError(f"--resume: {path} does not say its seed; its run cannot be continued")
@@ -107,6 +111,7 @@ def _recorded_cap(header: Header) -> int | None:
 def recorded_fairness(args: argparse.Namespace, header: Header, path: str) -> int | None:
     """The fairness bound of the resumed run: --fairness, else the header's (None: neither says
     one); RunInputError for a --fairness that says otherwise than the record."""
+    check_fairness(args.fairness, header.scheduler)
     recorded_k = header.extra.get("fairness")
     if isinstance(recorded_k, int) and args.fairness is not None and args.fairness != recorded_k:
         raise RunInputError(
@@ -149,11 +154,11 @@ def recorded_crash(args: argparse.Namespace, header: Header, path: str) -> int |
     return f
 
 
-def read_resumable(path: str, *, lockstep: bool) -> RunRecord:
+def read_resumable(path: str) -> RunRecord:
     """The run record at `path`, if it holds a run to continue; else RunInputError (one line).
 
-    A torn last line (a crash mid-write) is left for the networked world, which drops it; a
-    lockstep run never cuts a record, so it refuses one.
+    A torn last line (a crash mid-write, a full disk) is left out: the networked world drops it
+    from the file as it opens it, a lock-step run with `drop_torn_end` before it appends.
     """
     if not os.path.exists(path):
         raise RunInputError(
@@ -167,24 +172,64 @@ def read_resumable(path: str, *, lockstep: bool) -> RunRecord:
         raise RunInputError(f"--resume: not a run record: {exc}") from None
     if record.result is not None:
         raise RunInputError(
-            f"--resume: {path} already finished ({ended(record.result)}); nothing to resume"
-        )
-    if lockstep and record.torn_line is not None:
-        raise RunInputError(
-            f"--resume: {path} ends with a torn line (line {record.torn_line}, a "
-            "crash mid-write) that --lockstep will not cut: delete that line, or "
-            "resume without --lockstep (the world drops it)"
+            f"--resume: {path} already finished ({ended(record.result, record.header.scheduler)})"
+            "; nothing to resume"
         )
     return record
 
 
-def ended(result: Result) -> str:
-    """How a finished record ended, in a few words: "formed in 31 rounds"."""
+def drop_torn_end(path: str, record: RunRecord) -> str | None:
+    """Cut the torn last line `record` left out of the file at `path` (never committed: a crash
+    or a full disk mid-write), so that the resumed run appends after its last complete line; the
+    line saying so, or None if the record had no torn line."""
+    # the world's journal (and with it the world core): the CLI imports this module to build
+    # its parser
+    from fatswarm.world.journal import drop_torn_line
+
+    if record.torn_line is None:
+        return None
+    dropped = drop_torn_line(path)
+    return (
+        f"--resume: dropped the torn last line of {path} (line {record.torn_line}, {dropped} "
+        "bytes written when the run stopped mid-write)"
+    )
+
+
+def ended(result: Result, scheduler: str = "") -> str:
+    """How a finished record ended, in a few words: "formed in 31 rounds" (cycles under an
+    async model)."""
+    word = unit(scheduler)
     if result.status == Status.FORMED:
-        return f"formed in {result.rounds} rounds"
+        return f"formed in {counted(result.rounds, word)}"
     if result.status == Status.MAX_ROUNDS:
-        return f"stopped at the round limit of {result.rounds} rounds"
-    return f"{result.status} after {result.rounds} rounds"
+        return f"stopped at the {word} limit of {counted(result.rounds, word)}"
+    return f"{result.status} after {counted(result.rounds, word)}"
+
+
+def stopped_line(
+    word: str,
+    done: int,
+    *,
+    record: str | None,
+    scheduler: str,
+    lockstep: bool,
+    seed: int | None = None,
+    fix: bool = False,
+) -> str:
+    """The line a run stopped by a signal (`word`: "interrupted", "terminated") or a failed write
+    prints: after which round, and how to go on (`fatswarm run --record R --resume`), or why it
+    cannot be. `done`: the rounds (ended cycles, under an async model) its record holds.
+    `fix`: something must be fixed first (a full disk). Shared by the lock step and the
+    networked launcher, so that both say it alike."""
+    after = f"{word} after {unit(scheduler)} {done}"
+    if scheduler in ASYNC_NAMES:
+        again = "" if seed is None else f" with --seed {seed}"
+        return f"{after}; an async run cannot be resumed: run it again{again}"
+    if not record:
+        return f"{after} (no --record: nothing to resume)"
+    mode = " --lockstep" if lockstep else ""
+    then = "once that is fixed, go on" if fix else "go on"
+    return f"{after}; {then} with `fatswarm run{mode} --record {shlex.quote(record)} --resume`"
 
 
 def check_against_header(
@@ -285,6 +330,7 @@ def _first_difference(mine: Points, theirs: Points) -> tuple[int, str, str] | No
 
 __all__ = [
     "check_against_header",
+    "drop_torn_end",
     "ended",
     "read_resumable",
     "recorded_crash",
@@ -292,4 +338,5 @@ __all__ = [
     "recorded_model",
     "recorded_non_rigid",
     "resolve_resume",
+    "stopped_line",
 ]

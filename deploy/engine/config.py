@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, Final
 import numpy as np
 
 from fatswarm import __version__
+from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
@@ -102,12 +103,13 @@ class RunConfig:
         from fatswarm.coordinator.schedule import make_scheduler
 
         # the whole lock-step engine: the CLI imports this module to build its parser
-        from fatswarm.deploy.engine.lockstep import default_max_rounds
+        from fatswarm.deploy.engine.lockstep import default_max_rounds, run_reach
 
         if self.scheduler != "scripted" and self.schedule is not None:
             raise RunInputError("--schedule only goes with --scheduler scripted")
         if self.max_rounds is not None and self.max_rounds < 1:
             raise RunInputError(f"--max-rounds must be at least 1, got {self.max_rounds}")
+        check_fairness(self.fairness, self.scheduler)
         check_non_rigid(self.non_rigid)
         setting, initial = resolve_start(
             self.init,
@@ -122,7 +124,8 @@ class RunConfig:
         scheduler = make_scheduler(
             self.scheduler, setting.n, self.seed, self.schedule, self.fairness
         )
-        max_rounds = self.max_rounds or default_max_rounds(setting.n, self.scheduler)
+        reach = run_reach(setting, initial) if self.scheduler in ASYNC_NAMES else 0.0
+        max_rounds = self.max_rounds or default_max_rounds(setting.n, self.scheduler, reach)
         check_crash(self.crash, setting.n)
         check_lights(self.model, setting)
         return RunSetup(
@@ -194,6 +197,26 @@ def check_lights(model: RobotModel, setting: Configured) -> None:
     if model.lights is not Lights.FULL and not setting.luminous:
         raise RunInputError(
             f"--lights {model.lights} needs an algorithm with lights; {setting.name} has none"
+        )
+
+
+FAIR_SCHEDULERS: Final = ("ssync", "centralized")  # the schedulers a fairness bound K bounds
+WHY_NO_FAIRNESS: Final = {
+    "fsync": "activates every robot in every round",
+    "scripted": "activates whom its schedule file says",
+    "async": "has no rounds (its adversary is fair by construction: the header's fairness_time)",
+    "async-slowest": "has no rounds (its adversary is fair by construction: the header's "
+    "fairness_time)",
+}
+
+
+def check_fairness(fairness: int | None, scheduler: str) -> None:
+    """Refuse a fairness bound for a scheduler that would ignore it (RunInputError)."""
+    if fairness is not None and scheduler not in FAIR_SCHEDULERS:
+        why = WHY_NO_FAIRNESS.get(scheduler, "takes no fairness bound")
+        raise RunInputError(
+            f"--fairness only goes with --scheduler ssync or centralized; {scheduler} {why}: "
+            "drop --fairness"
         )
 
 
@@ -318,6 +341,7 @@ __all__ = [
     "RunInputError",
     "RunSetup",
     "check_crash",
+    "check_fairness",
     "check_lights",
     "check_non_rigid",
     "input_errors",

@@ -12,6 +12,7 @@ the very paths each robot's own `compute` returns; a `compute` passed in is call
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Final
@@ -29,7 +30,8 @@ from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path, Points
 from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
-from fatswarm.domain.seam import Configured, checked
+from fatswarm.domain.seam import AlgorithmFailure, Configured, checked
+from fatswarm.domain.tolerance import enclosing_circle
 from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.core import WorldCore
 from fatswarm.world.effects import Committed
@@ -44,10 +46,14 @@ from fatswarm.world.setup import WorldSetup
 # about 2 under ssync (p = 1/2), about n under centralized; the caps leave a factor 10 or more.
 # Under the async models a "round" is an ended cycle: every robot cycles while one moves, and the
 # fastest ones cycle up to 2n - 1 times as often under async-slowest (non-rigid 0.1 at n = 12
-# took 2733 cycles), hence 40 n.
+# took 2733 cycles), hence 40 n. A move of length L lasts L, and the others keep cycling (about
+# once per 2 time units) all along: so the async cap grows with the distances, by one more 40 n
+# (n + 10) for every ASYNC_REACH_UNIT of the run's reach (the larger of the start's and the
+# target's circle), so that a run whose moves are long is not cut while every robot progresses.
 STEP_SLACK: Final = 10
 ROUNDS_PER_STEP: Final = {"fsync": 10, "ssync": 40}  # others (centralized, scripted): 10 n
 CYCLES_PER_STEP_PER_ROBOT: Final = 40  # the async models: 40 n
+ASYNC_REACH_UNIT: Final = 40.0  # robot radii of reach the plain async cap covers (moves ~ 80)
 LOCKSTEP_SWARM: Final = "lockstep"
 SHOWN_FAULTS: Final = 3  # an algorithm's failing computes logged in full; the rest are counted
 
@@ -60,11 +66,35 @@ class HistoryMismatchError(ValueError):
     """Committed rounds to resume from that this run would not have produced."""
 
 
-def default_max_rounds(n: int, scheduler: str) -> int:
-    """A round cap far above what a correct run needs under `scheduler` (see ROUNDS_PER_STEP)."""
+def default_max_rounds(n: int, scheduler: str, reach: float = 0.0) -> int:
+    """A round cap far above what a correct run needs under `scheduler` (see ROUNDS_PER_STEP);
+    under an async model, in ended cycles, scaled by the run's `reach` (`run_reach`)."""
     per_robot = CYCLES_PER_STEP_PER_ROBOT if scheduler in ASYNC_NAMES else 10
     per_step = ROUNDS_PER_STEP.get(scheduler, per_robot * max(1, n))
-    return per_step * (n + STEP_SLACK)
+    cap = per_step * (n + STEP_SLACK)
+    if scheduler in ASYNC_NAMES and reach > ASYNC_REACH_UNIT:
+        cap *= math.ceil(reach / ASYNC_REACH_UNIT)
+    return cap
+
+
+def run_reach(setting: Configured, initial: Points) -> float:
+    """How far the run spreads: the radius of the start's smallest enclosing circle, or of the
+    algorithm's target circle (its `target radius` figure, if it has one) when that is larger."""
+    radius = enclosing_circle(initial)[2] if len(initial) else 0.0
+    try:
+        target = setting.figures(initial).get("target radius", 0.0)
+    except AlgorithmFailure:  # an algorithm's figures that fail say nothing of its reach
+        target = 0.0
+    return max(radius, float(target))
+
+
+def _cap(max_rounds: int | None, setting: Configured, scheduler: str, initial: Points) -> int:
+    """`max_rounds`, or the default cap of the run (`default_max_rounds`, with its reach under
+    an async model)."""
+    if max_rounds is not None:
+        return max_rounds
+    reach = run_reach(setting, initial) if scheduler in ASYNC_NAMES else 0.0
+    return default_max_rounds(len(initial), scheduler, reach)
 
 
 RoundReport = Committed  # what `on_round` gets: the round's record line and the figures after it
@@ -136,7 +166,7 @@ def run_lockstep(
     n = len(positions)
     if n != setting.n:
         raise ValueError(f"the start has {n} robots but params say n={setting.n}")
-    cap = default_max_rounds(n, scheduler.name) if max_rounds is None else max_rounds
+    cap = _cap(max_rounds, setting, scheduler.name, positions)
     setup = WorldSetup(
         swarm=LOCKSTEP_SWARM,
         n=n,
@@ -416,4 +446,5 @@ __all__ = [
     "configured",
     "default_max_rounds",
     "run_lockstep",
+    "run_reach",
 ]

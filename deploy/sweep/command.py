@@ -115,6 +115,7 @@ def _add_grid_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "-n",
+        "--n",
         action="append",
         default=[],
         metavar="SIZES",
@@ -122,10 +123,12 @@ def _add_grid_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--start",
+        "--starts",
         action="append",
         default=[],
         metavar="KINDS",
-        help=f"random start kinds: {', '.join(KINDS)} (default {DEFAULT_START})",
+        help=f"random start kinds: {', '.join(KINDS)} (default {DEFAULT_START}; --starts, "
+        "hunt's name, is the same flag)",
     )
     p.add_argument(
         "--scheduler",

@@ -6,8 +6,10 @@ faults and the async models are series of their own.
 
 from __future__ import annotations
 
+import importlib.util
 import itertools
 import os
+import sys
 from collections.abc import Sequence
 from typing import Any, Final
 
@@ -22,7 +24,9 @@ UPRIGHT_BARS: Final = 8  # more models than this: the success bars lie, a row pe
 
 
 def draw_figures(cells: Sequence[Cell], folder: str) -> list[str]:
-    """Write FIGURES into `folder` (created if missing); the paths written. Raises OSError."""
+    """Write FIGURES into `folder` (created if missing); the paths written. The ratio figure is
+    left out, with a line on stderr saying why, when runs formed but none has the bound (it
+    needs scipy). Raises OSError."""
     # matplotlib is an optional extra (fatswarm[plot]), and heavy: loaded only to draw
     import matplotlib
 
@@ -30,8 +34,14 @@ def draw_figures(cells: Sequence[Cell], folder: str) -> list[str]:
     import matplotlib.pyplot as plt  # once the backend is chosen
 
     os.makedirs(folder, exist_ok=True)
-    paths = [os.path.join(folder, name) for name in FIGURES]
-    for path, draw in zip(paths, (_success, _rounds, _ratio), strict=True):
+    drawers = dict(zip(FIGURES, (_success, _rounds, _ratio), strict=True))
+    why = no_ratio_reason(cells)
+    if why is not None:
+        del drawers["ratio.png"]
+        print(f"fatswarm sweep: no ratio.png: {why}", file=sys.stderr)
+    paths = []
+    for name, draw in drawers.items():
+        path = os.path.join(folder, name)
         fig, ax = plt.subplots(figsize=(7, 4.5))
         try:
             draw(ax, cells)
@@ -40,7 +50,27 @@ def draw_figures(cells: Sequence[Cell], folder: str) -> list[str]:
             fig.savefig(path, dpi=120)
         finally:
             plt.close(fig)
+        paths.append(path)
     return paths
+
+
+def no_ratio_reason(cells: Sequence[Cell]) -> str | None:
+    """Why the ratio figure would be empty although runs formed (no formed run has the bound:
+    scipy missing, or none computed); None when it has points, or when nothing formed (the
+    figure says so itself)."""
+    if any(c.ratio is not None for c in cells) or not any(c.formed for c in cells):
+        return None
+    if not has_scipy():
+        return (
+            "the distance's bound needs scipy, which is not installed (pip install "
+            "'fatswarm[sweep]'), so no run has a ratio"
+        )
+    return "no formed run of the table has the distance's bound (its rows were written without it)"
+
+
+def has_scipy() -> bool:
+    """Whether scipy (the optional `sweep` extra, which computes the bound) can be imported."""
+    return importlib.util.find_spec("scipy") is not None
 
 
 def _success(ax: Any, cells: Sequence[Cell]) -> None:

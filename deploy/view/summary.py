@@ -4,12 +4,16 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
+from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.outcome import ExitCode, Status, exit_code_for
 from fatswarm.domain.robot_model import ModelError, RobotModel
+
+if TYPE_CHECKING:
+    from fatswarm.world.record import RoundEntry
 
 
 def print_outcome(
@@ -53,6 +57,7 @@ class Outcome:
     time: float | None = None  # async models: the virtual time the run ended at
     model: str | None = None  # the robot model as flags, when it is not the paper's
     assumption: str | None = None  # the record header's line: frames outside the algorithm's
+    crashes: tuple[tuple[int, int], ...] = ()  # --crash: (robot, round or cycle it crashed in)
 
     def noted(self, header: Mapping[str, Any]) -> Outcome:
         """This outcome with the `model` and `assumption` a record header's fields give (its
@@ -87,28 +92,43 @@ def exit_code(outcome: Outcome) -> ExitCode:
     return exit_code_for(outcome.status, outcome.collisions)
 
 
+def unit(scheduler: str) -> str:
+    """What a run counts, in the words every summary and progress line uses: "round" under a
+    round model; "cycle" under an async model, an ended Look-Compute-Move cycle (one record line
+    each), whose run also says its virtual "time" (networked, a protocol round is an "instant")."""
+    return "cycle" if scheduler in ASYNC_NAMES else "round"
+
+
+def counted(k: int, word: str) -> str:
+    """`k word`, plural unless k is 1: "1 round", "31 rounds"."""
+    return f"{k} {word}{'' if k == 1 else 's'}"
+
+
 def verdict(outcome: Outcome) -> str:
-    """One line: formed or not, in how many rounds, and whether robots collided on the way."""
-    k, rounds = outcome.collisions, outcome.rounds
-    collisions = f"{k} collision{'' if k == 1 else 's'}"
+    """One line: formed or not, in how many rounds (ended cycles under an async model), and
+    whether robots collided on the way; a run stopped by its cap says which cap."""
+    k, word = outcome.collisions, unit(outcome.scheduler)
+    rounds = counted(outcome.rounds, word)
+    collisions = counted(k, "collision")
     if outcome.status == Status.FORMED:
         if k == 0:
-            return f"formed in {rounds} rounds, collision-free"
+            return f"formed in {rounds}, collision-free"
         return (
-            f"formed in {rounds} rounds, but with {collisions}: not the collision-free "
+            f"formed in {rounds}, but with {collisions}: not the collision-free "
             "formation the paper guarantees"
         )
     if outcome.status == Status.STALLED:
-        head = f"not formed: stalled after {rounds} rounds"
+        head = f"not formed: stalled after {rounds}"
     elif outcome.status == Status.MAX_ROUNDS:
-        head = f"not formed: stopped at the round limit ({rounds} rounds)"
+        head = f"not formed: stopped at the {word} limit ({rounds})"
     else:
-        head = f"not formed: {outcome.status} after {rounds} rounds"
+        head = f"not formed: {outcome.status} after {rounds}"
     return head if k == 0 else f"{head}, with {collisions}"
 
 
 def summary(outcome: Outcome) -> str:
-    """The summary both kinds of run print at the end: the verdict, the run, its figures."""
+    """The summary both kinds of run print at the end: the verdict, the run, its figures (and the
+    robots the crash adversary crashed, when it did)."""
     o = outcome
     epochs = "?" if o.epochs is None else str(o.epochs)
     values = o.params or ({"a": o.a} if o.algorithm == "uniform-circle" else {})
@@ -120,12 +140,36 @@ def summary(outcome: Outcome) -> str:
         f"{verdict(o)}\n"
         f"n={o.n}{named}{shown} seed={'?' if o.seed is None else o.seed} "
         f"scheduler={o.scheduler}\n"
-        f"rounds {o.rounds}  epochs {epochs}  moves {o.moves} ({o.moves / o.n:.2f} per robot)  "
-        f"total distance {o.total_distance:.3f}  collisions {o.collisions}"
+        f"{unit(o.scheduler)}s {o.rounds}  epochs {epochs}  moves {o.moves} "
+        f"({o.moves / o.n:.2f} per robot)  total distance {o.total_distance:.3f}  "
+        f"collisions {o.collisions}"
         + ("" if o.time is None else f"  virtual time {o.time:.3f}")
+        + ("" if not o.crashes else f"\n{crashes_text(o.crashes, o.scheduler)}")
         + ("" if o.model is None else f"\nmodel: {o.model}")
         + ("" if o.assumption is None else f"\n{o.assumption}")
     )
+
+
+def crashes_text(crashes: Iterable[tuple[int, int]], scheduler: str) -> str:
+    """ "crashed (--crash): robot 3 in round 5, robot 0 in round 9": who the crash adversary
+    crashed, and when (under an async model, the ended cycle its crash first counts in)."""
+    word = unit(scheduler)
+    listed = ", ".join(
+        f"robot {robot} in {word} {when}"
+        for robot, when in sorted(crashes, key=lambda c: (c[1], c[0]))
+    )
+    return f"crashed (--crash): {listed}"
+
+
+def crashes_in(rounds: Iterable[RoundEntry]) -> tuple[tuple[int, int], ...]:
+    """(robot, round) of every robot a record's round lines say the crash adversary crashed
+    (their `crash` key; an async record has none: see `Progress.crashed`)."""
+    found: list[tuple[int, int]] = []
+    for entry in rounds:
+        robots = entry.extra.get("crash")
+        if isinstance(robots, list):
+            found += [(int(r), entry.round) for r in robots]
+    return tuple(found)
 
 
 def summary_json(
@@ -136,8 +180,10 @@ def summary_json(
     fields: dict[str, Any] = {"status": "unfinished"}
     if outcome is not None:
         fields = {**dataclasses.asdict(outcome), "verdict": verdict(outcome)}
-        for key in ("model", "assumption"):  # only when there: the paper's runs' JSON as before
-            if fields[key] is None:
+        for key in ("model", "assumption", "crashes"):  # only when there: JSON as before
+            if not fields[key]:
                 del fields[key]
+            elif key == "crashes":
+                fields[key] = [{"robot": r, unit(outcome.scheduler): k} for r, k in fields[key]]
     fields.update(exit_code=int(code), record=record or None, svg=svg or None)
     return json.dumps(fields, allow_nan=False)

@@ -83,30 +83,116 @@ class UnsupportedInputError(ValueError):
     """A start or side length outside the range where these tolerances hold."""
 
 
-def check_supported(positions: NDArray[np.float64], a: float) -> None:
-    """Raise UnsupportedInputError unless the start and `a` are in the supported range.
+def enclosing_circle(positions: NDArray[np.float64]) -> tuple[float, float, float]:
+    """The smallest enclosing circle of the (n, 2) centres, n >= 1: (centre x, centre y, radius).
 
-    Coordinates must lie within +-MAX_COORD, and both the start's spread (half its bounding box
-    diagonal, an upper bound of its enclosing radius) and the target circle's radius within
-    MAX_SPAN. `positions` is (n, 2) and finite (the caller checked).
+    Welzl's algorithm, iterative, over a fixed shuffle of the points (expected linear time, the
+    same answer on every run), about the bounding box's centre so that a start far from the origin
+    keeps its digits. The range check's own: the algorithms keep theirs (agent/geometry.py).
+    """
+    pts = np.asarray(positions, dtype=np.float64)
+    mid = (pts.max(axis=0) + pts.min(axis=0)) / 2.0
+    local = [(float(x), float(y)) for x, y in (pts - mid)[_shuffle(len(pts))]]
+    cx, cy, r = local[0][0], local[0][1], 0.0
+    for i, p in enumerate(local):
+        if _outside((cx, cy, r), p):
+            cx, cy, r = p[0], p[1], 0.0
+            for j, q in enumerate(local[:i]):
+                if _outside((cx, cy, r), q):
+                    cx, cy, r = _through_two(p, q)
+                    for s in local[:j]:
+                        if _outside((cx, cy, r), s):
+                            cx, cy, r = _through_three(p, q, s)
+    return cx + float(mid[0]), cy + float(mid[1]), r
+
+
+def _shuffle(n: int) -> NDArray[np.intp]:
+    """A fixed permutation of range(n): Welzl's expected time needs a random order, not a new one
+    each run."""
+    return np.random.default_rng(0).permutation(n)
+
+
+def _outside(circle: tuple[float, float, float], p: tuple[float, float]) -> bool:
+    cx, cy, r = circle
+    return math.hypot(p[0] - cx, p[1] - cy) > r * (1.0 + SEC_SLACK_REL) + ROUND_ABS
+
+
+def _through_two(p: tuple[float, float], q: tuple[float, float]) -> tuple[float, float, float]:
+    """The circle with diameter pq."""
+    return (p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0, math.hypot(p[0] - q[0], p[1] - q[1]) / 2.0
+
+
+def _through_three(
+    p: tuple[float, float], q: tuple[float, float], s: tuple[float, float]
+) -> tuple[float, float, float]:
+    """The circle through p, q and s; for (nearly) collinear points, the widest pair's."""
+    bx, by, cx, cy = q[0] - p[0], q[1] - p[1], s[0] - p[0], s[1] - p[1]
+    d = 2.0 * (bx * cy - by * cx)
+    if abs(d) <= 1e-12 * (bx * bx + by * by + cx * cx + cy * cy):
+        return max((_through_two(p, q), _through_two(p, s), _through_two(q, s)), key=lambda c: c[2])
+    b2, c2 = bx * bx + by * by, cx * cx + cy * cy
+    ux, uy = (cy * b2 - by * c2) / d, (bx * c2 - cx * b2) / d
+    return p[0] + ux, p[1] + uy, math.hypot(ux, uy)
+
+
+def target_radius_of(n: int, a: float) -> float:
+    """The paper's target circle for n robots and side a: the regular n-gon of side max(a, 4)
+    (agent/geometry.py, `target_radius`); 0 for fewer than 2 robots."""
+    return 0.0 if n < 2 else max(a, 4.0) / (2.0 * math.sin(math.pi / n))
+
+
+def shown_beyond(value: float, limit: float) -> str:
+    """`value` with one decimal, or as many more as tell it apart from `limit`: a value just past
+    the limit never reads as the limit itself ("got about 10000" for a limit of 10000)."""
+    if not abs(value) < 1e9:  # far out (or not a number): the digits no longer matter
+        return f"{value:.6g}"
+    for decimals in range(1, 13):
+        text = f"{value:.{decimals}f}"
+        if float(text) != limit:
+            return text
+    return repr(value)
+
+
+def check_supported(positions: NDArray[np.float64], a: float) -> None:
+    """Raise UnsupportedInputError unless the start, `a` and the run's reach are in the supported
+    range.
+
+    Coordinates must lie within +-MAX_COORD; the start's smallest enclosing circle and the target
+    circle must have radius at most MAX_SPAN; and the run's reach, the larger of the two circles
+    about the start's centre (where the paper's algorithm forms its circle), must stay within
+    +-MAX_COORD too. `positions` is (n, 2) and finite (the caller checked).
     """
     pts = np.asarray(positions, dtype=np.float64)
     n = len(pts)
     if n and float(np.abs(pts).max()) > MAX_COORD:
+        far = float(np.abs(pts).max())
         raise UnsupportedInputError(
             f"coordinates must lie within +-{MAX_COORD:.0f} (the grid of 2^-{GRID_BITS} stays "
-            f"exact there), got {float(np.abs(pts).max()):.6g}"
+            f"exact there), got {shown_beyond(far, MAX_COORD)}"
         )
-    if n:
-        spread = 0.5 * float(np.hypot(*(pts.max(axis=0) - pts.min(axis=0))))
-        if spread > MAX_SPAN:
-            raise UnsupportedInputError(
-                f"the start must fit in a circle of radius {MAX_SPAN:.0f} (tolerances are 1e-6 of "
-                f"the swarm's radius, and must stay below a robot's size), got about {spread:.6g}"
-            )
+    cx, cy, radius = enclosing_circle(pts) if n else (0.0, 0.0, 0.0)
+    if radius > MAX_SPAN * (1.0 + EPS_EQ_REL):
+        raise UnsupportedInputError(
+            f"the start must fit in a circle of radius {MAX_SPAN:.0f} (tolerances are 1e-6 of "
+            f"the swarm's radius, and must stay below a robot's size), got "
+            f"{shown_beyond(radius, MAX_SPAN)}"
+        )
     limit = max_side(n)
     if not a <= limit:
         raise UnsupportedInputError(
             f"a must be at most {limit:.6g} for n = {n}: the target circle must have radius "
             f"<= {MAX_SPAN:.0f} (tolerances are 1e-6 of the swarm's radius), got a = {a:.6g}"
+        )
+    _check_reach(cx, cy, max(radius, target_radius_of(n, a)))
+
+
+def _check_reach(cx: float, cy: float, radius: float) -> None:
+    """Refuse a run whose circle of `radius` about (cx, cy) leaves +-MAX_COORD."""
+    reach = max(abs(cx), abs(cy)) + radius
+    if reach > MAX_COORD * (1.0 + EPS_EQ_REL):
+        raise UnsupportedInputError(
+            f"the run would reach {shown_beyond(reach, MAX_COORD)} (a circle of radius "
+            f"{radius:.1f} about the start's centre ({cx:.1f}, {cy:.1f})), but coordinates must "
+            f"stay within +-{MAX_COORD:.0f} (the grid of 2^-{GRID_BITS} stays exact there): move "
+            "the start towards the origin"
         )

@@ -271,7 +271,7 @@ def test_a_large_lockstep_run_prints_an_estimate_before_it_starts(
     code = fatswarm(["run", "--lockstep", "-n", "200", "--seed", "1", "--max-rounds", "1"])
     assert code == ExitCode.NOT_FORMED
     err = capsys.readouterr().err
-    assert "estimate for n=200 (a rough model, not a measurement): ~1 rounds" in err
+    assert "estimate for n=200 (a rough model, not a measurement): ~1 round," in err
     assert "a --record would take ~" in err
 
 

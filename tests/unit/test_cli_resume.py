@@ -239,14 +239,17 @@ def test_lockstep_refuses_a_networked_record_in_which_robots_timed_out(
     one_line_refusal(capsys, "round 3: robots", "timed out")
 
 
-def test_lockstep_refuses_a_torn_last_line_rather_than_cut_it(
+def test_lockstep_drops_a_torn_last_line_says_so_and_ends_as_the_uninterrupted_run(
     ssync_cut: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    torn = ssync_cut.read_text() + '{"type":"round","rou'
-    ssync_cut.write_text(torn)
-    assert fatswarm(["--lockstep", "--record", str(ssync_cut), "--resume", "-q"]) == 2
-    one_line_refusal(capsys, "ends with a torn line (line 7")
-    assert ssync_cut.read_text() == torn
+    whole = ssync_cut.with_name("whole-ssync.jsonl")
+    ssync_cut.write_text(ssync_cut.read_text() + '{"type":"round","rou')
+    assert fatswarm(["--lockstep", "--record", str(ssync_cut), "--resume", "-q"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert err.startswith(f"fatswarm run: --resume: dropped the torn last line of {ssync_cut}")
+    assert "(line 7, 20 bytes" in err
+    assert ssync_cut.read_text() == whole.read_text()  # the very record, byte for byte
 
 
 # --- a networked --resume hands the record's run to the parts -------------------------------------

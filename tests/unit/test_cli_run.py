@@ -53,7 +53,7 @@ def test_record_is_written(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
 def test_run_not_formed_exits_one(capsys: pytest.CaptureFixture[str]) -> None:
     code = fatswarm_run(["--lockstep", "-n", "6", "--seed", "0", "--max-rounds", "1", "-q"])
     assert code == 1
-    assert capsys.readouterr().out.startswith("not formed: stopped at the round limit (1 rounds)")
+    assert capsys.readouterr().out.startswith("not formed: stopped at the round limit (1 round)")
 
 
 def test_init_file_gives_n_and_a(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

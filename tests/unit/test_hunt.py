@@ -5,12 +5,16 @@ tests/integration/test_hunt_workers.py."""
 from __future__ import annotations
 
 import math
+import os
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from fatswarm.deploy import cli
+from fatswarm.deploy.hunt import pool
+from fatswarm.deploy.hunt.pool import Tally
 from fatswarm.deploy.hunt.search import (
     Case,
     Hunt,
@@ -158,7 +162,10 @@ def test_the_paper_algorithm_formed_cleanly_is_no_failure() -> None:
         (["--max-failures", "0"], "--max-failures must be at least 1"),
         (["--param", "a=2"], "a must be > 3"),
         (["--algorithm", "no_such_module:X"], "no_such_module"),
-        (["--non-rigid", "-1"], "--non-rigid must be"),
+        (["--non-rigid", "-1"], "--non-rigid takes distances > 0"),
+        (["--non-rigid", "rigid,1"], "--non-rigid takes one value in a hunt"),
+        (["--crash", "1,2"], "--crash takes one value in a hunt"),
+        (["--start", "square"], "not a start family"),
         (["--jobs", "0"], "--jobs must be at least 1"),
     ],
 )
@@ -178,3 +185,65 @@ def test_a_non_empty_out_is_refused(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert hunt(["--out", str(tmp_path / "old"), "--budget-runs", "1"]) == 2
     err = capsys.readouterr().err
     assert "is not empty" in err and err.count("\n") == 1
+
+
+# -- where failures go -------------------------------------------------------------------------
+
+
+def test_an_out_that_cannot_be_made_is_one_line_and_exit_two(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    out = "/proc/fatswarm-hunt-out"  # /proc takes no new directory, not even from root
+    assert hunt(["--budget-runs", "1", "--out", out]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1, captured.err
+    assert captured.err.startswith(f"fatswarm hunt: --out {out}: cannot make it in /proc: ")
+    assert "Traceback" not in captured.err
+
+
+def test_an_out_it_cannot_write_in_is_one_line_and_exit_two(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    def denied(path: object, *args: object, **kwargs: object) -> None:
+        raise PermissionError(13, "Permission denied", str(path))
+
+    monkeypatch.setattr(os, "makedirs", denied)
+    assert hunt(["--budget-runs", "1", "--out", str(tmp_path / "found")]) == 2
+    err = capsys.readouterr().err
+    assert err == (
+        f"fatswarm hunt: --out {tmp_path / 'found'}: cannot make it in {tmp_path}: Permission "
+        "denied; name a directory you can write in\n"
+    )
+    monkeypatch.undo()
+    (tmp_path / "locked").mkdir()
+    monkeypatch.setattr(os, "access", lambda path, mode: False)
+    assert hunt(["--budget-runs", "1", "--out", str(tmp_path / "locked")]) == 2
+    assert "cannot write in it" in capsys.readouterr().err
+
+
+def fake_hunt(saves: bool) -> Callable[..., tuple[Tally, bool]]:
+    """A `run_hunt` that runs nothing and saves one failure folder, or none."""
+
+    def run_hunt(
+        hunt: Hunt, seed: int, budget: object, jobs: int, out: str, *rest: object
+    ) -> tuple[Tally, bool]:
+        tally = Tally(runs=3)
+        if saves:
+            os.makedirs(os.path.join(out, "000001-collision"))
+        return tally, True
+
+    return run_hunt
+
+
+@pytest.mark.parametrize("saves", [False, True])
+def test_a_hunt_that_finds_nothing_leaves_no_out_folder(
+    saves: bool, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(pool, "run_hunt", fake_hunt(saves))
+    out = tmp_path / "found"
+    assert hunt(["--budget-runs", "3", "--out", str(out), "-q", "--seed", "1"]) == 0
+    assert out.exists() is saves
+    empty = tmp_path / "mine"
+    empty.mkdir()  # a folder of the user's, empty: it stays
+    assert hunt(["--budget-runs", "3", "--out", str(empty), "-q", "--seed", "1"]) == 0
+    assert empty.is_dir()

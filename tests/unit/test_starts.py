@@ -112,6 +112,9 @@ def test_load_init_reads_positions_and_optional_a(tmp_path: Path) -> None:
         ({"positions": [[0, 0], [1e400, 0]]}, "finite numbers"),
         ({"positions": [[0, 0], [5, 5], [1, 1]]}, "robots 0 and 2 overlap"),
         ({"positions": [[0, 0]], "a": "big"}, "'a' must be a number"),
+        ({"positions": [[0, 0]], "a": "4"}, "'a' must be a number, got '4'"),
+        ({"positions": [[0, 0]], "a": True}, "'a' must be a number, got true"),
+        ({"positions": [[0, 0]], "a": None}, r"'a' must be a number, got null \(leave 'a' out"),
     ],
 )
 def test_bad_init_file_gives_one_line_error(tmp_path: Path, content: object, message: str) -> None:
