@@ -114,11 +114,11 @@ ROBOT_PLACEHOLDER = "{robot}"  # in an agent's --config, replaced by its robot i
 
 
 def add_common_arguments(
-    p: argparse.ArgumentParser, connect_note: str = "", config_note: str = ""
+    p: argparse.ArgumentParser, connect_note: str = "", config_note: str = "", *, swarm: bool = True
 ) -> None:
     """The flags every part takes: Zenoh's (`--connect`, `--listen`, `--swarm`), `--config`,
     `--log-level` and the launcher's hidden `--exit-with-parent` and `--plain-log`."""
-    add_zenoh_arguments(p, connect_note=connect_note)
+    add_zenoh_arguments(p, connect_note=connect_note, swarm=swarm)
     p.add_argument(
         "--config",
         default=None,

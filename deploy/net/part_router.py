@@ -15,8 +15,8 @@ from fatswarm.deploy.net.router import run_router
 
 
 def add_router_arguments(p: argparse.ArgumentParser) -> None:
-    """Flags of `fatswarm router`."""
-    add_common_arguments(p)
+    """Flags of `fatswarm router` (no --swarm: a router routes every swarm)."""
+    add_common_arguments(p, swarm=False)
 
 
 def main_router(args: argparse.Namespace) -> int:

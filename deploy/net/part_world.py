@@ -151,7 +151,7 @@ def _fresh_setup(args: argparse.Namespace) -> WorldSetup | None:
 def _make_setup(args: argparse.Namespace) -> WorldSetup:
     """The run the flags ask for (the start, the algorithm and its parameters, the round cap)."""
     # here, not at the top: the world's cores load only when it runs (not for `fatswarm --help`)
-    from fatswarm.deploy.engine.lockstep import default_max_rounds
+    from fatswarm.deploy.engine.lockstep import default_max_rounds, run_reach
     from fatswarm.world.setup import WorldSetup
 
     # the same checks and supported range as `fatswarm run`; -n only without --init
@@ -164,7 +164,8 @@ def _make_setup(args: argparse.Namespace) -> WorldSetup:
         args.algorithm,
         args.param,
     )
-    max_rounds = args.max_rounds or default_max_rounds(setting.n, args.scheduler)
+    reach = run_reach(setting, initial)  # an async cap scales with it, as `fatswarm run`'s
+    max_rounds = args.max_rounds or default_max_rounds(setting.n, args.scheduler, reach)
     return WorldSetup(
         args.swarm,
         setting.n,

@@ -472,9 +472,14 @@ def loopback_endpoint() -> str:
 
 
 def add_zenoh_arguments(
-    p: argparse.ArgumentParser, listen_default: Sequence[str] = (), connect_note: str = ""
+    p: argparse.ArgumentParser,
+    listen_default: Sequence[str] = (),
+    connect_note: str = "",
+    *,
+    swarm: bool = True,
 ) -> None:
-    """`--connect`, `--listen` (repeatable) and `--swarm`, shared by every networked command."""
+    """`--connect`, `--listen` (repeatable) and `--swarm`, shared by every networked command
+    (`swarm` False: a router, which routes every swarm, takes no --swarm)."""
     p.add_argument(
         "--connect",
         action="append",
@@ -489,8 +494,9 @@ def add_zenoh_arguments(
         metavar="ENDPOINT",
         help="endpoint to listen on (repeatable)",
     )
-    p.add_argument(
-        "--swarm",
-        default=DEFAULT_SWARM,
-        help=f"swarm name: all keys live under fatswarm/<swarm>/ (default {DEFAULT_SWARM!r})",
-    )
+    if swarm:
+        p.add_argument(
+            "--swarm",
+            default=DEFAULT_SWARM,
+            help=f"swarm name: all keys live under fatswarm/<swarm>/ (default {DEFAULT_SWARM!r})",
+        )
