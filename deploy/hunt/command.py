@@ -31,6 +31,7 @@ from fatswarm.deploy.hunt.search import (
 )
 from fatswarm.deploy.hunt.shrink import DEFAULT_SHRINK_RUNS
 from fatswarm.deploy.sweep.command import _jobs, _stop_on_signals
+from fatswarm.deploy.sweep.executor import ClusterError, add_cluster_argument, open_workers
 from fatswarm.deploy.sweep.grid import (
     SweepInputError,
     model_suffix,
@@ -198,6 +199,7 @@ def _add_hunt_run_arguments(p: argparse.ArgumentParser) -> None:
         metavar="J",
         help="worker processes (default: one per core)",
     )
+    add_cluster_argument(p)
     p.add_argument(
         "--seed",
         type=int,
@@ -373,14 +375,17 @@ def _hunt(args: argparse.Namespace, hunt: Hunt, budget: Budget, jobs: int) -> in
     from fatswarm.deploy.sweep.pool import WorkerDiedError
 
     seed = args.seed if args.seed is not None else secrets.randbelow(SEED_BOUND)
-    if not args.quiet:
-        _say(_plan_text(hunt, budget, seed, jobs, args.out))
     progress = make_progress(budget, quiet=args.quiet)
     try:
-        with _stop_on_signals() as stopped, progress:
-            tally, complete = run_hunt(
-                hunt, seed, budget, jobs, args.out, progress.show, lambda: stopped[0] is not None
-            )
+        with open_workers(jobs, args.cluster) as workers:
+            if not args.quiet:
+                _say(_plan_text(hunt, budget, seed, workers.where, args.out))
+            with _stop_on_signals() as stopped, progress:
+                tally, complete = run_hunt(
+                    hunt, seed, budget, workers, args.out, progress.show, lambda: bool(stopped[0])
+                )
+    except ClusterError as exc:
+        return _fail(str(exc))
     except WorkerDiedError as exc:
         _say(f"fatswarm hunt: {exc}; the failures saved so far stay in {args.out}")
         return ExitCode.NOT_FORMED
@@ -399,7 +404,7 @@ def _hunt(args: argparse.Namespace, hunt: Hunt, budget: Budget, jobs: int) -> in
     return ExitCode.NOT_FORMED if tally.saved else ExitCode.OK
 
 
-def _plan_text(hunt: Hunt, budget: Budget, seed: int, jobs: int, out: str) -> str:
+def _plan_text(hunt: Hunt, budget: Budget, seed: int, where: str, out: str) -> str:
     limits = []
     if budget.runs is not None:
         limits.append(f"{budget.runs} runs")
@@ -416,7 +421,7 @@ def _plan_text(hunt: Hunt, budget: Budget, seed: int, jobs: int, out: str) -> st
         f"hunt: seed {seed}, {hunt.algorithm}, n {_sizes(hunt.sizes)}, "
         f"{', '.join(hunt.models)}{extra}; {len(hunt.families)} start families; budget "
         f"{' or '.join(limits)}, at most {budget.failures} failures into {out}/; "
-        f"{jobs} worker processes"
+        f"on {where}"
     )
 
 

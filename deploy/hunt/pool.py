@@ -6,12 +6,11 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import json
-import multiprocessing
+import logging
 import os
 import time
 from collections import Counter
-from collections.abc import Callable, Iterator
-from concurrent.futures.process import BrokenProcessPool
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Final
 
@@ -35,16 +34,11 @@ from fatswarm.deploy.hunt.search import (
     run_candidate,
     run_case,
 )
-from fatswarm.deploy.hunt.shrink import DEFAULT_SHRINK_RUNS, shrink
-from fatswarm.deploy.sweep.pool import (
-    WorkerDiedError,
-    _kill_workers,
-    _sigint_blocked,
-    init_worker,
-)
+from fatswarm.deploy.hunt.shrink import DEFAULT_SHRINK_RUNS, Shrunk, shrink
+from fatswarm.deploy.sweep.executor import Batcher, Workers, quiet_logs
+from fatswarm.deploy.sweep.pool import WorkerDiedError, sigint_blocked
 from fatswarm.world.record import RecordWriter
 
-IN_FLIGHT_PER_JOB: Final = 2  # candidate runs queued per worker: busy, yet quick to stop
 POLL_S: Final = 0.2  # how often the pool loop looks at the stop flag and the clock
 
 
@@ -77,6 +71,52 @@ def search(hunt: Hunt, candidate: Candidate) -> Searched:
     return Searched(candidate, outcome, case, time.perf_counter() - t0)
 
 
+def search_batch(hunt: Hunt, candidates: Sequence[Candidate]) -> list[Searched]:
+    """Run candidates one after the other (one task of the executor, in a worker)."""
+    quiet_logs()
+    return [search(hunt, candidate) for candidate in candidates]
+
+
+def shrink_failure(hunt: Hunt, case: Case, kind: str, budget: int) -> Shrunk:
+    """Shrink a failure (in a worker): only the shrunk case crosses back, so that the folder is
+    written where the hunt runs, whatever machine shrank it."""
+    quiet_logs()
+    return shrink(hunt, case, kind, budget=budget)
+
+
+def save_shrunk(
+    hunt: Hunt,
+    hunt_seed: int,
+    candidate: Candidate,
+    failure: Failure,
+    case: Case,
+    shrunk: Shrunk,
+    folder: str,
+) -> Saved:
+    """Save a shrunk failure in `folder` (a new directory): start.json, schedule.json, the
+    record of the shrunk run as `fatswarm run` makes it from those files (record.jsonl), the
+    command that replays it, and summary.json."""
+    os.makedirs(folder)
+    _write_json(os.path.join(folder, "start.json"), start_data(hunt, shrunk.case))
+    script = schedule_data(shrunk.case)
+    if script is not None:
+        _write_json(os.path.join(folder, "schedule.json"), script)
+    logger = logging.getLogger("fatswarm")
+    propagate, logger.propagate = logger.propagate, False  # a robot's warnings: not here
+    try:
+        replayed = replay_files(hunt, shrunk.case, folder)
+    finally:
+        logger.propagate = propagate
+    summary = summary_data(hunt, hunt_seed, candidate, failure, shrunk, case, replayed)
+    with open(os.path.join(folder, "command"), "w", encoding="utf-8") as fh:
+        fh.write(
+            f"# from this folder: replays the failure and writes replay.jsonl\n"
+            f"{replay_command(hunt, shrunk.case)}\n"
+        )
+    _write_json(os.path.join(folder, "summary.json"), summary)
+    return Saved(candidate, folder, summary)
+
+
 def shrink_and_save(
     hunt: Hunt,
     hunt_seed: int,
@@ -86,24 +126,10 @@ def shrink_and_save(
     folder: str,
     budget: int,
 ) -> Saved:
-    """Shrink a failure and save it in `folder` (a new directory): start.json, schedule.json, the
-    record of the shrunk run as `fatswarm run` makes it from those files (record.jsonl), the
-    command that replays it, and summary.json."""
-    shrunk = shrink(hunt, case, failure.kind, budget=budget)
-    os.makedirs(folder)
-    _write_json(os.path.join(folder, "start.json"), start_data(hunt, shrunk.case))
-    script = schedule_data(shrunk.case)
-    if script is not None:
-        _write_json(os.path.join(folder, "schedule.json"), script)
-    replayed = replay_files(hunt, shrunk.case, folder)
-    summary = summary_data(hunt, hunt_seed, candidate, failure, shrunk, case, replayed)
-    with open(os.path.join(folder, "command"), "w", encoding="utf-8") as fh:
-        fh.write(
-            f"# from this folder: replays the failure and writes replay.jsonl\n"
-            f"{replay_command(hunt, shrunk.case)}\n"
-        )
-    _write_json(os.path.join(folder, "summary.json"), summary)
-    return Saved(candidate, folder, summary)
+    """Shrink a failure and save it in `folder`, in one process (`shrink_failure`, then
+    `save_shrunk`)."""
+    shrunk = shrink_failure(hunt, case, failure.kind, budget)
+    return save_shrunk(hunt, hunt_seed, candidate, failure, case, shrunk, folder)
 
 
 def replay_files(hunt: Hunt, case: Case, folder: str) -> Failure | None:
@@ -192,24 +218,22 @@ def run_hunt(
     hunt: Hunt,
     hunt_seed: int,
     budget: Budget,
-    jobs: int,
+    workers: Workers,
     out: str,
     on_change: Callable[[Tally], None],
     stop: Callable[[], bool],
 ) -> tuple[Tally, bool]:
-    """Hunt on `jobs` worker processes; (the tally, True when it ended, False when `stop()`
-    turned true first: the workers are then killed, the failures saved so far stay).
+    """Hunt on `workers`; (the tally, True when it ended, False when `stop()` turned true first:
+    the workers' runs are then dropped, the failures saved so far stay).
 
-    Candidate i is `draw_candidate(hunt, hunt_seed, i)`, whichever worker runs it. A failure is
-    shrunk once every candidate before it has run, and only the first `budget.failures` of them
-    are, so a hunt with a run budget finds and saves the same failures on any number of cores.
+    Candidate i is `draw_candidate(hunt, hunt_seed, i)`, whichever worker runs it, in batches of
+    about a second (`Batcher`). A failure is shrunk once every candidate before it has run, and
+    only the first `budget.failures` of them are, and its folder is written here, so a hunt with
+    a run budget finds and saves the same failures on any number of cores or machines.
     Raises WorkerDiedError if a worker vanished.
     """
     tally = Tally()
-    pool = cf.ProcessPoolExecutor(
-        max_workers=jobs, mp_context=multiprocessing.get_context("spawn"), initializer=init_worker
-    )
-    loop = _HuntLoop(hunt, hunt_seed, budget, jobs, out, pool, tally)
+    loop = _HuntLoop(hunt, hunt_seed, budget, workers, out, tally)
     finished = False
     try:
         while True:
@@ -222,7 +246,7 @@ def run_hunt(
             for future in loop.ready():
                 try:
                     loop.collect(future)
-                except BrokenProcessPool:
+                except workers.died:
                     if stop():
                         return tally, False
                     raise WorkerDiedError(
@@ -235,28 +259,35 @@ def run_hunt(
         return tally, True
     finally:
         if not finished:
-            _kill_workers(pool)
-        pool.shutdown(wait=True, cancel_futures=True)
+            workers.kill()
+
+
+@dataclass(frozen=True, slots=True)
+class _Shrinking:
+    """A failure being shrunk, and where it goes once shrunk."""
+
+    found: Searched
+    folder: str
 
 
 class _HuntLoop:
-    """What `run_hunt`'s pool loop keeps: the searches and shrinkings in flight, the failures
-    found and not yet settled (shrunk and saved, or passed over), and how far the hunt has run."""
+    """What `run_hunt`'s loop keeps: the searches and shrinkings in flight, the failures found
+    and not yet settled (shrunk and saved, or passed over), and how far the hunt has run."""
 
     def __init__(
         self,
         hunt: Hunt,
         hunt_seed: int,
         budget: Budget,
-        jobs: int,
+        workers: Workers,
         out: str,
-        pool: cf.ProcessPoolExecutor,
         tally: Tally,
     ) -> None:
         self.hunt, self.hunt_seed, self.budget = hunt, hunt_seed, budget
-        self.jobs, self.out, self.pool, self.tally = jobs, out, pool, tally
-        self.searches: dict[cf.Future[Searched], Candidate] = {}
-        self.shrinks: dict[cf.Future[Saved], Candidate] = {}
+        self.workers, self.out, self.tally = workers, out, tally
+        self.batcher = Batcher(workers.slots)
+        self.searches: dict[cf.Future[list[Searched]], list[Candidate]] = {}
+        self.shrinks: dict[cf.Future[Shrunk], _Shrinking] = {}
         self.failed: dict[int, Searched] = {}  # found, waiting to be settled
         self.settled: list[int] = []
         self.done: set[int] = set()
@@ -265,51 +296,80 @@ class _HuntLoop:
 
     def searching(self) -> bool:
         """Whether the search still draws candidates (its budget is not spent)."""
+        if self.budget.runs is not None and self.drawn >= self.budget.runs:
+            return False
+        return not self.dropping()
+
+    def dropping(self) -> bool:
+        """Whether the candidates in flight are no longer needed: enough failures settled, or
+        the time is up (a run budget's candidates all count, so that it is reproducible)."""
         budget = self.budget
         if len(self.settled) >= budget.failures:
-            return False
-        if budget.runs is not None and self.drawn >= budget.runs:
-            return False
-        return budget.seconds is None or time.monotonic() - self.tally.started < budget.seconds
+            return True
+        return budget.seconds is not None and time.monotonic() - self.tally.started >= (
+            budget.seconds
+        )
 
     def feed(self) -> None:
-        """Keep the workers busy with candidates while searching; once the search is over, drop
-        the candidates not started and, when none runs, settle every failure found."""
+        """Keep the workers busy with batches of candidates while searching; once the search is
+        over, drop the candidates no longer needed and, when none runs, settle every failure
+        found."""
         if self.searching():
-            with _sigint_blocked():
-                while len(self.searches) < self.jobs * IN_FLIGHT_PER_JOB and self.searching():
-                    candidate = draw_candidate(self.hunt, self.hunt_seed, self.drawn)
-                    self.searches[self.pool.submit(search, self.hunt, candidate)] = candidate
-                    self.drawn += 1
-        else:
+            with sigint_blocked():
+                while len(self.searches) < self.batcher.in_flight() and self.searching():
+                    self._submit_batch()
+        elif self.dropping():
             for future in [f for f in self.searches if f.cancel()]:
                 del self.searches[future]  # never started: the search is over
-            if not self.searches:
-                self.settle(everything=True)
+        if not self.searching() and not self.searches:
+            self.settle(everything=True)
         self.tally.shrinking = len(self.shrinks)
+
+    def _submit_batch(self) -> None:
+        left = None if self.budget.runs is None else self.budget.runs - self.drawn
+        size = self.batcher.size(left if left is not None else 1 << 30)
+        if left is not None:
+            size = min(size, left)
+        batch = [draw_candidate(self.hunt, self.hunt_seed, self.drawn + i) for i in range(size)]
+        self.drawn += size
+        self.searches[self.workers.executor.submit(search_batch, self.hunt, batch)] = batch
 
     def over(self) -> bool:
         """Whether nothing runs and nothing more will."""
         return not self.searches and not self.shrinks and not self.searching()
 
     def ready(self) -> set[cf.Future[Any]]:
-        """The runs that ended within POLL_S."""
+        """The tasks that ended within POLL_S."""
         waiting: list[cf.Future[Any]] = [*self.searches, *self.shrinks]
         ready, _ = cf.wait(waiting, timeout=POLL_S, return_when=cf.FIRST_COMPLETED)
         return ready
 
     def collect(self, future: cf.Future[Any]) -> None:
-        """Count a candidate's run (keeping a failure to settle) or keep a saved failure."""
+        """Count a batch's runs (keeping the failures to settle), or save a shrunk failure."""
         if future in self.searches:
-            candidate = self.searches.pop(future)
-            result: Searched = future.result()
-            _count(self.tally, result)
-            self.done.add(candidate.index)
-            if result.outcome.failure is not None and result.case is not None:
-                self.failed[candidate.index] = result
+            del self.searches[future]
+            results: list[Searched] = future.result()
+            for result in results:
+                self.batcher.observe(result.wall_s)
+                _count(self.tally, result)
+                self.done.add(result.candidate.index)
+                if result.outcome.failure is not None and result.case is not None:
+                    self.failed[result.candidate.index] = result
         else:
-            self.shrinks.pop(future)
-            self.tally.saved.append(future.result())
+            shrinking = self.shrinks.pop(future)
+            found, shrunk = shrinking.found, future.result()
+            assert found.outcome.failure is not None and found.case is not None
+            self.tally.saved.append(
+                save_shrunk(
+                    self.hunt,
+                    self.hunt_seed,
+                    found.candidate,
+                    found.outcome.failure,
+                    found.case,
+                    shrunk,
+                    shrinking.folder,
+                )
+            )
 
     def advance(self) -> None:
         """Move the frontier past the candidates that have run and settle the failures below it."""
@@ -319,8 +379,8 @@ class _HuntLoop:
         self.tally.shrinking = len(self.shrinks)
 
     def settle(self, everything: bool) -> None:
-        """Shrink and save the failures found below the frontier (all of them with `everything`),
-        in the hunt's order, up to `budget.failures`."""
+        """Shrink the failures found below the frontier (all of them with `everything`), in the
+        hunt's order, up to `budget.failures`."""
         for index in sorted(self.failed):
             if len(self.settled) >= self.budget.failures or (
                 index >= self.frontier and not everything
@@ -331,18 +391,11 @@ class _HuntLoop:
             self.settled.append(index)
             kind = found.outcome.failure.kind
             folder = os.path.join(self.out, folder_name(found.candidate, kind))
-            with _sigint_blocked():
-                future = self.pool.submit(
-                    shrink_and_save,
-                    self.hunt,
-                    self.hunt_seed,
-                    found.candidate,
-                    found.outcome.failure,
-                    found.case,
-                    folder,
-                    self.budget.shrink_runs,
+            with sigint_blocked():
+                future = self.workers.executor.submit(
+                    shrink_failure, self.hunt, found.case, kind, self.budget.shrink_runs
                 )
-            self.shrinks[future] = found.candidate
+            self.shrinks[future] = _Shrinking(found, folder)
 
 
 def _count(tally: Tally, result: Searched) -> None:
@@ -380,6 +433,9 @@ __all__ = [
     "check_out",
     "replay_files",
     "run_hunt",
+    "save_shrunk",
     "search",
+    "search_batch",
     "shrink_and_save",
+    "shrink_failure",
 ]

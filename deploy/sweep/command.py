@@ -23,6 +23,12 @@ from fatswarm.coordinator.schedule import NAMES
 from fatswarm.deploy.engine.config import DEFAULT_START, check_lights, input_errors
 from fatswarm.deploy.flags import add_robot_model_arguments, check_writable
 from fatswarm.deploy.scenarios.starts import KINDS
+from fatswarm.deploy.sweep.executor import (
+    ClusterError,
+    Workers,
+    add_cluster_argument,
+    open_workers,
+)
 from fatswarm.deploy.sweep.figures import draw_figures
 from fatswarm.deploy.sweep.grid import (
     Grid,
@@ -178,6 +184,7 @@ def _add_output_arguments(p: argparse.ArgumentParser) -> None:
         metavar="J",
         help="worker processes (default: one per core)",
     )
+    add_cluster_argument(p)
     p.add_argument(
         "--plot",
         metavar="DIR",
@@ -281,12 +288,32 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _sweep(args: argparse.Namespace, grid: Grid, jobs: int, table: RunTable) -> int:
-    # the lock-step engine and multiprocessing: the CLI imports this module for its parser
+    runs = grid.runs()
+    todo = _todo(table, runs)
+    try:
+        # nothing to run asks nothing of a cluster (nor of dask)
+        cluster = args.cluster if todo else None
+        with open_workers(max(1, min(jobs, len(todo))), cluster) as workers:
+            _plan(args, grid, table, runs, len(todo), workers.where)
+            return _run(args, grid, table, (runs, todo), workers)
+    except ClusterError as exc:
+        return _fail(str(exc))
+
+
+def _run(
+    args: argparse.Namespace,
+    grid: Grid,
+    table: RunTable,
+    runs_todo: tuple[Sequence[RunSpec], Sequence[RunSpec]],
+    workers: Workers,
+) -> int:
+    """Run the `todo` of the grid's `runs` on `workers` into `table`, then summarise; the exit
+    code."""
+    # the lock-step engine: the CLI imports this module for its parser
     from fatswarm.deploy.sweep.pool import TableWriteError, WorkerDiedError, run_all
 
-    runs = grid.runs()
+    runs, todo = runs_todo
     keys = {spec.key() for spec in runs}
-    todo = _todo(args, grid, table, runs, keys, jobs)
 
     def record(spec: RunSpec, figures: RunFigures) -> None:
         table.append(make_row(spec, figures, __version__))
@@ -295,7 +322,7 @@ def _sweep(args: argparse.Namespace, grid: Grid, jobs: int, table: RunTable) -> 
     progress = make_progress(len(todo), quiet=args.quiet or not todo)
     try:
         with _stop_on_signals() as stopped, progress:
-            complete = run_all(todo, jobs, record, lambda: stopped[0] is not None)
+            complete = run_all(todo, workers, record, lambda: stopped[0] is not None)
     except TableWriteError as exc:
         _say(
             f"fatswarm sweep: {exc}; the rows written stay, run the same command again once "
@@ -310,28 +337,31 @@ def _sweep(args: argparse.Namespace, grid: Grid, jobs: int, table: RunTable) -> 
     return _finish(args, grid, [row for row in table.rows if row_key(row) in keys])
 
 
-def _todo(
+def _todo(table: RunTable, runs: Sequence[RunSpec]) -> list[RunSpec]:
+    """The runs of the grid the table lacks."""
+    present = table.keys()
+    return [spec for spec in runs if spec.key() not in present]
+
+
+def _plan(
     args: argparse.Namespace,
     grid: Grid,
     table: RunTable,
     runs: Sequence[RunSpec],
-    keys: set[Key],
-    jobs: int,
-) -> list[RunSpec]:
-    """The runs of the grid the table lacks; the plan (and a torn row cut, runs left out, scipy
-    missing) said on stderr."""
-    present = table.keys()
-    todo = [spec for spec in runs if spec.key() not in present]
+    todo: int,
+    where: str,
+) -> None:
+    """The plan (and a torn row cut, runs left out, scipy missing), said on stderr."""
+    keys = {spec.key() for spec in runs}
     other = sum(1 for row in table.rows if row_key(row) not in keys)
     if table.cut:
         _say(f"{args.out}: cut a torn last row ({table.cut} bytes); that run is done again")
     if not args.quiet:
-        _say(_plan_text(args.out, len(runs), len(runs) - len(todo), other, jobs))
+        _say(_plan_text(args.out, len(runs), len(runs) - todo, other, where))
         if grid.left_out:
             _say(f"sweep: {grid.left_out} runs left out, whose --crash F is >= their n (0 < F < n)")
     if todo and importlib.util.find_spec("scipy") is None:
         _say(MISSING_SCIPY)
-    return todo
 
 
 def _stopped(out: str, table: RunTable, keys: set[Key], total: int, signum: int | None) -> int:
@@ -362,12 +392,12 @@ def _finish(args: argparse.Namespace, grid: Grid, rows: Sequence[dict[str, str]]
     return ExitCode.OK
 
 
-def _plan_text(out: str, total: int, present: int, other: int, jobs: int) -> str:
+def _plan_text(out: str, total: int, present: int, other: int, where: str) -> str:
     there = f"{present} already in {out}" if present else f"none in {out} yet"
     others = f" (and {other} rows of other grids, left as they are)" if other else ""
     todo = total - present
     return f"sweep: {total} run{'' if total == 1 else 's'}, {there}{others}; " + (
-        f"{todo} to run on {min(jobs, todo)} worker processes" if todo else "nothing to run"
+        f"{todo} to run on {where}" if todo else "nothing to run"
     )
 
 

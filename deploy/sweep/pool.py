@@ -1,5 +1,6 @@
-"""The machinery of `fatswarm sweep`: one lock-step run per worker process, the pool that runs a
-grid, and the CSV table it appends to row by row (resumable: a torn last row is cut on open).
+"""The machinery of `fatswarm sweep`: lock-step runs in batches on the executor's workers, the
+loop that runs a grid, and the CSV table it appends to row by row (resumable: a torn last row is
+cut on open).
 """
 
 from __future__ import annotations
@@ -7,16 +8,15 @@ from __future__ import annotations
 import concurrent.futures as cf
 import contextlib
 import logging
-import multiprocessing
 import os
 import signal
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from concurrent.futures.process import BrokenProcessPool
+from collections.abc import Callable, Iterator, Sequence
 from typing import Final
 
 from fatswarm.deploy.engine.config import RunConfig, RunSetup
 from fatswarm.deploy.engine.lockstep import default_max_rounds, run_lockstep
+from fatswarm.deploy.sweep.executor import Batcher, Workers, init_worker, quiet_logs
 from fatswarm.deploy.sweep.grid import Key, RunSpec, SweepInputError, values_text
 from fatswarm.deploy.sweep.table import (
     COLUMNS,
@@ -34,7 +34,6 @@ from fatswarm.deploy.sweep.table import (
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.seam import resolve_values
 
-IN_FLIGHT_PER_JOB: Final = 4  # runs queued per worker: enough to keep it busy, few to cancel
 POLL_S: Final = 0.2  # how often the pool loop looks at the stop flag
 
 
@@ -65,14 +64,6 @@ class _FirstWarning(logging.Handler):
     def text(self) -> str:
         more = f" (+{self.count - 1} more)" if self.count > 1 else ""
         return f"{self.first}{more}" if self.first else ""
-
-
-def init_worker() -> None:
-    """A worker ignores Ctrl-C (the sweep stops it), dies on SIGTERM, and logs to no terminal
-    (a run's warnings go to its row)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    logging.getLogger("fatswarm").propagate = False
 
 
 def _resolved(spec: RunSpec) -> RunSetup:
@@ -151,74 +142,91 @@ def run_spec(spec: RunSpec) -> RunFigures:
 # -- the pool ---------------------------------------------------------------------------------
 
 
+def run_batch(specs: Sequence[RunSpec]) -> list[RunFigures]:
+    """Run `specs` one after the other (one task of the executor, in a worker)."""
+    quiet_logs()
+    return [run_spec(spec) for spec in specs]
+
+
 def run_all(
     todo: Sequence[RunSpec],
-    jobs: int,
+    workers: Workers,
     on_done: Callable[[RunSpec, RunFigures], None],
     stop: Callable[[], bool],
 ) -> bool:
-    """Run `todo` on `jobs` worker processes, calling `on_done` here as each run ends; True when
-    all ran, False when `stop()` turned true first. On any way out but the end (a stop, an
-    exception from `on_done`) the workers are killed, their runs dropped.
-
-    Workers are spawned, not forked: they share no thread, lock or signal handler with this
-    process (which runs a progress thread). Raises WorkerDiedError if a worker vanished.
+    """Run `todo` on `workers`, in batches of about a second (`Batcher`), calling `on_done` here
+    for each run of a batch as the batch ends; True when all ran, False when `stop()` turned
+    true first. On any way out but the end (a stop, an exception from `on_done`) the workers'
+    runs are dropped (`Workers.kill`). Raises WorkerDiedError if a worker vanished.
     """
     if not todo:
         return True
-    jobs = max(1, min(jobs, len(todo)))
-    pool = cf.ProcessPoolExecutor(
-        max_workers=jobs, mp_context=multiprocessing.get_context("spawn"), initializer=init_worker
-    )
-    pending: dict[cf.Future[RunFigures], RunSpec] = {}
-    queue = iter(todo)
+    batcher = Batcher(workers.slots)
+    pending: dict[cf.Future[list[RunFigures]], Sequence[RunSpec]] = {}
+    left = list(reversed(todo))  # popped from the end: the grid's order
     finished = False
     try:
-        _fill(pool, pending, queue, jobs * IN_FLIGHT_PER_JOB)
+        _fill(workers, batcher, pending, left)
         while pending:
             if stop():
                 return False
             done, _ = cf.wait(pending, timeout=POLL_S, return_when=cf.FIRST_COMPLETED)
             for future in done:
-                spec = pending.pop(future)
-                try:
-                    figures = future.result()
-                except BrokenProcessPool:
-                    if stop():  # a worker killed by the same signal, say
-                        return False
-                    raise WorkerDiedError(
-                        "a worker process died (killed, or out of memory?) with runs in flight, "
-                        f"such as {spec.command()!r}"
-                    ) from None
-                on_done(spec, figures)
-            _fill(pool, pending, queue, jobs * IN_FLIGHT_PER_JOB)
+                specs = pending.pop(future)
+                results = _results(future, specs, workers, stop)
+                for spec, figures in zip(specs, results, strict=True):
+                    batcher.observe(figures.wall_s)
+                    on_done(spec, figures)
+            _fill(workers, batcher, pending, left)
         finished = True
         return True
+    except _Stopped:
+        return False
     finally:
         if not finished:
-            _kill_workers(pool)
-        pool.shutdown(wait=True, cancel_futures=True)
+            workers.kill()
+
+
+class _Stopped(Exception):
+    """A worker died of the very signal that stops the sweep."""
+
+
+def _results(
+    future: cf.Future[list[RunFigures]],
+    specs: Sequence[RunSpec],
+    workers: Workers,
+    stop: Callable[[], bool],
+) -> list[RunFigures]:
+    try:
+        return future.result()
+    except workers.died:
+        if stop():  # a worker killed by the same signal, say
+            raise _Stopped from None
+        raise WorkerDiedError(
+            "a worker process died (killed, or out of memory?) with runs in flight, "
+            f"such as {specs[0].command()!r}"
+        ) from None
 
 
 def _fill(
-    pool: cf.ProcessPoolExecutor,
-    pending: dict[cf.Future[RunFigures], RunSpec],
-    queue: Iterator[RunSpec],
-    limit: int,
+    workers: Workers,
+    batcher: Batcher,
+    pending: dict[cf.Future[list[RunFigures]], Sequence[RunSpec]],
+    left: list[RunSpec],
 ) -> None:
-    """Submit runs up to `limit` in flight. The pool spawns its workers in `submit`: with SIGINT
-    blocked here, they start with it blocked, so a Ctrl-C during their start-up (before
-    `init_worker` ignores it) cannot kill them with a traceback; this process gets it after."""
-    with _sigint_blocked():
-        while len(pending) < limit:
-            spec = next(queue, None)
-            if spec is None:
-                return
-            pending[pool.submit(run_spec, spec)] = spec
+    """Submit batches while fewer than `batcher.in_flight()` are in flight. A local pool spawns
+    its workers in `submit`: with SIGINT blocked here, they start with it blocked, so a Ctrl-C
+    during their start-up (before `init_worker` ignores it) cannot kill them with a traceback;
+    this process gets it after."""
+    with sigint_blocked():
+        while left and len(pending) < batcher.in_flight():
+            size = batcher.size(len(left))
+            specs = [left.pop() for _ in range(min(size, len(left)))]
+            pending[workers.executor.submit(run_batch, specs)] = specs
 
 
 @contextlib.contextmanager
-def _sigint_blocked() -> Iterator[None]:
+def sigint_blocked() -> Iterator[None]:
     if not hasattr(signal, "pthread_sigmask"):  # not POSIX
         yield
         return
@@ -227,19 +235,6 @@ def _sigint_blocked() -> Iterator[None]:
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
-
-
-def _kill_workers(pool: cf.ProcessPoolExecutor) -> None:
-    """Stop the pool's workers now (a run can take minutes); Python 3.14 has
-    `terminate_workers()`, before it the processes are only reachable as `_processes`."""
-    processes: Mapping[int, multiprocessing.process.BaseProcess] = (
-        getattr(pool, "_processes", None) or {}
-    )
-    for process in list(processes.values()):
-        if process.is_alive():
-            process.terminate()
-    for process in list(processes.values()):
-        process.join(timeout=5)
 
 
 # -- the CSV table ----------------------------------------------------------------------------
@@ -352,4 +347,13 @@ def _write_all(fd: int, data: bytes) -> None:
         view = view[os.write(fd, view) :]
 
 
-__all__ = ["RunTable", "TableWriteError", "WorkerDiedError", "init_worker", "run_all", "run_spec"]
+__all__ = [
+    "RunTable",
+    "TableWriteError",
+    "WorkerDiedError",
+    "init_worker",
+    "run_all",
+    "run_batch",
+    "run_spec",
+    "sigint_blocked",
+]

@@ -1,0 +1,130 @@
+"""`fatswarm sweep` and `fatswarm hunt --cluster` on a real Dask LocalCluster (two worker
+processes on loopback, started and closed here): the same CSV rows (less the wall time) and the
+same hunt folders as one and two local worker processes; an unreachable address is one line."""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from fatswarm.deploy import cli
+from fatswarm.deploy.sweep import executor
+
+distributed: Any = pytest.importorskip("distributed")
+
+pytestmark = pytest.mark.integration
+ROOT = Path(__file__).resolve().parents[2]
+PLANTED = f"{ROOT / 'tests' / 'data' / 'always_right.py'}:ALGORITHM"
+VOLATILE = {"wall_s"}
+SWEEP = ["-n", "4,5,6", "--scheduler", "fsync,ssync", "--seeds", "2", "-q"]  # 12 runs
+HUNT = [
+    "--algorithm",
+    PLANTED,
+    "--scheduler",
+    "fsync,ssync,centralized",
+    "-n",
+    "3..6",
+    "--budget-runs",
+    "40",
+    "--max-failures",
+    "2",
+    "--seed",
+    "3",
+    "-q",
+]
+
+
+@pytest.fixture(scope="module")
+def scheduler() -> Iterator[str]:
+    """The address of a LocalCluster of two single-threaded worker processes on loopback."""
+    cluster = distributed.LocalCluster(
+        n_workers=2,
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        dashboard_address=":0",  # a free port: None means the default 8787, maybe taken
+    )
+    try:
+        yield str(cluster.scheduler_address)
+    finally:
+        cluster.close()
+
+
+def rows_of(path: Path) -> set[tuple[str, ...]]:
+    with path.open(newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    return {tuple(v for k, v in row.items() if k not in VOLATILE) for row in rows}
+
+
+def folders_of(out: Path) -> dict[str, dict[str, str]]:
+    """Every saved folder's files, with the --out path written as OUT."""
+    return {
+        folder.name: {
+            f.name: f.read_text().replace(str(out), "OUT") for f in sorted(folder.iterdir())
+        }
+        for folder in sorted(out.iterdir())
+    }
+
+
+def test_a_sweep_on_a_cluster_writes_the_rows_of_one_and_two_local_workers(
+    scheduler: str, tmp_path: Path
+) -> None:
+    tables = {}
+    for where in (["--jobs", "1"], ["--jobs", "2"], ["--cluster", scheduler]):
+        out = tmp_path / f"{where[1].replace('/', '_').replace(':', '_')}.csv"
+        assert cli.main(["sweep", *SWEEP, *where, "--out", str(out)]) == 0
+        tables[where[0] + where[1]] = rows_of(out)
+    local = tables["--jobs1"]
+    assert len(local) == 12
+    assert tables["--jobs2"] == local
+    assert tables["--cluster" + scheduler] == local
+
+
+def test_a_hunt_on_a_cluster_saves_the_folders_of_one_and_two_local_workers(
+    scheduler: str, tmp_path: Path
+) -> None:
+    saved = {}
+    for name, where in (
+        ("1", ["--jobs", "1"]),
+        ("2", ["--jobs", "2"]),
+        ("c", ["--cluster", scheduler]),
+    ):
+        out = tmp_path / f"hunt{name}"
+        assert cli.main(["hunt", *HUNT, *where, "--out", str(out)]) == 1
+        saved[name] = folders_of(out)
+    assert len(saved["1"]) == 2
+    assert saved["2"] == saved["1"]
+    assert saved["c"] == saved["1"]
+
+
+def test_a_resumed_sweep_on_a_cluster_runs_only_what_the_table_lacks(
+    scheduler: str, tmp_path: Path
+) -> None:
+    out = tmp_path / "runs.csv"
+    first = ["-n", "4", "--scheduler", "fsync", "--seeds", "2", "-q", "--out", str(out)]
+    assert cli.main(["sweep", *first, "--jobs", "1"]) == 0
+    wider = ["-n", "4", "--scheduler", "fsync", "--seeds", "4", "-q", "--out", str(out)]
+    assert cli.main(["sweep", *wider, "--cluster", scheduler]) == 0
+    rows = rows_of(out)
+    assert len(rows) == 4
+
+
+def test_an_unreachable_cluster_is_one_line_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(executor, "CONNECT_S", 1.0)
+    address = "tcp://127.0.0.1:9"  # the discard port: nothing listens there
+    out = tmp_path / "runs.csv"
+    code = cli.main(["sweep", "-n", "4", "--seeds", "1", "--cluster", address, "--out", str(out)])
+    assert code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith(f"fatswarm sweep: --cluster {address}: no Dask scheduler answered")
+    code = cli.main(
+        ["hunt", "--budget-runs", "2", "--cluster", address, "--out", str(tmp_path / "h")]
+    )
+    assert code == 2
+    assert "no Dask scheduler answered" in capsys.readouterr().err
