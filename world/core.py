@@ -313,6 +313,12 @@ class WorldCore:
             own=own,
         )
 
+    def prepare_looks(self, robots: Sequence[int]) -> None:
+        """The open round's views of `robots` built at once, ahead of their Looks (`look` hands
+        each the very view it would build alone): a lock step's whole round."""
+        if self.open_round:
+            self.looks.prepare(self.positions, self.open_round, robots)
+
     def admit_look(self, robot: int) -> bool:
         """Count robot `robot`'s Look without building its view (a lock step that plans the round
         at once); False (refused, counted) if it is not active now."""

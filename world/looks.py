@@ -7,17 +7,21 @@ and the views it served when `--record-views` asks. Pure: the world core holds o
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
-from fatswarm.domain.draws import view_order
+from fatswarm.domain.draws import view_order, view_orders
 from fatswarm.domain.frames import Frame, draw_frame
 from fatswarm.domain.path import Path, Points
 from fatswarm.domain.robot_model import FrameChange, Lights, RobotModel
 from fatswarm.domain.seam import Configured
 from fatswarm.world.sight import seen
+
+AHEAD_LIMIT = 1 << 20
+"""`Looks.prepare` builds a round's views at once up to this many points (16 MB); past it, each
+view alone."""
 
 
 class Looks:
@@ -37,6 +41,8 @@ class Looks:
         # every robot's colour (palette index; the first at the start); none without lights
         self.colours: list[int] | None = [0] * n if self.palette else None
         self.views: dict[int, list[int]] = {}  # robot -> the ids it saw, of Looks not recorded yet
+        # views built ahead for one round and one configuration (`prepare`): robot -> its view
+        self._ahead: tuple[int, Points, dict[int, Points]] | None = None
 
     def frame(self, robot: int, look_round: int) -> Frame:
         """Robot `robot`'s frame for its Look of round `look_round`."""
@@ -49,8 +55,13 @@ class Looks:
     ) -> tuple[Points, tuple[int, ...] | None, int | None]:
         """Robot `robot`'s view in its frame, the colours it reads of those it sees (lined up
         with the view; None if it reads none) and its own (None if it cannot read it)."""
-        if self.model.sees_all and self.colours is None and not self.record_views:
+        if self._plain():
             # the paper's model: every other robot (the fast path of every Look of every run)
+            ahead = self._ahead
+            if ahead is not None and ahead[0] == look_round and ahead[1] is positions:
+                view = ahead[2].pop(robot, None)
+                if view is not None:
+                    return view, None, None
             others = np.concatenate((positions[:robot], positions[robot + 1 :]))
             others -= positions[robot]
             order = view_order(self.seed, look_round, robot, len(others))
@@ -66,6 +77,34 @@ class Looks:
         shown = None if lights is Lights.INTERNAL else tuple(self.colours[i] for i in ids)
         own = None if lights is Lights.EXTERNAL else self.colours[robot]
         return view, shown, own
+
+    def _plain(self) -> bool:
+        """Whether a view is every other robot, with no colours and nothing recorded."""
+        return self.model.sees_all and self.colours is None and not self.record_views
+
+    def prepare(self, positions: Points, look_round: int, robots: Sequence[int]) -> None:
+        """Build the views of `robots` for their Looks of round `look_round` at `positions` in one
+        pass, for `view` to hand out: each the very array `view` would build alone (the same
+        differences, `view_orders` gives each row `view_order`'s order, the same frame)."""
+        self._ahead = None
+        k = self.n - 1
+        if not self._plain() or not robots or len(robots) * k > AHEAD_LIMIT:
+            return
+        rows = np.asarray(robots, dtype=np.intp)
+        order = view_orders(self.seed, look_round, robots, k)
+        order += order >= rows[:, None]  # an index among the others is one among all robots
+        frames = [self.frame(robot, look_round) for robot in robots]
+        sign = np.array([-1.0 if f.mirror and not f.rotation else 1.0 for f in frames])
+        rel = np.empty((len(rows), k, 2), dtype=np.float64)
+        for axis in (0, 1):  # per coordinate: the same differences, faster than in (m, k, 2)
+            coord = np.ascontiguousarray(positions[:, axis])
+            np.subtract(coord[order], coord[rows][:, None], out=rel[:, :, axis])
+        rel[:, :, 0] *= sign[:, None]  # x * 1.0 is x, bit for bit: the mirror of to_local alone
+        views = {
+            robot: frame.to_local(rel[i]) if frame.rotation else rel[i]
+            for i, (robot, frame) in enumerate(zip(robots, frames, strict=True))
+        }
+        self._ahead = (look_round, positions, views)
 
     def seen_by(self, positions: Points, robot: int) -> np.ndarray:
         """The ids of the robots `robot` sees now, ascending."""

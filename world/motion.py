@@ -89,6 +89,27 @@ def _arc_box(start: tuple[float, float], arc: Arc, radius: float) -> list[float]
     return [min(xs), min(ys), max(xs), max(ys)]
 
 
+_NO_ARC = (0.0, 0.0, 0.0, 0.0, 0.0)  # a line's arc columns: centre, sweep, rate, curvature
+
+
+def _arc_row(
+    here: tuple[float, float], seg: Arc, t: float, xs: list[float], ys: list[float]
+) -> tuple[list[float], tuple[float, float]]:
+    """An arc's row of the segment table from `here` at time `t`, and its end; its bounding box
+    joins `xs`, `ys`."""
+    length = segment_length(here, seg)
+    end = segment_end(here, seg)
+    row = [t, t + length, length, 0.0, *here, end[0], end[1], 0.0, 0.0, 0.0, 0.0, 0.0]
+    radius = math.hypot(here[0] - seg.center[0], here[1] - seg.center[1])
+    row[_ARC], row[_CX], row[_CY], row[_SWEEP] = 1.0, *seg.center, seg.sweep
+    if length > 0.0:
+        row[_RATE], row[_CURV] = seg.sweep / length, 1.0 / radius
+    box = _arc_box(here, seg, radius)
+    xs += box[0::2]
+    ys += box[1::2]
+    return row, end
+
+
 def build_motion(start: Points, moves: list[tuple[int, Path]]) -> Motion:
     """Tabulate the movers' paths; lengths are summed exactly as agent.path.path_length does."""
     rows: list[tuple[int, list[list[float]], float, tuple[float, float], list[float]]] = []
@@ -98,22 +119,18 @@ def build_motion(start: Points, moves: list[tuple[int, Path]]) -> Motion:
         segs: list[list[float]] = []
         xs, ys = [here[0]], [here[1]]
         for seg in path.segments:
-            length = segment_length(here, seg)
-            end = segment_end(here, seg)
-            row = [t, t + length, length, 0.0, *here, end[0], end[1], 0.0, 0.0, 0.0, 0.0, 0.0]
-            if isinstance(seg, Line):
-                xs.append(end[0])
-                ys.append(end[1])
-            else:
-                radius = math.hypot(here[0] - seg.center[0], here[1] - seg.center[1])
-                row[_ARC], row[_CX], row[_CY], row[_SWEEP] = 1.0, *seg.center, seg.sweep
-                if length > 0.0:
-                    row[_RATE], row[_CURV] = seg.sweep / length, 1.0 / radius
-                box = _arc_box(here, seg, radius)
-                xs += box[0::2]
-                ys += box[1::2]
+            if isinstance(seg, Line):  # the common case inline: segment_length's arithmetic
+                ex, ey = seg.end[0], seg.end[1]
+                length = math.hypot(ex - here[0], ey - here[1])
+                segs.append([t, t + length, length, 0.0, *here, ex, ey, *_NO_ARC])
+                xs.append(ex)
+                ys.append(ey)
+                t += length
+                here = (float(ex), float(ey))
+                continue
+            row, end = _arc_row(here, seg, t, xs, ys)
             segs.append(row)
-            t += length
+            t += row[_LEN]
             here = (float(end[0]), float(end[1]))
         box = [min(xs), min(ys), max(xs), max(ys)]
         if not (math.isfinite(t) and all(map(math.isfinite, box))):
@@ -124,8 +141,11 @@ def build_motion(start: Points, moves: list[tuple[int, Path]]) -> Motion:
     width = max((len(r[1]) for r in rows), default=1)
     table = np.zeros((m, width, 13), dtype=np.float64)
     table[:, :, _T0 : _T1 + 1] = np.inf
-    for i, (_, segs, _, _, _) in enumerate(rows):
-        table[i, : len(segs)] = segs
+    counts = [len(r[1]) for r in rows]
+    if sum(counts):  # every segment row at once: one conversion, the same floats
+        at = np.repeat(np.arange(m, dtype=np.intp), counts)
+        col = np.arange(len(at), dtype=np.intp) - np.repeat(np.cumsum(counts) - counts, counts)
+        table[at, col] = [seg for r in rows for seg in r[1]]
     row_of = np.full(len(start), -1, dtype=np.intp)
     robots = np.array([r[0] for r in rows], dtype=np.intp)
     row_of[robots] = np.arange(m, dtype=np.intp)
@@ -134,7 +154,7 @@ def build_motion(start: Points, moves: list[tuple[int, Path]]) -> Motion:
         start=start,
         row_of=row_of,
         robots=robots,
-        nseg=np.array([len(r[1]) for r in rows], dtype=np.intp),
+        nseg=np.array(counts, dtype=np.intp),
         seg=table,
         t1=np.ascontiguousarray(table[:, :, _T1]),
         total=total,

@@ -40,7 +40,14 @@ from fatswarm.domain.tolerance import (
     snap,
     snap_point,
 )
-from fatswarm.world.motion import IntArray, Motion, build_motion, first_contacts, positions_at
+from fatswarm.world.motion import (
+    FloatArray,
+    IntArray,
+    Motion,
+    build_motion,
+    first_contacts,
+    positions_at,
+)
 
 CONTACT_SLACK = OVERLAP_SLACK
 """Two discs overlap iff their centres are closer than 2 - CONTACT_SLACK
@@ -156,10 +163,14 @@ def validate_configuration(positions: Points) -> Points:
 
 
 def _finite_number(value: Any) -> bool:
+    if type(value) is float:  # the common case first: a float is a Real and no bool
+        return math.isfinite(value)
     return isinstance(value, Real) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def _finite_point(value: Any) -> bool:
+    if type(value) is tuple and len(value) == 2:  # the common case first
+        return _finite_number(value[0]) and _finite_number(value[1])
     return (
         isinstance(value, (tuple, list, np.ndarray))
         and len(value) == 2
@@ -201,19 +212,56 @@ def _check_moves(paths: Mapping[int, Path], n: int) -> list[tuple[int, Path]]:
 # The round: the pairs that can meet, the event loop over their contacts, the end on the grid
 
 
+def _sweep_pairs(
+    lo: FloatArray, hi: FloatArray, first: IntArray, second: IntArray, reach: float
+) -> tuple[IntArray, IntArray]:
+    """Every pair (a in `first`, b in `second`) whose intervals [lo, hi] (one axis, per robot) come
+    within `reach`, and maybe a few more: a sort and sweep, O((m + k) log k) for k = len(second);
+    up to BRUTE_PAIRS pairs, every pair (first, then second) instead.
+    """
+    if len(first) * len(second) <= BRUTE_PAIRS:  # few: every pair, already in their order
+        return np.repeat(first, len(second)), np.tile(second, len(first))
+    lo_b = lo[second]
+    order = np.argsort(lo_b, kind="stable")
+    lo_sorted = lo_b[order]
+    width = float((hi[second] - lo_b).max()) if len(second) else 0.0
+    pad = reach + width + 1.0  # generous: the exact test of the pairs comes after
+    begin = np.searchsorted(lo_sorted, lo[first] - pad, side="left")
+    end = np.searchsorted(lo_sorted, hi[first] + reach + 1.0, side="right")
+    counts = end - begin
+    total = int(counts.sum())
+    offsets = np.repeat(begin - np.cumsum(counts) + counts, counts)
+    pi = np.repeat(first, counts)
+    pj = second[order[np.arange(total, dtype=np.intp) + offsets]]
+    return pi, pj
+
+
 def _candidate_pairs(mo: Motion, first: IntArray, second: IntArray) -> tuple[IntArray, IntArray]:
-    """Pairs (a in `first`, b in `second`, a != b, once each) whose path boxes come within 2."""
-    pi = np.repeat(first, len(second))
-    pj = np.tile(second, len(first))
+    """Pairs (a in `first`, b in `second`, a != b, once each) whose path boxes come within 2.
+
+    In the order of a brute force over `first` x `second` (first, then second, the order of the
+    arguments), which the event loop's ties depend on; the pairs come from a sweep along the wider
+    axis (`_sweep_pairs`) and the test on each is the brute force's very arithmetic.
+    """
     boxes = np.concatenate([mo.start, mo.start], axis=1)
     boxes[mo.robots] = mo.box
+    ax = 0 if np.ptp(boxes[:, 0]) >= np.ptp(boxes[:, 1]) else 1
+    pi, pj = _sweep_pairs(boxes[:, ax], boxes[:, ax + 2], first, second, 2.0 + BOX_MARGIN)
     bi, bj = boxes[pi], boxes[pj]
     gx = np.maximum(0.0, np.maximum(bj[:, 0] - bi[:, 2], bi[:, 0] - bj[:, 2]))
     gy = np.maximum(0.0, np.maximum(bj[:, 1] - bi[:, 3], bi[:, 1] - bj[:, 3]))
     in_first = np.zeros(len(mo.start), dtype=np.bool_)
     in_first[first] = True
     keep = (gx * gx + gy * gy < (2.0 + BOX_MARGIN) ** 2) & (pi != pj) & ~(in_first[pj] & (pj < pi))
-    return pi[keep], pj[keep]
+    pi, pj = pi[keep], pj[keep]
+    if len(first) * len(second) <= BRUTE_PAIRS:  # every pair was taken, in the brute order
+        return pi, pj
+    rank_first = np.empty(len(mo.start), dtype=np.intp)
+    rank_first[first] = np.arange(len(first), dtype=np.intp)
+    rank_second = np.empty(len(mo.start), dtype=np.intp)
+    rank_second[second] = np.arange(len(second), dtype=np.intp)
+    order = np.lexsort((rank_second[pj], rank_first[pi]))
+    return pi[order], pj[order]
 
 
 def _simulate(mo: Motion, pi: IntArray, pj: IntArray) -> list[Collision]:
@@ -261,6 +309,16 @@ def _closest_pair(points: Points, pi: IntArray, pj: IntArray) -> tuple[int, int,
 _CORNERS = np.array([[0, 0], [0, 1], [1, 0], [1, 1]], dtype=np.float64)
 
 
+BRUTE_PAIRS = 2048
+"""Up to this many pairs, the candidate pairs are every pair: cheaper than a sort and sweep for
+the few movers of a round of the paper's algorithm."""
+SNAP_FEW = 2
+"""Up to this many movers, `_snap_movers` tests each against every other robot, as one."""
+SNAP_REACH = CONTACT + 1e-3
+"""Only a robot closer than this to a mover's end can refuse one of its grid corners (a corner is
+within GRID * sqrt(2) of the end): `_snap_movers` tests those alone."""
+
+
 def _snap_movers(final: Points, movers: IntArray) -> None:
     """Put the movers' end positions on the grid, in place, without bringing anyone closer.
 
@@ -268,22 +326,49 @@ def _snap_movers(final: Points, movers: IntArray) -> None:
     other robot closer than it was and closer than 2 (into the touching band); then the nearest
     corner that does not. Planned paths thus keep what the planner promised (CLEAR_SLACK) after
     snapping, and touching neighbours do not creep towards each other round after round.
+
+    A mover with no robot within SNAP_REACH takes its nearest corner (no other robot can refuse
+    it, nor can its own snap matter to another's), all such movers at once; the others, one after
+    the other in the order of `movers`, test their corners against the robots within SNAP_REACH.
     """
-    for robot in movers:
-        p = final[robot].copy()
-        base = np.floor(p / GRID) * GRID
-        corners = base + _CORNERS * GRID
-        order = np.argsort(np.hypot(corners[:, 0] - p[0], corners[:, 1] - p[1]), kind="stable")
-        others = np.delete(final, robot, axis=0)
-        before = np.hypot(others[:, 0] - p[0], others[:, 1] - p[1])
-        floor = np.minimum(before, CONTACT)
-        chosen = corners[order[0]]
-        for k in order:
-            c = corners[k]
-            if (np.hypot(others[:, 0] - c[0], others[:, 1] - c[1]) >= floor).all():
-                chosen = c
-                break
-        final[robot] = chosen + 0.0
+    if len(movers) <= SNAP_FEW:  # few: each against every other robot
+        everyone = np.arange(len(final), dtype=np.intp)
+        for robot in movers:
+            _snap_one(final, int(robot), everyone[everyone != robot])
+        return
+    pi, pj = _sweep_pairs(final[:, 0], final[:, 0], movers, np.arange(len(final)), SNAP_REACH)
+    d = final[pi] - final[pj]
+    near = (np.hypot(d[:, 0], d[:, 1]) < SNAP_REACH) & (pi != pj)
+    pi, pj = pi[near], pj[near]
+    p = final[movers]
+    base = np.floor(p / GRID) * GRID
+    corners = base[:, None, :] + _CORNERS * GRID
+    dist = np.hypot(corners[:, :, 0] - p[:, 0, None], corners[:, :, 1] - p[:, 1, None])
+    nearest = corners[np.arange(len(movers)), np.argmin(dist, axis=1)]
+    crowded = np.isin(movers, pi)
+    alone = ~crowded
+    final[movers[alone]] = nearest[alone] + 0.0
+    for robot in movers[crowded]:
+        _snap_one(final, int(robot), pj[pi == robot])
+
+
+def _snap_one(final: Points, robot: int, neighbours: IntArray) -> None:
+    """`_snap_movers` for one mover, tested against the robots `neighbours` (all those within
+    SNAP_REACH: no other can refuse a corner)."""
+    p = final[robot].copy()
+    base = np.floor(p / GRID) * GRID
+    corners = base + _CORNERS * GRID
+    order = np.argsort(np.hypot(corners[:, 0] - p[0], corners[:, 1] - p[1]), kind="stable")
+    others = final[neighbours]
+    before = np.hypot(others[:, 0] - p[0], others[:, 1] - p[1])
+    floor = np.minimum(before, CONTACT)
+    chosen = corners[order[0]]
+    for k in order:
+        c = corners[k]
+        if (np.hypot(others[:, 0] - c[0], others[:, 1] - c[1]) >= floor).all():
+            chosen = c
+            break
+    final[robot] = chosen + 0.0
 
 
 def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
@@ -319,7 +404,7 @@ def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
                 f"robots {a} and {b} overlap before the round: centres {dist:.9g} apart (< 2); "
                 "start from a valid configuration (see validate_configuration)"
             )
-    collisions = _simulate(mo, pi, pj)
+    collisions = _simulate(mo, pi, pj) if pi.size else []  # no pair, no contact
     final = start.copy()
     final[mo.robots] = positions_at(mo, mo.robots, mo.stop) + np.array(origin)
     _snap_movers(final, mo.robots)
@@ -334,9 +419,10 @@ def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
                 f"physics bug: robots {a} and {b} overlap after the round (centres {dist!r} apart)"
             )
     world_paths = dict(moves)
-    for row, robot in enumerate(mo.robots):
-        done = mo.stop[row] >= mo.total[row]  # the whole path: its length as the world measures it
-        here = (float(start[robot, 0]), float(start[robot, 1]))
-        length = path_length(here, world_paths[int(robot)]) if done else float(mo.stop[row])
-        traveled[int(robot)] = length
+    starts = start.tolist()  # Python floats: the same values, read faster than numpy scalars
+    rows = zip(mo.robots.tolist(), mo.stop.tolist(), mo.total.tolist(), strict=True)
+    for robot, stop, total in rows:
+        done = stop >= total  # the whole path: its length as the world measures it
+        here = (starts[robot][0], starts[robot][1])
+        traveled[robot] = path_length(here, world_paths[robot]) if done else stop
     return RoundOutcome(positions=final, traveled=traveled, collisions=collisions)

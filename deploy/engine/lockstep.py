@@ -28,11 +28,11 @@ from fatswarm.coordinator.rounds import Finished, Note, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
 from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel
 from fatswarm.domain.outcome import Status
-from fatswarm.domain.path import Path, Points
+from fatswarm.domain.path import MAX_SEGMENTS, Arc, Line, Path, Points, vertices
 from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
 from fatswarm.domain.seam import AlgorithmFailure, Configured, checked
 from fatswarm.domain.tolerance import enclosing_circle
-from fatswarm.domain.wire import ProtocolError
+from fatswarm.domain.wire import MAX_COORD, MAX_SWEEP, ProtocolError
 from fatswarm.world.core import WorldCore
 from fatswarm.world.effects import Committed
 from fatswarm.world.journal import Journal, perform
@@ -333,6 +333,8 @@ class _Bus:
         planned = None
         if self.planner is not None:
             planned = self.planner.paths(world.positions, active, self.flips)
+        else:
+            world.prepare_looks([robot for robot in active if world.may_look(robot)])
         for robot in active:
             if not world.may_look(robot):
                 continue  # its Look stays held (a robot the async adversary crashed)
@@ -367,6 +369,8 @@ class _Bus:
         """The move as the world receives it from an agent (the wire's checks, `MoveSubmitted.of`),
         or None if the world would refuse it (counted, said on the log)."""
         try:
+            if colour is None and plain_path(path):
+                return MoveSubmitted(robot, round_no, path, None)
             return MoveSubmitted.of(robot, round_no, path, colour)
         except ProtocolError as exc:
             self.world.reject("move-garbage", f"robot {robot} round {round_no}: {exc}")
@@ -393,6 +397,39 @@ class _Bus:
         for committed in perform(self.world.take_effects(), self.record):
             if self.on_round is not None:
                 self.on_round(committed)
+
+
+def plain_path(path: Path) -> bool:
+    """Whether the wire's checks give `path` back as it is: `MoveSubmitted.of` would return a
+    move with an equal path (made of the same floats), no refusal. True only for a Path of Line
+    and Arc segments of exact floats in tuples, finite and inside the wire's bounds
+    (`checked_path`: every vertex, every arc's centre and sweep); False for anything else, which
+    goes the codec's way (a property test pins the two together)."""
+    if type(path) is not Path or type(path.segments) is not tuple:
+        return False
+    if len(path.segments) > MAX_SEGMENTS:
+        return False
+    arcs = False
+    for seg in path.segments:
+        if type(seg) is Line:
+            point: object = seg.end  # a line's end is its vertex
+        elif type(seg) is Arc:
+            if not (type(seg.sweep) is float and abs(seg.sweep) <= MAX_SWEEP):  # NaN fails too
+                return False
+            point, arcs = seg.center, True
+        else:
+            return False
+        if not (type(point) is tuple and len(point) == 2):
+            return False
+        x, y = point
+        if not (type(x) is float and type(y) is float):
+            return False
+        if not (abs(x) <= MAX_COORD and abs(y) <= MAX_COORD):
+            return False
+    # an arc's end is a vertex too
+    return not arcs or all(
+        abs(x) <= MAX_COORD and abs(y) <= MAX_COORD for x, y in vertices((0.0, 0.0), path)
+    )
 
 
 class _CheckedScheduler:

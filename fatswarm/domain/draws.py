@@ -8,6 +8,7 @@ replay all see the same start, frames, schedule and adversary.
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from typing import Final
 
 import numpy as np
@@ -33,12 +34,23 @@ def view_order(seed: int, round_no: int, robot: int, k: int) -> np.ndarray:
     costs 15 on every Look (the order is no figure of the run: compute must not depend on it, and
     records do not keep it).
     """
-    key = _mix64(_mix64(_mix64(LOOK_STREAM ^ (seed & _MASK64)) ^ round_no) ^ robot)
-    z = _spread(k) + np.uint64(key)  # uint64 arrays wrap silently: that is the hash
+    order: np.ndarray = view_orders(seed, round_no, (robot,), k)[0]
+    return order
+
+
+def view_orders(seed: int, round_no: int, robots: Sequence[int], k: int) -> np.ndarray:
+    """`view_order` of every robot of `robots` at once: row i is robot robots[i]'s, (m, k).
+
+    The same hashes; they are distinct within a row (splitmix64's finaliser is a bijection and the
+    keys differ), so any sort gives each row the very order `view_order` gives.
+    """
+    base = _mix64(_mix64(LOOK_STREAM ^ (seed & _MASK64)) ^ round_no)
+    keys = np.array([_mix64(base ^ robot) for robot in robots], dtype=np.uint64)
+    z = _spread(k)[None, :] + keys[:, None]  # uint64 arrays wrap silently: that is the hash
     z = (z ^ (z >> _S30)) * _C2
     z = (z ^ (z >> _S27)) * _C3
     z ^= z >> _S31
-    return np.argsort(z)
+    return np.argsort(z, axis=1)
 
 
 def cut_fraction(seed: int, round_no: int, robot: int) -> float:

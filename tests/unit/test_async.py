@@ -30,7 +30,7 @@ from fatswarm.domain.adversary import (
     NotRoundBasedError,
     make_async,
 )
-from fatswarm.domain.draws import crash_plan, view_order
+from fatswarm.domain.draws import crash_plan, view_order, view_orders
 from fatswarm.domain.path import Line, Path, Point, path_length, point_at, remainder, truncate
 from fatswarm.world import looks
 from fatswarm.world.asynchrony import AsyncWorld, CycleDone, Phase
@@ -266,8 +266,9 @@ def test_async_decisions_do_not_depend_on_frames_or_view_order(
     base = final(lambda r: False)
     assert final(lambda r: True) == base
     assert final(lambda r: r % 2 == 1) == base
-    original = view_order
+    original, originals = view_order, view_orders
     monkeypatch.setattr(looks, "view_order", lambda *a: original(*a)[::-1].copy())
+    monkeypatch.setattr(looks, "view_orders", lambda *a: originals(*a)[:, ::-1].copy())
     assert final(lambda r: False) == base
 
 

@@ -1,0 +1,56 @@
+"""A round's views built at once (`Looks.prepare`) are the very arrays each Look builds alone."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fatswarm.agent.uniform_circle import ALGORITHM
+from fatswarm.domain.draws import view_order, view_orders
+from fatswarm.domain.robot_model import PAPER_MODEL, FrameChange, Frames, RobotModel
+from fatswarm.domain.seam import Configured
+from fatswarm.world.looks import Looks
+
+MODELS = (
+    PAPER_MODEL,
+    RobotModel(frames=Frames.DISORIENTED, frame_change=FrameChange.EVERY_LOOK),
+    RobotModel(frames=Frames.CHIRALITY),
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 2**64 - 1), st.integers(1, 10**6), st.integers(1, 40), st.data())
+def test_view_orders_rows_are_view_order(
+    seed: int, round_no: int, n: int, data: st.DataObject
+) -> None:
+    robots = data.draw(st.lists(st.integers(0, 10**4), max_size=5))
+    rows = view_orders(seed, round_no, robots, n)
+    assert rows.shape == (len(robots), n)
+    for row, robot in zip(rows, robots, strict=True):
+        assert np.array_equal(row, view_order(seed, round_no, robot, n))
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    st.integers(2, 30),
+    st.integers(0, 2**32),
+    st.integers(1, 500),
+    st.sampled_from(range(len(MODELS))),
+    st.data(),
+)
+def test_prepared_views_are_the_views_built_alone(
+    n: int, seed: int, look_round: int, model: int, data: st.DataObject
+) -> None:
+    setting = Configured.of(ALGORITHM, n)
+    rng = np.random.default_rng(seed)
+    positions = np.round(rng.uniform(-50.0, 50.0, (n, 2)), 6)
+    robots = data.draw(st.lists(st.integers(0, n - 1), unique=True))
+    alone = Looks(MODELS[model], setting, n, seed, False)
+    ahead = Looks(MODELS[model], setting, n, seed, False)
+    ahead.prepare(positions, look_round, robots)
+    for robot in range(n):
+        want = alone.view(positions, robot, look_round)[0]
+        got = ahead.view(positions, robot, look_round)[0]
+        assert got.dtype == want.dtype and got.shape == want.shape
+        assert got.tobytes() == want.tobytes()
