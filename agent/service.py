@@ -51,11 +51,10 @@ WAIT_NOTICE_S = 5.0  # meanwhile, say this often that the robot still waits for 
 
 @dataclass(frozen=True, slots=True)
 class AgentConfig:
-    """One robot's identity and the seed its private frame is drawn from."""
+    """One robot's identity (its private frame is the world's: it draws none)."""
 
     swarm: str
     robot: int
-    seed: int
     algorithm: str = DEFAULT  # a registered name or module:attribute (fatswarm/domain/registry.py)
 
 

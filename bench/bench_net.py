@@ -249,13 +249,13 @@ def networked(
         t0 = time.perf_counter()
         if spawn == "fork":
             children.start(
-                "agents", agents_command(n, seed, swarm, [endpoint], "error", algorithm=algorithm)
+                "agents", agents_command(n, swarm, [endpoint], "error", algorithm=algorithm)
             )
         else:
             for robot in range(n):
                 children.start(
                     f"agent {robot}",
-                    agent_command(robot, seed, swarm, [endpoint], "error", algorithm=algorithm),
+                    agent_command(robot, swarm, [endpoint], "error", algorithm=algorithm),
                 )
         if not all_alive.wait(600):
             raise RuntimeError(f"only {len(alive)} of {n} agents came up")

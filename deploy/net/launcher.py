@@ -411,12 +411,16 @@ def _run_children(
         net += ["--connect", ep]
     coord = _coordinator_flags(args, setup, pace)
     children.start("coordinator", _part("coordinator", *net, *_quiet(), *coord), stdout=STDERR_FD)
-    n, seed = setup.params.n, setup.seed
     children.start(
         "agents",
         [
             *agents_command(
-                n, seed, swarm, endpoints, "warning", args.spawn, algorithm=setup.algorithm_ref
+                setup.params.n,
+                swarm,
+                endpoints,
+                "warning",
+                args.spawn,
+                algorithm=setup.algorithm_ref,
             ),
             "--exit-with-parent",
             str(os.getpid()),

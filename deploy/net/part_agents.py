@@ -30,18 +30,18 @@ from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.seam import AlgorithmError
 
 
+def add_ignored_seed(p: argparse.ArgumentParser) -> None:
+    """`--seed`, accepted and ignored: agents once drew their private frames from the run's seed;
+    the world draws them now (docs/model.md), and recipes written before still run."""
+    p.add_argument("--seed", type=int, default=None, help=argparse.SUPPRESS)
+
+
 def add_agent_arguments(p: argparse.ArgumentParser) -> None:
     """Flags of `fatswarm agent`."""
     add_common_arguments(p, KEEPS_WAITING.format(WAIT_NOTICE_S), PLACEHOLDER_NOTE)
     p.add_argument("--robot", type=int, required=True, metavar="I", help="robot id, 0..n-1")
     add_algorithm_arguments(p, params=False)
-    p.add_argument(
-        "--seed",
-        type=int,
-        default=0,
-        metavar="S",
-        help="seed the private frame is drawn from (the run's seed)",
-    )
+    add_ignored_seed(p)
     p.add_argument(
         "--waiting-as", default=None, metavar="WHO", help=argparse.SUPPRESS
     )  # who the waiting notice names ("": no notice)
@@ -63,7 +63,7 @@ def main_agent(args: argparse.Namespace) -> int:
         return fail("agent", str(exc))
     waiting = f"robot {args.robot}" if args.waiting_as is None else args.waiting_as
     return serve(
-        AgentConfig(args.swarm, args.robot, args.seed, args.algorithm),
+        AgentConfig(args.swarm, args.robot, args.algorithm),
         conf,
         stop,
         waiting or None,
@@ -83,7 +83,7 @@ def add_agents_arguments(p: argparse.ArgumentParser) -> None:
         metavar="I",
         help="id of the first robot (robots I..I+K-1; default 0)",
     )
-    p.add_argument("--seed", type=int, default=0, metavar="S", help="the run's seed")
+    add_ignored_seed(p)
     p.add_argument(
         "--spawn",
         choices=SPAWN_MODES,
@@ -103,7 +103,6 @@ PLACEHOLDER_NOTE = (
 
 def agent_command(
     robot: int,
-    seed: int,
     swarm: str,
     connect: Sequence[str],
     log_level: str | None = None,
@@ -119,8 +118,6 @@ def agent_command(
         "agent",
         "--robot",
         str(robot),
-        "--seed",
-        str(seed),
         "--swarm",
         swarm,
         "--algorithm",
@@ -139,7 +136,6 @@ def agent_command(
 
 def agents_command(
     count: int,
-    seed: int,
     swarm: str,
     connect: Sequence[str],
     log_level: str | None = None,
@@ -159,8 +155,6 @@ def agents_command(
         str(count),
         "--first",
         str(first),
-        "--seed",
-        str(seed),
         "--swarm",
         swarm,
         "--spawn",
@@ -216,7 +210,6 @@ def _exec_agents(args: argparse.Namespace, robots: range) -> int:
                 [
                     *agent_command(
                         robot,
-                        args.seed,
                         args.swarm,
                         args.connect,
                         args.log_level,
@@ -260,7 +253,7 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
                 # the first one says for all that they wait for a router
                 waiting = _waiting_as(robots) if robot == robots[0] else None
                 code = serve(
-                    AgentConfig(args.swarm, robot, args.seed, args.algorithm),
+                    AgentConfig(args.swarm, robot, args.algorithm),
                     conf,
                     stop,
                     waiting,

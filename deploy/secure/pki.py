@@ -251,7 +251,7 @@ def readme_text(plan: Plan) -> str:
         "Each part needs ca.pem and its own NAME.key, NAME.pem and NAME.json5: copy each host",
         "only the files of the parts it runs (a .key file is that part's identity). Each router",
         f"listens on its host's address and on {local}, where the parts on its host connect.",
-        "S is the run's seed: the same for the world, the coordinator and every agent.",
+        "S is the run's seed: the same for the world and the coordinator.",
         "",
         "# on each host, its router:",
         *(f"fatswarm router --config router-{host}.json5" for host in plan.hosts),
@@ -262,7 +262,7 @@ def readme_text(plan: Plan) -> str:
         "--seed S",
         "# agents, on any hosts, each with its own identity ({robot} becomes its id):",
         f"fatswarm agents --config 'agent-{{robot}}.json5' --connect {local} --swarm {swarm} "
-        f"-n {plan.n} --first 0 --seed S",
+        f"-n {plan.n} --first 0",
     ]
     if plan.dashboards:
         lines += [
