@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from fatswarm.domain.lights import glance_of
-from fatswarm.domain.path import Path
+from fatswarm.domain.path import Path, Points
 from fatswarm.domain.registry import DEFAULT, load_algorithm
 from fatswarm.domain.seam import Algorithm, AlgorithmParamsError, Configured
 from fatswarm.domain.wire import ProtocolError
@@ -87,10 +87,16 @@ class Robot:
 
 
 def act(setting: Configured, snapshot: Snapshot) -> tuple[Path, int | None]:
-    """One Compute on a snapshot, as every agent and the lock step make it: the path in the
-    robot's frame and its next colour (None without lights)."""
-    glance = glance_of(setting.colours, snapshot.own, snapshot.colours)
-    return setting.decide(snapshot.view, glance)
+    """One Compute on a snapshot, as every agent makes it: the path in the robot's frame and its
+    next colour (None without lights)."""
+    return act_on(setting, snapshot.view, snapshot.colours, snapshot.own)
+
+
+def act_on(
+    setting: Configured, view: Points, colours: tuple[int, ...] | None, own: int | None
+) -> tuple[Path, int | None]:
+    """`act` on what a snapshot carries (the lock step hands it over without the snapshot)."""
+    return setting.decide(view, glance_of(setting.colours, own, colours))
 
 
 def open_session(conf: Any, stop: threading.Event, waiting: str | None = None) -> Any:

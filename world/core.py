@@ -28,7 +28,7 @@ from fatswarm.domain.tolerance import snap
 from fatswarm.world.effects import Effect, Level, Note
 from fatswarm.world.faults import crash_after, stuck_in
 from fatswarm.world.instants import Instants, async_setup, is_async
-from fatswarm.world.looks import Looks
+from fatswarm.world.looks import Looks, Seen
 from fatswarm.world.model import Model
 from fatswarm.world.physics import Collision
 from fatswarm.world.progress import ProgressTracker
@@ -294,14 +294,10 @@ class WorldCore:
 
     def look(self, robot: int) -> Snapshot | None:
         """Robot `robot`'s snapshot, or None (refused, counted) if it is not active now."""
-        if not 0 <= robot < self.setup.n:
-            self.reject("look-bad-key", f"robot {robot}")
+        seen = self.sight(robot)
+        if seen is None:
             return None
-        if not self.open_round or robot not in self.active_set:
-            self.reject("look-not-active", f"robot {robot} round {self.open_round}")
-            return None
-        self.looked.add(robot)
-        view, colours, own = self.looks.view(self.positions, robot, self.open_round)
+        view, colours, own = seen
         return Snapshot(
             round=self.open_round,
             n=self.setup.n,
@@ -312,6 +308,19 @@ class WorldCore:
             colours=colours,
             own=own,
         )
+
+    def sight(self, robot: int) -> Seen | None:
+        """What robot `robot`'s Look shows (its view, the colours it reads of those it sees, its
+        own), or None (refused, counted) if it is not active now: `look` without the snapshot
+        around it, for a lock step that hands the view to the algorithm in process."""
+        if not 0 <= robot < self.setup.n:
+            self.reject("look-bad-key", f"robot {robot}")
+            return None
+        if not self.open_round or robot not in self.active_set:
+            self.reject("look-not-active", f"robot {robot} round {self.open_round}")
+            return None
+        self.looked.add(robot)
+        return self.looks.view(self.positions, robot, self.open_round)
 
     def prepare_looks(self, robots: Sequence[int]) -> None:
         """The open round's views of `robots` built at once, ahead of their Looks (`look` hands
@@ -333,20 +342,26 @@ class WorldCore:
         robot); False if refused (counted)."""
         if robot != msg.robot:
             self.reject("move-wrong-robot", f"robot {msg.robot} sent as robot {robot}")
-        elif msg.round != self.open_round:
-            self.reject("move-wrong-round", f"robot {robot} round {msg.round} != {self.open_round}")
+            return False
+        return self.hold(robot, msg.round, msg.path, msg.colour)
+
+    def hold(self, robot: int, round_no: int, path: Path, colour: int | None) -> bool:
+        """`move` of what a MoveSubmitted from robot `robot` itself carries (the lock step hands
+        it over without the message); False if refused (counted)."""
+        if round_no != self.open_round:
+            self.reject("move-wrong-round", f"robot {robot} round {round_no} != {self.open_round}")
         elif robot not in self.active_set:
-            self.reject("move-not-active", f"robot {robot} round {msg.round}")
+            self.reject("move-not-active", f"robot {robot} round {round_no}")
         elif robot not in self.looked:
-            self.reject("move-without-look", f"robot {robot} round {msg.round}")
+            self.reject("move-without-look", f"robot {robot} round {round_no}")
         elif robot in self.held:
-            self.reject("move-duplicate", f"robot {robot} round {msg.round}")
-        elif not self._colour_ok(msg.colour):
-            self.reject("move-bad-colour", f"robot {robot} colour {msg.colour}")
+            self.reject("move-duplicate", f"robot {robot} round {round_no}")
+        elif not self._colour_ok(colour):
+            self.reject("move-bad-colour", f"robot {robot} colour {colour}")
         else:
-            self.held[robot] = self.looks.to_world(robot, msg.round, msg.path)
-            if msg.colour is not None:
-                self.held_colours[robot] = msg.colour
+            self.held[robot] = self.looks.to_world(robot, round_no, path)
+            if colour is not None:
+                self.held_colours[robot] = colour
             self.missing.discard(robot)
             return True
         return False

@@ -19,6 +19,10 @@ from fatswarm.domain.robot_model import FrameChange, Lights, RobotModel
 from fatswarm.domain.seam import Configured
 from fatswarm.world.sight import seen
 
+Seen = tuple[Points, tuple[int, ...] | None, int | None]
+"""What one Look shows: the view in the looker's frame, the colours it reads of those it sees
+(lined up with the view; None if it reads none) and its own (None if it cannot read it)."""
+
 AHEAD_LIMIT = 1 << 20
 """`Looks.prepare` builds a round's views at once up to this many points (16 MB); past it, each
 view alone."""
@@ -50,11 +54,8 @@ class Looks:
             return self._fixed[robot]
         return draw_frame(self.model, self.seed, robot, look_round)
 
-    def view(
-        self, positions: Points, robot: int, look_round: int
-    ) -> tuple[Points, tuple[int, ...] | None, int | None]:
-        """Robot `robot`'s view in its frame, the colours it reads of those it sees (lined up
-        with the view; None if it reads none) and its own (None if it cannot read it)."""
+    def view(self, positions: Points, robot: int, look_round: int) -> Seen:
+        """What robot `robot`'s Look shows at `positions` in round `look_round`."""
         if self._plain():
             # the paper's model: every other robot (the fast path of every Look of every run)
             ahead = self._ahead

@@ -15,6 +15,7 @@ from fatswarm.domain.path import (
     Line,
     Path,
     PathFormatError,
+    Point,
     Points,
     segment_end,
     segment_length,
@@ -110,17 +111,33 @@ def _arc_row(
     return row, end
 
 
-def build_motion(start: Points, moves: list[tuple[int, Path]]) -> Motion:
-    """Tabulate the movers' paths; lengths are summed exactly as agent.path.path_length does."""
+def build_motion(
+    start: Points, moves: list[tuple[int, Path]], shift: tuple[float, float] | None = None
+) -> Motion:
+    """Tabulate the movers' paths, each first translated by `shift` if given (exactly as
+    `transform(path, shift, False)` would); lengths are summed exactly as path_length does."""
+    lines = _single_lines(start, moves, shift)
+    return _tabulated(start, moves, shift) if lines is None else lines
+
+
+def _tabulated(
+    start: Points, moves: list[tuple[int, Path]], shift: tuple[float, float] | None
+) -> Motion:
+    """`build_motion` for any paths, a segment at a time."""
     rows: list[tuple[int, list[list[float]], float, tuple[float, float], list[float]]] = []
-    for robot, path in moves:
-        here = (float(start[robot, 0]), float(start[robot, 1]))
+    at = start[[robot for robot, _ in moves]].tolist()  # Python floats: the same values
+    ox, oy = (0.0, 0.0) if shift is None else shift
+    shifted = shift is not None
+    for (robot, path), (hx, hy) in zip(moves, at, strict=True):
+        here = (hx, hy)
         t = 0.0
         segs: list[list[float]] = []
-        xs, ys = [here[0]], [here[1]]
+        xs, ys = [hx], [hy]
         for seg in path.segments:
             if isinstance(seg, Line):  # the common case inline: segment_length's arithmetic
                 ex, ey = seg.end[0], seg.end[1]
+                if shifted:  # 1.0 * x is x: the floats `transform` gives
+                    ex, ey = ex + ox, ey + oy
                 length = math.hypot(ex - here[0], ey - here[1])
                 segs.append([t, t + length, length, 0.0, *here, ex, ey, *_NO_ARC])
                 xs.append(ex)
@@ -128,6 +145,8 @@ def build_motion(start: Points, moves: list[tuple[int, Path]]) -> Motion:
                 t += length
                 here = (float(ex), float(ey))
                 continue
+            if shifted:
+                seg = Arc((seg.center[0] + ox, seg.center[1] + oy), 1.0 * seg.sweep)
             row, end = _arc_row(here, seg, t, xs, ys)
             segs.append(row)
             t += row[_LEN]
@@ -160,6 +179,58 @@ def build_motion(start: Points, moves: list[tuple[int, Path]]) -> Motion:
         total=total,
         end=np.array([r[3] for r in rows], dtype=np.float64).reshape(m, 2),
         box=np.array([r[4] for r in rows], dtype=np.float64).reshape(m, 4),
+        stop=total.copy(),
+    )
+
+
+def _single_lines(
+    start: Points, moves: list[tuple[int, Path]], shift: tuple[float, float] | None
+) -> Motion | None:
+    """`build_motion` when every path is one Line to a point of two floats (every move of most
+    algorithms), as arrays: the same floats (lengths by math.hypot, boxes as min and max of a
+    list pick them); None for any other round."""
+    ends: list[Point] = []
+    for _, path in moves:
+        if len(path.segments) != 1 or type(seg := path.segments[0]) is not Line:
+            return None
+        end = seg.end
+        if type(end) is not tuple or type(end[0]) is not float or type(end[1]) is not float:
+            return None
+        ends.append(end)
+    every = np.array([robot for robot, _ in moves], dtype=np.intp)
+    here = start[every]
+    e = np.array(ends, dtype=np.float64).reshape(len(ends), 2)
+    if shift is not None:
+        e += shift
+    d = (e - here).tolist()
+    length = np.array([math.hypot(dx, dy) for dx, dy in d], dtype=np.float64)
+    lo = np.where(e < here, e, here)  # min([here, end]): the end only if strictly less
+    hi = np.where(e > here, e, here)
+    bad = ~(np.isfinite(length) & np.isfinite(lo).all(axis=1) & np.isfinite(hi).all(axis=1))
+    if bad.any():
+        k = int(bad.argmax())
+        raise PathFormatError(
+            f"robot {moves[k][0]}: the path is too long to simulate (length {float(length[k])})"
+        )
+    keep = length > 0.0
+    robots, total, m = every[keep], length[keep], int(keep.sum())
+    table = np.zeros((m, 1, 13), dtype=np.float64)
+    table[:, 0, _T1] = total
+    table[:, 0, _LEN] = total
+    table[:, 0, _SX : _SY + 1] = here[keep]
+    table[:, 0, _EX : _EY + 1] = e[keep]
+    row_of = np.full(len(start), -1, dtype=np.intp)
+    row_of[robots] = np.arange(m, dtype=np.intp)
+    return Motion(
+        start=start,
+        row_of=row_of,
+        robots=robots,
+        nseg=np.ones(m, dtype=np.intp),
+        seg=table,
+        t1=np.ascontiguousarray(table[:, :, _T1]),
+        total=total,
+        end=e[keep],
+        box=np.concatenate((lo[keep], hi[keep]), axis=1),
         stop=total.copy(),
     )
 

@@ -28,7 +28,6 @@ from fatswarm.domain.path import (
     PathFormatError,
     Points,
     path_length,
-    transform,
 )
 from fatswarm.domain.tolerance import (
     CLEAR_SLACK,
@@ -391,7 +390,7 @@ def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
     origin = snap_point(*start[moves[0][0]]) if moves else (0.0, 0.0)
     local = start - np.array(origin)
     shift = (-origin[0], -origin[1])
-    mo = build_motion(local, [(robot, transform(path, shift, False)) for robot, path in moves])
+    mo = build_motion(local, moves, shift)
     if not len(mo.robots):
         return RoundOutcome(positions=start, traveled=traveled)
     # Every pair that can meet: a robot never leaves its path's box, so no other pair can overlap,

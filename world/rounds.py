@@ -63,8 +63,9 @@ class Rounds:
         """Apply the held moves through physics, emit the round's record line, then book it."""
         w = self.books
         round_no, before = w.open_round, w.positions
+        at = before.tolist()  # Python floats: the same values, read faster than numpy scalars
         paths = {  # the lockstep runner applies and records non-empty paths only: so do we
-            robot: transform(path, (float(before[robot, 0]), float(before[robot, 1])), False)
+            robot: transform(path, (at[robot][0], at[robot][1]), False)
             for robot, path in sorted(w.held.items())
             if path
         }

@@ -20,7 +20,7 @@ from typing import Any, Final
 import numpy as np
 
 from fatswarm.agent.params import Params
-from fatswarm.agent.service import act
+from fatswarm.agent.service import act_on
 from fatswarm.agent.uniform_circle import ALGORITHM as UNIFORM_CIRCLE
 from fatswarm.coordinator.async_rounds import coordinator_core
 from fatswarm.coordinator.driver import Event, drive
@@ -36,8 +36,9 @@ from fatswarm.domain.wire import MAX_COORD, MAX_SWEEP, ProtocolError
 from fatswarm.world.core import WorldCore
 from fatswarm.world.effects import Committed
 from fatswarm.world.journal import Journal, perform
+from fatswarm.world.looks import Seen
 from fatswarm.world.physics import validate_configuration
-from fatswarm.world.protocol import ControlReply, ControlRequest, MoveSubmitted, Snapshot
+from fatswarm.world.protocol import ControlReply, ControlRequest, MoveSubmitted
 from fatswarm.world.record import Header, RoundEntry, RunRecord
 from fatswarm.world.setup import WorldSetup
 
@@ -258,12 +259,12 @@ class _Bus:
         self.events: list[Event] = []  # for the coordinator: the open round's moves notice
         self.looks = 0
         self.faults = 0  # computes that raised or gave no valid path (the robot stayed)
-        self.compute: Callable[[Snapshot], tuple[Path, int | None]]
+        self.compute: Callable[[Seen], tuple[Path, int | None]]
         if compute is not None:
-            user, own = compute, setting.params
-            self.compute = lambda snapshot: (checked(lambda v: user(v, own))(snapshot.view), None)
+            user, params = compute, setting.params
+            self.compute = lambda seen: (checked(lambda v: user(v, params))(seen[0]), None)
         else:
-            self.compute = lambda snapshot: act(setting, snapshot)
+            self.compute = lambda seen: act_on(setting, *seen)
         # the round planner gives the paper's model's paths: every view whole, fixed frames
         setup = world.setup
         plain = setup.robot_model.is_paper and not setting.luminous and not setup.record_views
@@ -343,35 +344,34 @@ class _Bus:
                     continue
                 decided: tuple[Path, int | None] | None = (planned[robot], None)
             else:
-                snapshot = world.look(robot)
-                if snapshot is None:
+                seen = world.sight(robot)  # what its snapshot would carry
+                if seen is None:
                     continue
-                decided = self._computed(robot, round_no, snapshot)
+                decided = self._computed(robot, round_no, seen)
             self.looks += 1
-            msg = None if decided is None else self._delivered(robot, round_no, *decided)
-            if msg is not None:  # else as a networked agent whose compute failed: it stays
-                world.move(robot, msg)
+            move = None if decided is None else self._delivered(robot, round_no, *decided)
+            if move is not None:  # else as a networked agent whose compute failed: it stays
+                world.hold(robot, round_no, *move)
 
-    def _computed(
-        self, robot: int, round_no: int, snapshot: Snapshot
-    ) -> tuple[Path, int | None] | None:
+    def _computed(self, robot: int, round_no: int, seen: Seen) -> tuple[Path, int | None] | None:
         """Robot `robot`'s path in its frame and next colour, or None where a networked agent
         would send none: its compute raised, or returned something that is not a path."""
         try:
-            return self.compute(snapshot)
+            return self.compute(seen)
         except Exception as exc:  # a bug in the algorithm: the robot stays put, as networked
             self._fault(robot, round_no, f"compute raised {type(exc).__name__}: {exc}")
             return None
 
     def _delivered(
         self, robot: int, round_no: int, path: Path, colour: int | None
-    ) -> MoveSubmitted | None:
-        """The move as the world receives it from an agent (the wire's checks, `MoveSubmitted.of`),
-        or None if the world would refuse it (counted, said on the log)."""
+    ) -> tuple[Path, int | None] | None:
+        """The path and colour as the world receives them from an agent (the wire's checks,
+        `MoveSubmitted.of`), or None if the world would refuse them (counted, said on the log)."""
         try:
             if colour is None and plain_path(path):
-                return MoveSubmitted(robot, round_no, path, None)
-            return MoveSubmitted.of(robot, round_no, path, colour)
+                return path, None
+            msg = MoveSubmitted.of(robot, round_no, path, colour)
+            return msg.path, msg.colour
         except ProtocolError as exc:
             self.world.reject("move-garbage", f"robot {robot} round {round_no}: {exc}")
             self._fault(robot, round_no, f"sent a move the world refuses: {exc}")

@@ -45,8 +45,12 @@ def view_orders(seed: int, round_no: int, robots: Sequence[int], k: int) -> np.n
     keys differ), so any sort gives each row the very order `view_order` gives.
     """
     base = _mix64(_mix64(LOOK_STREAM ^ (seed & _MASK64)) ^ round_no)
-    keys = np.array([_mix64(base ^ robot) for robot in robots], dtype=np.uint64)
-    z = _spread(k)[None, :] + keys[:, None]  # uint64 arrays wrap silently: that is the hash
+    x = np.asarray(robots, dtype=np.uint64) ^ np.uint64(base)  # uint64 arrays wrap silently:
+    x += _C1  # that is the hash (`_mix64` of every robot's key at once, the same bits)
+    x = (x ^ (x >> _S30)) * _C2
+    x = (x ^ (x >> _S27)) * _C3
+    keys = x ^ (x >> _S31)
+    z = _spread(k)[None, :] + keys[:, None]
     z = (z ^ (z >> _S30)) * _C2
     z = (z ^ (z >> _S27)) * _C3
     z ^= z >> _S31

@@ -41,11 +41,22 @@ class Frame:
         """A path computed in this frame, relative to the robot, in world axes."""
         if not self.rotation and not self.mirror:
             return path
-        c, s = math.cos(-self.rotation), math.sin(-self.rotation)
         sx = -1.0 if self.mirror else 1.0
+        if not self.rotation:  # a mirror alone (the paper's frames): the common case inline
+            return Path(
+                tuple(
+                    [
+                        Line((sx * seg.end[0], seg.end[1]))
+                        if isinstance(seg, Line)
+                        else Arc((sx * seg.center[0], seg.center[1]), sx * seg.sweep)
+                        for seg in path.segments
+                    ]
+                )
+            )
+        c, s = math.cos(-self.rotation), math.sin(-self.rotation)
 
         def back(p: Point) -> Point:
-            x, y = (c * p[0] - s * p[1], s * p[0] + c * p[1]) if self.rotation else p
+            x, y = c * p[0] - s * p[1], s * p[0] + c * p[1]
             return (sx * x, y)
 
         segments: list[Segment] = [

@@ -180,16 +180,12 @@ def transform(path: Path, offset: Point, flip_x: bool) -> Path:
     """
     sx = -1.0 if flip_x else 1.0
     ox, oy = offset
-
-    def tp(p: Point) -> Point:
-        return (sx * p[0] + ox, p[1] + oy)
-
-    segs: list[Segment] = []
-    for seg in path.segments:
-        if isinstance(seg, Line):
-            segs.append(Line(tp(seg.end)))
-        else:
-            segs.append(Arc(tp(seg.center), sx * seg.sweep))
+    segs: list[Segment] = [
+        Line((sx * seg.end[0] + ox, seg.end[1] + oy))
+        if isinstance(seg, Line)
+        else Arc((sx * seg.center[0] + ox, seg.center[1] + oy), sx * seg.sweep)
+        for seg in path.segments
+    ]
     return Path(tuple(segs))
 
 

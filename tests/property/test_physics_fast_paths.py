@@ -11,9 +11,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fatswarm.domain.path import Line, Path
+from fatswarm.domain.path import Arc, Line, Path, PathFormatError
 from fatswarm.domain.tolerance import CONTACT, GRID
-from fatswarm.world import physics
+from fatswarm.world import motion, physics
 from fatswarm.world.motion import IntArray, Motion, build_motion
 from fatswarm.world.physics import BOX_MARGIN, BRUTE_PAIRS, SNAP_FEW, _candidate_pairs, _snap_movers
 
@@ -120,3 +120,55 @@ def test_snap_is_the_brute_force_snap(
         _snap_movers(got, movers)
     brute_snap(want, movers)
     assert got.tobytes() == want.tobytes()
+
+
+def _same_motion(a: Motion, b: Motion) -> None:
+    for name in ("start", "row_of", "robots", "nseg", "seg", "t1", "total", "end", "box", "stop"):
+        x, y = getattr(a, name), getattr(b, name)
+        assert x.shape == y.shape and x.dtype == y.dtype, name
+        assert x.tobytes() == y.tobytes(), name  # the same bits, -0.0 and inf included
+
+
+_coord = st.floats(-1e6, 1e6, allow_nan=False) | st.sampled_from([0.0, -0.0, 1e-300, 2.0])
+
+
+@given(
+    start=st.lists(st.tuples(_coord, _coord), min_size=1, max_size=12),
+    ends=st.lists(st.one_of(st.none(), st.tuples(_coord, _coord)), max_size=12),
+    shift=st.one_of(st.none(), st.tuples(_coord, _coord)),
+)
+def test_motion_of_single_lines_is_the_segment_tables(
+    start: list[tuple[float, float]],
+    ends: list[tuple[float, float] | None],
+    shift: tuple[float, float] | None,
+) -> None:
+    """Rounds of one straight segment per mover (zero-length ones, -0.0, shifted frames) are
+    tabulated as arrays with the very floats the general segment loop gives."""
+    points = np.array(start, dtype=np.float64)
+    moves = [  # a move to where the robot is (None) is a zero-length line
+        (robot, Path((Line(end if end is not None else tuple(points[robot].tolist())),)))
+        for robot, end in enumerate(ends[: len(start)])
+    ]
+    fast = motion._single_lines(points, moves, shift)
+    assert fast is not None
+    _same_motion(fast, motion._tabulated(points, moves, shift))
+    _same_motion(build_motion(points, moves, shift), fast)
+
+
+def test_motion_declines_what_is_not_single_lines() -> None:
+    """Arcs, several segments or non-float coordinates go the general way."""
+    start = np.zeros((2, 2))
+    for path in (
+        Path((Arc((1.0, 0.0), 0.5),)),
+        Path((Line((1.0, 0.0)), Line((2.0, 0.0)))),
+        Path((Line((1, 0.0)),)),
+    ):
+        assert motion._single_lines(start, [(0, path)], None) is None
+
+
+def test_motion_refuses_a_line_too_long_to_simulate_by_its_robot() -> None:
+    with pytest.raises(PathFormatError, match="robot 1: the path is too long"):
+        build_motion(
+            np.zeros((2, 2)),
+            [(0, Path((Line((1.0, 0.0)),))), (1, Path((Line((1.7e308, 1.7e308)),)))],
+        )

@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fatswarm.agent.uniform_circle import ALGORITHM
-from fatswarm.domain.draws import view_order, view_orders
+from fatswarm.domain.draws import LOOK_STREAM, _mix64, view_order, view_orders
 from fatswarm.domain.robot_model import PAPER_MODEL, FrameChange, Frames, RobotModel
 from fatswarm.domain.seam import Configured
 from fatswarm.world.looks import Looks
@@ -29,6 +29,21 @@ def test_view_orders_rows_are_view_order(
     assert rows.shape == (len(robots), n)
     for row, robot in zip(rows, robots, strict=True):
         assert np.array_equal(row, view_order(seed, round_no, robot, n))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 2**64 - 1), st.integers(1, 10**6), st.integers(1, 40), st.data())
+def test_view_order_is_the_scalar_splitmix64_hash_order(
+    seed: int, round_no: int, k: int, data: st.DataObject
+) -> None:
+    """The robots' keys hashed at once in uint64 arrays are the Python-int hashes: index i
+    hashes as splitmix64 of key + i times its increment."""
+    robots = data.draw(st.lists(st.integers(0, 2**20), min_size=1, max_size=5))
+    base = _mix64(_mix64(LOOK_STREAM ^ seed) ^ round_no)
+    for row, robot in zip(view_orders(seed, round_no, robots, k), robots, strict=True):
+        key = _mix64(base ^ robot)
+        hashes = [_mix64((key + i * 0x9E3779B97F4A7C15) & (2**64 - 1)) for i in range(k)]
+        assert row.tolist() == sorted(range(k), key=hashes.__getitem__)
 
 
 @settings(max_examples=100, deadline=None)
