@@ -13,7 +13,7 @@ computation. Physics and the end test are the core's (`world.physics.apply_round
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import replace
 from typing import Any, Final
 
@@ -232,10 +232,12 @@ class WorldCore:
         recovered: Collection[int] = (),
         stuck: Collection[int] = (),
         relit: bool = False,
+        lengths: Mapping[int, float] | None = None,
     ) -> None:
         """Book one committed round (live or replayed) into the state and the progress tracker.
         `stuck`: the robots the crash adversary crashes in this round (for good). `relit`: a
-        colour changed (the configuration changed, though no robot may have moved)."""
+        colour changed (the configuration changed, though no robot may have moved). `lengths`:
+        the paths' lengths physics measured (`RoundOutcome.lengths`), where it did."""
         if stuck:
             self._note(
                 Level.INFO,
@@ -258,10 +260,12 @@ class WorldCore:
             self.last_active[robot] = round_no
         for robot in timed_out:
             self.timeouts[robot] += 1
+        measured = {} if lengths is None else lengths
         for robot, path in paths.items():
-            self.last_length[robot] = path_length(
-                (float(before[robot, 0]), float(before[robot, 1])), path
-            )
+            length = measured.get(robot)
+            if length is None:
+                length = path_length((float(before[robot, 0]), float(before[robot, 1])), path)
+            self.last_length[robot] = length
         self.collisions_total += len(collisions)
         self.tracker.observe(
             [r for r in active if r not in timed_out],

@@ -42,6 +42,7 @@ class Looks:
             if model.frame_change is FrameChange.FIXED
             else None
         )
+        self._fixed_sign = None if self._fixed is None else _mirror_signs(self._fixed)
         # every robot's colour (palette index; the first at the start); none without lights
         self.colours: list[int] | None = [0] * n if self.palette else None
         self.views: dict[int, list[int]] = {}  # robot -> the ids it saw, of Looks not recorded yet
@@ -94,17 +95,21 @@ class Looks:
         rows = np.asarray(robots, dtype=np.intp)
         order = view_orders(self.seed, look_round, robots, k)
         order += order >= rows[:, None]  # an index among the others is one among all robots
-        frames = [self.frame(robot, look_round) for robot in robots]
-        sign = np.array([-1.0 if f.mirror and not f.rotation else 1.0 for f in frames])
+        frames: Mapping[int, Frame] | Sequence[Frame]
+        if self._fixed is not None and self._fixed_sign is not None:  # drawn once
+            frames, sign = self._fixed, self._fixed_sign[rows]
+        else:
+            drawn = {robot: self.frame(robot, look_round) for robot in robots}
+            frames, sign = drawn, _mirror_signs(list(drawn.values()))
         rel = np.empty((len(rows), k, 2), dtype=np.float64)
         for axis in (0, 1):  # per coordinate: the same differences, faster than in (m, k, 2)
             coord = np.ascontiguousarray(positions[:, axis])
             np.subtract(coord[order], coord[rows][:, None], out=rel[:, :, axis])
         rel[:, :, 0] *= sign[:, None]  # x * 1.0 is x, bit for bit: the mirror of to_local alone
-        views = {
-            robot: frame.to_local(rel[i]) if frame.rotation else rel[i]
-            for i, (robot, frame) in enumerate(zip(robots, frames, strict=True))
-        }
+        views = dict(zip(robots, rel, strict=True))  # each row a view of its own
+        for robot in robots:
+            if frames[robot].rotation:
+                views[robot] = frames[robot].to_local(views[robot])
         self._ahead = (look_round, positions, views)
 
     def seen_by(self, positions: Points, robot: int) -> np.ndarray:
@@ -155,4 +160,10 @@ class Looks:
         return extra
 
 
-__all__ = ["Looks"]
+def _mirror_signs(frames: Sequence[Frame]) -> np.ndarray:
+    """-1.0 for each frame that is a mirror alone, else 1.0: what `Looks.prepare` multiplies a
+    view's x by before a rotation, if any, turns it."""
+    return np.array([-1.0 if f.mirror and not f.rotation else 1.0 for f in frames])
+
+
+__all__ = ["Looks", "Seen"]

@@ -7,7 +7,7 @@ answers looks and moves; a model opens and commits what the coordinator asks, th
 
 from __future__ import annotations
 
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from typing import Any, Protocol
 
 from fatswarm.domain.outcome import Status
@@ -69,6 +69,7 @@ class Books(Protocol):
         recovered: Collection[int] = (),
         stuck: Collection[int] = (),
         relit: bool = False,
+        lengths: Mapping[int, float] | None = None,
     ) -> None: ...
 
     def finish(self) -> None: ...

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from math import isfinite
 from numbers import Real
 from typing import Any
 
@@ -90,6 +91,7 @@ class RoundOutcome:
     positions: Points
     traveled: dict[int, float] = field(default_factory=dict)
     collisions: list[Collision] = field(default_factory=list)
+    lengths: dict[int, float] = field(default_factory=dict)  # path_length of movers that moved
 
 
 # --------------------------------------------------------------------------------------------------
@@ -193,7 +195,12 @@ def _check_moves(paths: Mapping[int, Path], n: int) -> list[tuple[int, Path]]:
                 f"robot {robot}: a path has at most {MAX_SEGMENTS} segments, got {len(path)}"
             )
         for seg in path.segments:
-            if isinstance(seg, Line):
+            if type(seg) is Line and type(end := seg.end) is tuple and len(end) == 2:
+                x, y = end  # the common case inline: `_finite_point` of two floats
+                if type(x) is float and type(y) is float and isfinite(x) and isfinite(y):
+                    continue
+                ok = _finite_point(end)
+            elif isinstance(seg, Line):
                 ok = _finite_point(seg.end)
             elif isinstance(seg, Arc):
                 ok = _finite_point(seg.center) and _finite_number(seg.sweep)
@@ -420,8 +427,10 @@ def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
     world_paths = dict(moves)
     starts = start.tolist()  # Python floats: the same values, read faster than numpy scalars
     rows = zip(mo.robots.tolist(), mo.stop.tolist(), mo.total.tolist(), strict=True)
+    lengths: dict[int, float] = {}
     for robot, stop, total in rows:
-        done = stop >= total  # the whole path: its length as the world measures it
-        here = (starts[robot][0], starts[robot][1])
-        traveled[robot] = path_length(here, world_paths[robot]) if done else stop
-    return RoundOutcome(positions=final, traveled=traveled, collisions=collisions)
+        length = lengths[robot] = path_length(
+            (starts[robot][0], starts[robot][1]), world_paths[robot]
+        )
+        traveled[robot] = length if stop >= total else stop  # the whole path: the world's length
+    return RoundOutcome(final, traveled, collisions, lengths)

@@ -114,6 +114,7 @@ class Rounds:
                 back,
                 stuck,
                 relit,
+                outcome.lengths,
             )
         finally:
             w.emit(Committed(entry, w.tracker.snapshot()))
