@@ -64,10 +64,12 @@ def _with_observer(view: Points, params: Params) -> Points:
         raise ViewError(f"the view must be an (n-1, 2) array, got shape {arr.shape}")
     if len(arr) != params.n - 1:
         raise ViewError(f"the view holds {len(arr)} robots, expected n-1 = {params.n - 1}")
-    if len(arr) and not float(np.abs(arr).max()) <= VIEW_LIMIT:  # NaN fails the comparison too
-        if not np.isfinite(arr).all():
-            raise ViewError("the view holds non-finite coordinates")
-        raise ViewError(f"the view reaches beyond +-{VIEW_LIMIT:g}, outside the grid's range")
+    if len(arr):
+        size = np.abs(arr)
+        if not float(size.flat[size.argmax()]) <= VIEW_LIMIT:  # NaN fails the comparison too
+            if not np.isfinite(arr).all():
+                raise ViewError("the view holds non-finite coordinates")
+            raise ViewError(f"the view reaches beyond +-{VIEW_LIMIT:g}, outside the grid's range")
     out = np.empty((len(arr) + 1, 2), dtype=np.float64)
     out[0] = 0.0
     out[1:] = arr
@@ -88,11 +90,11 @@ def plan(points: Points, params: Params) -> Plan:
     s = scale(circle.radius)
     tol_at, tol_eq = EPS_AT_REL * s, EPS_EQ_REL * s
     r = target_radius(n, params.a)
-    orientation = orientation_of(points, circle.center[0], tol_at, tol_eq)
-    ctx = Ctx(points, circle, tol_at, tol_eq, r, orientation)
     if circle.radius < r - tol_eq:  # G2
-        phase, step = "expansion", sec_expansion(ctx, r)
-    else:
+        phase, step = "expansion", sec_expansion(points, circle, tol_at, tol_eq, r)
+    else:  # only FormUCircle needs the agreed side
+        orientation = orientation_of(points, circle.center[0], tol_at, tol_eq)
+        ctx = Ctx(points, circle, tol_at, tol_eq, r, orientation)
         phase, step = "formation", form_u_circle(ctx, n)
     if step is None:
         return Plan("stuck", "stuck")

@@ -11,6 +11,7 @@ ties are broken by canonical position, which is geometry, never by the order of 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -52,13 +53,14 @@ def canonical(points: Points, observer: int = 0) -> Canonical:
     form = _form(points)
     order = form.order()
     ref = int(order[0])
-    where = int((order == observer).argmax())
+    at = order == observer
     x_ref, y_ref = float(points[ref, 0]), float(points[ref, 1])
-    return Canonical(form.points, where, (form.sign * x_ref, y_ref), form.sign, form.symmetric)
+    return Canonical(
+        form.points, int(at.argmax()), (form.sign * x_ref, y_ref), form.sign, form.symmetric
+    )
 
 
-@dataclass(frozen=True, slots=True)
-class _Form:
+class _Form(NamedTuple):
     """The canonical array and how it was made: the robots sorted by (y, x) (`up`) and by
     (y, -x) (`down`, the mirror image's order), and which image was taken (`sign` +1: up)."""
 
@@ -73,10 +75,11 @@ class _Form:
 
 
 def _form(points: Points) -> _Form:
-    up = points[:, 1].argsort(kind="stable")
-    out = points[up]
+    up = points[:, 1].argsort()  # any sort: with all heights distinct the order is unique
+    out = points.take(up, axis=0)
     heights = out[:, 1]
-    if (heights[1:] == heights[:-1]).any():
+    same = heights[1:] == heights[:-1]
+    if len(same) and same[same.argmax()]:
         return _form_with_equal_heights(points)
     # All heights differ: both mirror images list the robots in this order, and their x columns
     # are each other's negatives, so the smaller image has its first non-zero x negative.
@@ -94,12 +97,18 @@ def _form(points: Points) -> _Form:
 def _form_with_equal_heights(points: Points) -> _Form:
     """`_form` when some robots share a height: each mirror image sorts them by its own x."""
     xs, ys = points[:, 0], points[:, 1]
-    up = np.lexsort((xs, ys))
-    down = np.lexsort((-xs, ys))
+    # Complex numbers sort lexicographically: y + ix by (y, x), its conjugate by (y, -x).
+    key = np.empty(len(points), dtype=np.complex128)
+    key.real = ys
+    key.imag = xs
+    up = key.argsort(kind="stable")
+    down = key.conj().argsort(kind="stable")
     # Both orders list the same y values; the mirror image differs only in x.
-    x_up = xs[up] - xs[up[0]]
-    x_down = xs[down[0]] - xs[down]
-    diff = (x_up - x_down).nonzero()[0]
+    x_up = xs[up]
+    x_up -= x_up[0]
+    x_down = xs[down]
+    x_down = x_down[0] - x_down
+    diff = (x_up != x_down).nonzero()[0]
     symmetric = len(diff) == 0
     if symmetric or x_up[diff[0]] < x_down[diff[0]]:
         order, cx, sign = up, x_up, 1.0
@@ -107,7 +116,9 @@ def _form_with_equal_heights(points: Points) -> _Form:
         order, cx, sign = down, x_down, -1.0
     out = np.empty((len(points), 2), dtype=np.float64)
     out[:, 0] = cx
-    out[:, 1] = ys[order] - ys[order[0]]
+    y = ys[order]
+    y -= y[0]
+    out[:, 1] = y
     out += 0.0  # -0.0 -> +0.0: equal positions are equal bits
     return _Form(out, up, down, sign, symmetric)
 

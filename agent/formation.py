@@ -18,7 +18,7 @@ from fatswarm.agent.geometry import (
     segment_distances,
     targets_on,
 )
-from fatswarm.agent.planning import Ctx, Lazy, Step, ranked, without
+from fatswarm.agent.planning import Ctx, Lazy, Step, TieKeys, ranked, without
 from fatswarm.domain.path import (
     MAX_SEGMENTS,
     Arc,
@@ -42,38 +42,56 @@ def form_u_circle(ctx: Ctx, n: int) -> Step | None:
     cx, cy = c.center
     at_o = robot_at(pts, north_point(c), ctx.tol_at) is not None
     targets = targets_on(c, n, at_o)
+    xs, ys = pts[:, 0], pts[:, 1]
     # Targets are >= a* >= 4 apart (G1), so only a robot's angularly nearest target can be within
     # 2 of it: one O(n) pass gives "settled" (G8) and "blocks" (G7) for every robot.
     step = 2.0 * math.pi / n
-    theta = np.arctan2(pts[:, 0] - cx, pts[:, 1] - cy) - (0.0 if at_o else step / 2.0)
-    nearest = np.rint(theta / step).astype(np.intp) % n
-    d_near = np.hypot(pts[:, 0] - targets[nearest, 0], pts[:, 1] - targets[nearest, 1])
+    theta = np.arctan2(xs - cx, ys - cy)
+    if not at_o:
+        theta -= step / 2.0
+    theta /= step
+    nearest = np.rint(theta, out=theta).astype(np.intp)
+    nearest %= n
+    off = pts - targets.take(nearest, axis=0)
+    d_near = np.hypot(off[:, 0], off[:, 1])
     settled_robot = d_near <= ctx.tol_at  # G8: settled robots never move
-    blocking = d_near < CONTACT - CLEAR_SLACK  # G7: R blocks T iff their discs overlap
     settled_target = np.zeros(n, dtype=bool)
     settled_target[nearest[settled_robot]] = True
-    unsettled = (~settled_robot).nonzero()[0]
+    moving = ~settled_robot
+    unsettled = moving.nonzero()[0]
     vacant = (~settled_target).nonzero()[0]
-    order_keys = (-targets[vacant, 1], -ctx.orientation * (targets[vacant, 0] - cx))
-    order = Lazy(int(vacant[j]) for j in ranked(order_keys, ctx.tol_eq))
+    # G7: R blocks T iff their discs overlap. A settled robot's own target is not vacant, so only
+    # unsettled robots can block a vacant target.
+    near = ((d_near < CONTACT - CLEAR_SLACK) & moving).nonzero()[0]
+    blockers: dict[int, list[int]] = {}
+    for i, k in zip(near.tolist(), nearest[near].tolist(), strict=True):
+        blockers.setdefault(k, []).append(i)
+    side = -ctx.orientation
+    t_x, t_y = targets[:, 0], targets[:, 1]
+    order = Lazy(
+        int(vacant[j])
+        for j in ranked(-t_y[vacant], ctx.tol_eq, lambda: (side * (t_x[vacant] - cx),))
+    )
+    u_x, u_y = xs[unsettled], ys[unsettled]
     # The paper's paths first (chord, arcs, one slide); only if none is admissible anywhere, any
     # free path (G14b), so that every configuration the old rules moved still moves the same way.
     for wide in (False, True):
         for k in order:
-            blockers = (blocking & (nearest == k)).nonzero()[0]
-            if len(blockers) >= 2:  # double-blocked: wait until one blocker has left (G7)
+            blocked_by = blockers.get(k, ())
+            if len(blocked_by) >= 2:  # double-blocked: wait until one blocker has left (G7)
                 continue
-            if len(blockers) == 1:
-                cands = blockers[:0] if settled_robot[blockers[0]] else blockers
+            if ctx.symmetric or blocked_by:
+                cands = np.array(blocked_by, dtype=np.intp) if blocked_by else unsettled
+                if ctx.symmetric:
+                    cands = _symmetric_candidates(ctx, cands, targets[k])
+                c_x, c_y = xs[cands], ys[cands]
             else:
-                cands = unsettled
-            if ctx.symmetric:
-                cands = _symmetric_candidates(ctx, cands, targets[k])
+                cands, c_x, c_y = unsettled, u_x, u_y
             if len(cands) == 0:
                 continue
-            dist = np.hypot(pts[cands, 0] - targets[k, 0], pts[cands, 1] - targets[k, 1])
-            keys = (dist, -pts[cands, 1], -ctx.orientation * (pts[cands, 0] - cx))
-            for j in ranked(keys, ctx.tol_eq):
+            dist = np.hypot(c_x - t_x[k], c_y - t_y[k])
+            ties = _ties(side, cx, c_x, c_y)
+            for j in ranked(dist, ctx.tol_eq, ties):
                 moves = _try_move(ctx, int(cands[j]), targets, k, wide)
                 if moves is not None:
                     return ("detour" if wide else "fill"), moves
@@ -81,6 +99,11 @@ def form_u_circle(ctx: Ctx, n: int) -> Step | None:
     if swap is not None:
         return "note-swap", swap
     return None
+
+
+def _ties(side: float, cx: float, c_x: np.ndarray, c_y: np.ndarray) -> TieKeys:
+    """The candidates' tie keys after distance: the highest, then the agreed side (G12)."""
+    return lambda: (-c_y, side * (c_x - cx))
 
 
 def _symmetric_candidates(ctx: Ctx, cands: np.ndarray, target: np.ndarray) -> np.ndarray:
@@ -161,7 +184,8 @@ def _keeps_sec(ctx: Ctx, moves: dict[int, Path]) -> bool:
     pts, c = ctx.pts, ctx.circle
     cx, cy = c.center
     movers = list(moves)
-    if all(math.hypot(pts[i, 0] - cx, pts[i, 1] - cy) < c.radius - ctx.tol_at for i in movers):
+    inside = c.radius - ctx.tol_at
+    if all(math.hypot(float(pts[i, 0]) - cx, float(pts[i, 1]) - cy) < inside for i in movers):
         return True  # only interior robots move onto the circle: the support stays
     subsets = [movers] if len(movers) == 1 else [movers, movers[:1], movers[1:]]
     for subset in subsets:
@@ -223,14 +247,20 @@ def _first_free(ctx: Ctx, start: Point, options: list[Path], others: Points) -> 
     """The shortest free option; equal lengths go to the agreed side (G12)."""
     if len(options) == 1:
         return options[0] if is_free(start, options[0], others) else None
-    keys = np.empty((2, len(options)))
-    for j, p in enumerate(options):
-        lo, hi = path_x_range(start, p)
-        keys[:, j] = (path_length(start, p), -ctx.orientation * ((lo + hi) / 2.0 - ctx.cx))
-    for j in ranked((keys[0], keys[1]), ctx.tol_eq):
+    lengths = np.array([path_length(start, p) for p in options])
+    for j in ranked(lengths, ctx.tol_eq, lambda: (_sides(ctx, start, options),)):
         if is_free(start, options[j], others):
             return options[j]
     return None
+
+
+def _sides(ctx: Ctx, start: Point, options: list[Path]) -> np.ndarray:
+    """How far each option's x range lies on the agreed side of L (a tie key: lower first)."""
+    sides = []
+    for p in options:
+        lo, hi = path_x_range(start, p)
+        sides.append(-ctx.orientation * ((lo + hi) / 2.0 - ctx.cx))
+    return np.array(sides)
 
 
 def _first_blocker(start: Point, target: Point, others: Points) -> Point | None:

@@ -4,8 +4,8 @@ without chirality (G12)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator
+from typing import NamedTuple
 
 import numpy as np
 
@@ -15,9 +15,11 @@ from fatswarm.domain.path import Path, Points
 Step = tuple[str, dict[int, Path]]
 """A phase's choice: its kind (`Plan.kind`) and the moves it makes (robot index -> path)."""
 
+TieKeys = Callable[[], tuple[np.ndarray, ...]]
+"""The key columns after the first, made only when a tie needs them."""
 
-@dataclass(frozen=True, slots=True)
-class Ctx:
+
+class Ctx(NamedTuple):
     """Quantities of one snapshot shared by the routines (computed once per call)."""
 
     pts: Points
@@ -44,37 +46,47 @@ def orientation_of(pts: Points, cx: float, tol_at: float, tol_eq: float) -> floa
 
     It flips with the frame, so `s * x` means the same side to every robot: an agreed left/right.
     """
-    idx = (~mirror_matched(pts, cx, tol_at)).nonzero()[0]
-    if len(idx) == 0:
+    unmatched = ~mirror_matched(pts, cx, tol_at)
+    if not unmatched[unmatched.argmax()]:
         return 0.0
-    dx = pts[idx, 0] - cx
-    best = first_ranked((-pts[idx, 1], -np.abs(dx)), tol_eq)
-    return 1.0 if dx[best] > 0 else -1.0
+    idx = unmatched.nonzero()[0]
+    xs, ys = pts[:, 0], pts[:, 1]
+    best = int(idx[first_ranked(-ys[idx], tol_eq, lambda: (-np.abs(xs[idx] - cx),))])
+    return 1.0 if float(xs[best]) - cx > 0 else -1.0
 
 
-def ranked(cols: tuple[np.ndarray, ...], tol: float) -> Iterator[int]:
-    """Indices in increasing lexicographic order of the key columns `cols` (each (m,)), lazily.
+def ranked(first: np.ndarray, tol: float, tie_keys: TieKeys | None = None) -> Iterator[int]:
+    """Indices in increasing lexicographic order of the key columns (each (m,)), lazily.
 
-    Values within `tol` of the smallest remaining one count as ties and fall through to the next
-    column; full ties go by index. Lazy because the caller usually stops at the first.
+    `first` is the first column, `tie_keys()` the others. Values within `tol` of the smallest
+    remaining one count as ties and fall through to the next column; full ties go by index. Lazy
+    because the caller usually stops at the first, and the later columns are rarely needed.
     """
-    first = np.array(cols[0], dtype=np.float64)  # a copy: taken rows are set to +inf
-    for _ in range(len(first)):
-        i = int(first.argmin())
-        low = first[i]
+    keys = np.asarray(first, dtype=np.float64)
+    rest: tuple[np.ndarray, ...] | None = None
+    copied = False
+    for _ in range(len(keys)):
+        i = int(keys.argmin())
+        low = keys[i]
         if low == np.inf:
             return
-        tied = (first <= low + tol).nonzero()[0]
+        tied = (keys <= low + tol).nonzero()[0]
         if len(tied) > 1:  # rare outside mirror pairs: settle on the next columns
-            group = tied
-            for col in cols[1:]:
-                values = col[group]
-                group = group[values <= values.min() + tol]
+            if rest is None:
+                rest = tie_keys() if tie_keys is not None else ()
+            group = tied.tolist()
+            for col in rest:
+                values = col[group].tolist()
+                bound = min(values) + tol
+                group = [g for g, v in zip(group, values, strict=True) if v <= bound]
                 if len(group) == 1:
                     break
-            i = int(group[0])
-        first[i] = np.inf
+            i = group[0]
         yield i
+        if not copied:  # taken rows are set to +inf, in a copy
+            keys = keys.copy()
+            copied = True
+        keys[i] = np.inf
 
 
 class Lazy:
@@ -91,9 +103,9 @@ class Lazy:
             yield item
 
 
-def first_ranked(cols: tuple[np.ndarray, ...], tol: float) -> int:
+def first_ranked(first: np.ndarray, tol: float, tie_keys: TieKeys | None = None) -> int:
     """Index of the smallest key under the tolerant order of `ranked`."""
-    return next(ranked(cols, tol))
+    return next(ranked(first, tol, tie_keys))
 
 
 def without(pts: Points, i: int) -> Points:
