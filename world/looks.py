@@ -45,6 +45,8 @@ class Looks:
         self._fixed_sign = None if self._fixed is None else _mirror_signs(self._fixed)
         # every robot's colour (palette index; the first at the start); none without lights
         self.colours: list[int] | None = [0] * n if self.palette else None
+        # whether a view is every other robot, with no colours and nothing recorded
+        self.plain = model.sees_all and self.colours is None and not record_views
         self.views: dict[int, list[int]] = {}  # robot -> the ids it saw, of Looks not recorded yet
         # views built ahead for one round and one configuration (`prepare`): robot -> its view
         self._ahead: tuple[int, Points, dict[int, Points]] | None = None
@@ -57,7 +59,7 @@ class Looks:
 
     def view(self, positions: Points, robot: int, look_round: int) -> Seen:
         """What robot `robot`'s Look shows at `positions` in round `look_round`."""
-        if self._plain():
+        if self.plain:
             # the paper's model: every other robot (the fast path of every Look of every run)
             ahead = self._ahead
             if ahead is not None and ahead[0] == look_round and ahead[1] is positions:
@@ -80,17 +82,13 @@ class Looks:
         own = None if lights is Lights.EXTERNAL else self.colours[robot]
         return view, shown, own
 
-    def _plain(self) -> bool:
-        """Whether a view is every other robot, with no colours and nothing recorded."""
-        return self.model.sees_all and self.colours is None and not self.record_views
-
     def prepare(self, positions: Points, look_round: int, robots: Sequence[int]) -> None:
         """Build the views of `robots` for their Looks of round `look_round` at `positions` in one
         pass, for `view` to hand out: each the very array `view` would build alone (the same
         differences, `view_orders` gives each row `view_order`'s order, the same frame)."""
         self._ahead = None
         k = self.n - 1
-        if not self._plain() or not robots or len(robots) * k > AHEAD_LIMIT:
+        if not self.plain or not robots or len(robots) * k > AHEAD_LIMIT:
             return
         rows = np.asarray(robots, dtype=np.intp)
         order = view_orders(self.seed, look_round, robots, k)

@@ -183,12 +183,14 @@ def _check_moves(paths: Mapping[int, Path], n: int) -> list[tuple[int, Path]]:
     """The (robot, path) pairs of a round, checked; raises before anything moves."""
     moves: list[tuple[int, Path]] = []
     for key, path in paths.items():
-        if isinstance(key, bool) or not isinstance(key, (int, np.integer)):
+        if type(key) is not int and (
+            isinstance(key, bool) or not isinstance(key, (int, np.integer))
+        ):
             raise InvalidRoundError(f"robot ids must be integers, got {key!r}")
         robot = int(key)
         if not 0 <= robot < n:
             raise InvalidRoundError(f"robot {robot} does not exist: ids run from 0 to {n - 1}")
-        if not isinstance(path, Path):
+        if type(path) is not Path and not isinstance(path, Path):
             raise InvalidRoundError(f"robot {robot}: expected a Path, got {type(path).__name__}")
         if len(path.segments) > MAX_SEGMENTS:
             raise PathFormatError(
@@ -228,16 +230,16 @@ def _sweep_pairs(
     if len(first) * len(second) <= BRUTE_PAIRS:  # few: every pair, already in their order
         return np.repeat(first, len(second)), np.tile(second, len(first))
     lo_b = lo[second]
-    order = np.argsort(lo_b, kind="stable")
+    order = lo_b.argsort(kind="stable")
     lo_sorted = lo_b[order]
     width = float((hi[second] - lo_b).max()) if len(second) else 0.0
     pad = reach + width + 1.0  # generous: the exact test of the pairs comes after
-    begin = np.searchsorted(lo_sorted, lo[first] - pad, side="left")
-    end = np.searchsorted(lo_sorted, hi[first] + reach + 1.0, side="right")
+    begin = lo_sorted.searchsorted(lo[first] - pad, side="left")
+    end = lo_sorted.searchsorted(hi[first] + reach + 1.0, side="right")
     counts = end - begin
     total = int(counts.sum())
-    offsets = np.repeat(begin - np.cumsum(counts) + counts, counts)
-    pi = np.repeat(first, counts)
+    offsets = (begin - counts.cumsum() + counts).repeat(counts)
+    pi = first.repeat(counts)
     pj = second[order[np.arange(total, dtype=np.intp) + offsets]]
     return pi, pj
 
@@ -251,7 +253,8 @@ def _candidate_pairs(mo: Motion, first: IntArray, second: IntArray) -> tuple[Int
     """
     boxes = np.concatenate([mo.start, mo.start], axis=1)
     boxes[mo.robots] = mo.box
-    ax = 0 if np.ptp(boxes[:, 0]) >= np.ptp(boxes[:, 1]) else 1
+    xs, ys = boxes[:, 0], boxes[:, 1]  # spans as np.ptp takes them: max - min
+    ax = 0 if xs.max() - xs.min() >= ys.max() - ys.min() else 1
     pi, pj = _sweep_pairs(boxes[:, ax], boxes[:, ax + 2], first, second, 2.0 + BOX_MARGIN)
     bi, bj = boxes[pi], boxes[pj]
     gx = np.maximum(0.0, np.maximum(bj[:, 0] - bi[:, 2], bi[:, 0] - bj[:, 2]))
@@ -351,7 +354,9 @@ def _snap_movers(final: Points, movers: IntArray) -> None:
     corners = base[:, None, :] + _CORNERS * GRID
     dist = np.hypot(corners[:, :, 0] - p[:, 0, None], corners[:, :, 1] - p[:, 1, None])
     nearest = corners[np.arange(len(movers)), np.argmin(dist, axis=1)]
-    crowded = np.isin(movers, pi)
+    near_someone = np.zeros(len(final), dtype=np.bool_)
+    near_someone[pi] = True
+    crowded = near_someone[movers]
     alone = ~crowded
     final[movers[alone]] = nearest[alone] + 0.0
     for robot in movers[crowded]:
@@ -429,8 +434,11 @@ def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
     rows = zip(mo.robots.tolist(), mo.stop.tolist(), mo.total.tolist(), strict=True)
     lengths: dict[int, float] = {}
     for robot, stop, total in rows:
-        length = lengths[robot] = path_length(
-            (starts[robot][0], starts[robot][1]), world_paths[robot]
-        )
+        path, (x, y) = world_paths[robot], starts[robot]
+        if len(path.segments) == 1 and type(seg := path.segments[0]) is Line:
+            length = 0.0 + math.hypot(seg.end[0] - x, seg.end[1] - y)  # path_length's sum
+        else:
+            length = path_length((x, y), path)
+        lengths[robot] = length
         traveled[robot] = length if stop >= total else stop  # the whole path: the world's length
     return RoundOutcome(final, traveled, collisions, lengths)

@@ -332,13 +332,13 @@ class _Bus:
         through the wire codec (`_delivered`), as a networked agent's does."""
         world = self.world
         planned = None
+        # the others' Looks stay held (robots the async adversary crashed)
+        lookers = [robot for robot in active if world.may_look(robot)]
         if self.planner is not None:
             planned = self.planner.paths(world.positions, active, self.flips)
         else:
-            world.prepare_looks([robot for robot in active if world.may_look(robot)])
-        for robot in active:
-            if not world.may_look(robot):
-                continue  # its Look stays held (a robot the async adversary crashed)
+            world.prepare_looks(lookers)
+        for robot in lookers:
             if planned is not None:
                 if not world.admit_look(robot):
                     continue

@@ -54,7 +54,8 @@ def view_orders(seed: int, round_no: int, robots: Sequence[int], k: int) -> np.n
     z = (z ^ (z >> _S30)) * _C2
     z = (z ^ (z >> _S27)) * _C3
     z ^= z >> _S31
-    return np.argsort(z, axis=1)
+    order: np.ndarray = z.argsort(axis=1)
+    return order
 
 
 def cut_fraction(seed: int, round_no: int, robot: int) -> float:
