@@ -3,11 +3,12 @@ pair) at a time; the Note's swap when nothing else can move."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
 
-from fatswarm.agent.detour import shortest_free_path
+from fatswarm.agent.detour import END_MATCH, shortest_free_path
 from fatswarm.agent.geometry import (
     is_free,
     north_point,
@@ -33,6 +34,12 @@ from fatswarm.domain.path import (
     transform,
 )
 from fatswarm.domain.tolerance import CLEAR_SLACK, CONTACT, ROUND_ABS
+
+SURE_SEC = 4.0
+"""`_moves_the_sec` decides only with this many tol_at to spare (one would do in exact
+arithmetic): room for the rounding of `sec`'s circles."""
+RIM_MAX = 16
+"""`_moves_the_sec` leaves swarms with more robots near the SEC than this to `_keeps_sec`."""
 
 
 def form_u_circle(ctx: Ctx, n: int) -> Step | None:
@@ -133,6 +140,8 @@ def _try_move(
         target = (2.0 * cx - target[0], target[1])
     start = (float(pts[i, 0]), float(pts[i, 1]))
     others = without(pts, i)
+    if _moves_the_sec(ctx, start, target, others):
+        return None  # `_keeps_sec` would refuse it (i moving alone) whatever the path: spare it
     path = _detour(start, target, others) if wide else _free_path(ctx, start, target, others)
     if path is None:
         return None
@@ -177,6 +186,42 @@ def _partner_move(ctx: Ctx, i: int, start: Point, path: Path) -> tuple[int, Path
         if not is_free(p_start, mirrored, rest):
             return None
     return partner, mirrored
+
+
+def _moves_the_sec(ctx: Ctx, start: Point, target: Point, others: Points) -> bool:
+    """True only if robot i on the SEC at `start`, moving alone to within END_MATCH of `target`,
+    surely moves the SEC by more than tol_at (G9): `_keeps_sec` refuses it, whatever the path,
+    and with it any pair move of i (SSYNC may activate i alone).
+
+    Every circle `sec` returns passes through two or three robots and holds its centre between
+    them. One within tol_at of the current circle (centre and radius) passes through robots at
+    least R - 2 tol_at from the centre c; if all of those, and the target, lie beyond one line
+    through c by more than tol_at, its centre is not between them: there is no such circle. The
+    test keeps SURE_SEC times that room, and says False whenever it is not plain.
+    """
+    c = ctx.circle
+    cx, cy = c.center
+    if math.hypot(start[0] - cx, start[1] - cy) < c.radius - ctx.tol_at:
+        return False  # an interior mover keeps the SEC
+    sure = SURE_SEC * ctx.tol_at
+    dist = np.hypot(others[:, 0] - cx, others[:, 1] - cy)
+    rim = (dist >= c.radius - 2.0 * sure - ROUND_ABS).nonzero()[0]
+    if len(rim) > RIM_MAX:
+        return False
+    rows = others.take(rim, axis=0).tolist()
+    vecs = [(x - cx, y - cy) for x, y in rows] + [(target[0] - cx, target[1] - cy)]
+    # The line: across the middle of the widest angular gap between them, if it exceeds pi.
+    angles = sorted(math.atan2(vy, vx) for vx, vy in vecs)
+    gap = angles[0] + 2.0 * math.pi - angles[-1]
+    mid = (angles[-1] + angles[0] + 2.0 * math.pi) / 2.0
+    for a0, a1 in itertools.pairwise(angles):
+        if a1 - a0 > gap:
+            gap, mid = a1 - a0, (a0 + a1) / 2.0
+    if gap <= math.pi:
+        return False
+    ux, uy = -math.cos(mid), -math.sin(mid)
+    need = sure + END_MATCH + ROUND_ABS
+    return all(vx * ux + vy * uy > need for vx, vy in vecs)
 
 
 def _keeps_sec(ctx: Ctx, moves: dict[int, Path]) -> bool:
