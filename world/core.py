@@ -298,7 +298,7 @@ class WorldCore:
 
     def look(self, robot: int) -> Snapshot | None:
         """Robot `robot`'s snapshot, or None (refused, counted) if it is not active now."""
-        seen = self.sight(robot)
+        seen = self.view_of(robot)
         if seen is None:
             return None
         view, colours, own = seen
@@ -313,7 +313,7 @@ class WorldCore:
             own=own,
         )
 
-    def sight(self, robot: int) -> Seen | None:
+    def view_of(self, robot: int) -> Seen | None:
         """What robot `robot`'s Look shows (its view, the colours it reads of those it sees, its
         own), or None (refused, counted) if it is not active now: `look` without the snapshot
         around it, for a lock step that hands the view to the algorithm in process."""

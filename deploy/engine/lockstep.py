@@ -344,7 +344,7 @@ class _Bus:
                     continue
                 decided: tuple[Path, int | None] | None = (planned[robot], None)
             else:
-                seen = world.sight(robot)  # what its snapshot would carry
+                seen = world.view_of(robot)  # what its snapshot would carry
                 if seen is None:
                     continue
                 decided = self._computed(robot, round_no, seen)
