@@ -42,12 +42,16 @@ FAR_FROM_ORIGIN = 64.0
 """`sec` works about the points' box centre when they lie farther than this many spans away."""
 
 
-def _circle2(p: Point, q: Point) -> Circle:
+Disc = tuple[float, float, float]
+"""A circle as (centre x, centre y, radius): `sec`'s working form, cheaper than a `Circle`."""
+
+
+def _disc2(p: Point, q: Point) -> Disc:
     cx, cy = (p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0
-    return Circle((cx, cy), math.hypot(p[0] - cx, p[1] - cy))
+    return cx, cy, math.hypot(p[0] - cx, p[1] - cy)
 
 
-def _circle3(p: Point, q: Point, s: Point) -> Circle | None:
+def _disc3(p: Point, q: Point, s: Point) -> Disc | None:
     """Circumcircle of three points, or None when they are (nearly) collinear."""
     bx, by = q[0] - p[0], q[1] - p[1]
     cx, cy = s[0] - p[0], s[1] - p[1]
@@ -59,44 +63,71 @@ def _circle3(p: Point, q: Point, s: Point) -> Circle | None:
     b2, c2 = bx * bx + by * by, cx * cx + cy * cy
     ux = (cy * b2 - by * c2) / d
     uy = (bx * c2 - cx * b2) / d
-    return Circle((p[0] + ux, p[1] + uy), math.hypot(ux, uy))
+    return p[0] + ux, p[1] + uy, math.hypot(ux, uy)
 
 
-def _encloses(circle: Circle, pts: list[Point]) -> bool:
-    lim = circle.radius * (1.0 + SEC_SLACK_REL) + 1e-300
-    cx, cy = circle.center
-    return all(math.hypot(x - cx, y - cy) <= lim for x, y in pts)
+def _encloses(disc: Disc, pts: list[Point]) -> bool:
+    cx, cy, r = disc
+    lim = r * (1.0 + SEC_SLACK_REL) + 1e-300
+    for x, y in pts:  # noqa: SIM110 (a loop: cheaper than all() over a generator, called often)
+        if not math.hypot(x - cx, y - cy) <= lim:
+            return False
+    return True
 
 
-def _sec_through(support: list[Point], p: Point) -> tuple[Circle, list[Point]]:
+def _sec_through(support: list[Point], p: Point) -> tuple[Disc, list[Point]]:
     """Smallest circle enclosing `support` (at most 3 points) and p, where p lies outside the
     smallest circle of `support`: p is then on its boundary (Welzl's lemma), so only circles
     through p are tried. Returns the circle and the points that pin it."""
     pts = [*support, p]
-    best: tuple[Circle, list[Point]] | None = None
+    best: Disc | None = None
+    pinned: list[Point] = []
     for q in support:
-        c = _circle2(p, q)
-        if (best is None or c.radius < best[0].radius) and _encloses(c, pts):
-            best = (c, [p, q])
-    for i in range(len(support)):
-        for j in range(i + 1, len(support)):
-            c3 = _circle3(p, support[i], support[j])
-            if (
-                c3 is not None
-                and (best is None or c3.radius < best[0].radius)
-                and _encloses(c3, pts)
-            ):
-                best = (c3, [p, support[i], support[j]])
+        c = _disc2(p, q)
+        # p's own distance from c is c's radius, bit for bit: only the support needs checking.
+        if (best is None or c[2] < best[2]) and _encloses(c, support):
+            best, pinned = c, [p, q]
+    m = len(support)
+    for i in range(m - 1):
+        for j in range(i + 1, m):
+            c3 = _disc3(p, support[i], support[j])
+            if c3 is not None and (best is None or c3[2] < best[2]) and _encloses(c3, pts):
+                best, pinned = c3, [p, support[i], support[j]]
     if best is None:  # only rounding gets here: fall back to the farthest pair
         far = max(support, key=lambda q: math.hypot(q[0] - p[0], q[1] - p[1]))
-        best = (_circle2(p, far), [p, far])
-    return best
+        best, pinned = _disc2(p, far), [p, far]
+    return best, pinned
+
+
+def _sq_distances(xs: np.ndarray, ys: np.ndarray, cx: float, cy: float) -> np.ndarray:
+    """(xs - cx)**2 + (ys - cy)**2, in place on two fresh arrays."""
+    dx = xs - cx
+    dx *= dx
+    dy = ys - cy
+    dy *= dy
+    dx += dy
+    return dx
 
 
 def _overshoot(circle: Circle, xs: np.ndarray, ys: np.ndarray) -> float:
     """How far the farthest point lies outside `circle` (<= 0: none does)."""
     cx, cy = circle.center
     return float(np.max(np.hypot(xs - cx, ys - cy))) - circle.radius
+
+
+def _far_from_origin(pts: np.ndarray, x0: float, y0: float, reach2: float) -> bool:
+    """Whether the points lie farther from the origin than FAR_FROM_ORIGIN spans (see `sec`).
+
+    `reach2` is the largest squared distance of a point from the first, (x0, y0). Every coordinate
+    is within max(|x0|, |y0|) + reach of the origin and the span is at least reach / sqrt(2), so
+    most calls are decided without a pass over the points (margins cover the rounding).
+    """
+    reach = math.sqrt(reach2)
+    bound = (max(abs(x0), abs(y0)) + reach * (1.0 + 1e-9)) * (1.0 + 1e-9)
+    if bound <= FAR_FROM_ORIGIN * max(1.0, reach / 1.5):
+        return False
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    return float(np.abs(pts).max()) > FAR_FROM_ORIGIN * max(1.0, float((hi - lo).max()))
 
 
 def sec(points: Points) -> Circle:
@@ -112,34 +143,37 @@ def sec(points: Points) -> Circle:
     if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) == 0:
         raise ValueError(f"sec needs an (n, 2) array with n >= 1, got shape {pts.shape}")
     xs, ys = pts[:, 0], pts[:, 1]
+    x0, y0 = float(xs[0]), float(ys[0])
     if len(pts) == 1:
-        return Circle((float(xs[0]), float(ys[0])), 0.0)
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
-    if float(np.abs(pts).max()) > FAR_FROM_ORIGIN * max(1.0, float((hi - lo).max())):
+        return Circle((x0, y0), 0.0)
+    # Seed with an approximate diameter: the point farthest from robot 0, then farthest from that.
+    d2 = _sq_distances(xs, ys, x0, y0)
+    i0 = int(d2.argmax())
+    if _far_from_origin(pts, x0, y0, float(d2[i0])):
         # Far from the origin (a world frame at a large offset), the centre's rounding exceeds the
         # relative enclosure slack and the true SEC was refused: work about the box's centre, a
         # point no order or numbering of the points changes. A robot's own frame never gets here.
-        mid = (lo + hi) / 2.0
+        mid = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
         c = sec(pts - mid)
         return Circle((c.center[0] + float(mid[0]), c.center[1] + float(mid[1])), c.radius)
-    # Seed with an approximate diameter: the point farthest from robot 0, then farthest from that.
-    i0 = int(np.argmax((xs - xs[0]) ** 2 + (ys - ys[0]) ** 2))
-    i1 = int(np.argmax((xs - xs[i0]) ** 2 + (ys - ys[i0]) ** 2))
-    support: list[Point] = [(float(xs[i0]), float(ys[i0])), (float(xs[i1]), float(ys[i1]))]
-    circle = _circle2(support[0], support[1])
+    a = (float(xs[i0]), float(ys[i0]))
+    i1 = int(_sq_distances(xs, ys, a[0], a[1]).argmax())
+    support: list[Point] = [a, (float(xs[i1]), float(ys[i1]))]
+    disc = _disc2(support[0], support[1])
     for _ in range(4 * len(pts) + 16):
-        cx, cy = circle.center
-        d2 = (xs - cx) ** 2 + (ys - cy) ** 2
+        cx, cy, r = disc
+        d2 = _sq_distances(xs, ys, cx, cy)
         k = int(d2.argmax())
-        lim = circle.radius * (1.0 + SEC_SLACK_REL) + 1e-300
-        if d2[k] <= lim * lim:
-            return circle
+        lim = r * (1.0 + SEC_SLACK_REL) + 1e-300
+        if float(d2[k]) <= lim * lim:
+            return Circle((cx, cy), r)
         candidate, pinned = _sec_through(support, (float(xs[k]), float(ys[k])))
-        if candidate.radius <= circle.radius:  # rounding stalled the growth: of two circles of
-            # one radius, the one the points overshoot less (here 9e-9 on a radius of 5.5)
-            return min(circle, candidate, key=lambda c: _overshoot(c, xs, ys))
-        circle, support = candidate, pinned
-    return circle
+        if candidate[2] <= r:  # rounding stalled the growth: of two circles of one radius, the
+            # one the points overshoot less (here 9e-9 on a radius of 5.5)
+            two = (Circle((cx, cy), r), Circle((candidate[0], candidate[1]), candidate[2]))
+            return min(two, key=lambda c: _overshoot(c, xs, ys))
+        disc, support = candidate, pinned
+    return Circle((disc[0], disc[1]), disc[2])
 
 
 # --- the algorithm's quantities ----------------------------------------------------------------
@@ -168,11 +202,21 @@ def targets_on(circle: Circle, n: int, robot_at_o: bool) -> Points:
     Target k sits at angle theta_k from north. The set is mirror symmetric about L, so a mirrored
     frame yields the same set (in another order: callers must not rely on the order).
     """
-    k = np.arange(n, dtype=np.float64)
-    theta = 2.0 * math.pi * k / n + (0.0 if robot_at_o else math.pi / n)
+    theta = np.arange(n, dtype=np.float64)
+    theta *= 2.0 * math.pi
+    theta /= n
+    if not robot_at_o:  # (for case i, adding 0.0 to these non-negative angles changes nothing)
+        theta += math.pi / n
     cx, cy = circle.center
     rad = circle.radius
-    return np.stack([cx + rad * np.sin(theta), cy + rad * np.cos(theta)], axis=1)
+    out = np.empty((n, 2))
+    part = np.sin(theta)
+    part *= rad
+    np.add(part, cx, out=out[:, 0])
+    part = np.cos(theta, out=part)
+    part *= rad
+    np.add(part, cy, out=out[:, 1])
+    return out
 
 
 def robot_at(points: Points, p: Point, tol: float) -> int | None:
@@ -203,22 +247,42 @@ def mirror_matched(points: Points, axis_x: float, tol: float) -> np.ndarray:
     share a Y, where it falls back to all pairs.
     """
     n = len(points)
-    order = np.argsort(points[:, 1], kind="stable")
-    ys, xs = points[order, 1], points[order, 0]
-    lo = np.searchsorted(ys, ys - tol, side="left")
-    hi = np.searchsorted(ys, ys + tol, side="right")
-    width = int((hi - lo).max()) if n else 0
+    ys, xs = points[:, 1], points[:, 0]
+    order: np.ndarray | None = None
+    found: np.ndarray
+    if n > 1 and np.count_nonzero(ys[1:] >= ys[:-1]) < n - 1:  # a canonical form is sorted
+        order = np.argsort(ys, kind="stable")
+        ys, xs = ys.take(order), xs.take(order)
+    lo = ys.searchsorted(ys - tol, side="left")
+    hi = ys.searchsorted(ys + tol, side="right")
+    span = hi - lo
+    width = int(span[span.argmax()]) if n else 0
     mx = 2.0 * axis_x - xs
+    tol2 = tol * tol
     if width > MATCH_WINDOW:
         dx = mx[:, None] - xs[None, :]
         dy = ys[:, None] - ys[None, :]
-        found = (dx * dx + dy * dy).min(axis=1) <= tol * tol
+        found = (dx * dx + dy * dy).min(axis=1) <= tol2
+    elif width == 1 and tol >= 0.0:  # each robot alone in its window: only itself can match
+        dx = xs - mx
+        dx *= dx
+        found = dx <= tol2
     else:
         found = np.zeros(n, dtype=bool)
         for offset in range(width):
-            j = np.minimum(lo + offset, n - 1)
-            ddx, ddy = xs[j] - mx, ys[j] - ys
-            found |= (lo + offset < hi) & (ddx * ddx + ddy * ddy <= tol * tol)
+            j = lo + offset
+            dx = xs.take(j, mode="clip")
+            dx -= mx
+            dx *= dx
+            dy = ys.take(j, mode="clip")
+            dy -= ys
+            dy *= dy
+            dx += dy
+            hit = dx <= tol2
+            hit &= offset < span
+            found |= hit
+    if order is None:
+        return found
     out = np.empty(n, dtype=bool)
     out[order] = found
     return out
@@ -240,8 +304,12 @@ def is_uniform_circle(points: Points, a: float, circle: Circle | None = None) ->
     tol = EPS_AT_REL * scale(circle.radius)
     cx, cy = circle.center
     dx, dy = pts[:, 0] - cx, pts[:, 1] - cy
-    radii = np.sqrt(dx * dx + dy * dy)
-    if (np.abs(radii - circle.radius) > tol).any():  # the usual early exit: someone is inside
+    off = dx * dx
+    off += dy * dy
+    off = np.sqrt(off, out=off)
+    off -= circle.radius
+    off = np.abs(off, out=off)
+    if np.count_nonzero(off > tol):  # the usual early exit: someone is inside
         return False
     ang = np.sort(np.arctan2(dy, dx))
     gaps = np.diff(np.append(ang, ang[0] + 2.0 * math.pi))
@@ -268,13 +336,24 @@ def is_formed(points: Points, a: float) -> bool:
 def segment_distances(p: Point, q: Point, others: Points) -> np.ndarray:
     """Distance from every row of `others` to the segment pq."""
     px, py = p
-    dx, dy = q[0] - px, q[1] - py
+    return _to_segment(others[:, 0] - px, others[:, 1] - py, q[0] - px, q[1] - py)
+
+
+def _to_segment(ox: np.ndarray, oy: np.ndarray, dx: float, dy: float) -> np.ndarray:
+    """Distance of the points (ox, oy) to the segment from the origin to (dx, dy); the points are
+    given relative to the segment's start, in arrays this overwrites."""
     len2 = dx * dx + dy * dy
-    ox, oy = others[:, 0] - px, others[:, 1] - py
     if len2 == 0.0:
-        return np.asarray(np.hypot(ox, oy))
-    t = np.clip((ox * dx + oy * dy) / len2, 0.0, 1.0)
-    return np.asarray(np.hypot(ox - t * dx, oy - t * dy))
+        np.hypot(ox, oy, out=ox)
+        return ox
+    t = ox * dx
+    t += oy * dy
+    t /= len2
+    t = t.clip(0.0, 1.0, out=t)
+    ox -= t * dx
+    oy -= t * dy
+    np.hypot(ox, oy, out=ox)
+    return ox
 
 
 def _angle_in_sweep(angles: np.ndarray, start: float, sweep: float) -> np.ndarray:
@@ -288,20 +367,30 @@ def _angle_in_sweep(angles: np.ndarray, start: float, sweep: float) -> np.ndarra
 
 def arc_distances(start: Point, arc: Arc, others: Points) -> np.ndarray:
     """Distance from every row of `others` to the arc that starts at `start`."""
+    return _to_arc(start, arc, others, None)
+
+
+def _to_arc(start: Point, arc: Arc, others: Points, from_start: np.ndarray | None) -> np.ndarray:
+    """`arc_distances`; `from_start`, if given, holds the distances of `others` from `start`
+    (this overwrites it)."""
     cx, cy = arc.center
     radius = math.hypot(start[0] - cx, start[1] - cy)
-    end = segment_end(start, arc)
     ox, oy = others[:, 0] - cx, others[:, 1] - cy
-    to_circle = np.abs(np.hypot(ox, oy) - radius)
-    a0 = math.atan2(start[1] - cy, start[0] - cx)
-    inside = _angle_in_sweep(np.arctan2(oy, ox), a0, arc.sweep)
-    if abs(arc.sweep) >= 2.0 * math.pi:
-        inside = np.ones(len(others), dtype=bool)
-    d_ends = np.minimum(
-        np.hypot(others[:, 0] - start[0], others[:, 1] - start[1]),
-        np.hypot(others[:, 0] - end[0], others[:, 1] - end[1]),
-    )
-    return np.asarray(np.where(inside, to_circle, d_ends))
+    full = abs(arc.sweep) >= 2.0 * math.pi
+    if not full:
+        a0 = math.atan2(start[1] - cy, start[0] - cx)
+        inside = _angle_in_sweep(np.arctan2(oy, ox), a0, arc.sweep)
+    to_circle = np.hypot(ox, oy, out=ox)
+    to_circle -= radius
+    np.abs(to_circle, out=to_circle)
+    if full:
+        return to_circle
+    if from_start is None:
+        from_start = np.hypot(others[:, 0] - start[0], others[:, 1] - start[1])
+    end = segment_end(start, arc)
+    ex, ey = others[:, 0] - end[0], others[:, 1] - end[1]
+    d_ends = np.minimum(from_start, np.hypot(ex, ey, out=ex), out=from_start)
+    return np.where(inside, to_circle, d_ends)
 
 
 def path_distances(start: Point, path: Path, others: Points) -> np.ndarray:
@@ -309,14 +398,16 @@ def path_distances(start: Point, path: Path, others: Points) -> np.ndarray:
     best = np.hypot(others[:, 0] - start[0], others[:, 1] - start[1])
     here = start
     for seg in path.segments:
-        d = (
-            segment_distances(here, seg.end, others)
-            if isinstance(seg, Line)
-            else (arc_distances(here, seg, others))
-        )
-        best = np.minimum(best, d)
+        best = np.minimum(best, _to_piece(here, seg, others), out=best)
         here = segment_end(here, seg)
-    return np.asarray(best)
+    return best
+
+
+def _to_piece(here: Point, seg: Line | Arc, others: Points) -> np.ndarray:
+    """Distance from every row of `others` to one segment of a path, starting at `here`."""
+    if isinstance(seg, Line):
+        return segment_distances(here, seg.end, others)
+    return arc_distances(here, seg, others)
 
 
 def required_clearance(start: Point, others: Points) -> np.ndarray:
@@ -327,7 +418,13 @@ def required_clearance(start: Point, others: Points) -> np.ndarray:
     ROUND_ABS absorbs the rounding of the distance computations themselves.
     """
     d0 = np.hypot(others[:, 0] - start[0], others[:, 1] - start[1])
-    return np.asarray(np.minimum(d0, CONTACT - CLEAR_SLACK) - ROUND_ABS)
+    return _clearance(d0)
+
+
+def _clearance(d0: np.ndarray) -> np.ndarray:
+    need: np.ndarray = np.minimum(d0, CONTACT - CLEAR_SLACK)
+    need -= ROUND_ABS
+    return need
 
 
 def is_free(start: Point, path: Path, others: Points) -> bool:
@@ -337,10 +434,30 @@ def is_free(start: Point, path: Path, others: Points) -> bool:
     (every other centre >= 2 from every point of the path, up to `required_clearance`) is the
     sound version. Starting in contact is allowed.
     """
-    if len(others) == 0:
+    m = len(others)
+    if m == 0:
         return True
-    need = required_clearance(start, others)
-    return bool((path_distances(start, path, others) >= need).all())
+    sx, sy = start
+    ox, oy = others[:, 0] - sx, others[:, 1] - sy
+    d0 = np.hypot(ox, oy)
+    need = _clearance(d0)
+    if not path.segments:
+        return bool(np.count_nonzero(d0 >= need) == m)
+    # need is NaN where d0 is, and d0 >= need elsewhere: so only the pieces are checked, each on
+    # its own (all(min(a, b) >= c) is all(a >= c) and all(b >= c), NaN included). The first
+    # piece starts at `start`, where (ox, oy) and d0 already hold the others' offsets and distances.
+    here = start
+    for k, seg in enumerate(path.segments):
+        if isinstance(seg, Line) and k == 0:
+            d = _to_segment(ox, oy, seg.end[0] - sx, seg.end[1] - sy)
+        elif isinstance(seg, Line):
+            d = segment_distances(here, seg.end, others)
+        else:
+            d = _to_arc(here, seg, others, d0 if k == 0 else None)
+        if np.count_nonzero(d >= need) < m:
+            return False
+        here = segment_end(here, seg)
+    return True
 
 
 def is_vacant(p: Point, others: Points) -> bool:
