@@ -165,22 +165,31 @@ def _tabulated(
         at = np.repeat(np.arange(m, dtype=np.intp), counts)
         col = np.arange(len(at), dtype=np.intp) - np.repeat(np.cumsum(counts) - counts, counts)
         table[at, col] = [seg for r in rows for seg in r[1]]
-    row_of = np.full(len(start), -1, dtype=np.intp)
-    robots = np.array([r[0] for r in rows], dtype=np.intp)
-    row_of[robots] = np.arange(m, dtype=np.intp)
-    total = np.array([r[2] for r in rows], dtype=np.float64)
-    return Motion(
-        start=start,
-        row_of=row_of,
-        robots=robots,
-        nseg=np.array(counts, dtype=np.intp),
-        seg=table,
-        t1=np.ascontiguousarray(table[:, :, _T1]),
-        total=total,
-        end=np.array([r[3] for r in rows], dtype=np.float64).reshape(m, 2),
-        box=np.array([r[4] for r in rows], dtype=np.float64).reshape(m, 4),
-        stop=total.copy(),
+    return _motion(
+        start,
+        np.array([r[0] for r in rows], dtype=np.intp),
+        np.array(counts, dtype=np.intp),
+        table,
+        np.array([r[2] for r in rows], dtype=np.float64),
+        np.array([r[3] for r in rows], dtype=np.float64).reshape(m, 2),
+        np.array([r[4] for r in rows], dtype=np.float64).reshape(m, 4),
     )
+
+
+def _motion(
+    start: Points,
+    robots: IntArray,
+    nseg: IntArray,
+    table: FloatArray,
+    total: FloatArray,
+    end: Points,
+    box: FloatArray,
+) -> Motion:
+    """The Motion of these rows (robot, segment count, segment table, length, end, box)."""
+    row_of = np.full(len(start), -1, dtype=np.intp)
+    row_of[robots] = np.arange(len(robots), dtype=np.intp)
+    t1 = np.ascontiguousarray(table[:, :, _T1])
+    return Motion(start, row_of, robots, nseg, table, t1, total, end, box, total.copy())
 
 
 def _single_lines(
@@ -219,20 +228,8 @@ def _single_lines(
     table[:, 0, _LEN] = total
     table[:, 0, _SX : _SY + 1] = here[keep]
     table[:, 0, _EX : _EY + 1] = e[keep]
-    row_of = np.full(len(start), -1, dtype=np.intp)
-    row_of[robots] = np.arange(m, dtype=np.intp)
-    return Motion(
-        start=start,
-        row_of=row_of,
-        robots=robots,
-        nseg=np.ones(m, dtype=np.intp),
-        seg=table,
-        t1=np.ascontiguousarray(table[:, :, _T1]),
-        total=total,
-        end=e[keep],
-        box=np.concatenate((lo[keep], hi[keep]), axis=1),
-        stop=total.copy(),
-    )
+    box = np.concatenate((lo[keep], hi[keep]), axis=1)
+    return _motion(start, robots, np.ones(m, dtype=np.intp), table, total, e[keep], box)
 
 
 def _segments_at(mo: Motion, rows: IntArray, t: FloatArray) -> FloatArray:
