@@ -46,57 +46,53 @@ Disc = tuple[float, float, float]
 """A circle as (centre x, centre y, radius): `sec`'s working form, cheaper than a `Circle`."""
 
 
-def _disc2(p: Point, q: Point) -> Disc:
-    cx, cy = (p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0
-    return cx, cy, math.hypot(p[0] - cx, p[1] - cy)
+def _sec_through(support: list[Point], p: Point) -> tuple[Disc, list[Point]]:
+    """Smallest circle enclosing `support` (at most 3 points) and p, where p lies outside the
+    smallest circle of `support`: p is then on its boundary (Welzl's lemma), so only circles
+    through p are tried: the diametral circles of p and each support point, then the circumcircles
+    of p and each support pair. Returns the circle and the points that pin it.
+
+    The circle routines are written out here: this runs a few times per `sec`.
+    """
+    px, py = p
+    best: Disc | None = None
+    pinned: list[Point] = []
+    for q in support:
+        cx, cy = (px + q[0]) / 2.0, (py + q[1]) / 2.0
+        r = math.hypot(px - cx, py - cy)
+        # p's own distance from the centre is r, bit for bit: only the support needs checking.
+        if (best is None or r < best[2]) and _encloses(cx, cy, r, support):
+            best, pinned = (cx, cy, r), [p, q]
+    for i in range(len(support) - 1):
+        q = support[i]
+        bx, by = q[0] - px, q[1] - py
+        for s in support[i + 1 :]:
+            cx, cy = s[0] - px, s[1] - py
+            d = 2.0 * (bx * cy - by * cx)
+            # Collinear within rounding: the circumcircle is huge or undefined; the diametral
+            # circle of the extreme pair then encloses the third point, so the triple is dropped.
+            if abs(d) <= 1e-14 * (bx * bx + by * by + cx * cx + cy * cy):
+                continue
+            b2, c2 = bx * bx + by * by, cx * cx + cy * cy
+            ux = (cy * b2 - by * c2) / d
+            uy = (bx * c2 - cx * b2) / d
+            r = math.hypot(ux, uy)
+            if (best is None or r < best[2]) and _encloses(px + ux, py + uy, r, [*support, p]):
+                best, pinned = (px + ux, py + uy, r), [p, q, s]
+    if best is None:  # only rounding gets here: fall back to the farthest pair
+        far = max(support, key=lambda q: math.hypot(q[0] - px, q[1] - py))
+        cx, cy = (px + far[0]) / 2.0, (py + far[1]) / 2.0
+        best, pinned = (cx, cy, math.hypot(px - cx, py - cy)), [p, far]
+    return best, pinned
 
 
-def _disc3(p: Point, q: Point, s: Point) -> Disc | None:
-    """Circumcircle of three points, or None when they are (nearly) collinear."""
-    bx, by = q[0] - p[0], q[1] - p[1]
-    cx, cy = s[0] - p[0], s[1] - p[1]
-    d = 2.0 * (bx * cy - by * cx)
-    # Collinear within rounding: the circumcircle is huge or undefined; the diametral circle of the
-    # extreme pair then encloses the third point, so dropping the triple loses nothing.
-    if abs(d) <= 1e-14 * (bx * bx + by * by + cx * cx + cy * cy):
-        return None
-    b2, c2 = bx * bx + by * by, cx * cx + cy * cy
-    ux = (cy * b2 - by * c2) / d
-    uy = (bx * c2 - cx * b2) / d
-    return p[0] + ux, p[1] + uy, math.hypot(ux, uy)
-
-
-def _encloses(disc: Disc, pts: list[Point]) -> bool:
-    cx, cy, r = disc
+def _encloses(cx: float, cy: float, r: float, pts: list[Point]) -> bool:
+    """Whether the circle holds every point, up to its relative slack."""
     lim = r * (1.0 + SEC_SLACK_REL) + 1e-300
     for x, y in pts:  # noqa: SIM110 (a loop: cheaper than all() over a generator, called often)
         if not math.hypot(x - cx, y - cy) <= lim:
             return False
     return True
-
-
-def _sec_through(support: list[Point], p: Point) -> tuple[Disc, list[Point]]:
-    """Smallest circle enclosing `support` (at most 3 points) and p, where p lies outside the
-    smallest circle of `support`: p is then on its boundary (Welzl's lemma), so only circles
-    through p are tried. Returns the circle and the points that pin it."""
-    pts = [*support, p]
-    best: Disc | None = None
-    pinned: list[Point] = []
-    for q in support:
-        c = _disc2(p, q)
-        # p's own distance from c is c's radius, bit for bit: only the support needs checking.
-        if (best is None or c[2] < best[2]) and _encloses(c, support):
-            best, pinned = c, [p, q]
-    m = len(support)
-    for i in range(m - 1):
-        for j in range(i + 1, m):
-            c3 = _disc3(p, support[i], support[j])
-            if c3 is not None and (best is None or c3[2] < best[2]) and _encloses(c3, pts):
-                best, pinned = c3, [p, support[i], support[j]]
-    if best is None:  # only rounding gets here: fall back to the farthest pair
-        far = max(support, key=lambda q: math.hypot(q[0] - p[0], q[1] - p[1]))
-        best, pinned = _disc2(p, far), [p, far]
-    return best, pinned
 
 
 def _sq_distances(xs: np.ndarray, ys: np.ndarray, cx: float, cy: float) -> np.ndarray:
@@ -158,8 +154,10 @@ def sec(points: Points) -> Circle:
         return Circle((c.center[0] + float(mid[0]), c.center[1] + float(mid[1])), c.radius)
     a = (float(xs[i0]), float(ys[i0]))
     i1 = int(_sq_distances(xs, ys, a[0], a[1]).argmax())
-    support: list[Point] = [a, (float(xs[i1]), float(ys[i1]))]
-    disc = _disc2(support[0], support[1])
+    b = (float(xs[i1]), float(ys[i1]))
+    cx, cy = (a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0
+    disc = (cx, cy, math.hypot(a[0] - cx, a[1] - cy))
+    support: list[Point] = [a, b]
     for _ in range(4 * len(pts) + 16):
         cx, cy, r = disc
         d2 = _sq_distances(xs, ys, cx, cy)
@@ -221,6 +219,12 @@ def targets_on(circle: Circle, n: int, robot_at_o: bool) -> Points:
 
 def robot_at(points: Points, p: Point, tol: float) -> int | None:
     """Index of a robot within `tol` of point p, or None."""
+    ys = points[:, 1]
+    top = float(ys[ys.argmax()]) if len(ys) else math.nan
+    # p clear above every robot (the north point o, usually): then no distance is within tol
+    # (the margin covers the rounding of the height differences).
+    if p[1] - top > tol + 1e-9 * (abs(p[1]) + abs(top) + tol):
+        return None
     d = np.hypot(points[:, 0] - p[0], points[:, 1] - p[1])
     k = int(d.argmin())
     return k if d[k] <= tol else None
@@ -239,6 +243,13 @@ MATCH_WINDOW = 8
 """Above this many robots sharing one Y (within tolerance), mirror matching compares all pairs."""
 
 
+def _sq_diff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(a - b)**2, in place on one fresh array."""
+    d: np.ndarray = a - b
+    d *= d
+    return d
+
+
 def mirror_matched(points: Points, axis_x: float, tol: float) -> np.ndarray:
     """Boolean (n,): robot i has a robot (itself, when on the axis) at its mirror image about x.
 
@@ -250,9 +261,16 @@ def mirror_matched(points: Points, axis_x: float, tol: float) -> np.ndarray:
     ys, xs = points[:, 1], points[:, 0]
     order: np.ndarray | None = None
     found: np.ndarray
-    if n > 1 and np.count_nonzero(ys[1:] >= ys[:-1]) < n - 1:  # a canonical form is sorted
-        order = np.argsort(ys, kind="stable")
-        ys, xs = ys.take(order), xs.take(order)
+    if n > 1:
+        gaps = ys[1:] - ys[:-1]
+        # Sorted by Y (as a canonical form is) with every gap beyond tol (and a margin for the
+        # rounding of y +- tol): each robot is alone in its window, so only itself can match.
+        reach = tol + 1e-9 * (max(abs(float(ys[0])), abs(float(ys[-1]))) + tol)
+        if tol >= 0.0 and np.count_nonzero(gaps > reach) == n - 1:
+            return _sq_diff(xs, 2.0 * axis_x - xs) <= tol * tol
+        if np.count_nonzero(gaps >= 0.0) < n - 1:
+            order = np.argsort(ys, kind="stable")
+            ys, xs = ys.take(order), xs.take(order)
     lo = ys.searchsorted(ys - tol, side="left")
     hi = ys.searchsorted(ys + tol, side="right")
     span = hi - lo
@@ -264,9 +282,7 @@ def mirror_matched(points: Points, axis_x: float, tol: float) -> np.ndarray:
         dy = ys[:, None] - ys[None, :]
         found = (dx * dx + dy * dy).min(axis=1) <= tol2
     elif width == 1 and tol >= 0.0:  # each robot alone in its window: only itself can match
-        dx = xs - mx
-        dx *= dx
-        found = dx <= tol2
+        found = _sq_diff(xs, mx) <= tol2
     else:
         found = np.zeros(n, dtype=bool)
         for offset in range(width):
@@ -303,6 +319,11 @@ def is_uniform_circle(points: Points, a: float, circle: Circle | None = None) ->
     circle = sec(pts) if circle is None else circle
     tol = EPS_AT_REL * scale(circle.radius)
     cx, cy = circle.center
+    # The usual early exit, someone inside, tried first on one robot, by the same operations: the
+    # middle one of a canonical form (sorted by height) is rarely on the circle.
+    x, y = pts[n // 2].tolist()
+    if abs(math.sqrt((x - cx) * (x - cx) + (y - cy) * (y - cy)) - circle.radius) > tol:
+        return False
     dx, dy = pts[:, 0] - cx, pts[:, 1] - cy
     off = dx * dx
     off += dy * dy
@@ -479,11 +500,16 @@ def path_x_range(start: Point, path: Path) -> tuple[float, float]:
             cx, cy = seg.center
             radius = math.hypot(here[0] - cx, here[1] - cy)
             a0 = math.atan2(here[1] - cy, here[0] - cx)
-            extremes = np.array([0.0, math.pi])
-            hit = _angle_in_sweep(extremes, a0, seg.sweep)
-            if hit[0]:
+            if _on_sweep(0.0, a0, seg.sweep):
                 xs.append(cx + radius)
-            if hit[1]:
+            if _on_sweep(math.pi, a0, seg.sweep):
                 xs.append(cx - radius)
         here = end
     return min(xs), max(xs)
+
+
+def _on_sweep(angle: float, start: float, sweep: float) -> bool:
+    """`_angle_in_sweep` of one angle (Python's float % is numpy's mod, bit for bit)."""
+    if sweep >= 0.0:
+        return (angle - start) % (2.0 * math.pi) <= sweep
+    return (start - angle) % (2.0 * math.pi) <= -sweep

@@ -210,6 +210,32 @@ def plain_path_distances(start: Point, path: Path, others: Points) -> np.ndarray
     return np.asarray(best)
 
 
+def plain_path_x_range(start: Point, path: Path) -> tuple[float, float]:
+    xs = [start[0]]
+    here = start
+    for seg in path.segments:
+        end = segment_end(here, seg)
+        xs.append(end[0])
+        if isinstance(seg, Arc):
+            cx, cy = seg.center
+            radius = math.hypot(here[0] - cx, here[1] - cy)
+            a0 = math.atan2(here[1] - cy, here[0] - cx)
+            extremes = np.array([0.0, math.pi])
+            hit = _angle_in_sweep(extremes, a0, seg.sweep)
+            if hit[0]:
+                xs.append(cx + radius)
+            if hit[1]:
+                xs.append(cx - radius)
+        here = end
+    return min(xs), max(xs)
+
+
+def plain_robot_at(points: Points, p: Point, tol: float) -> int | None:
+    d = np.hypot(points[:, 0] - p[0], points[:, 1] - p[1])
+    k = int(d.argmin())
+    return k if d[k] <= tol else None
+
+
 def plain_required_clearance(start: Point, others: Points) -> np.ndarray:
     d0 = np.hypot(others[:, 0] - start[0], others[:, 1] - start[1])
     return np.asarray(np.minimum(d0, CONTACT - CLEAR_SLACK) - ROUND_ABS)
@@ -417,3 +443,27 @@ def test_is_free_stays_plain_near_contact_and_on_non_finite_neighbours() -> None
         path = _path(rng, start) if rng.random() < 0.9 else Path()
         with np.errstate(invalid="ignore", over="ignore"):
             assert geometry.is_free(start, path, others) == plain_is_free(start, path, others)
+
+
+def test_path_x_range_gives_the_plain_bits() -> None:
+    rng = np.random.default_rng(12)
+    for _ in range(5000):
+        start = (float(rng.normal(0, 10)), float(rng.normal(0, 10)))
+        path = _path(rng, start)
+        got, want = geometry.path_x_range(start, path), plain_path_x_range(start, path)
+        assert [v.hex() for v in got] == [v.hex() for v in want]
+
+
+def test_robot_at_gives_the_plain_answer() -> None:
+    rng = np.random.default_rng(13)
+    for pts in _clouds(14, 3000, 60):
+        circle = plain_sec(pts)
+        tol = EPS_AT_REL * scale(circle.radius)
+        near = pts[int(rng.integers(len(pts)))] + rng.choice([0.0, 0.5, 1.0, 2.0]) * tol
+        for p in (geometry.north_point(circle), (float(near[0]), float(near[1]))):
+            for t in (tol, 0.0, 1.0):
+                assert geometry.robot_at(pts, p, t) == plain_robot_at(pts, p, t)
+    with np.errstate(invalid="ignore"):
+        odd = np.array([[0.0, 0.0], [np.nan, 5.0], [1.0, np.nan], [2.0, np.inf]])
+        for p in ((0.0, 10.0), (0.0, np.inf), (np.nan, 0.0), (1.0, 0.0)):
+            assert geometry.robot_at(odd, p, 1e-6) == plain_robot_at(odd, p, 1e-6)
