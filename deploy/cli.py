@@ -20,9 +20,9 @@ from collections.abc import Callable, Sequence
 from types import FrameType
 from typing import TYPE_CHECKING, Any, Final, NoReturn
 
-from fatswarm import __version__
 from fatswarm.deploy.flags import Terminated
 from fatswarm.domain.outcome import ExitCode
+from fatswarm.domain.version import __version__
 
 if TYPE_CHECKING:
     from _typeshed import SupportsWrite

@@ -12,8 +12,9 @@ The Python API (fatswarm.deploy.engine.api) is here too: `fatswarm.run(...)`,
 """
 
 import importlib as _importlib
-import importlib.metadata as _metadata
 import typing as _typing
+
+from fatswarm.domain.version import __version__
 
 if _typing.TYPE_CHECKING:  # the API's types for type checkers and editors; loaded lazily below
     from fatswarm.deploy.engine.api import (
@@ -39,11 +40,6 @@ __all__ = [
     "trajectory",
 ]
 _API = frozenset(__all__) - {"__version__"}  # names of fatswarm.deploy.engine.api
-
-try:
-    __version__ = _metadata.version("fatswarm")
-except _metadata.PackageNotFoundError:  # a checkout that was never installed
-    __version__ = "0+unknown"
 
 
 def __getattr__(name: str) -> _typing.Any:

@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING, Any, Final
 
 import numpy as np
 
-from fatswarm import __version__
 from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
@@ -26,6 +25,7 @@ from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.robot_model import PAPER_MODEL, Lights, ModelError, RobotModel
 from fatswarm.domain.seam import AlgorithmError, AlgorithmParamsError, Configured, parse_assignments
 from fatswarm.domain.tolerance import UnsupportedInputError, check_supported
+from fatswarm.domain.version import __version__
 
 if TYPE_CHECKING:
     from fatswarm.coordinator.schedule import Scheduler

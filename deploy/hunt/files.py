@@ -9,11 +9,11 @@ import shlex
 from collections.abc import Mapping
 from typing import Any
 
-from fatswarm import __version__
 from fatswarm.deploy.hunt.search import KINDS, Candidate, Case, Failure, Hunt, configure
 from fatswarm.deploy.hunt.shrink import Shrunk, case_decimals
 from fatswarm.deploy.sweep.grid import model_argv
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
+from fatswarm.domain.version import __version__
 
 
 def start_data(hunt: Hunt, case: Case) -> dict[str, Any]:

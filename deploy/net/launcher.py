@@ -24,6 +24,7 @@ from fatswarm.deploy.flags import check_seconds
 from fatswarm.deploy.net import capacity
 from fatswarm.deploy.net.children import STOP_GRACE_S, Children, stop_grace_s
 from fatswarm.deploy.net.part_agents import agents_command
+from fatswarm.deploy.net.part_common import part_command
 from fatswarm.deploy.net.run_flags import live_dashboard, watchable_pace
 from fatswarm.deploy.net.zconf import (
     DEFAULT_SWARM,
@@ -365,10 +366,6 @@ def _await_final_state(watcher: Any, timeout_s: float) -> None:
         watcher.ended.wait(0.05)
 
 
-def _part(name: str, *flags: str) -> list[str]:
-    return [sys.executable, "-m", "fatswarm.deploy.net.parts", name, *flags]
-
-
 def _start_world(
     setup: RunSetup,
     record: str,
@@ -387,7 +384,7 @@ def _start_world(
         for ep in endpoints:
             net += ["--connect", ep]
     # the parts' standard output joins ours on stderr (fd 2): stdout carries only the summary
-    children.start("world", _part("world", *net, "--state", record), stdout=STDERR_FD)
+    children.start("world", part_command("world", *net, "--state", record), stdout=STDERR_FD)
 
 
 def _quiet() -> list[str]:
@@ -410,7 +407,9 @@ def _run_children(
     for ep in endpoints:
         net += ["--connect", ep]
     coord = _coordinator_flags(args, setup, pace)
-    children.start("coordinator", _part("coordinator", *net, *_quiet(), *coord), stdout=STDERR_FD)
+    children.start(
+        "coordinator", part_command("coordinator", *net, *_quiet(), *coord), stdout=STDERR_FD
+    )
     children.start(
         "agents",
         [

@@ -22,6 +22,7 @@ from fatswarm.deploy.net.part_common import (
     config_for,
     fail,
     install_stop_signals,
+    part_command,
     setup_logging,
 )
 from fatswarm.deploy.net.zconf import AGENT_LEASE_MS, check_endpoints
@@ -111,18 +112,7 @@ def agent_command(
     config: str | None = None,
 ) -> list[str]:
     """The argv that starts one agent process (`waiting_as`: who its waiting notice names)."""
-    argv = [
-        sys.executable,
-        "-m",
-        "fatswarm.deploy.net.parts",
-        "agent",
-        "--robot",
-        str(robot),
-        "--swarm",
-        swarm,
-        "--algorithm",
-        algorithm,
-    ]
+    argv = part_command("agent", "--robot", str(robot), "--swarm", swarm, "--algorithm", algorithm)
     for endpoint in connect:
         argv += ["--connect", endpoint]
     if config is not None:
@@ -146,22 +136,10 @@ def agents_command(
 ) -> list[str]:
     """The argv of one `agents` host process starting `count` agent processes (`config`: their
     --config, ROBOT_PLACEHOLDER in it replaced by each one's robot id)."""
-    argv = [
-        sys.executable,
-        "-m",
-        "fatswarm.deploy.net.parts",
-        "agents",
-        "-n",
-        str(count),
-        "--first",
-        str(first),
-        "--swarm",
-        swarm,
-        "--spawn",
-        spawn,
-        "--algorithm",
-        algorithm,
-    ]
+    argv = part_command(
+        *("agents", "-n", str(count), "--first", str(first), "--swarm", swarm),
+        *("--spawn", spawn, "--algorithm", algorithm),
+    )
     for endpoint in connect:
         argv += ["--connect", endpoint]
     if config is not None:

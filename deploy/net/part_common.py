@@ -25,6 +25,13 @@ PARENT_POLL_S = 0.5
 MAX_LOG_CHARS = 300  # a log message longer than this is cut (ShortLines)
 
 
+def part_command(*args: str) -> list[str]:
+    """The argv that starts a part as a child: `python -P -m fatswarm.deploy.net.parts ARGS`. -P:
+    the child imports fatswarm as installed, never a `fatswarm` folder of the current directory,
+    which `-m` alone puts first on sys.path (a run started from the parent of a clone)."""
+    return [sys.executable, "-P", "-m", "fatswarm.deploy.net.parts", *args]
+
+
 def install_stop_signals(parent: int | None = None) -> threading.Event:
     """An event set by SIGTERM or SIGINT (or when process `parent` is gone), so a part closes its
     session and exits cleanly; the parent watch makes a killed launcher leave nothing behind."""

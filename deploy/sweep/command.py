@@ -18,7 +18,6 @@ from contextlib import contextmanager, suppress
 from types import FrameType
 from typing import TYPE_CHECKING, Final
 
-from fatswarm import __version__
 from fatswarm.coordinator.schedule import NAMES
 from fatswarm.deploy.engine.config import DEFAULT_START, check_lights, input_errors
 from fatswarm.deploy.flags import add_robot_model_arguments, check_writable
@@ -51,6 +50,7 @@ from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.seam import Configured
+from fatswarm.domain.version import __version__
 
 if TYPE_CHECKING:
     from fatswarm.deploy.sweep.pool import RunTable
