@@ -1,14 +1,13 @@
 """`fatswarm plot RECORD OUT.gif|OUT.mp4`: how many frames a video takes, where each frame puts
-the robots (the timeline, not pixels), and the one-line refusals."""
+the robots (the timeline, not pixels), and the one-line refusals (an mp4 through ffmpeg starts a
+process: tests/integration/test_animate_process.py)."""
 
 from __future__ import annotations
 
 import argparse
 import io
-import os
 import pathlib
 import shutil
-import sys
 
 import numpy as np
 import pytest
@@ -226,25 +225,3 @@ def test_progress_off_a_terminal_is_a_line_every_tenth() -> None:
 def test_clip_of_an_empty_record_is_one_frame() -> None:
     timeline = Timeline(long_record(0))
     assert plan_clip(timeline, None, 20, None) == Clip(0, 0, 0.0, 0.0, 1, 20, 2.0)
-
-
-def test_an_mp4_goes_through_ffmpeg_frame_by_frame(
-    tmp_path: pathlib.Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
-) -> None:
-    """A stand-in ffmpeg on the PATH counts the raw frames matplotlib pipes to it."""
-    pytest.importorskip("matplotlib")
-    fake = tmp_path / "bin" / "ffmpeg"
-    fake.parent.mkdir()
-    fake.write_text(
-        f"#!{sys.executable}\n"
-        "import sys\n"
-        "size = sys.argv[sys.argv.index('-s') + 1].split('x')\n"
-        "data = sys.stdin.buffer.read()\n"
-        "frame = int(size[0]) * int(size[1]) * 4\n"
-        "open(sys.argv[-1], 'w').write(f'{len(data) // frame} {len(data) % frame}')\n"
-    )
-    fake.chmod(0o755)
-    monkeypatch.setenv("PATH", f"{fake.parent}{os.pathsep}{os.environ['PATH']}")
-    out = tmp_path / "run.mp4"
-    assert run_plot(SMALL, out, "--fps", "4", "--speed", "3") == 0, capsys.readouterr().err
-    assert out.read_text() == "5 0"  # 3 rounds at 3 per second, 4 fps: 4 frames and the first

@@ -1,10 +1,10 @@
 """The Python API in a notebook: what `fatswarm.run` and `fatswarm.read_record` hand back (one line
 of text, a picture of the final frame, a DataFrame), positions at any time, plain summaries,
-torn records, `dir(fatswarm)` and `python -m fatswarm`."""
+torn records and `dir(fatswarm)` (`python -m fatswarm` starts a process: its test is in
+tests/integration/test_notebook_process.py)."""
 
 from __future__ import annotations
 
-import subprocess
 import sys
 import warnings
 import xml.etree.ElementTree as ET
@@ -280,15 +280,3 @@ def test_dir_lists_the_lazy_api_and_no_private_import() -> None:
     for name in ("run", "read_record", "positions_at", "summary", "trajectory", "RunResult"):
         assert name in names and callable(getattr(fatswarm, name))
     assert not {"import_module", "version", "Any", "PackageNotFoundError"} & set(names)
-
-
-def test_python_dash_m_fatswarm_is_the_fatswarm_command() -> None:
-    done = subprocess.run(
-        [sys.executable, "-m", "fatswarm", "--help"],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-    )
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.startswith("usage: fatswarm ") and " run " in done.stdout

@@ -291,6 +291,12 @@ def test_the_error_is_an_assertion_error() -> None:
     assert issubclass(AlgorithmContractError, AssertionError)
 
 
+def test_a_traceback_names_the_error_as_fatswarm_testing_shows_it() -> None:
+    with pytest.raises(AlgorithmContractError) as info:
+        check_algorithm(object())
+    assert info.exconly().startswith("fatswarm.testing.AlgorithmContractError: algorithm 'object'")
+
+
 # -- one property each -------------------------------------------------------------------------
 
 

@@ -1,5 +1,6 @@
 """The repository reads as ruff formats and checks it ([tool.ruff] in pyproject.toml). Ruff is a
-program of its own: these two tests run it, without writing its cache."""
+program of its own (its Python package only finds the binary; there is no API to call in this
+process): these two tests run it, without writing its cache, so they are integration tests."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.integration
 ROOT = Path(__file__).resolve().parents[2]
 
 
