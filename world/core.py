@@ -6,14 +6,14 @@ algorithm comes in configured: the core loads nothing.
 
 The Zenoh shell (world/service.py) and the in-process lock step (deploy/engine/lockstep.py) drive
 this very core, so a networked run and a lock-step run of the same configuration are one
-computation. Physics and the end test are the core's (`world.physics.apply_round`,
-`world.progress`).
+computation; they read it through `WorldCore.readout` alone (world/readout.py). Physics and the
+end test are the core's (`world.physics.apply_round`, `world.progress`).
 """
 
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any, Final
 
@@ -29,8 +29,7 @@ from fatswarm.world.effects import Effect, Level, Note
 from fatswarm.world.faults import crash_after, stuck_in
 from fatswarm.world.instants import Instants, async_setup, is_async
 from fatswarm.world.looks import Looks, Seen
-from fatswarm.world.model import Model
-from fatswarm.world.physics import Collision
+from fatswarm.world.model import Model, RoundBooking
 from fatswarm.world.progress import ProgressTracker
 from fatswarm.world.protocol import (
     AgentInfo,
@@ -44,6 +43,7 @@ from fatswarm.world.protocol import (
     Snapshot,
     WorldState,
 )
+from fatswarm.world.readout import CoreReadout
 from fatswarm.world.record import Header, Result, RoundEntry, RunRecord
 from fatswarm.world.rounds import Rounds
 from fatswarm.world.setup import WorldSetup
@@ -126,6 +126,7 @@ class WorldCore:
         self.last_timed_out: tuple[int, ...] = ()  # of the round committed last (its reply says)
         self._figures_failed = False
         self.model: Model = Instants(self) if is_async(setup) else Rounds(self)
+        self.readout = CoreReadout(self)  # what the shells read of it (they send it commands)
         if history is None:
             self.emit(self._header())
         else:
@@ -197,47 +198,29 @@ class WorldCore:
             self.finish()  # died between the last round line and the result line
 
     def _replay_round(self, entry: RoundEntry) -> None:
-        before = self.positions
-        after = np.asarray(entry.positions, dtype=np.float64)
-        timed_out = {int(r) for r in entry.extra.get("timed_out", [])}
-        traveled = {m.robot: m.traveled for m in entry.moves}
-        paths = {m.robot: m.path for m in entry.moves}
         relit = self.looks.restore(entry.extra.get("lights"))
         self.account(
-            entry.round,
-            entry.active,
-            paths,
-            timed_out,
-            before,
-            after,
-            traveled,
-            entry.collisions,
-            entry.extra.get("crashed", ()),
-            entry.extra.get("recovered", ()),
-            stuck_in(self.crash_plan, entry.round),
-            relit,
+            RoundBooking(
+                round=entry.round,
+                active=entry.active,
+                paths={m.robot: m.path for m in entry.moves},
+                timed_out={int(r) for r in entry.extra.get("timed_out", [])},
+                before=self.positions,
+                after=np.asarray(entry.positions, dtype=np.float64),
+                traveled={m.robot: m.traveled for m in entry.moves},
+                collisions=entry.collisions,
+                crashed=entry.extra.get("crashed", ()),
+                recovered=entry.extra.get("recovered", ()),
+                stuck=stuck_in(self.crash_plan, entry.round),
+                relit=relit,
+            )
         )
 
-    def account(
-        self,
-        round_no: int,
-        active: Sequence[int],
-        paths: dict[int, Path],
-        timed_out: Collection[int],
-        before: Points,
-        after: Points,
-        traveled: dict[int, float],
-        collisions: Sequence[Collision],
-        crashed: Collection[int] = (),
-        recovered: Collection[int] = (),
-        stuck: Collection[int] = (),
-        relit: bool = False,
-        lengths: Mapping[int, float] | None = None,
-    ) -> None:
-        """Book one committed round (live or replayed) into the state and the progress tracker.
-        `stuck`: the robots the crash adversary crashes in this round (for good). `relit`: a
-        colour changed (the configuration changed, though no robot may have moved). `lengths`:
-        the paths' lengths physics measured (`RoundOutcome.lengths`), where it did."""
+    def account(self, booking: RoundBooking) -> None:
+        """Book one committed round (live or replayed) into the state and the progress tracker:
+        the crash adversary's and the gone agents' crashes, the agents' books, the figures."""
+        round_no, active, paths = booking.round, booking.active, booking.paths
+        stuck, crashed, timed_out = booking.stuck, booking.crashed, booking.timed_out
         if stuck:
             self._note(
                 Level.INFO,
@@ -254,13 +237,14 @@ class WorldCore:
                 "are, and are not waited for",
             )
         self.tracker.crash(crashed)
-        self.tracker.recover(recovered)
+        self.tracker.recover(booking.recovered)
         self.views_changed()
         for robot in active:
             self.last_active[robot] = round_no
         for robot in timed_out:
             self.timeouts[robot] += 1
-        measured = {} if lengths is None else lengths
+        before, collisions = booking.before, booking.collisions
+        measured = {} if booking.lengths is None else booking.lengths
         for robot, path in paths.items():
             length = measured.get(robot)
             if length is None:
@@ -271,12 +255,12 @@ class WorldCore:
             [r for r in active if r not in timed_out],
             paths.keys(),
             before,
-            after,
-            traveled,
+            booking.after,
+            booking.traveled,
             len(collisions),
-            changed=True if relit else None,
+            changed=True if booking.relit else None,
         )
-        self.positions, self.committed = after, round_no
+        self.positions, self.committed = booking.after, round_no
         self.active = tuple(active)
         self.active_set = frozenset(self.active)
         self.moved = tuple(sorted(paths))

@@ -95,7 +95,8 @@ def open_world(
         journal = RecordWriter(state_path, fsync=fsync, append=True)
         core = WorldCore(setup, load_configured(setup), record, epoch=epoch)
         perform(core.take_effects(), journal)
-        log.info("resumed %s after round %d (%s)", state_path, core.committed, core.status)
+        readout = core.readout
+        log.info("resumed %s after round %d (%s)", state_path, readout.committed, readout.status)
         return core, journal
     setup = make_setup()
     journal = RecordWriter(state_path, fsync=fsync)

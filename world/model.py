@@ -8,6 +8,7 @@ answers looks and moves; a model opens and commits what the coordinator asks, th
 from __future__ import annotations
 
 from collections.abc import Collection, Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 from fatswarm.domain.outcome import Status
@@ -18,6 +19,26 @@ from fatswarm.world.physics import Collision
 from fatswarm.world.progress import ProgressTracker
 from fatswarm.world.protocol import Begin, Commit, ControlReply
 from fatswarm.world.setup import WorldSetup
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class RoundBooking:
+    """One committed round as the core books it (`Books.account`): live, from the model that
+    committed it, or replayed from a record. Positions are (n, 2), world frame."""
+
+    round: int
+    active: Sequence[int]
+    paths: Mapping[int, Path]  # the moves applied (non-empty), world frame, from `before`
+    timed_out: Collection[int]  # active robots without a move
+    before: Points
+    after: Points
+    traveled: Mapping[int, float]  # the arc length each mover covered
+    collisions: Sequence[Collision]
+    crashed: Collection[int] = ()  # robots that count as crashed from this round (agents gone)
+    recovered: Collection[int] = ()  # crashed robots whose agent is back
+    stuck: Collection[int] = ()  # robots the crash adversary crashes in this round, for good
+    relit: bool = False  # a colour changed: the configuration changed, though none may have moved
+    lengths: Mapping[int, float] | None = None  # the paths' lengths physics measured, where it did
 
 
 class Books(Protocol):
@@ -55,22 +76,7 @@ class Books(Protocol):
 
     def views_changed(self) -> None: ...
 
-    def account(
-        self,
-        round_no: int,
-        active: Sequence[int],
-        paths: dict[int, Path],
-        timed_out: Collection[int],
-        before: Points,
-        after: Points,
-        traveled: dict[int, float],
-        collisions: Sequence[Collision],
-        crashed: Collection[int] = (),
-        recovered: Collection[int] = (),
-        stuck: Collection[int] = (),
-        relit: bool = False,
-        lengths: Mapping[int, float] | None = None,
-    ) -> None: ...
+    def account(self, booking: RoundBooking) -> None: ...
 
     def finish(self) -> None: ...
 
@@ -99,4 +105,4 @@ class Model(Protocol):
         ...
 
 
-__all__ = ["Books", "Model"]
+__all__ = ["Books", "Model", "RoundBooking"]

@@ -15,7 +15,7 @@ from fatswarm.domain.draws import cut_fraction
 from fatswarm.domain.path import Path, Points, transform
 from fatswarm.world.effects import Committed
 from fatswarm.world.faults import crash_after, cut_path, stuck_in
-from fatswarm.world.model import Books
+from fatswarm.world.model import Books, RoundBooking
 from fatswarm.world.physics import RoundOutcome, apply_round
 from fatswarm.world.protocol import Begin, Commit, ControlReply
 from fatswarm.world.record import Move, RoundEntry
@@ -102,19 +102,21 @@ class Rounds:
         )
         try:  # the round is the record's even when the goal raises while it is booked
             w.account(
-                round_no,
-                w.active,
-                paths,
-                timed_out,
-                before,
-                after,
-                traveled,
-                outcome.collisions,
-                down,
-                back,
-                stuck,
-                relit,
-                outcome.lengths,
+                RoundBooking(
+                    round=round_no,
+                    active=w.active,
+                    paths=paths,
+                    timed_out=timed_out,
+                    before=before,
+                    after=after,
+                    traveled=traveled,
+                    collisions=outcome.collisions,
+                    crashed=down,
+                    recovered=back,
+                    stuck=stuck,
+                    relit=relit,
+                    lengths=outcome.lengths,
+                )
             )
         finally:
             w.emit(Committed(entry, w.tracker.snapshot()))

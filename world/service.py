@@ -83,7 +83,7 @@ def serve(
     except RecordWriteError as exc:
         log.error("%s", exc)
         code = ExitCode.RECORD_FAILED
-    log.info("world stopped at round %d (%s)", core.committed, core.status)
+    log.info("world stopped at round %d (%s)", core.readout.committed, core.readout.status)
     return code
 
 
@@ -101,7 +101,7 @@ class _Shell:
     def declare(self, session: Any) -> Any:
         """Publishers, queryables, subscribers and the world's liveliness token (returned: it
         lives as long as the caller holds it)."""
-        swarm = self.core.setup.swarm
+        swarm = self.core.readout.setup.swarm
         self.state_pub = session.declare_publisher(
             state_key(swarm), congestion_control=zenoh.CongestionControl.DROP
         )
@@ -147,7 +147,8 @@ class _Shell:
     def run(self, stop: threading.Event) -> ExitCode:
         """Serve until `stop` is set or the world cannot go on; the exit code."""
         core, events, looks = self.core, self.events, self.looks
-        log.info("world of %d robots serving swarm %r", core.setup.n, core.setup.swarm)
+        setup = core.readout.setup
+        log.info("world of %d robots serving swarm %r", setup.n, setup.swarm)
         published, dirty = self._publish(), False
         said: Counter[str] = Counter()
         said_at = -DROPPED_EVERY_S
@@ -177,7 +178,7 @@ class _Shell:
 
     def _step(self, kind: str, item: Any) -> bool | ExitCode:
         """One event: whether to publish the state at once, or the exit code if the world stops."""
-        core = self.core
+        core, readout = self.core, self.core.readout
         try:
             publish = _handle(core, self.journal, kind, item, self.held_pub, self.looks)
             if publish:
@@ -191,7 +192,7 @@ class _Shell:
             log.error(
                 "%s; the world stops at round %d (resume it once this is fixed)",
                 exc,
-                core.open_round or core.committed,
+                readout.open_round or readout.committed,
             )
             return ExitCode.RECORD_FAILED
         except AlgorithmFailure as exc:  # its round is durable; nobody can say what next
@@ -200,7 +201,7 @@ class _Shell:
             log.error(
                 "%s; the world stops at round %d (in its record)",
                 exc,
-                core.open_round or core.committed,
+                readout.open_round or readout.committed,
             )
             return ExitCode.NOT_FORMED
 
@@ -210,8 +211,8 @@ def observed_state(core: WorldCore) -> WorldState:
     An async run's record counts ended cycles, and the coordinator's instants are not rounds: its
     state says how many cycles have ended, as its progress lines and its summary do."""
     state = core.state()
-    if is_async(core.setup):
-        return dataclasses.replace(state, round=core.tracker.snapshot().rounds)
+    if is_async(core.readout.setup):
+        return dataclasses.replace(state, round=core.readout.progress().rounds)
     return state
 
 
@@ -342,7 +343,7 @@ def _take_look(core: WorldCore, query: Any, looks: HeldLooks, held_pub: Any) -> 
         return
     if request.move:
         _take_carried_move(core, robot, key, request.move, held_pub)
-    if robot is None or not 0 <= robot < core.setup.n or core.may_look(robot, request):
+    if robot is None or not 0 <= robot < core.readout.setup.n or core.may_look(robot, request):
         _answer_look(core, query)
     else:
         looks.hold(robot, query, request, time.monotonic())
@@ -359,7 +360,7 @@ def _take_carried_move(
     except ProtocolError as exc:
         core.reject("move-garbage", f"in a look on {key}: {exc}")
         return
-    if msg.round != core.open_round or robot in core.held:
+    if msg.round != core.readout.open_round or robot in core.readout.held:
         return
     if core.move(robot, msg):
         _notify(core, held_pub)

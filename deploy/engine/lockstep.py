@@ -185,7 +185,8 @@ def run_lockstep(
     )
     world, checked = _open(setup, setting, scheduler, history)
     if history is not None:
-        log.info("resumed %s after round %d", getattr(record, "path", "a run"), world.committed)
+        committed = world.readout.committed
+        log.info("resumed %s after round %d", getattr(record, "path", "a run"), committed)
     bus = _Bus(world, setting, compute, record, on_round)
     finished = bus.run(checked)
     looks = bus.looks + sum(len(entry.active) for entry in history or ())
@@ -194,7 +195,8 @@ def run_lockstep(
 
 def _result(world: WorldCore, finished: Finished, looks: int, initial: Points) -> RunResult:
     """How the run ended and what it cost, from the world's books."""
-    progress = world.tracker.snapshot()
+    readout = world.readout
+    progress = readout.progress()
     assert progress.status is not None and finished.status == progress.status
     return RunResult(
         status=progress.status,
@@ -205,10 +207,10 @@ def _result(world: WorldCore, finished: Finished, looks: int, initial: Points) -
         collisions=progress.collisions,
         looks=looks,
         initial=np.array(initial),
-        positions=world.positions,
+        positions=readout.positions,
         moves_by_robot=progress.moves_by_robot,
-        time=world.model.time(),
-        lights=world.looks.names(),
+        time=readout.time(),
+        lights=readout.lights(),
     )
 
 
@@ -232,10 +234,9 @@ def _open(
         world = WorldCore(setup, setting, RunRecord(header, tuple(history), None))
     except RuntimeError as exc:  # the tracker saw a round after the run had ended
         raise HistoryMismatchError(str(exc)) from None
-    if world.status != Status.RUNNING:
-        raise HistoryMismatchError(
-            f"the run already ended ({world.status}) after round {len(history)}"
-        )
+    status = world.readout.status
+    if status != Status.RUNNING:
+        raise HistoryMismatchError(f"the run already ended ({status}) after round {len(history)}")
     return world, _CheckedScheduler(scheduler, history)
 
 
@@ -251,7 +252,8 @@ class _Bus:
         record: Journal | None,
         on_round: Callable[[RoundReport], None] | None,
     ) -> None:
-        self.world = world
+        self.world = world  # the commands go to the core, the reads to its readout
+        self.readout = world.readout
         self.setting = setting
         self.record = record
         self.on_round = on_round
@@ -266,15 +268,15 @@ class _Bus:
         else:
             self.compute = lambda seen: act_on(setting, *seen)
         # the round planner gives the paper's model's paths: every view whole, fixed frames
-        setup = world.setup
+        setup = self.readout.setup
         plain = setup.robot_model.is_paper and not setting.luminous and not setup.record_views
         self.planner = setting.round_planner() if compute is None and plain else None
-        self.flips = [world.looks.frame(robot, 0).mirror for robot in range(setup.n)]
+        self.flips = [self.readout.frame(robot, 0).mirror for robot in range(setup.n)]
 
     def run(self, scheduler: Scheduler) -> Finished:
         """Every robot's agent up for the whole run, the coordinator's core driven on this bus
         until the run ends."""
-        n = self.world.setup.n
+        n = self.readout.setup.n
         for robot in range(n):
             self.world.set_alive(robot, True)
         self.perform()  # the header of a new run
@@ -297,13 +299,14 @@ class _Bus:
         """The world core answers at once; a round it opens has every robot Look, Compute and
         Move at once too (each Look is held at the world until then), and its moves notice
         comes back as the next event."""
-        opened = self.world.open_round
+        readout = self.readout
+        opened = readout.open_round
         try:
             reply, _ = self.world.control(request)
         finally:  # what was committed is recorded, even when the algorithm's goal raised
             self.perform()
-        if reply.ok and self.world.open_round and self.world.open_round != opened:
-            self._act(self.world.open_round, self.world.active)
+        if reply.ok and readout.open_round and readout.open_round != opened:
+            self._act(readout.open_round, readout.active)
             self.perform()
             notice = self.world.moves_notice()
             if notice is not None:
@@ -335,7 +338,7 @@ class _Bus:
         # the others' Looks stay held (robots the async adversary crashed)
         lookers = [robot for robot in active if world.may_look(robot)]
         if self.planner is not None:
-            planned = self.planner.paths(world.positions, active, self.flips)
+            planned = self.planner.paths(self.readout.positions, active, self.flips)
         else:
             world.prepare_looks(lookers)
         for robot in lookers:
