@@ -444,13 +444,11 @@ class WorldCore:
                 status,
                 progress.rounds,
                 self.positions,
-                {
-                    "epochs": progress.epochs,
-                    "moves": progress.moves,
-                    "total_distance": progress.total_distance,
-                    "collisions": progress.collisions,
-                    **self.model.result_fields(),
-                },
+                epochs=progress.epochs,
+                moves=progress.moves,
+                total_distance=progress.total_distance,
+                collisions=progress.collisions,
+                **self.model.result_fields(),
             )
         )
         self.status = status

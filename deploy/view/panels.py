@@ -18,6 +18,7 @@ from rich.text import Text
 
 from fatswarm.agent import geometry
 from fatswarm.deploy.view.lights import Focus
+from fatswarm.domain import figures as declared
 from fatswarm.domain import tolerance
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Points
@@ -208,7 +209,8 @@ def counters_table(frame: Frame, derived: Derived) -> Table:
     rows: list[Row] = [("round", round_text(frame)), ("scheduler", frame.scheduler + seed)]
     for i, line in enumerate(run_lines(frame, SIDE_WIDTH - 4 - keys - 1)):  # borders, padding
         rows.append(("" if i else "robots", Text(line)))  # Text: a user's name is no markup
-    rows += radius_rows(frame, derived) + figure_rows(figures) + tail_rows(frame)
+    rows += radius_rows(frame, derived) + figure_rows(figures) + derived_rows(frame)
+    rows += tail_rows(frame)
     for key, value in rows:
         grid.add_row(key, value)
     return grid
@@ -232,6 +234,17 @@ def figure_rows(figures: list[tuple[str, float]]) -> list[Row]:
     if len(shown) < len(figures):
         rows.append(("", Text(f"… {len(figures) - len(shown)} more figures", style="dim")))
     return rows
+
+
+def derived_rows(frame: Frame) -> list[Row]:
+    """The declared figures of the frame's positions the dashboard shows (fatswarm.domain.figures:
+    min gap...), live and in replay alike."""
+    pts = np.asarray(frame.positions, dtype=np.float64).reshape(-1, 2)
+    return [
+        (f.words, declared.shown(f.derive(pts)))
+        for f in declared.derived_figures()
+        if declared.Place.DASHBOARD in f.places and f.derive is not None
+    ]
 
 
 def tail_rows(frame: Frame) -> list[Row]:
@@ -363,6 +376,7 @@ __all__ = [
     "algorithm_text",
     "counters_table",
     "derive",
+    "derived_rows",
     "enclosing_circle",
     "figure_text",
     "fmt_rate",

@@ -196,8 +196,8 @@ def test_the_dataframe_of_a_read_record_adds_up_to_its_figures() -> None:
     record = fatswarm.read_record(LOCKSTEP)
     df = record.to_dataframe()
     assert len(df) == 6 * 17 and df["round"].max() == 17
-    assert df.distance.sum() == pytest.approx(record.result.extra["total_distance"])  # type: ignore[union-attr]
-    assert int(df.moved.sum()) == record.result.extra["moves"]  # type: ignore[union-attr]
+    assert df.distance.sum() == pytest.approx(record.result.total_distance)  # type: ignore[union-attr]
+    assert int(df.moved.sum()) == record.result.moves  # type: ignore[union-attr]
     last = df[df["round"] == 17][["x", "y"]].to_numpy()
     assert np.array_equal(last, record.rounds[-1].positions)
 
