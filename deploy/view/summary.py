@@ -155,11 +155,12 @@ def summary(outcome: Outcome) -> str:
 
 
 def derived_text(values: Mapping[str, figures.FigureValue]) -> str:
-    """`  min gap 0.412`: the run's derived figures shown in the summary, each with its words."""
+    """`  min gap 0.412`: the run's derived figures shown in the summary, each with its words
+    (one it does not know, or that does not apply, is left out)."""
     return "".join(
-        f"  {f.words} {figures.shown(values.get(f.name))}"
+        f"  {f.words} {figures.shown(value)}"
         for f in figures.derived_figures()
-        if figures.Place.SUMMARY in f.places
+        if figures.Place.SUMMARY in f.places and (value := values.get(f.name)) is not None
     )
 
 
