@@ -11,13 +11,17 @@ from __future__ import annotations
 
 import enum
 import json
+import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Final
 
+import numpy as np
+
 from fatswarm.domain.path import Points
 
 RADIUS: Final = 1.0  # every robot is a unit disc: the rim-to-rim gap is the centres' less 2
+PAIRWISE_UP_TO: Final = 80  # min_gap measures every pair up to this many robots (faster there)
 
 
 class Place(enum.Flag):
@@ -79,6 +83,43 @@ class LineField:
     help: str
     schema: Mapping[str, Any]
     required: bool = False
+
+
+def min_gap(positions: Points) -> float | None:
+    """The smallest rim-to-rim distance between two robots of the (n, 2) `positions` (their
+    centres' distance less 2: unit discs), None for fewer than two robots; negative if two overlap.
+
+    Up to PAIRWISE_UP_TO robots, every pair at once (~20 us at n = 64); above, sort and sweep
+    along the wider axis: neighbours in that order give a first bound w, then only pairs within
+    w along it are measured, all at once (O(n log n) for spread swarms, O(n^2) at worst; ~60 us
+    at n = 256). Both take the least of the same squares, so they give the same bits.
+    """
+    pts = np.asarray(positions, dtype=np.float64).reshape(-1, 2)
+    n = len(pts)
+    if n < 2:
+        return None
+    if n <= PAIRWISE_UP_TO:
+        dx = pts[:, None, 0] - pts[None, :, 0]
+        dy = pts[:, None, 1] - pts[None, :, 1]
+        squares = dx * dx + dy * dy
+        np.fill_diagonal(squares, np.inf)
+        return math.sqrt(float(np.min(squares))) - 2 * RADIUS
+    axis = 0 if np.ptp(pts[:, 0]) >= np.ptp(pts[:, 1]) else 1
+    order = np.argsort(pts[:, axis], kind="stable")
+    along, across = pts[order, axis], pts[order, 1 - axis]
+    dx, dy = np.diff(along), np.diff(across)
+    best2 = float(np.min(dx * dx + dy * dy))
+    reach = math.sqrt(best2) * (1 + 1e-9)  # a rounding margin: no closer pair is left out
+    counts = np.searchsorted(along, along + reach, side="right") - np.arange(n) - 2
+    np.maximum(counts, 0, out=counts)  # the pairs (i, i + 2...) within reach along the axis
+    total = int(counts.sum())
+    if total:
+        first = np.repeat(np.arange(n), counts)
+        starts = np.repeat(np.cumsum(counts) - counts, counts)
+        second = first + 2 + (np.arange(total) - starts)
+        dx, dy = along[second] - along[first], across[second] - across[first]
+        best2 = min(best2, float(np.min(dx * dx + dy * dy)))
+    return math.sqrt(best2) - 2 * RADIUS
 
 
 _NUMBER: Final = {"$ref": "#/$defs/number", "minimum": 0}
@@ -196,6 +237,20 @@ FIGURES: tuple[Figure, ...] = (
         csv=".3f",
         kept_on_error=True,
     ),
+    Figure(
+        "min_gap",
+        float,
+        "robot radii",
+        "The smallest rim-to-rim distance between two robots after a round (centres' distance "
+        "less 2; negative: an overlap); over a run, its minimum over the rounds (how close the "
+        "swarm came to a collision). Derived from the positions, never written: every record, "
+        "old ones too, has it. None with one robot, or no round.",
+        Summary.MIN,
+        Place.CSV | Place.SUMMARY | Place.DASHBOARD | Place.DATAFRAME,
+        optional=True,
+        derive=min_gap,
+        csv=".6f",
+    ),
 )
 
 
@@ -229,15 +284,23 @@ def summarise(how: Summary, so_far: FigureValue, value: FigureValue) -> FigureVa
 
 
 class RunFolder:
-    """The run's values of the derived figures so far, fed the positions after each round."""
+    """The run's values of the derived figures so far, fed the positions after each round (a
+    round that left every robot where it was, to the bit, reuses the last round's values: the
+    world core feeds every committed round, and many change nothing)."""
 
     def __init__(self, values: Mapping[str, FigureValue] | None = None) -> None:
         self.values: dict[str, FigureValue] = dict(values or {})
+        self._last: tuple[Points, dict[str, float | None]] | None = None
 
     def add(self, positions: Points) -> None:
+        pts = np.asarray(positions, dtype=np.float64)
+        if self._last is not None and np.array_equal(self._last[0], pts):
+            rounds = self._last[1]
+        else:
+            rounds = derived(pts)
+            self._last = (pts.copy(), rounds)
         for f in derived_figures():
-            assert f.derive is not None
-            self.values[f.name] = summarise(f.summary, self.values.get(f.name), f.derive(positions))
+            self.values[f.name] = summarise(f.summary, self.values.get(f.name), rounds.get(f.name))
 
     def snapshot(self) -> dict[str, FigureValue]:
         return {f.name: self.values.get(f.name) for f in derived_figures()}
@@ -429,6 +492,7 @@ def names(figures: Sequence[Figure]) -> tuple[str, ...]:
 __all__ = [
     "ASYNC_TIMES",
     "FIGURES",
+    "PAIRWISE_UP_TO",
     "RADIUS",
     "RESULT_HEAD",
     "ROBOT_LISTS",
@@ -444,6 +508,7 @@ __all__ = [
     "derived",
     "derived_figures",
     "json_copy",
+    "min_gap",
     "names",
     "place",
     "record_schema",

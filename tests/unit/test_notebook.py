@@ -159,7 +159,7 @@ def test_the_dataframe_has_one_row_per_robot_per_round() -> None:
     assert isinstance(df, pd.DataFrame)
     assert (
         list(df.columns)
-        == list(notebook.COLUMNS)
+        == list(notebook.columns())
         == [
             "round",
             "robot",
@@ -169,6 +169,7 @@ def test_the_dataframe_has_one_row_per_robot_per_round() -> None:
             "moved",
             "distance",
             "collided",
+            "min_gap",  # the round's, derived from the positions (fatswarm.domain.figures)
         ]
     )
     assert df[["round", "robot"]].values.tolist() == [
@@ -188,6 +189,7 @@ def test_the_dataframe_has_one_row_per_robot_per_round() -> None:
     assert [str(t) for t in df.dtypes] == ["int64"] * 2 + ["float64"] * 2 + ["bool"] * 2 + [
         "float64",
         "bool",
+        "float64",
     ]
 
 
