@@ -20,6 +20,7 @@ from typing import Any, Final
 import numpy as np
 
 from fatswarm.domain.draws import crash_plan
+from fatswarm.domain.figures import known_numbers
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path, Points, path_length
 from fatswarm.domain.robot_model import RobotModel
@@ -487,6 +488,7 @@ class WorldCore:
             agents=self._agent_infos(),
             lights=self.looks.names(),
             palette=self.algorithm.colours,
+            derived=known_numbers(self.tracker.snapshot().derived),
         )
 
     def _algorithm_figures(self) -> dict[str, float]:

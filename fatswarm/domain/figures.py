@@ -320,6 +320,11 @@ def summary_values(values: Mapping[str, FigureValue]) -> dict[str, FigureValue]:
     return {f.name: values.get(f.name) for f in derived_figures() if Place.SUMMARY in f.places}
 
 
+def known_numbers(values: Mapping[str, FigureValue]) -> dict[str, float]:
+    """The numbers among `values` (those known: no None, no text), as floats."""
+    return {k: float(v) for k, v in values.items() if isinstance(v, int | float) and v is not True}
+
+
 def cell(figure: Figure, value: FigureValue) -> str:
     """A sweep table's cell of `figure`: blank for None, else formatted as `figure.csv` says."""
     if value is None:
@@ -508,6 +513,7 @@ __all__ = [
     "derived",
     "derived_figures",
     "json_copy",
+    "known_numbers",
     "min_gap",
     "names",
     "place",
