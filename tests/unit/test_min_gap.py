@@ -16,6 +16,7 @@ import pytest
 import fatswarm
 from fatswarm.deploy import cli
 from fatswarm.deploy.engine.lockstep import RoundReport
+from fatswarm.deploy.net.launcher import read_outcome
 from fatswarm.deploy.sweep import table
 from fatswarm.deploy.sweep.pool import RunTable
 from fatswarm.deploy.view import panels, replay
@@ -151,3 +152,13 @@ def test_min_gap_is_a_sweep_column_and_an_older_table_resumes(
     )
     assert old["min_gap"] == "" and old["rounds"] == "6"  # not measured then
     assert float(new["min_gap"]) >= 0.0  # a collision-free ssync run
+
+
+def test_an_old_record_has_min_gap_and_so_has_the_networked_summary_of_it() -> None:
+    old = Path(__file__).resolve().parents[1] / "data" / "lockstep-n6-seed1.jsonl"  # checked in
+    record = fatswarm.read_record(old)
+    gaps = [entry.derived["min_gap"] for entry in record.rounds]
+    assert all(isinstance(g, float) and g >= 0 for g in gaps)  # collision-free
+    outcome = read_outcome(str(old))  # what a networked run's summary reads
+    assert outcome is not None and outcome.derived["min_gap"] == min(g for g in gaps if g is not None)
+    assert fatswarm.summary(record)["min_gap"] == outcome.derived["min_gap"]
