@@ -1,10 +1,13 @@
 """Every figure that crosses the house, declared once: the fields of a record's round line, and the
 figures of a round and of a run (name, type, unit, how a run summarises it, where it shows).
 
-The record's writer and reader, the JSON Schema (`record_schema`), the sweep table's columns, the
-dashboard's and replay's rows, `to_dataframe`, the summary, `--json` and `fatswarm.summary` read
-this module instead of listing figures again. A figure with `derive` follows from the positions
-after a round (`derived`): its readers compute it, so no record carries it and old records have it.
+The record's reader (known keys, the result line's typed figures), the JSON Schema's round and
+result lines (`record_schema`) and the sweep table's figure columns read this module instead of
+listing figures again. A figure with `derive` follows from the positions after a round
+(`derived`): no record carries it (old records have it too), and it reaches the world's progress
+and published state, the lock step's result, the dashboard's and replay's rows, `to_dataframe`,
+the summary, `--json` and `fatswarm.summary` from here alone. The figures the world counts keep
+typed fields in those shapes (`Result`, `RunResult`, `Outcome`...), tied to this list by tests.
 """
 
 from __future__ import annotations
