@@ -160,5 +160,6 @@ def test_an_old_record_has_min_gap_and_so_has_the_networked_summary_of_it() -> N
     gaps = [entry.derived["min_gap"] for entry in record.rounds]
     assert all(isinstance(g, float) and g >= 0 for g in gaps)  # collision-free
     outcome = read_outcome(str(old))  # what a networked run's summary reads
-    assert outcome is not None and outcome.derived["min_gap"] == min(g for g in gaps if g is not None)
+    assert outcome is not None
+    assert outcome.derived["min_gap"] == min(g for g in gaps if g is not None)
     assert fatswarm.summary(record)["min_gap"] == outcome.derived["min_gap"]
