@@ -183,3 +183,23 @@ def _record(tmp_path: Path) -> Path:
         w.append(round_entry(1, (0, 1, 2), {}, {}, START))
         w.append(Result(Status.STALLED, 1, START, 1, 0, 0.0, 0))
     return target
+
+
+def test_a_table_written_before_a_new_model_column_resumes_with_it_blank(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    out = tmp_path / "runs.csv"
+    spec = RunSpec("gathering", 3, "clustered", "fsync", 0)
+    first = RunTable.open(str(out), models=True)
+    first.append(table.make_row(spec, table.RunFigures("formed", rounds=2), "0"))
+    first.close()
+    # a model axis added later (as grid.MODEL_COLUMNS and KEY_COLUMNS would grow)
+    monkeypatch.setattr(table, "KEY_COLUMNS", (*table.KEY_COLUMNS, "axis_x"))
+    monkeypatch.setattr(table, "MODEL_COLUMNS", (*table.MODEL_COLUMNS, "axis_x"))
+    again = RunTable.open(str(out))  # a table with model columns keeps them, and gains the new
+    try:
+        assert again.columns == table.columns() and "axis_x" in again.columns
+        assert again.rows[0]["axis_x"] == "" and again.keys() == {(*spec.key(), "")}
+    finally:
+        again.close()
+    assert out.read_text().startswith(table.header_line(table.columns()))
