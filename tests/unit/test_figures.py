@@ -13,7 +13,7 @@ import pytest
 
 import fatswarm
 from fatswarm.deploy.engine import api, notebook
-from fatswarm.deploy.sweep import table
+from fatswarm.deploy.sweep import grid, table
 from fatswarm.deploy.sweep.grid import RunSpec
 from fatswarm.deploy.sweep.pool import RunTable
 from fatswarm.deploy.view import panels, summary
@@ -194,8 +194,8 @@ def test_a_table_written_before_a_new_model_column_resumes_with_it_blank(
     first.append(table.make_row(spec, table.RunFigures("formed", rounds=2), "0"))
     first.close()
     # a model axis added later (as grid.MODEL_COLUMNS and KEY_COLUMNS would grow)
-    monkeypatch.setattr(table, "KEY_COLUMNS", (*table.KEY_COLUMNS, "axis_x"))
-    monkeypatch.setattr(table, "MODEL_COLUMNS", (*table.MODEL_COLUMNS, "axis_x"))
+    monkeypatch.setattr(table, "KEY_COLUMNS", (*grid.KEY_COLUMNS, "axis_x"))
+    monkeypatch.setattr(table, "MODEL_COLUMNS", (*grid.MODEL_COLUMNS, "axis_x"))
     again = RunTable.open(str(out))  # a table with model columns keeps them, and gains the new
     try:
         assert again.columns == table.columns() and "axis_x" in again.columns
