@@ -487,14 +487,17 @@ def schema_text(schema: Mapping[str, Any]) -> str:
 
 def write_record_schema(path: str) -> bool:
     """Regenerate the schema file at `path` from the declaration (its other parts kept); True if
-    it changed. `python -m fatswarm.domain.figures docs/record.schema.json` runs it."""
+    it changed. A file that already says what the declaration generates (as JSON: its layout is
+    free, so hand edits of the header's part stay as they are written) is left alone; one that
+    does not is written again, two-space JSON. `python -m fatswarm.domain.figures` runs it."""
     with open(path, encoding="utf-8") as fh:
-        old = fh.read()
-    new = schema_text(record_schema(json.loads(old)))
-    if new != old:
-        with open(path, "w", encoding="utf-8") as fh:
-            fh.write(new)
-    return new != old
+        old = json.loads(fh.read())
+    new = record_schema(old)
+    if new == old:
+        return False
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(schema_text(new))
+    return True
 
 
 def names(figures: Sequence[Figure]) -> tuple[str, ...]:

@@ -59,10 +59,21 @@ def scratch(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def test_the_schema_file_is_what_the_declaration_generates() -> None:
-    text = SCHEMA.read_text(encoding="utf-8")
-    assert text == figures.schema_text(figures.record_schema(json.loads(text))), (
+    on_disk = json.loads(SCHEMA.read_text(encoding="utf-8"))  # as JSON: its layout is free
+    assert on_disk == figures.record_schema(on_disk), (
         "docs/record.schema.json is stale: python -m fatswarm.domain.figures"
     )
+
+
+def test_regenerating_the_schema_rewrites_only_a_stale_file(tmp_path: Path) -> None:
+    target = tmp_path / "record.schema.json"
+    target.write_text(SCHEMA.read_text(encoding="utf-8"))
+    assert not figures.write_record_schema(str(target))  # up to date: left as written
+    stale = json.loads(target.read_text())
+    del stale["$defs"]["result"]["properties"]["epochs"]
+    target.write_text(json.dumps(stale))
+    assert figures.write_record_schema(str(target))
+    assert json.loads(target.read_text()) == json.loads(SCHEMA.read_text(encoding="utf-8"))
 
 
 def test_the_result_line_carries_the_declared_result_figures_typed() -> None:
