@@ -20,6 +20,7 @@ from typing import Any, Final
 import numpy as np
 
 from fatswarm.domain.draws import crash_plan
+from fatswarm.domain.figures import known_numbers
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path, Points, path_length
 from fatswarm.domain.robot_model import RobotModel
@@ -428,13 +429,11 @@ class WorldCore:
                 status,
                 progress.rounds,
                 self.positions,
-                {
-                    "epochs": progress.epochs,
-                    "moves": progress.moves,
-                    "total_distance": progress.total_distance,
-                    "collisions": progress.collisions,
-                    **self.model.result_fields(),
-                },
+                epochs=progress.epochs,
+                moves=progress.moves,
+                total_distance=progress.total_distance,
+                collisions=progress.collisions,
+                **self.model.result_fields(),
             )
         )
         self.status = status
@@ -473,6 +472,7 @@ class WorldCore:
             agents=self._agent_infos(),
             lights=self.looks.names(),
             palette=self.algorithm.colours,
+            derived=known_numbers(self.tracker.snapshot().derived),
         )
 
     def _algorithm_figures(self) -> dict[str, float]:

@@ -25,7 +25,7 @@ from fatswarm.world.faults import cut_path
 from fatswarm.world.model import Books
 from fatswarm.world.progress import MOVE_TOLERANCE
 from fatswarm.world.protocol import Begin, Commit, ControlReply
-from fatswarm.world.record import Move, RoundEntry, RunRecord
+from fatswarm.world.record import RunRecord, round_entry
 from fatswarm.world.setup import WorldSetup
 
 
@@ -211,26 +211,27 @@ class Instants:
         w = self.books
         self._show_due()
         k = w.tracker.snapshot().rounds + 1
-        extra: dict[str, Any] = {
-            "look": done.look,
-            "start": done.start,
-            "end": done.end,
-            "origin": [done.origin[0], done.origin[1]],
-        }
-        if done.cut:
-            extra["cut"] = [done.robot]
-        if timed_out:
-            extra["timed_out"] = [done.robot]
-        extra.update(w.looks.round_fields([done.robot]))
-        entry = RoundEntry(
+        paths = {done.robot: done.path} if done.path else {}
+        traveled = {done.robot: done.traveled} if done.path else {}
+        entry = round_entry(
             k,
             (done.robot,),
-            (Move(done.robot, done.path, done.traveled),) if done.path else (),
+            paths,
+            traveled,
             done.positions,
-            tuple(done.collisions),
-            extra,
+            done.collisions,
+            times={
+                "look": done.look,
+                "start": done.start,
+                "end": done.end,
+                "origin": [done.origin[0], done.origin[1]],
+            },
+            robots=(
+                ("cut", [done.robot] if done.cut else []),
+                ("timed_out", [done.robot] if timed_out else []),
+            ),
+            model=w.looks.round_fields([done.robot]),
         )
-        traveled = {done.robot: done.traveled} if done.path else {}
         # its move changed the configuration even when the line before is of the same instant
         moved = done.traveled > MOVE_TOLERANCE or self._relit or None
         self._relit = False

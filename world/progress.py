@@ -7,11 +7,12 @@ world so both decide `formed`, `stalled` and `max_rounds` the same way.
 from __future__ import annotations
 
 from collections.abc import Callable, Collection, Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Final
 
 import numpy as np
 
+from fatswarm.domain.figures import FigureValue, RunFolder
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Points
 
@@ -37,6 +38,9 @@ class Progress:
     collisions: int
     moves_by_robot: tuple[int, ...]
     crashed: tuple[int, ...] = ()  # the robots that count as crashed now, sorted
+    # the figures that follow from the positions (fatswarm.domain.figures), each summarised over
+    # the rounds so far as declared (min_gap: its minimum), by name; None before any round
+    derived: Mapping[str, FigureValue] = field(default_factory=dict)
 
 
 class ProgressTracker:
@@ -71,6 +75,7 @@ class ProgressTracker:
         self._wanting_since_change: set[int] = set()
         self._status: Status | None = None
         self._crashed: set[int] = set()
+        self._derived = RunFolder()
 
     def crash(self, robots: Iterable[int]) -> None:
         """These robots count as crashed: still obstacles, no longer waited for (seen as staying
@@ -121,6 +126,7 @@ class ProgressTracker:
         self._count(active_set, movers, traveled, collisions)
         before_arr = np.asarray(before, dtype=np.float64)
         after_arr = np.asarray(after, dtype=np.float64)
+        self._derived.add(after_arr)
         if changed if changed is not None else configuration_changed(before_arr, after_arr):
             # The robots active this round looked at the old configuration: start counting afresh.
             self._seen_since_change = set()
@@ -165,6 +171,7 @@ class ProgressTracker:
             collisions=self._collisions,
             moves_by_robot=tuple(self._moves),
             crashed=tuple(sorted(self._crashed)),
+            derived=self._derived.snapshot(),
         )
 
 

@@ -13,9 +13,10 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
+from fatswarm.domain.figures import derived_figures
 from fatswarm.domain.lights import MAX_COLOURS
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import (
@@ -203,6 +204,9 @@ class WorldState:
     agents: tuple[AgentInfo, ...]  # one per robot
     lights: tuple[str, ...] = ()  # each robot's colour name (a luminous algorithm's), else ()
     palette: tuple[str, ...] = ()  # the algorithm's colour names, else ()
+    # the run's figures derived from the positions so far (fatswarm.domain.figures: min_gap, its
+    # least over the rounds), by name; only those known (a figure without a value yet is left out)
+    derived: dict[str, float] = field(default_factory=dict)
 
     @property
     def a(self) -> float:
@@ -238,6 +242,7 @@ class WorldState:
                     if self.lights
                     else {}
                 ),
+                **({"derived": derived_wire(self.derived)} if self.derived else {}),
             },
         )
 
@@ -285,7 +290,23 @@ class WorldState:
             status=Status(status),
             agents=agents,
             **get_lights(obj, n),
+            derived=get_derived(obj),
         )
+
+
+def derived_wire(values: dict[str, float]) -> dict[str, float]:
+    """The run's derived figures as the state carries them: the declared ones, as numbers."""
+    known = {f.name for f in derived_figures()}
+    return {k: float(v) for k, v in values.items() if k in known}
+
+
+def get_derived(obj: dict[str, Any]) -> dict[str, float]:
+    """A state's derived figures ({} for a world that sends none); those this fatswarm does not
+    declare are left out (a newer world's)."""
+    if "derived" not in obj:
+        return {}
+    known = {f.name for f in derived_figures()}
+    return {k: v for k, v in get_figures(obj, "derived").items() if k in known}
 
 
 # --- world -> agent: the snapshot -------------------------------------------------------------

@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field, fields
 from types import TracebackType
 from typing import IO, Any, Final
 
 import numpy as np
 
+from fatswarm.domain import figures
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path, Points, to_record
 from fatswarm.domain.seam import ParamValue
@@ -67,7 +68,12 @@ class Move:
 
 @dataclass(frozen=True, slots=True)
 class RoundEntry:
-    """One committed round: who was active, who moved how, positions after (n, 2), contacts."""
+    """One committed round: who was active, who moved how, positions after (n, 2), contacts;
+    `extra`: the line's other fields (fatswarm.domain.figures.ROUND_FIELDS), in the line's order.
+
+    `derived`: the figures that follow from the positions (fatswarm.domain.figures: computed when
+    asked, never written, so that every record, old ones too, has them).
+    """
 
     round: int
     active: tuple[int, ...]
@@ -76,15 +82,68 @@ class RoundEntry:
     collisions: tuple[Collision, ...]
     extra: dict[str, Any] = field(default_factory=dict)
 
+    @property
+    def derived(self) -> dict[str, float | None]:
+        """The declared figures of the positions after this round, by name."""
+        return figures.derived(self.positions)
+
+
+def round_entry(
+    round_no: int,
+    active: Sequence[int],
+    paths: Mapping[int, Path],
+    covered: Mapping[int, float],
+    positions: Points,
+    collisions: Iterable[Collision] = (),
+    *,
+    times: Mapping[str, Any] | None = None,
+    robots: Sequence[tuple[str, Sequence[int]]] = (),
+    model: Mapping[str, Any] | None = None,
+) -> RoundEntry:
+    """The one builder of a round line, for the round models and the async ones (a cycle).
+
+    `paths`: each mover's world-frame path (a robot that stays has none); `covered`: the arc
+    length each covered (0 where absent). The other fields in the line's order: an async cycle's
+    `times` (look, start, end, origin), the robot lists (`ROBOT_LISTS`, each written only when
+    not empty, in the order given), then the model's (lights, views).
+    """
+    extra: dict[str, Any] = dict(times or {})
+    for key, listed in robots:
+        assert key in figures.ROBOT_LISTS, f"{key!r} is no robot list of the round line"
+        if listed:
+            extra[key] = list(listed)
+    extra.update(model or {})
+    return RoundEntry(
+        round_no,
+        tuple(active),
+        tuple(Move(r, p, float(covered.get(r, 0.0))) for r, p in sorted(paths.items())),
+        positions,
+        tuple(collisions),
+        extra,
+    )
+
 
 @dataclass(frozen=True, slots=True)
 class Result:
-    """Last line: how the run ended."""
+    """Last line: how the run ended, and the run's figures the world counts (those of
+    fatswarm.domain.figures on the RESULT_LINE, in this class's order: the line's); None: not
+    on the line (an early record's, or `time` of a round model). `extra`: unknown fields."""
 
     status: Status
     rounds: int
     positions: Points
+    epochs: int | None = None
+    moves: int | None = None
+    total_distance: float | None = None
+    collisions: int | None = None
+    time: float | None = None
     extra: dict[str, Any] = field(default_factory=dict)
+
+
+def result_figures() -> tuple[str, ...]:
+    """The names of `Result`'s figure fields, in the line's order."""
+    head = {f.name for f in figures.RESULT_HEAD}
+    return tuple(f.name for f in fields(Result) if f.name not in head and f.name != "extra")
 
 
 @dataclass(frozen=True, slots=True)
@@ -229,6 +288,7 @@ class RecordWriter:
         )
 
     def result(self, status: str, rounds: int, positions: Points, **extra: Any) -> None:
+        """The last line; `extra`: its figures (`Result`'s order) and any other field."""
         self.write(
             {
                 "type": "result",
@@ -258,7 +318,9 @@ class RecordWriter:
                 line.round, line.active, moves, line.positions, line.collisions, **line.extra
             )
         else:
-            self.result(line.status, line.rounds, line.positions, **line.extra)
+            counted = {k: getattr(line, k) for k in result_figures()}
+            kept = {k: v for k, v in counted.items() if v is not None}
+            self.result(line.status, line.rounds, line.positions, **kept, **line.extra)
 
     def close(self) -> None:
         """Close the file; a failure to flush its last bytes is a RecordWriteError."""
@@ -296,4 +358,6 @@ __all__ = [
     "RunRecord",
     "collision_to_record",
     "move_origin",
+    "result_figures",
+    "round_entry",
 ]

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from fatswarm.domain import figures
 from fatswarm.domain.outcome import ENDED, Status
 from fatswarm.domain.path import PathFormatError, Points, from_record
 from fatswarm.world.physics import Collision
@@ -25,6 +26,7 @@ from fatswarm.world.record import (
     Result,
     RoundEntry,
     RunRecord,
+    result_figures,
 )
 
 
@@ -155,7 +157,7 @@ def _round(entry: Mapping[str, Any], n: int, expected: int | None) -> RoundEntry
     collisions = entry.get("collisions", [])
     if not isinstance(collisions, list):
         raise _LineError(f"'collisions' must be a list, got {collisions!r}")
-    known = {"type", "round", "active", "moves", "positions", "collisions"}
+    known = {f.name for f in figures.ROUND_FIELDS if f.required}
     return RoundEntry(
         round=number,
         active=tuple(_robot(r, n, "an 'active' entry") for r in active),
@@ -170,13 +172,30 @@ def _result(entry: Mapping[str, Any], n: int) -> Result:
     status = entry.get("status")
     if status not in ENDED:
         raise _LineError(f"'status' must be one of {', '.join(ENDED)}, got {status!r}")
-    known = {"type", "status", "rounds", "positions"}
+    counted = {name: _figure(entry, name) for name in result_figures()}
+    known = {f.name for f in figures.RESULT_HEAD} | set(counted)
     return Result(
         Status(status),
         _int(entry, "rounds", 0),
         _points(entry.get("positions"), n, "positions"),
-        _extra(entry, known),
+        **counted,  # type: ignore[arg-type]
+        extra=_extra(entry, known),
     )
+
+
+_RESULT_FIGURES = {f.name: f for f in figures.FIGURES}
+
+
+def _figure(entry: Mapping[str, Any], name: str) -> int | float | None:
+    """A result line's figure as its declaration types it; None if the line has none."""
+    if name not in entry:
+        return None
+    if _RESULT_FIGURES[name].type is int:
+        return _int(entry, name, 0)
+    value = _number(entry[name], f"'{name}'")
+    if value < 0:
+        raise _LineError(f"'{name}' must be >= 0, got {value}")
+    return value
 
 
 Entry = Header | RoundEntry | Result

@@ -18,7 +18,7 @@ from fatswarm.world.faults import crash_after, cut_path, stuck_in
 from fatswarm.world.model import Books, RoundBooking
 from fatswarm.world.physics import RoundOutcome, apply_round
 from fatswarm.world.protocol import Begin, Commit, ControlReply
-from fatswarm.world.record import Move, RoundEntry
+from fatswarm.world.record import round_entry
 
 
 class Rounds:
@@ -81,24 +81,21 @@ class Rounds:
         timed_out = [r for r in w.active if r not in w.held]
         w.last_timed_out = tuple(timed_out)
         down, back = self._crashes(round_no)
-        extra: dict[str, Any] = {}
-        for key, robots in (
-            ("timed_out", timed_out),
-            ("crashed", down),
-            ("recovered", back),
-            ("cut", cut),
-            ("crash", stuck),
-        ):
-            if robots:
-                extra[key] = robots
-        extra.update(w.looks.round_fields(w.looked))
-        entry = RoundEntry(
+        entry = round_entry(
             round_no,
             w.active,
-            tuple(Move(r, p, traveled[r]) for r, p in sorted(paths.items())),
+            paths,
+            traveled,
             after,
-            tuple(outcome.collisions),
-            extra,
+            outcome.collisions,
+            robots=(
+                ("timed_out", timed_out),
+                ("crashed", down),
+                ("recovered", back),
+                ("cut", cut),
+                ("crash", stuck),
+            ),
+            model=w.looks.round_fields(w.looked),
         )
         try:  # the round is the record's even when the goal raises while it is booked
             w.account(

@@ -151,7 +151,7 @@ def _line_ends(record: RunRecord, in_virtual_time: bool) -> tuple[float, ...]:
 def _run_end(record: RunRecord, ends: tuple[float, ...], in_virtual_time: bool) -> float:
     """The last time of the run: its last line's end, or an async result's `time` if later."""
     end = ends[-1] if ends else 0.0
-    time = record.result.extra.get("time") if record.result is not None else None
+    time = record.result.time if record.result is not None else None
     if in_virtual_time and isinstance(time, (int, float)) and math.isfinite(time):
         end = max(end, float(time))
     return end

@@ -384,6 +384,7 @@ def _outcome(setup: RunSetup, result: RunResult, watch: _Watch) -> Outcome:
         params=dict(params.values),
         time=result.time,
         crashes=tuple(watch.crashes),
+        derived=result.derived,
     ).noted(model_fields(setup))
 
 

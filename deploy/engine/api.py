@@ -36,6 +36,7 @@ from fatswarm.deploy.engine.config import (
 from fatswarm.deploy.engine.lockstep import RoundReport, run_lockstep
 from fatswarm.deploy.engine.lockstep import RunResult as LockstepResult
 from fatswarm.deploy.engine.notebook import RunRecord, RunResult
+from fatswarm.domain.figures import run_derived, summary_values
 from fatswarm.domain.path import Points
 from fatswarm.domain.robot_model import RobotModel
 from fatswarm.world import record_read
@@ -313,7 +314,8 @@ def summary(of: LockstepResult | RecordLines) -> dict[str, str | int | float | N
     """A run's figures as plain values (a row of a table or a DataFrame), from its result or its
     record: status ("formed", "stalled", "max_rounds"; "unfinished" for a record without a
     result line), rounds, epochs, moves, total_distance, collisions, looks, time (the virtual
-    time of an async run, else None), n, seed, scheduler and algorithm (None where unknown)."""
+    time of an async run, else None), n, seed, scheduler and algorithm (None where unknown),
+    then the figures that follow from the positions (fatswarm.domain.figures: min_gap...)."""
     if isinstance(of, RecordLines):
         return _record_summary(of)
     if not isinstance(of, LockstepResult):
@@ -332,26 +334,28 @@ def summary(of: LockstepResult | RecordLines) -> dict[str, str | int | float | N
         "seed": None if known is None else known.seed,
         "scheduler": None if known is None else known.scheduler,
         "algorithm": None if known is None else known.algorithm,
+        **summary_values(of.derived),
     }
 
 
 def _record_summary(record: RecordLines) -> dict[str, str | int | float | None]:
-    """`summary` of a record: counted from its lines, epochs and time from its result line."""
-    extra = {} if record.result is None else record.result.extra
-    epochs, time = extra.get("epochs"), extra.get("time")
+    """`summary` of a record: counted from its lines (the result line's figures where it has
+    them: epochs and time are not counted), the derived figures from its positions."""
+    res = record.result
     return {
-        "status": "unfinished" if record.result is None else str(record.result.status),
-        "rounds": len(record.rounds) if record.result is None else int(record.result.rounds),
-        "epochs": int(epochs) if isinstance(epochs, int) else None,
+        "status": "unfinished" if res is None else str(res.status),
+        "rounds": len(record.rounds) if res is None else int(res.rounds),
+        "epochs": None if res is None else res.epochs,
         "moves": sum(len(entry.moves) for entry in record.rounds),
         "total_distance": float(sum(m.traveled for e in record.rounds for m in e.moves)),
         "collisions": sum(len(entry.collisions) for entry in record.rounds),
         "looks": sum(len(entry.active) for entry in record.rounds),
-        "time": float(time) if isinstance(time, (int, float)) else None,
+        "time": None if res is None else res.time,
         "n": record.header.n,
         "seed": record.header.seed,
         "scheduler": record.header.scheduler,
         "algorithm": record.header.algorithm,
+        **summary_values(run_derived(entry.positions for entry in record.rounds)),
     }
 
 

@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Any, Final
 
 import numpy as np
@@ -27,6 +27,7 @@ from fatswarm.coordinator.driver import Event, drive
 from fatswarm.coordinator.rounds import Finished, Note, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
 from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel
+from fatswarm.domain.figures import FigureValue
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import MAX_SEGMENTS, Arc, Line, Path, Points, vertices
 from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
@@ -117,6 +118,8 @@ class RunResult:
     moves_by_robot: tuple[int, ...]
     time: float | None = None  # async models: the virtual time the run ended at
     lights: tuple[str, ...] = ()  # each robot's final colour (a luminous algorithm's), else ()
+    # the run's figures that follow from the positions (fatswarm.domain.figures), by name
+    derived: Mapping[str, FigureValue] = field(default_factory=dict)
 
 
 def configured(params: Params | Configured) -> Configured:
@@ -211,6 +214,7 @@ def _result(world: WorldCore, finished: Finished, looks: int, initial: Points) -
         moves_by_robot=progress.moves_by_robot,
         time=readout.time(),
         lights=readout.lights(),
+        derived=dict(progress.derived),
     )
 
 

@@ -17,6 +17,7 @@ import numpy as np
 
 from fatswarm.agent import geometry
 from fatswarm.deploy.engine.lockstep import RunResult as LockstepResult
+from fatswarm.domain import figures
 from fatswarm.domain.path import Points
 from fatswarm.domain.seam import ParamValue
 from fatswarm.world.record import RunRecord as RecordLines
@@ -25,6 +26,8 @@ if TYPE_CHECKING:
     import pandas as pd
 
 EXTRA: Final = "notebook"  # pip install 'fatswarm[notebook]': pandas (and matplotlib, to animate)
+# One row per robot and round: these, then each round's figures of fatswarm.domain.figures shown
+# in a DataFrame (`columns()`; min_gap...), the same on each row of the round.
 COLUMNS: Final = ("round", "robot", "x", "y", "active", "moved", "distance", "collided")
 PICTURE_PX: Final = 360  # the picture's width and height in pixels, the caption below it
 CAPTION_PX: Final = 40  # two lines: how the run ended, which run it was
@@ -126,7 +129,9 @@ class RunRecord(RecordLines):
         """One row per robot per round (record line; an async run's ended cycle): `round` (1,
         2, ...), `robot`, `x`, `y` (its centre after the round, world frame), `active`, `moved`
         (it asked for a non-empty path), `distance` (the arc length it covered), `collided` (it
-        was stopped at contact). The start is `header.initial`. Needs pandas (`fatswarm[notebook]`).
+        was stopped at contact), then the round's figures that follow from the positions
+        (fatswarm.domain.figures: `min_gap`, the smallest rim-to-rim distance after the round,
+        NaN for one robot). The start is `header.initial`. Needs pandas (`fatswarm[notebook]`).
         """
         try:
             import pandas as pd  # optional (fatswarm[notebook]): only this method needs it
@@ -134,7 +139,16 @@ class RunRecord(RecordLines):
             raise ImportError(
                 f"RunRecord.to_dataframe needs pandas: pip install 'fatswarm[{EXTRA}]'"
             ) from None
-        return pd.DataFrame(record_columns(self), columns=list(COLUMNS))
+        return pd.DataFrame(record_columns(self), columns=list(columns()))
+
+
+def columns() -> tuple[str, ...]:
+    """`to_dataframe`'s columns: COLUMNS, then the declared figures of a round it shows."""
+    return COLUMNS + tuple(f.name for f in round_figures())
+
+
+def round_figures() -> tuple[figures.Figure, ...]:
+    return tuple(f for f in figures.derived_figures() if figures.Place.DATAFRAME in f.places)
 
 
 def record_columns(record: RecordLines) -> dict[str, np.ndarray[Any, Any]]:
@@ -161,7 +175,18 @@ def record_columns(record: RecordLines) -> dict[str, np.ndarray[Any, Any]]:
         "moved": moved.ravel(),
         "distance": distance.ravel(),
         "collided": collided.ravel(),
+        **{
+            f.name: np.repeat(np.array([_nan(f, e.positions) for e in record.rounds]), n)
+            for f in round_figures()
+        },
     }
+
+
+def _nan(figure: figures.Figure, positions: Points) -> float:
+    """A round's value of a derived figure, NaN where it does not apply (pandas' missing)."""
+    assert figure.derive is not None
+    value = figure.derive(positions)
+    return math.nan if value is None else float(value)
 
 
 def outcome_text(status: str, rounds: int, collisions: int) -> str:

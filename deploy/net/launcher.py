@@ -46,6 +46,7 @@ from fatswarm.deploy.view.summary import (
     unit,
 )
 from fatswarm.domain.adversary import ASYNC_NAMES
+from fatswarm.domain.figures import run_derived
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.wire import check_swarm
 from fatswarm.world.record import RecordFormatError, RecordWriteError, RecordWriter
@@ -536,29 +537,27 @@ def read_outcome(record: str) -> Outcome | None:
     if res is None:
         print(f"unfinished: n={h.n} after {len(rec.rounds)} rounds", file=sys.stderr)
         return None
-    x = res.extra
-    collisions = x.get("collisions")
-    epochs = x.get("epochs")
     return Outcome(
         status=res.status,
         rounds=res.rounds,
         # the world writes the count; else the rounds' own collisions say it
         collisions=(
-            collisions
-            if isinstance(collisions, int)
+            res.collisions
+            if res.collisions is not None
             else sum(len(r.collisions) for r in rec.rounds)
         ),
         n=h.n,
         a=side_of(h.params),
         seed=h.seed,
         scheduler=h.scheduler,
-        epochs=epochs if isinstance(epochs, int) else None,
-        moves=int(x.get("moves", 0)),
-        total_distance=float(x.get("total_distance", 0.0)),
+        epochs=res.epochs,
+        moves=res.moves or 0,
+        total_distance=res.total_distance or 0.0,
         algorithm=h.algorithm,
         params=dict(h.params),
-        time=float(x["time"]) if isinstance(x.get("time"), (int, float)) else None,
+        time=res.time,
         crashes=crashes_in(rec.rounds),  # (an async record's cycles name none)
+        derived=run_derived(r.positions for r in rec.rounds),
     ).noted(h.extra)
 
 

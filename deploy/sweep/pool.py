@@ -10,6 +10,7 @@ import contextlib
 import logging
 import os
 import signal
+import tempfile
 import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Final
@@ -30,6 +31,7 @@ from fatswarm.deploy.sweep.table import (
     row_key,
     row_line,
     table_columns,
+    upgraded,
 )
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.seam import resolve_values
@@ -136,6 +138,7 @@ def run_spec(spec: RunSpec) -> RunFigures:
         round_cap=cap,
         warning=warnings.text(),
         time=result.time,
+        derived=dict(result.derived),
     )
 
 
@@ -245,8 +248,10 @@ class RunTable:
 
     Opening it cuts a torn last row (a crash mid-write) and reads the rows there. Each row is
     appended with one write and no buffer: a Ctrl-C, which this process only acts on between
-    Python steps, cannot leave half a row. Its `columns` are its header's (`table.SCHEMAS`): a
-    table of the paper's robot model alone has no model columns.
+    Python steps, cannot leave half a row. Its `columns` are its header's (`table_columns`): a
+    table of the paper's robot model alone has no model columns. A table of an earlier fatswarm
+    (or of the paper's model alone, for a grid with model axes) is written again first, whole,
+    with the columns it lacks filled in (`table.upgraded`), then resumed.
     """
 
     def __init__(
@@ -281,7 +286,12 @@ class RunTable:
             keep = kept_length(data)
             if keep < len(data):
                 os.ftruncate(fd, keep)
-            rows = parse_table(data[:keep].decode("utf-8", errors="replace"), path)
+            text = data[:keep].decode("utf-8", errors="replace")
+            new = upgraded(text, path, columns) if keep else None
+            if new is not None:
+                fd = _replaced(fd, path, new)
+                text = new
+            rows = parse_table(text, path)
             if keep == 0:
                 _write_all(fd, header_line(columns).encode())
         except BaseException:
@@ -294,7 +304,7 @@ class RunTable:
 
     def append(self, row: dict[str, str]) -> None:
         """Add one row at the end of the file; raises TableWriteError (a full disk...)."""
-        dropped = [c for c in COLUMNS if c not in self.columns and row.get(c)]
+        dropped = [c for c in row if c not in self.columns and row.get(c)]
         assert not dropped, f"a row with {dropped} in a table without those columns"
         try:
             _write_all(self._fd, row_line(row, self.columns).encode())
@@ -306,6 +316,31 @@ class RunTable:
         if self._fd >= 0:
             os.close(self._fd)  # releases the lock
             self._fd = -1
+
+
+def _replaced(fd: int, path: str, text: str) -> int:
+    """Put `text` in place of the table at `path` (open and locked as `fd`) in one step: written
+    and synced beside it, then renamed over it, so a crash leaves the old table or the new one;
+    the new file's descriptor, locked (the old one is closed)."""
+    folder = os.path.dirname(os.path.abspath(path))
+    spare, tmp = tempfile.mkstemp(prefix=".sweep-", suffix=".csv", dir=folder)
+    try:
+        os.fchmod(spare, os.fstat(fd).st_mode & 0o777)  # the old table's permissions
+        _write_all(spare, text.encode())
+        os.fsync(spare)
+        os.replace(tmp, path)
+    except OSError as exc:
+        os.close(spare)
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise SweepInputError(
+            f"--out {path}: cannot write its new columns: {exc.strerror}"
+        ) from None
+    os.close(fd)
+    os.close(spare)
+    fd = os.open(path, os.O_RDWR | os.O_APPEND | os.O_CLOEXEC)
+    _lock(fd, path)
+    return fd
 
 
 def _check_output(path: str) -> None:

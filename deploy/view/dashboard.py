@@ -285,6 +285,7 @@ def frame_from_state(
         source="live",
         lights=state.lights,
         palette=tuple(sorted(state.palette)),  # names sorted, as replay and plot colour them
+        derived=dict(state.derived),
     )
 
 

@@ -18,6 +18,7 @@ from rich.text import Text
 
 from fatswarm.agent import geometry
 from fatswarm.deploy.view.lights import Focus
+from fatswarm.domain import figures as declared
 from fatswarm.domain import tolerance
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Points
@@ -68,6 +69,8 @@ class Frame:
     focus: Focus | None = None  # replay --robot: what the chosen robot saw in this round
     source: str = "live"
     unfinished: bool = False  # replay: the record's last round, and it has no result line
+    # the run's figures derived from the positions, so far (fatswarm.domain.figures), by name
+    derived: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         side = self.params.get("a")
@@ -208,7 +211,8 @@ def counters_table(frame: Frame, derived: Derived) -> Table:
     rows: list[Row] = [("round", round_text(frame)), ("scheduler", frame.scheduler + seed)]
     for i, line in enumerate(run_lines(frame, SIDE_WIDTH - 4 - keys - 1)):  # borders, padding
         rows.append(("" if i else "robots", Text(line)))  # Text: a user's name is no markup
-    rows += radius_rows(frame, derived) + figure_rows(figures) + tail_rows(frame)
+    rows += radius_rows(frame, derived) + figure_rows(figures) + derived_rows(frame)
+    rows += tail_rows(frame)
     for key, value in rows:
         grid.add_row(key, value)
     return grid
@@ -231,6 +235,31 @@ def figure_rows(figures: list[tuple[str, float]]) -> list[Row]:
     rows: list[Row] = [(Text(k), figure_text(v)) for k, v in shown]  # Text: labels, no markup
     if len(shown) < len(figures):
         rows.append(("", Text(f"… {len(figures) - len(shown)} more figures", style="dim")))
+    return rows
+
+
+RUN_WORDS: Final = {
+    declared.Summary.MIN: "least",
+    declared.Summary.MAX: "most",
+    declared.Summary.SUM: "total",
+    declared.Summary.COUNT: "count",
+}  # how a derived row names the run's value beside the round's
+
+
+def derived_rows(frame: Frame) -> list[Row]:
+    """The declared figures of the frame's positions the dashboard shows (fatswarm.domain.figures:
+    min gap...), live and in replay alike, with the run's value so far when the frame has it:
+    `0.412  least 0.113`."""
+    pts = np.asarray(frame.positions, dtype=np.float64).reshape(-1, 2)
+    rows: list[Row] = []
+    for f in declared.derived_figures():
+        if declared.Place.DASHBOARD not in f.places or f.derive is None:
+            continue
+        text = declared.shown(f.derive(pts))
+        run, word = frame.derived.get(f.name), RUN_WORDS.get(f.summary)
+        if run is not None and word is not None:
+            text += f"  {word} {declared.shown(run)}"
+        rows.append((f.words, text))
     return rows
 
 
@@ -363,6 +392,7 @@ __all__ = [
     "algorithm_text",
     "counters_table",
     "derive",
+    "derived_rows",
     "enclosing_circle",
     "figure_text",
     "fmt_rate",

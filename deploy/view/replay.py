@@ -29,6 +29,7 @@ from fatswarm.deploy.view.lights import (
     record_palette,
 )
 from fatswarm.deploy.view.summary import model_notes
+from fatswarm.domain.figures import RunFolder, known_numbers
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.path import Points, sample, truncate
 from fatswarm.domain.registry import load_algorithm
@@ -62,6 +63,7 @@ def build_frames(record: RunRecord, source: str = "replay") -> list[Frame]:
         )  # fmt: skip
 
     frames = [frame(round=0, positions=positions)]
+    so_far = RunFolder()  # the run's derived figures so far (min_gap: the least yet)
     for rr in record.rounds:
         trails = []
         for move in rr.moves:
@@ -75,6 +77,7 @@ def build_frames(record: RunRecord, source: str = "replay") -> list[Frame]:
             last_active[robot] = rr.round
         collisions_total += len(rr.collisions)
         positions = rr.positions
+        so_far.add(positions)
         frames.append(
             frame(
                 round=rr.round,
@@ -85,6 +88,7 @@ def build_frames(record: RunRecord, source: str = "replay") -> list[Frame]:
                 collisions_total=collisions_total,
                 trails=tuple(trails),
                 lights=lights_of(rr, n) or (),
+                derived=known_numbers(so_far.snapshot()),
             )
         )
     if record.result is not None:

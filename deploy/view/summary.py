@@ -8,6 +8,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, TextIO
 
+from fatswarm.domain import figures
 from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.outcome import ExitCode, Status, exit_code_for
 from fatswarm.domain.robot_model import ModelError, RobotModel
@@ -58,6 +59,8 @@ class Outcome:
     model: str | None = None  # the robot model as flags, when it is not the paper's
     assumption: str | None = None  # the record header's line: frames outside the algorithm's
     crashes: tuple[tuple[int, int], ...] = ()  # --crash: (robot, round or cycle it crashed in)
+    # the run's figures that follow from the positions (fatswarm.domain.figures), by name
+    derived: Mapping[str, figures.FigureValue] = dataclasses.field(default_factory=dict)
 
     def noted(self, header: Mapping[str, Any]) -> Outcome:
         """This outcome with the `model` and `assumption` a record header's fields give (its
@@ -143,10 +146,21 @@ def summary(outcome: Outcome) -> str:
         f"{unit(o.scheduler)}s {o.rounds}  epochs {epochs}  moves {o.moves} "
         f"({o.moves / o.n:.2f} per robot)  total distance {o.total_distance:.3f}  "
         f"collisions {o.collisions}"
+        + derived_text(o.derived)
         + ("" if o.time is None else f"  virtual time {o.time:.3f}")
         + ("" if not o.crashes else f"\n{crashes_text(o.crashes, o.scheduler)}")
         + ("" if o.model is None else f"\nmodel: {o.model}")
         + ("" if o.assumption is None else f"\n{o.assumption}")
+    )
+
+
+def derived_text(values: Mapping[str, figures.FigureValue]) -> str:
+    """`  min gap 0.412`: the run's derived figures shown in the summary, each with its words
+    (one it does not know, or that does not apply, is left out)."""
+    return "".join(
+        f"  {f.words} {figures.shown(value)}"
+        for f in figures.derived_figures()
+        if figures.Place.SUMMARY in f.places and (value := values.get(f.name)) is not None
     )
 
 
@@ -180,6 +194,8 @@ def summary_json(
     fields: dict[str, Any] = {"status": "unfinished"}
     if outcome is not None:
         fields = {**dataclasses.asdict(outcome), "verdict": verdict(outcome)}
+        del fields["derived"]  # each at the top level, as the other figures
+        fields.update(figures.summary_values(outcome.derived))
         for key in ("model", "assumption", "crashes"):  # only when there: JSON as before
             if not fields[key]:
                 del fields[key]

@@ -18,7 +18,7 @@ from fatswarm.deploy.net.children import Children
 from fatswarm.deploy.net.zconf import loopback_endpoint, make_config
 from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.protocol import WorldState, state_key
-from fatswarm.world.record import RecordWriter, RunRecord
+from fatswarm.world.record import RecordWriter, RunRecord, result_figures
 from fatswarm.world.record_read import read_record
 
 DEADLINE_S = 120.0  # generous: the machine is shared; tests wait on predicates, never on sleeps
@@ -272,6 +272,8 @@ def assert_same_run(net: RunRecord, lock: RunRecord) -> None:
         lock.result.rounds,
         lock.result.extra,
     )
+    for name in result_figures():  # the result line's figures, typed
+        assert getattr(net.result, name) == getattr(lock.result, name), name
     assert np.array_equal(net.result.positions, lock.result.positions)
 
 

@@ -200,7 +200,7 @@ def test_the_paper_algorithm_forms_under_async_and_the_record_rebuilds_every_ins
     result, record = _record(tmp_path, name, 5, seed)
     assert (result.status, result.collisions) == ("formed", 0)
     assert record.header.scheduler == name
-    assert record.result is not None and record.result.extra["time"] == result.time
+    assert record.result is not None and record.result.time == result.time
     cycles = []
     for entry in record.rounds:
         (robot,) = entry.active

@@ -45,7 +45,7 @@ def test_record_is_written(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
     code = fatswarm_run(["--lockstep", "-n", "4", "--seed", "1", "--record", str(target), "-q"])
     record = read_record(target)
     assert record.result is not None
-    assert code == exit_code_for(record.result.status, record.result.extra["collisions"])
+    assert code == exit_code_for(record.result.status, record.result.collisions or 0)
     assert (record.header.n, record.header.seed, record.header.scheduler) == (4, 1, "ssync")
     assert f"record: {target}" in capsys.readouterr().out
 

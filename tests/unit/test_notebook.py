@@ -159,7 +159,7 @@ def test_the_dataframe_has_one_row_per_robot_per_round() -> None:
     assert isinstance(df, pd.DataFrame)
     assert (
         list(df.columns)
-        == list(notebook.COLUMNS)
+        == list(notebook.columns())
         == [
             "round",
             "robot",
@@ -169,6 +169,7 @@ def test_the_dataframe_has_one_row_per_robot_per_round() -> None:
             "moved",
             "distance",
             "collided",
+            "min_gap",  # the round's, derived from the positions (fatswarm.domain.figures)
         ]
     )
     assert df[["round", "robot"]].values.tolist() == [
@@ -188,6 +189,7 @@ def test_the_dataframe_has_one_row_per_robot_per_round() -> None:
     assert [str(t) for t in df.dtypes] == ["int64"] * 2 + ["float64"] * 2 + ["bool"] * 2 + [
         "float64",
         "bool",
+        "float64",
     ]
 
 
@@ -196,8 +198,8 @@ def test_the_dataframe_of_a_read_record_adds_up_to_its_figures() -> None:
     record = fatswarm.read_record(LOCKSTEP)
     df = record.to_dataframe()
     assert len(df) == 6 * 17 and df["round"].max() == 17
-    assert df.distance.sum() == pytest.approx(record.result.extra["total_distance"])  # type: ignore[union-attr]
-    assert int(df.moved.sum()) == record.result.extra["moves"]  # type: ignore[union-attr]
+    assert df.distance.sum() == pytest.approx(record.result.total_distance)  # type: ignore[union-attr]
+    assert int(df.moved.sum()) == record.result.moves  # type: ignore[union-attr]
     last = df[df["round"] == 17][["x", "y"]].to_numpy()
     assert np.array_equal(last, record.rounds[-1].positions)
 

@@ -36,7 +36,6 @@ from fatswarm.deploy.sweep.table import (
     COLUMNS,
     PLAIN_COLUMNS,
     RunFigures,
-    TableError,
     header_line,
     make_row,
     parse_table,
@@ -183,7 +182,7 @@ def test_the_grid_crosses_the_models_seed_by_seed() -> None:
 # -- the table ----------------------------------------------------------------------------------
 
 
-def test_a_grid_of_the_papers_model_keeps_the_table_without_model_columns(
+def test_a_table_without_model_columns_keeps_them_off_until_a_grid_has_model_axes(
     tmp_path: Path,
 ) -> None:
     out = tmp_path / "runs.csv"
@@ -196,8 +195,10 @@ def test_a_grid_of_the_papers_model_keeps_the_table_without_model_columns(
     again = RunTable.open(str(out))  # resumed: its row has the key of the run
     assert again.keys() == {spec().key()} and again.columns == PLAIN_COLUMNS
     again.close()
-    with pytest.raises(TableError, match=r"no robot-model columns.*needs a new --out"):
-        RunTable.open(str(out), models=True)
+    widened = RunTable.open(str(out), models=True)  # a grid with model axes: columns added
+    assert widened.keys() == {spec().key()} and widened.columns == COLUMNS
+    widened.close()
+    assert out.read_text() == header_line() + row_line(row)  # its row: the paper's model
 
 
 def test_a_table_with_model_columns_takes_every_model(tmp_path: Path) -> None:

@@ -94,7 +94,7 @@ def test_async_each_line_end_puts_its_robot_where_the_line_says(
     record = _async_record(tmp_path, name, 2)
     timeline = Timeline(record)
     assert timeline.is_async
-    assert record.result is not None and timeline.end == record.result.extra["time"]
+    assert record.result is not None and timeline.end == record.result.time
     for entry in record.rounds:
         (robot,) = entry.active
         here = timeline.at(entry.extra["end"])

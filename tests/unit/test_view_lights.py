@@ -191,6 +191,7 @@ def test_a_record_without_lights_draws_as_before() -> None:
         stopped=f2.stopped, collisions_total=f2.collisions_total, seed=f2.seed,
         last_active=f2.last_active, last_path_length=f2.last_path_length,
         last_round=f2.last_round, trails=f2.trails, source=f2.source,
+        derived=f2.derived,  # the run's min_gap so far: the live view's state carries it too
     )  # fmt: skip
     assert render(f2, colours=True) == render(plain, colours=True)
     legend = re.sub(r"\[/?[^\]]*\]", "", LEGEND)

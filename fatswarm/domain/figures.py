@@ -1,0 +1,544 @@
+"""Every figure that crosses the house, declared once: the fields of a record's round line, and the
+figures of a round and of a run (name, type, unit, how a run summarises it, where it shows).
+
+The record's reader (known keys, the result line's typed figures), the JSON Schema's round and
+result lines (`record_schema`) and the sweep table's figure columns read this module instead of
+listing figures again. A figure with `derive` follows from the positions after a round
+(`derived`): no record carries it (old records have it too), and it reaches the world's progress
+and published state, the lock step's result, the dashboard's and replay's rows, `to_dataframe`,
+the summary, `--json` and `fatswarm.summary` from here alone. The figures the world counts keep
+typed fields in those shapes (`Result`, `RunResult`, `Outcome`...), tied to this list by tests.
+"""
+
+from __future__ import annotations
+
+import enum
+import json
+import math
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Final
+
+import numpy as np
+
+from fatswarm.domain.path import Points
+
+RADIUS: Final = 1.0  # every robot is a unit disc: the rim-to-rim gap is the centres' less 2
+PAIRWISE_UP_TO: Final = 80  # min_gap measures every pair up to this many robots (faster there)
+
+
+class Place(enum.Flag):
+    """Where a figure shows besides the record (a run figure's value, or a round figure's)."""
+
+    NONE = 0
+    RESULT_LINE = enum.auto()  # a field of the record's result line (`Result`)
+    CSV = enum.auto()  # a column of the sweep table (deploy/sweep/table.py)
+    SUMMARY = enum.auto()  # the end-of-run summary text, `--json` and `fatswarm.summary`
+    DASHBOARD = enum.auto()  # a row of the live dashboard and of replay (each round's value)
+    DATAFRAME = enum.auto()  # a column of `RunRecord.to_dataframe` (each round's value)
+
+
+class Summary(enum.StrEnum):
+    """How a run summarises a figure it has after each round."""
+
+    LAST = "last"  # its value after the last round
+    SUM = "sum"  # the sum over the rounds
+    COUNT = "count"  # how many rounds, or entries of them
+    MIN = "min"  # the smallest value of any round
+    MAX = "max"  # the largest value of any round
+
+
+FigureValue = int | float | str | None
+Derive = Callable[[Points], float | None]  # a round's value from the (n, 2) positions after it
+
+
+@dataclass(frozen=True, slots=True)
+class Figure:
+    """A figure of a run (and, with `derive`, of each round): what every carrier of it reads.
+
+    `schema`: its JSON Schema on the result line (RESULT_LINE); `csv`: the format of its cell
+    (blank for None); `kept_on_error`: a sweep row of a run that raised still has it.
+    """
+
+    name: str
+    type: type  # the Python type of a value (None, too, where `optional`)
+    unit: str  # "" for a count or a word
+    help: str
+    summary: Summary = Summary.LAST
+    places: Place = Place.NONE
+    label: str = ""  # the dashboard's and summary text's words for it (default: the name)
+    optional: bool = False  # None where it does not apply (no rounds, one robot, a round model)
+    derive: Derive | None = None
+    schema: Mapping[str, Any] = field(default_factory=dict)
+    csv: str = ""  # a format spec: "d", ".6f"
+    kept_on_error: bool = False
+
+    @property
+    def words(self) -> str:
+        return self.label or self.name.replace("_", " ")
+
+
+@dataclass(frozen=True, slots=True)
+class LineField:
+    """One field of the record's round line: its JSON Schema (`schema`, without the help)."""
+
+    name: str
+    help: str
+    schema: Mapping[str, Any]
+    required: bool = False
+
+
+def min_gap(positions: Points) -> float | None:
+    """The smallest rim-to-rim distance between two robots of the (n, 2) `positions` (their
+    centres' distance less 2: unit discs), None for fewer than two robots; negative if two overlap.
+
+    Derived by every reader, never written: the positions say it exactly, so writing it would only
+    lengthen every round line and leave the records before it without it; derived, every record
+    stays byte for byte and every record, old ones too, has it.
+
+    Up to PAIRWISE_UP_TO robots, every pair at once (~20 us at n = 64); above, sort and sweep
+    along the wider axis: neighbours in that order give a first bound w, then only pairs within
+    w along it are measured, all at once (O(n log n) for spread swarms, O(n^2) at worst; ~60 us
+    at n = 256). Both take the least of the same squares, so they give the same bits.
+    """
+    pts = np.asarray(positions, dtype=np.float64).reshape(-1, 2)
+    n = len(pts)
+    if n < 2:
+        return None
+    if n <= PAIRWISE_UP_TO:
+        dx = pts[:, None, 0] - pts[None, :, 0]
+        dy = pts[:, None, 1] - pts[None, :, 1]
+        squares = dx * dx + dy * dy
+        np.fill_diagonal(squares, np.inf)
+        return math.sqrt(float(np.min(squares))) - 2 * RADIUS
+    axis = 0 if np.ptp(pts[:, 0]) >= np.ptp(pts[:, 1]) else 1
+    order = np.argsort(pts[:, axis], kind="stable")
+    along, across = pts[order, axis], pts[order, 1 - axis]
+    dx, dy = np.diff(along), np.diff(across)
+    best2 = float(np.min(dx * dx + dy * dy))
+    reach = math.sqrt(best2) * (1 + 1e-9)  # a rounding margin: no closer pair is left out
+    counts = np.searchsorted(along, along + reach, side="right") - np.arange(n) - 2
+    np.maximum(counts, 0, out=counts)  # the pairs (i, i + 2...) within reach along the axis
+    total = int(counts.sum())
+    if total:
+        first = np.repeat(np.arange(n), counts)
+        starts = np.repeat(np.cumsum(counts) - counts, counts)
+        second = first + 2 + (np.arange(total) - starts)
+        dx, dy = along[second] - along[first], across[second] - across[first]
+        best2 = min(best2, float(np.min(dx * dx + dy * dy)))
+    return math.sqrt(best2) - 2 * RADIUS
+
+
+_NUMBER: Final = {"$ref": "#/$defs/number", "minimum": 0}
+_COUNT: Final = {"type": "integer", "minimum": 0}
+
+# The figures of a run, in the sweep table's order of columns. A new one goes at the end.
+FIGURES: tuple[Figure, ...] = (
+    Figure(
+        "status",
+        str,
+        "",
+        "How the run ended: formed, stalled or max_rounds (a sweep row: error if it raised).",
+        places=Place.RESULT_LINE | Place.CSV,
+        kept_on_error=True,
+        schema={"enum": ["formed", "stalled", "max_rounds"]},
+    ),
+    Figure(
+        "rounds",
+        int,
+        "",
+        "Rounds committed (async models: ended Look-Compute-Move cycles).",
+        Summary.COUNT,
+        Place.RESULT_LINE | Place.CSV,
+        schema=_COUNT,
+        csv="d",
+    ),
+    Figure(
+        "time",
+        float,
+        "virtual time",
+        "Async models: the virtual time the run ended at.",
+        places=Place.RESULT_LINE | Place.CSV,
+        optional=True,
+        schema=_NUMBER,
+        csv=".6f",
+    ),
+    Figure(
+        "epochs",
+        int,
+        "",
+        "Completed epochs (an epoch ends once every robot has been active since the last one "
+        "ended; a crashed robot counts as active).",
+        Summary.COUNT,
+        Place.RESULT_LINE | Place.CSV,
+        optional=True,  # records of early versions do not say
+        schema=_COUNT,
+        csv="d",
+    ),
+    Figure(
+        "looks",
+        int,
+        "",
+        "Looks over the run (robots activated, counted once a round each).",
+        Summary.SUM,
+        Place.CSV,
+        csv="d",
+    ),
+    Figure(
+        "moves",
+        int,
+        "",
+        "Moves applied over the run (the number of round lines' move entries).",
+        Summary.SUM,
+        Place.RESULT_LINE | Place.CSV,
+        schema=_COUNT,
+        csv="d",
+    ),
+    Figure(
+        "collisions",
+        int,
+        "",
+        "Collision entries over the run.",
+        Summary.SUM,
+        Place.RESULT_LINE | Place.CSV,
+        schema=_COUNT,
+        csv="d",
+    ),
+    Figure(
+        "total_distance",
+        float,
+        "robot radii",
+        "The sum of every move's traveled (robot radii).",
+        Summary.SUM,
+        Place.RESULT_LINE | Place.CSV,
+        schema=_NUMBER,
+        csv=".6f",
+    ),
+    Figure(
+        "bound",
+        float,
+        "robot radii",
+        "Sweeps: the least total distance of any run from the start to the final spots "
+        "(optimal assignment; blank without scipy).",
+        places=Place.CSV,
+        optional=True,
+        csv=".6f",
+        kept_on_error=True,
+    ),
+    Figure(
+        "ratio",
+        float,
+        "",
+        "Sweeps: total_distance / bound (blank when the bound is ~0 or unknown).",
+        places=Place.CSV,
+        optional=True,
+        csv=".6f",
+        kept_on_error=True,
+    ),
+    Figure(
+        "wall_s",
+        float,
+        "s",
+        "Sweeps: the run's wall-clock seconds.",
+        places=Place.CSV,
+        csv=".3f",
+        kept_on_error=True,
+    ),
+    Figure(
+        "min_gap",
+        float,
+        "robot radii",
+        "The smallest rim-to-rim distance between two robots after a round (centres' distance "
+        "less 2; negative: an overlap); over a run, its minimum over the rounds (how close the "
+        "swarm came to a collision). Derived from the positions, never written: every record, "
+        "old ones too, has it. None with one robot, or no round.",
+        Summary.MIN,
+        Place.CSV | Place.SUMMARY | Place.DASHBOARD | Place.DATAFRAME,
+        optional=True,
+        derive=min_gap,
+        csv=".6f",
+    ),
+)
+
+
+def place(where: Place, figures: Iterable[Figure] | None = None) -> tuple[Figure, ...]:
+    """The figures (of FIGURES, read now: a test may add one) that show `where`, in order."""
+    return tuple(f for f in (FIGURES if figures is None else figures) if where in f.places)
+
+
+def derived_figures() -> tuple[Figure, ...]:
+    """The figures that follow from the positions after each round."""
+    return tuple(f for f in FIGURES if f.derive is not None)
+
+
+def derived(positions: Points) -> dict[str, float | None]:
+    """Every derived figure of the (n, 2) positions after a round, by name."""
+    return {f.name: f.derive(positions) for f in FIGURES if f.derive is not None}
+
+
+def summarise(how: Summary, so_far: FigureValue, value: FigureValue) -> FigureValue:
+    """`so_far` (the run's value before this round; None: no round yet) with one more round's
+    `value` (None: the figure does not apply to it, and the run's value stays)."""
+    if value is None:
+        return so_far
+    if so_far is None or how == Summary.LAST:
+        return value
+    if how == Summary.MIN:
+        return min(so_far, value)
+    if how == Summary.MAX:
+        return max(so_far, value)
+    return so_far + value  # type: ignore[operator]
+
+
+class RunFolder:
+    """The run's values of the derived figures so far, fed the positions after each round (a
+    round that left every robot where it was, to the bit, reuses the last round's values: the
+    world core feeds every committed round, and many change nothing)."""
+
+    def __init__(self, values: Mapping[str, FigureValue] | None = None) -> None:
+        self.values: dict[str, FigureValue] = dict(values or {})
+        self._last: tuple[Points, dict[str, float | None]] | None = None
+
+    def add(self, positions: Points) -> None:
+        pts = np.asarray(positions, dtype=np.float64)
+        if self._last is not None and np.array_equal(self._last[0], pts):
+            rounds = self._last[1]
+        else:
+            rounds = derived(pts)
+            self._last = (pts.copy(), rounds)
+        for f in derived_figures():
+            self.values[f.name] = summarise(f.summary, self.values.get(f.name), rounds.get(f.name))
+
+    def snapshot(self) -> dict[str, FigureValue]:
+        return {f.name: self.values.get(f.name) for f in derived_figures()}
+
+
+def run_derived(rounds: Iterable[Points]) -> dict[str, FigureValue]:
+    """The run's values of the derived figures from the positions after each of its rounds."""
+    folder = RunFolder()
+    for positions in rounds:
+        folder.add(positions)
+    return folder.snapshot()
+
+
+def summary_values(values: Mapping[str, FigureValue]) -> dict[str, FigureValue]:
+    """The run's derived figures the summary, `--json` and `fatswarm.summary` show, by name
+    (None: it does not apply, e.g. no round)."""
+    return {f.name: values.get(f.name) for f in derived_figures() if Place.SUMMARY in f.places}
+
+
+def known_numbers(values: Mapping[str, FigureValue]) -> dict[str, float]:
+    """The numbers among `values` (those known: no None, no text), as floats."""
+    return {k: float(v) for k, v in values.items() if isinstance(v, int | float) and v is not True}
+
+
+def cell(figure: Figure, value: FigureValue) -> str:
+    """A sweep table's cell of `figure`: blank for None, else formatted as `figure.csv` says."""
+    if value is None:
+        return ""
+    return format(value, figure.csv) if figure.csv else str(value)
+
+
+def shown(value: FigureValue) -> str:
+    """A figure in the summary text and the dashboard: three decimals, `-` for None."""
+    if value is None:
+        return "-"
+    return f"{value:.3f}" if isinstance(value, float) else str(value)
+
+
+# -- the round line ---------------------------------------------------------------------------
+
+_SOME: Final = {"$ref": "#/$defs/someRobots"}
+_TIME: Final = {"$ref": "#/$defs/number", "minimum": 0}
+
+# The fields of the record's round line, in the schema's order (the writer keeps a line's own).
+ROUND_FIELDS: tuple[LineField, ...] = (
+    LineField("type", "", {"const": "round"}, True),
+    LineField(
+        "round", "Round number: 1, 2, ... consecutive.", {"type": "integer", "minimum": 1}, True
+    ),
+    LineField(
+        "active",
+        "The robots the scheduler activated.",
+        {"$ref": "#/$defs/robots", "minItems": 1},
+        True,
+    ),
+    LineField(
+        "moves",
+        "The applied paths (robots with a non-empty path), by robot number.",
+        {"type": "array", "items": {"$ref": "#/$defs/move"}},
+        True,
+    ),
+    LineField(
+        "positions", "Every robot's position after the round.", {"$ref": "#/$defs/points"}, True
+    ),
+    LineField(
+        "collisions",
+        "Contacts that stopped a mover.",
+        {"type": "array", "items": {"$ref": "#/$defs/collision"}},
+        True,
+    ),
+    LineField(
+        "timed_out",
+        "Active robots whose move did not arrive in time (their agent was slow, gone, or its "
+        "compute failed).",
+        _SOME,
+    ),
+    LineField(
+        "crashed",
+        "Robots that count as crashed from this round (their agent gone for 4n rounds, at "
+        "least 10).",
+        _SOME,
+    ),
+    LineField("recovered", "Crashed robots whose agent came back.", _SOME),
+    LineField("cut", "--non-rigid: robots whose move the adversary stopped short.", _SOME),
+    LineField(
+        "crash", "--crash: robots the crash adversary crashes in this round, for good.", _SOME
+    ),
+    LineField("look", "Async models: the virtual time of the Look this cycle began with.", _TIME),
+    LineField(
+        "start",
+        "Async models: the virtual time the move starts (robots move at unit speed from then "
+        "on); the Look's time for a cycle that stays.",
+        _TIME,
+    ),
+    LineField(
+        "end",
+        "Async models: the virtual time the cycle ends (its move's end, or its Look when it "
+        "stays); positions are every robot's at this time.",
+        _TIME,
+    ),
+    LineField(
+        "origin",
+        "Async models: where the move starts (the robot's position at its Look).",
+        {"$ref": "#/$defs/point"},
+    ),
+    LineField(
+        "lights",
+        "Luminous algorithms: every robot's colour at this line (rounds: after the round's moves "
+        "started; async: at end), robot i at index i (n of them).",
+        {"type": "array", "items": {"$ref": "#/$defs/colour"}, "minItems": 1},
+    ),
+    LineField(
+        "views",
+        "--record-views: for each robot that Looked in the round (async: the cycle's robot), "
+        "keyed by its number as a string, the robots it was shown, increasing (possibly none).",
+        {
+            "type": "object",
+            "propertyNames": {"pattern": "^(0|[1-9][0-9]*)$"},
+            "additionalProperties": {"$ref": "#/$defs/robots"},
+        },
+    ),
+)
+ROBOT_LISTS: Final = ("timed_out", "crashed", "recovered", "cut", "crash")  # written if not empty
+ASYNC_TIMES: Final = ("look", "start", "end", "origin")  # an async cycle's line has all four
+
+# The result line: the fields before its figures, each with its schema.
+RESULT_HEAD: tuple[LineField, ...] = (
+    LineField("type", "", {"const": "result"}, True),
+    LineField("status", "", {"enum": ["formed", "stalled", "max_rounds"]}, True),
+    LineField("rounds", "Rounds committed.", {"type": "integer", "minimum": 0}, True),
+    LineField("positions", "Final positions.", {"$ref": "#/$defs/points"}, True),
+)
+
+
+def _property(help_text: str, schema: Mapping[str, Any]) -> dict[str, Any]:
+    return {"description": help_text, **schema} if help_text else dict(schema)
+
+
+def record_schema(template: Mapping[str, Any]) -> dict[str, Any]:
+    """docs/record.schema.json: `template` (the file as it is) with the round and result lines'
+    properties and required keys generated from ROUND_FIELDS, RESULT_HEAD and FIGURES."""
+    schema: dict[str, Any] = json_copy(template)
+    line = schema["$defs"]["round"]
+    line["properties"] = {f.name: _property(f.help, f.schema) for f in ROUND_FIELDS}
+    line["required"] = [f.name for f in ROUND_FIELDS if f.required]
+    line["dependentRequired"] = {
+        key: [other for other in ASYNC_TIMES if other != key] for key in ASYNC_TIMES
+    }
+    result = schema["$defs"]["result"]
+    head = {f.name: _property(f.help, f.schema) for f in RESULT_HEAD}
+    result["properties"] = head | {
+        f.name: _property(f.help, f.schema) for f in place(Place.RESULT_LINE) if f.name not in head
+    }
+    result["required"] = [f.name for f in RESULT_HEAD if f.required]
+    derived_help = ", ".join(f.name for f in derived_figures())
+    result["description"] = (
+        "The last line: how the run ended (absent while it runs, or if it never ended). "
+        f"Figures that follow from the positions ({derived_help or 'none'}) are not written: "
+        "readers derive them (fatswarm.domain.figures)."
+    )
+    return schema
+
+
+def json_copy(obj: Any) -> Any:
+    """A deep copy of JSON-like data (dicts and lists copied, keeping key order)."""
+    if isinstance(obj, Mapping):
+        return {k: json_copy(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [json_copy(v) for v in obj]
+    return obj
+
+
+def schema_text(schema: Mapping[str, Any]) -> str:
+    """The schema file's text: two-space JSON, one trailing newline."""
+    return json.dumps(schema, indent=2, ensure_ascii=False) + "\n"
+
+
+def write_record_schema(path: str) -> bool:
+    """Regenerate the schema file at `path` from the declaration (its other parts kept); True if
+    it changed. A file that already says what the declaration generates (as JSON: its layout is
+    free, so hand edits of the header's part stay as they are written) is left alone; one that
+    does not is written again, two-space JSON. `python -m fatswarm.domain.figures` runs it."""
+    with open(path, encoding="utf-8") as fh:
+        old = json.loads(fh.read())
+    new = record_schema(old)
+    if new == old:
+        return False
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(schema_text(new))
+    return True
+
+
+def names(figures: Sequence[Figure]) -> tuple[str, ...]:
+    return tuple(f.name for f in figures)
+
+
+__all__ = [
+    "ASYNC_TIMES",
+    "FIGURES",
+    "PAIRWISE_UP_TO",
+    "RADIUS",
+    "RESULT_HEAD",
+    "ROBOT_LISTS",
+    "ROUND_FIELDS",
+    "Derive",
+    "Figure",
+    "FigureValue",
+    "LineField",
+    "Place",
+    "RunFolder",
+    "Summary",
+    "cell",
+    "derived",
+    "derived_figures",
+    "json_copy",
+    "known_numbers",
+    "min_gap",
+    "names",
+    "place",
+    "record_schema",
+    "run_derived",
+    "schema_text",
+    "shown",
+    "summarise",
+    "summary_values",
+    "write_record_schema",
+]
+
+
+if __name__ == "__main__":
+    import sys
+
+    for target in sys.argv[1:] or ["docs/record.schema.json"]:
+        print(f"{target}: {'regenerated' if write_record_schema(target) else 'up to date'}")
