@@ -17,23 +17,12 @@ import fatswarm
 from fatswarm.deploy import cli
 from fatswarm.deploy.engine.lockstep import RoundReport
 from fatswarm.deploy.net.launcher import read_outcome
-from fatswarm.deploy.sweep import table
-from fatswarm.deploy.sweep.pool import RunTable
 from fatswarm.deploy.view import panels, replay
 from fatswarm.deploy.view.dashboard import frame_from_state
 from fatswarm.domain.figures import min_gap
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.wire import unpack
 from fatswarm.world.protocol import AgentInfo, WorldState
-
-# a sweep table of the fatswarm before min_gap (its header and a row, as it wrote them)
-BEFORE_MIN_GAP = (
-    "algorithm,n,start,scheduler,seed,params,max_rounds,non_rigid,crash,status,rounds,time,epochs,"
-    "looks,moves,collisions,total_distance,bound,ratio,wall_s,values,round_cap,error,warning,"
-    "fatswarm_version,command\n"
-    "uniform-circle,4,clustered,fsync,0,,,,,formed,6,,6,24,5,0,4.798929,4.389946,1.093164,0.081,"
-    "a=4.0,140,,,0.1.0,fatswarm run --lockstep -n 4 --seed 0 --start clustered --scheduler fsync\n"
-)
 
 
 def brute(positions: np.ndarray) -> float:
@@ -132,26 +121,6 @@ def test_min_gap_reaches_json_and_the_summary(
     assert fields["min_gap"] == min(min_gap(r.positions) or math.inf for r in rounds)
     cli.main(["run", "--lockstep", "-n", "5", "--seed", "2", "--record", str(out), "--force"])
     assert f"min gap {fields['min_gap']:.3f}" in capsys.readouterr().out
-
-
-def test_min_gap_is_a_sweep_column_and_an_older_table_resumes(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    out = tmp_path / "runs.csv"
-    out.write_text(BEFORE_MIN_GAP)
-    argv = ["sweep", "-n", "4", "--seeds", "1", "--scheduler", "fsync,ssync", "--out", str(out)]
-    assert cli.main(argv) == 0
-    assert "1 run" in capsys.readouterr().err  # the fsync run was there: one to go
-    table_ = RunTable.open(str(out))
-    try:
-        old, new = table_.rows
-    finally:
-        table_.close()
-    assert "min_gap" in table.plain_columns() and out.read_text().startswith(
-        table.header_line(table.plain_columns())
-    )
-    assert old["min_gap"] == "" and old["rounds"] == "6"  # not measured then
-    assert float(new["min_gap"]) >= 0.0  # a collision-free ssync run
 
 
 def test_an_old_record_has_min_gap_and_so_has_the_networked_summary_of_it() -> None:
