@@ -23,7 +23,7 @@ from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
-from fatswarm.domain.robot_model import PAPER_MODEL, Lights, ModelError, RobotModel
+from fatswarm.domain.robot_model import AXES, PAPER_MODEL, Lights, ModelError, RobotModel
 from fatswarm.domain.seam import AlgorithmError, AlgorithmParamsError, Configured, parse_assignments
 from fatswarm.domain.tolerance import UnsupportedInputError, check_supported
 
@@ -182,13 +182,10 @@ class RunSetup:
     record_views: bool = False  # each record line names what each looker saw
 
 
-MODEL_FLAGS: Final = ("visibility", "sight", "lights", "frames", "frame_change")
-
-
 def model_from_args(args: argparse.Namespace) -> RobotModel:
-    """The robot model that `--visibility`, `--sight`, `--lights`, `--frames` and `--frame-change`
-    ask for (unset ones: the paper's); raises ModelError."""
-    given = {key: getattr(args, key, None) for key in MODEL_FLAGS}
+    """The robot model that the flags of its axes (`AXES`: `--visibility`, `--sight`...) ask for
+    (unset ones: the paper's); raises ModelError."""
+    given = {a.name: getattr(args, a.name, None) for a in AXES}
     return RobotModel.of(**{k: v for k, v in given.items() if v is not None})
 
 
@@ -336,7 +333,6 @@ __all__ = [
     "DEFAULT_N",
     "DEFAULT_SCHEDULER",
     "DEFAULT_START",
-    "MODEL_FLAGS",
     "RunConfig",
     "RunInputError",
     "RunSetup",
