@@ -89,7 +89,7 @@ def add_robot_model_arguments(p: argparse.ArgumentParser, *, lists: bool = False
     group = p.add_argument_group("robot model (docs/model.md; default: the paper's)")
     for axis in AXES:
         if lists:
-            shown = ",".join(axis.words) if axis.words else "V,..."
+            shown = ",".join(axis.words) if axis.words else f"{axis.metavar},..."
             default = f"'{axis.unset}' is no limit" if axis.unset else "default the first"
             if not axis.words and not axis.unset:
                 default = f"default {axis.default:g}" if isinstance(axis.default, float) else ""
@@ -103,7 +103,9 @@ def add_robot_model_arguments(p: argparse.ArgumentParser, *, lists: bool = False
         elif axis.words:
             group.add_argument(axis.flag, choices=axis.words, default=None, help=axis.help)
         else:
-            group.add_argument(axis.flag, type=float, default=None, metavar="V", help=axis.help)
+            group.add_argument(
+                axis.flag, type=float, default=None, metavar=axis.metavar, help=axis.help
+            )
     group.add_argument(
         "--record-views",
         action="store_true",

@@ -77,6 +77,7 @@ class Axis:
     inclusive: bool = False
     tag: str = ""
     always: bool = True
+    metavar: str = "V"  # a number axis's value in `--help`
 
     @property
     def flag(self) -> str:
