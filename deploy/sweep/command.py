@@ -69,7 +69,7 @@ MISSING_SCIPY: Final = (
 )
 DESCRIPTION: Final = (
     "Run a grid of lock-step runs (algorithm x n x start kind x scheduler x non-rigid delta x "
-    "robot model (visibility x sight x lights x frames x frame change) x crash count x seeds) "
+    "robot model (its axes: docs/model.md) x crash count x seeds) "
     "on every core, appending one CSV row per run (outcome, cost, the "
     "distance's ratio to the optimal-assignment bound, the virtual time of async runs, wall "
     "time, the configuration and the `fatswarm run --lockstep` command that repeats it). "
