@@ -206,6 +206,20 @@ class RobotModel:
             literature="fixed / variable frames",
         ),
     )
+    noise: float = field(
+        default=0.0,
+        metadata=axis(
+            help="inaccurate sensors: each position a Look shows is off by a Gaussian error of "
+            "standard deviation SIGMA in each axis (>= 0, robot radii; default 0: exact), drawn "
+            "by the world from the seed, the robot and its Look",
+            literature="inaccurate sensors (error sigma; Cohen and Peleg 2008)",
+            above=0.0,
+            inclusive=True,
+            tag="noise",
+            always=False,
+            metavar="SIGMA",
+        ),
+    )
 
     @staticmethod
     def of(*values: object, **named: object) -> RobotModel:
