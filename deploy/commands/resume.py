@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import os
 import shlex
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 from fatswarm.coordinator.schedule import make_scheduler
@@ -23,12 +23,12 @@ from fatswarm.deploy.view.summary import counted, unit
 from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.registry import load_algorithm
-from fatswarm.domain.robot_model import AXES, RobotModel
+from fatswarm.domain.robot_model import AXES
 from fatswarm.domain.seam import Configured, parse_assignments
 from fatswarm.world.physics import validate_configuration
-from fatswarm.world.record import RecordFormatError
+from fatswarm.world.record import DEFAULT_SCALE, RecordFormatError
 from fatswarm.world.record_read import read_record
-from fatswarm.world.setup import header_crash, header_non_rigid
+from fatswarm.world.setup import WorldSetup
 
 if TYPE_CHECKING:
     from fatswarm.domain.path import Points
@@ -43,40 +43,31 @@ def resolve_resume(args: argparse.Namespace) -> RunSetup:
     are fine)."""
     # the whole lock-step engine: the CLI imports this module (through deploy.commands.run) to
     # build its parser
-    from fatswarm.deploy.engine.lockstep import default_max_rounds
+    from fatswarm.deploy.engine.lockstep import LOCKSTEP_SWARM, default_max_rounds
 
     path: str = args.record
     record = read_resumable(path)
     h = record.header
     if h.seed is None:
         raise RunInputError(f"--resume: {path} does not say its seed; its run cannot be continued")
-    cap = _recorded_cap(h)
+    recorded = WorldSetup.from_header(h, LOCKSTEP_SWARM, None)  # (its header is not written again)
     _check_values(args, h, path)
-    check_against_header(args, h, cap, path)
+    check_against_header(args, recorded, path)
     params = Configured.of(load_algorithm(h.algorithm_ref), h.n, h.params)
     params.check_start(h.initial)
     initial = validate_configuration(h.initial)
-    recorded_k = _recorded_fairness(h)
-    fairness = args.fairness if args.fairness is not None else recorded_k
-    schedule = args.schedule
-    if schedule is None and isinstance(h.extra.get("schedule"), str):
-        schedule = h.extra["schedule"]  # the script the run was made with, where it was
+    fairness = args.fairness if args.fairness is not None else recorded.fairness
+    # the script the run was made with, where it was, unless --schedule says where it is now
+    schedule = args.schedule if args.schedule is not None else recorded.schedule
     scheduler = make_scheduler(h.scheduler, h.n, h.seed, schedule, fairness)
+    cap = (
+        recorded.max_rounds
+        if recorded.max_rounds is not None and recorded.max_rounds >= 1
+        else None
+    )
     if cap is None:  # a header without its cap: as the run would have had it
         cap = args.max_rounds or default_max_rounds(h.n, h.scheduler)
-    return RunSetup(
-        h.seed,
-        params,
-        initial,
-        scheduler,
-        cap,
-        record,
-        h.algorithm_ref,
-        non_rigid=header_non_rigid(h),
-        crash=header_crash(h),
-        robot_model=RobotModel.from_header(h.extra.get("model")),
-        record_views=h.extra.get("record_views") is True,
-    )
+    return RunSetup(replace(recorded, initial=initial, max_rounds=cap), params, scheduler, record)
 
 
 def _check_values(args: argparse.Namespace, header: Header, path: str) -> None:
@@ -93,18 +84,6 @@ def _check_values(args: argparse.Namespace, header: Header, path: str) -> None:
     check_fairness(args.fairness, header.scheduler)
     check_non_rigid(getattr(args, "non_rigid", None))
     check_crash(getattr(args, "crash", None), header.n)
-
-
-def _recorded_cap(header: Header) -> int | None:
-    """The header's round cap, if it says one (a whole number >= 1)."""
-    saved = header.extra.get("max_rounds")
-    return saved if isinstance(saved, int) and not isinstance(saved, bool) and saved >= 1 else None
-
-
-def _recorded_fairness(header: Header) -> int | None:
-    """The header's fairness bound, if it says one."""
-    k = header.extra.get("fairness")
-    return k if isinstance(k, int) and not isinstance(k, bool) else None
 
 
 def read_resumable(path: str) -> RunRecord:
@@ -194,91 +173,90 @@ class Contradiction:
     recorded: str  # what the record says, after "whose run": `has n=8`
 
 
-def check_against_header(
-    args: argparse.Namespace, header: Header, cap: int | None, path: str
-) -> None:
-    """Refuse (RunInputError, one line) the flags given with --resume that contradict the record's
-    header: every one of them, each with both values; `cap`: the header's round cap, if it says
-    one."""
-    found = contradictions(args, header, cap)
+def check_against_header(args: argparse.Namespace, recorded: WorldSetup, path: str) -> None:
+    """Refuse (RunInputError, one line) the flags given with --resume that contradict the
+    record's settings (`WorldSetup.from_header`): every one of them, each with both values."""
+    found = contradictions(args, recorded)
     if found:
         said = "; ".join(f"{c.given} contradicts {path}, whose run {c.recorded}" for c in found)
         flags = ", ".join(dict.fromkeys(c.flag for c in found))
         raise RunInputError(f"{said}; drop {flags} to resume it")
 
 
-def contradictions(
-    args: argparse.Namespace, header: Header, cap: int | None
-) -> list[Contradiction]:
-    """Every flag given with --resume that contradicts the record's header, in one pass over the
-    run's settings: the algorithm and its parameters, n, a, seed, scheduler, round cap, start,
-    fairness, adversary, the robot model's axes (`AXES`) and --record-views. A flag not given
-    never contradicts (its default may be the record's)."""
-    h = header
+def contradictions(args: argparse.Namespace, settings: WorldSetup) -> list[Contradiction]:
+    """Every flag given with --resume that contradicts the record's settings, in one pass over
+    them: the algorithm and its parameters, n, a, seed, scheduler, round cap, fairness, start,
+    adversary, the robot model's axes (`AXES`) and --record-views. A flag not given never
+    contradicts (its default may be the record's)."""
+    h = settings
+    cap = h.max_rounds if h.max_rounds is not None and h.max_rounds >= 1 else None
     found: list[Contradiction] = []
 
     def differs(flag: str, given: object, recorded: str) -> None:
         shown = _number(given) if isinstance(given, float) else given
         found.append(Contradiction(flag, f"{flag} {shown}", recorded))
 
-    if flag_given(args, "algorithm") and args.algorithm != h.algorithm_ref:
-        differs("--algorithm", args.algorithm, f"has algorithm {h.algorithm_ref}")
+    if flag_given(args, "algorithm") and args.algorithm != h.algorithm:
+        differs("--algorithm", args.algorithm, f"has algorithm {h.algorithm}")
     for name, text in parse_assignments(list(getattr(args, "param", []) or [])).items():
-        recorded = h.params.get(name)
-        if recorded is None or (str(recorded) != text and _as_number(text) != recorded):
-            found.append(
-                Contradiction("--param", f"--param {name}={text}", f"has {name}={recorded}")
-            )
+        value = h.params.get(name)
+        if value is None or (str(value) != text and _as_number(text) != value):
+            found.append(Contradiction("--param", f"--param {name}={text}", f"has {name}={value}"))
+    side = _side(h)
     plain: list[tuple[str, str, Any, Any, str]] = [
         ("-n", "n", args.n, h.n, f"n={h.n}"),
-        ("-a", "a", args.a, h.a, f"a={_number(h.a)}"),
+        ("-a", "a", args.a, side, f"a={_number(side)}"),
         ("--seed", "seed", args.seed, h.seed, f"seed={h.seed}"),
         ("--scheduler", "scheduler", args.scheduler, h.scheduler, f"scheduler={h.scheduler}"),
         ("--max-rounds", "max_rounds", args.max_rounds, cap, f"max_rounds={cap}"),
-        ("--fairness", "fairness", args.fairness, _recorded_fairness(h), "fairness={}"),
+        ("--fairness", "fairness", args.fairness, h.fairness, "fairness={}"),
     ]
     for flag, dest, value, recorded, says in plain:
         if flag_given(args, dest) and recorded is not None and value != recorded:
             differs(flag, value, "has " + says.format(recorded))
     if args.init is not None:
         _check_init(args.init, h, found)
-    elif flag_given(args, "start") and h.seed is not None:
+    elif flag_given(args, "start"):
         _check_start(args.start, h, found)
     _check_adversary(args, h, found)
     _check_model(args, h, found)
     return found
 
 
-def _check_adversary(args: argparse.Namespace, header: Header, found: list[Contradiction]) -> None:
+def _check_adversary(
+    args: argparse.Namespace, recorded: WorldSetup, found: list[Contradiction]
+) -> None:
     """A --non-rigid or a --crash that is not the record's."""
-    delta, given_delta = header_non_rigid(header), getattr(args, "non_rigid", None)
+    delta, given_delta = recorded.non_rigid, getattr(args, "non_rigid", None)
     if given_delta is not None and given_delta != delta:
         says = "rigid moves" if delta is None else f"non_rigid={delta:g}"
         found.append(Contradiction("--non-rigid", f"--non-rigid {given_delta:g}", f"has {says}"))
-    f, given_f = header_crash(header), getattr(args, "crash", None)
+    f, given_f = recorded.crash, getattr(args, "crash", None)
     if given_f is not None and given_f != f:
         says = "no crashes" if f is None else f"crash={f}"
         found.append(Contradiction("--crash", f"--crash {given_f}", f"has {says}"))
 
 
-def _check_model(args: argparse.Namespace, header: Header, found: list[Contradiction]) -> None:
+def _check_model(
+    args: argparse.Namespace, recorded: WorldSetup, found: list[Contradiction]
+) -> None:
     """A robot-model flag (one per axis of `AXES`) or a --record-views that is not the
     record's."""
-    recorded = RobotModel.from_header(header.extra.get("model"))
+    model = recorded.robot_model
     for axis in AXES:
         given = getattr(args, axis.name, None)
-        if given is not None and axis.check(given) != recorded.value(axis.name):
-            says = axis.text(recorded.value(axis.name)) or "none"
+        if given is not None and axis.check(given) != model.value(axis.name):
+            says = axis.text(model.value(axis.name)) or "none"
             found.append(
                 Contradiction(axis.flag, f"{axis.flag} {given}", f"has {axis.name}={says}")
             )
-    if getattr(args, "record_views", False) and header.extra.get("record_views") is not True:
+    if getattr(args, "record_views", False) and not recorded.record_views:
         found.append(Contradiction("--record-views", "--record-views", "does not record views"))
 
 
-def _check_init(init: str, header: Header, found: list[Contradiction]) -> None:
+def _check_init(init: str, recorded: WorldSetup, found: list[Contradiction]) -> None:
     """An --init file whose start is not the record's."""
-    h = header
+    h = recorded
     positions, _ = load_init(init)
     if len(positions) != h.n:
         says = f"has n={h.n} (the file {len(positions)} robots)"
@@ -291,11 +269,10 @@ def _check_init(init: str, header: Header, found: list[Contradiction]) -> None:
         found.append(Contradiction("--init", f"--init {init}", says))
 
 
-def _check_start(kind: str, header: Header, found: list[Contradiction]) -> None:
+def _check_start(kind: str, recorded: WorldSetup, found: list[Contradiction]) -> None:
     """A --start kind whose start of the record's seed is not the record's start."""
-    h = header
-    assert h.seed is not None
-    where = _first_difference(random_start(h.n, h.seed, kind, h.a), h.initial)
+    h = recorded
+    where = _first_difference(random_start(h.n, h.seed, kind, _side(h)), h.initial)
     if where is not None:
         robot, mine, theirs = where
         says = (
@@ -303,6 +280,12 @@ def _check_start(kind: str, header: Header, found: list[Contradiction]) -> None:
             f"{theirs}, not at {mine})"
         )
         found.append(Contradiction("--start", f"--start {kind}", says))
+
+
+def _side(recorded: WorldSetup) -> float:
+    """The paper's side `a` of the record's run, as its header gives it (`Header.a`)."""
+    value = recorded.params.get("a", DEFAULT_SCALE)
+    return float(value) if isinstance(value, (int, float)) else DEFAULT_SCALE
 
 
 def _as_number(text: str) -> float | None:

@@ -76,7 +76,7 @@ def resolve_run(args: argparse.Namespace, seed: int) -> RunSetup:
     check_start_flags(args)
     if getattr(args, "resume", False):
         return resolve_resume(args)
-    return RunConfig.from_args(args, seed).resolve()
+    return RunConfig.from_args(args, seed).resolve(networked=not getattr(args, "lockstep", True))
 
 
 __all__ = [

@@ -187,7 +187,7 @@ def model_fields(setup: RunSetup) -> dict[str, Any]:
     """The header fields a run's summary names: its model (if not the paper's) and the line saying
     that its frames are outside the algorithm's assumption (if they are)."""
     # here, not at the top: the CLI imports this module to build its parser
-    from fatswarm.world.core import outside_assumption
+    from fatswarm.world.setup import outside_assumption
 
     model = setup.robot_model
     return {
@@ -270,16 +270,7 @@ def _run_lockstep(
             record=None if record is None else _Counted(record, watch),
             on_round=watch,
             history=None if setup.resumed is None else setup.resumed.rounds,
-            algorithm_ref=setup.algorithm_ref,
-            header_extra=(
-                {}
-                if setup.config is None
-                else setup.config.header_extra(networked=False, n=setup.params.n)
-            ),
-            non_rigid=setup.non_rigid,
-            crash=setup.crash,
-            robot_model=setup.robot_model,
-            record_views=setup.record_views,
+            settings=setup.settings,
         )
     except InvalidConfigurationError as exc:
         return _fail(f"invalid start: {exc}")

@@ -130,12 +130,7 @@ def _run_config(
             max_rounds=setup.max_rounds,
             record=writer,
             on_round=on_round,
-            algorithm_ref=setup.algorithm_ref,
-            header_extra=config.header_extra(networked=False, n=setup.params.n),
-            non_rigid=setup.non_rigid,
-            crash=setup.crash,
-            robot_model=setup.robot_model,
-            record_views=setup.record_views,
+            settings=setup.settings,
         )
     finally:
         if writer is not None:

@@ -27,6 +27,7 @@ from fatswarm.deploy.sweep.grid import (
 )
 from fatswarm.domain.robot_model import AXES, PAPER_MODEL, Axis, RobotModel
 from fatswarm.world.record import Header
+from fatswarm.world.setup import WorldSetup
 
 
 def other_value(axis: Axis) -> str:
@@ -71,7 +72,7 @@ def test_every_axis_is_a_keyword_of_the_api_and_a_resume_check(axis: Axis) -> No
     assert parameter.kind is inspect.Parameter.KEYWORD_ONLY
     header = Header(3, 0, "fsync", np.zeros((3, 2)))  # the paper's model: no `model`
     args = parser(add_run_arguments).parse_args([axis.flag, other_value(axis)])
-    (found,) = contradictions(args, header, None)
+    (found,) = contradictions(args, WorldSetup.from_header(header, "s", None))
     assert found.flag == axis.flag
 
 
