@@ -50,6 +50,18 @@ def flag_given(args: argparse.Namespace, dest: str) -> bool:
     return getattr(args, dest, None) is not None
 
 
+def given_flags(args: argparse.Namespace) -> dict[str, Any]:
+    """The flags the user gave, by dest, with their values (`flag_given`: the TRACKED ones as
+    `StoreGiven` listed them, the others not None, a `store_true` one when set): what --resume
+    holds against the record's settings."""
+    skip = {GIVEN, "_argv", "_networked_flags"}
+    return {
+        dest: value
+        for dest, value in vars(args).items()
+        if dest not in skip and value is not False and value != [] and flag_given(args, dest)
+    }
+
+
 def check_start_flags(args: argparse.Namespace) -> None:
     """Refuse `--start` beside `--init` rather than ignore it: the file is the start
     (RunInputError)."""

@@ -7,7 +7,7 @@ import argparse
 import os
 import shlex
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy.engine.config import (
@@ -17,13 +17,13 @@ from fatswarm.deploy.engine.config import (
     check_fairness,
     check_non_rigid,
 )
-from fatswarm.deploy.flags import flag_given
+from fatswarm.deploy.flags import given_flags
 from fatswarm.deploy.scenarios.starts import load_init, random_start
 from fatswarm.deploy.view.summary import counted, unit
 from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.registry import load_algorithm
-from fatswarm.domain.robot_model import AXES
+from fatswarm.domain.robot_model import AXES, AXIS_NAMES, axis_named
 from fatswarm.domain.seam import Configured, parse_assignments
 from fatswarm.world.physics import validate_configuration
 from fatswarm.world.record import DEFAULT_SCALE, RecordFormatError
@@ -183,75 +183,70 @@ def check_against_header(args: argparse.Namespace, recorded: WorldSetup, path: s
         raise RunInputError(f"{said}; drop {flags} to resume it")
 
 
-def contradictions(args: argparse.Namespace, settings: WorldSetup) -> list[Contradiction]:
+def contradictions(args: argparse.Namespace, recorded: WorldSetup) -> list[Contradiction]:
     """Every flag given with --resume that contradicts the record's settings, in one pass over
     them: the algorithm and its parameters, n, a, seed, scheduler, round cap, fairness, start,
-    adversary, the robot model's axes (`AXES`) and --record-views. A flag not given never
+    adversary, each axis of the robot model (`AXES`) and --record-views. A flag not given never
     contradicts (its default may be the record's)."""
-    h = settings
-    cap = h.max_rounds if h.max_rounds is not None and h.max_rounds >= 1 else None
+    h = recorded
+    given = given_flags(args)
     found: list[Contradiction] = []
-
-    def differs(flag: str, given: object, recorded: str) -> None:
-        shown = _number(given) if isinstance(given, float) else given
-        found.append(Contradiction(flag, f"{flag} {shown}", recorded))
-
-    if flag_given(args, "algorithm") and args.algorithm != h.algorithm:
-        differs("--algorithm", args.algorithm, f"has algorithm {h.algorithm}")
-    for name, text in parse_assignments(list(getattr(args, "param", []) or [])).items():
+    for name, text in parse_assignments(list(given.get("param") or [])).items():
         value = h.params.get(name)
         if value is None or (str(value) != text and _as_number(text) != value):
             found.append(Contradiction("--param", f"--param {name}={text}", f"has {name}={value}"))
+    cap = h.max_rounds if h.max_rounds is not None and h.max_rounds >= 1 else None
     side = _side(h)
-    plain: list[tuple[str, str, Any, Any, str]] = [
-        ("-n", "n", args.n, h.n, f"n={h.n}"),
-        ("-a", "a", args.a, side, f"a={_number(side)}"),
-        ("--seed", "seed", args.seed, h.seed, f"seed={h.seed}"),
-        ("--scheduler", "scheduler", args.scheduler, h.scheduler, f"scheduler={h.scheduler}"),
-        ("--max-rounds", "max_rounds", args.max_rounds, cap, f"max_rounds={cap}"),
-        ("--fairness", "fairness", args.fairness, h.fairness, "fairness={}"),
+    # (flag, dest, the record's value, what it says after "whose run"); `known`: False where
+    # the record does not say (an old header without its cap or fairness): no flag contradicts
+    rows: list[tuple[str, str, object, str, bool]] = [
+        ("--algorithm", "algorithm", h.algorithm, f"has algorithm {h.algorithm}", True),
+        ("-n", "n", h.n, f"has n={h.n}", True),
+        ("-a", "a", side, f"has a={_number(side)}", True),
+        ("--seed", "seed", h.seed, f"has seed={h.seed}", True),
+        ("--scheduler", "scheduler", h.scheduler, f"has scheduler={h.scheduler}", True),
+        ("--max-rounds", "max_rounds", cap, f"has max_rounds={cap}", cap is not None),
+        (
+            "--fairness",
+            "fairness",
+            h.fairness,
+            f"has fairness={h.fairness}",
+            h.fairness is not None,
+        ),
+        ("--non-rigid", "non_rigid", h.non_rigid, _says_non_rigid(h.non_rigid), True),
+        (
+            "--crash",
+            "crash",
+            h.crash,
+            "has no crashes" if h.crash is None else f"has crash={h.crash}",
+            True,
+        ),
+        *(
+            (a.flag, a.name, v, f"has {a.name}={a.text(v) or 'none'}", True)
+            for a in AXES
+            for v in [h.robot_model.value(a.name)]
+        ),
+        ("--record-views", "record_views", h.record_views, "does not record views", True),
     ]
-    for flag, dest, value, recorded, says in plain:
-        if flag_given(args, dest) and recorded is not None and value != recorded:
-            differs(flag, value, "has " + says.format(recorded))
-    if args.init is not None:
-        _check_init(args.init, h, found)
-    elif flag_given(args, "start"):
-        _check_start(args.start, h, found)
-    _check_adversary(args, h, found)
-    _check_model(args, h, found)
+    for flag, dest, theirs, says, known in rows:
+        if dest in given and known and _value(dest, given[dest]) != theirs:
+            mine = given[dest]
+            shown = "" if mine is True else f" {_number(mine) if isinstance(mine, float) else mine}"
+            found.append(Contradiction(flag, f"{flag}{shown}", says))
+    if "init" in given:
+        _check_init(given["init"], h, found)
+    elif "start" in given:
+        _check_start(given["start"], h, found)
     return found
 
 
-def _check_adversary(
-    args: argparse.Namespace, recorded: WorldSetup, found: list[Contradiction]
-) -> None:
-    """A --non-rigid or a --crash that is not the record's."""
-    delta, given_delta = recorded.non_rigid, getattr(args, "non_rigid", None)
-    if given_delta is not None and given_delta != delta:
-        says = "rigid moves" if delta is None else f"non_rigid={delta:g}"
-        found.append(Contradiction("--non-rigid", f"--non-rigid {given_delta:g}", f"has {says}"))
-    f, given_f = recorded.crash, getattr(args, "crash", None)
-    if given_f is not None and given_f != f:
-        says = "no crashes" if f is None else f"crash={f}"
-        found.append(Contradiction("--crash", f"--crash {given_f}", f"has {says}"))
+def _value(dest: str, given: object) -> object:
+    """A flag's value as the settings hold it (a robot-model axis's: its member or number)."""
+    return axis_named(dest).check(given) if dest in AXIS_NAMES else given
 
 
-def _check_model(
-    args: argparse.Namespace, recorded: WorldSetup, found: list[Contradiction]
-) -> None:
-    """A robot-model flag (one per axis of `AXES`) or a --record-views that is not the
-    record's."""
-    model = recorded.robot_model
-    for axis in AXES:
-        given = getattr(args, axis.name, None)
-        if given is not None and axis.check(given) != model.value(axis.name):
-            says = axis.text(model.value(axis.name)) or "none"
-            found.append(
-                Contradiction(axis.flag, f"{axis.flag} {given}", f"has {axis.name}={says}")
-            )
-    if getattr(args, "record_views", False) and not recorded.record_views:
-        found.append(Contradiction("--record-views", "--record-views", "does not record views"))
+def _says_non_rigid(delta: float | None) -> str:
+    return "has rigid moves" if delta is None else f"has non_rigid={delta:g}"
 
 
 def _check_init(init: str, recorded: WorldSetup, found: list[Contradiction]) -> None:
