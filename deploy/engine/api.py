@@ -155,7 +155,12 @@ def _signature() -> inspect.Signature:
     shown = inspect.signature(run)
     kept = [p for p in shown.parameters.values() if p.kind is not p.VAR_KEYWORD]
     axes = [
-        inspect.Parameter(a.name, inspect.Parameter.KEYWORD_ONLY, default=_plain_default(a))
+        inspect.Parameter(
+            a.name,
+            inspect.Parameter.KEYWORD_ONLY,
+            default=_plain_default(a),
+            annotation="str" if a.choices else "float | None" if a.unset else "float",
+        )
         for a in AXES
     ]
     return shown.replace(parameters=[*kept, *axes])
