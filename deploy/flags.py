@@ -12,6 +12,7 @@ from fatswarm.deploy.engine.config import (
     RunInputError,
 )
 from fatswarm.domain.registry import DEFAULT
+from fatswarm.domain.robot_model import AXES
 
 
 class Terminated(BaseException):
@@ -49,6 +50,18 @@ def flag_given(args: argparse.Namespace, dest: str) -> bool:
     return getattr(args, dest, None) is not None
 
 
+def given_flags(args: argparse.Namespace) -> dict[str, Any]:
+    """The flags the user gave, by dest, with their values (`flag_given`: the TRACKED ones as
+    `StoreGiven` listed them, the others not None, a `store_true` one when set): what --resume
+    holds against the record's settings."""
+    skip = {GIVEN, "_argv", "_networked_flags"}
+    return {
+        dest: value
+        for dest, value in vars(args).items()
+        if dest not in skip and value is not False and value != [] and flag_given(args, dest)
+    }
+
+
 def check_start_flags(args: argparse.Namespace) -> None:
     """Refuse `--start` beside `--init` rather than ignore it: the file is the start
     (RunInputError)."""
@@ -81,47 +94,30 @@ def add_algorithm_arguments(p: argparse.ArgumentParser, *, params: bool = True) 
         )
 
 
-MODEL_HELP: Final = {
-    "visibility": "transparent: robots never hide one another (the paper's); opaque: a robot sees "
-    "another if some point of its disc is reachable from the observer's centre by a segment "
-    "crossing no third disc; opaque-centres: if the segment between the centres crosses none",
-    "sight": "a robot sees only the robots whose centre is within V of its own (V > 0, robot "
-    "radii; default unlimited)",
-    "lights": "whose colours a luminous algorithm reads: full (its own and the seen robots'), "
-    "internal (only its own: FSTA), external (only the others': FCOM)",
-    "frames": "the robots' private frames: y-axis (shared Y, X mirrored at random: the paper's), "
-    "chirality (a random rotation, common handedness), disoriented (a random rotation and "
-    "reflection)",
-    "frame-change": "fixed: one frame per robot for the run; every-look: a new frame at each Look",
-}
-MODEL_CHOICES: Final = {
-    "visibility": ("transparent", "opaque", "opaque-centres"),
-    "lights": ("full", "internal", "external"),
-    "frames": ("y-axis", "chirality", "disoriented"),
-    "frame-change": ("fixed", "every-look"),
-}
-
-
 def add_robot_model_arguments(p: argparse.ArgumentParser, *, lists: bool = False) -> None:
-    """The robot model's flags (docs/model.md), unset by default (the paper's model). With
-    `lists` (sweep, hunt) each takes a comma-separated list of values: an axis."""
+    """The robot model's flags (docs/model.md), one per axis of `AXES`, unset by default (the
+    paper's model). With `lists` (sweep, hunt) each takes a comma-separated list of values: an
+    axis of the grid."""
     group = p.add_argument_group("robot model (docs/model.md; default: the paper's)")
-    for flag, text in MODEL_HELP.items():
-        choices = MODEL_CHOICES.get(flag)
+    for axis in AXES:
         if lists:
-            shown = ",".join(choices) if choices else "V,..."
+            shown = ",".join(axis.words) if axis.words else f"{axis.metavar},..."
+            default = f"'{axis.unset}' is no limit" if axis.unset else "default the first"
+            if not axis.words and not axis.unset:
+                default = f"default {axis.default:g}" if isinstance(axis.default, float) else ""
             group.add_argument(
-                f"--{flag}",
+                axis.flag,
                 action="append",
                 default=None,
                 metavar="LIST",
-                help=f"{text}; a comma-separated list is an axis ({shown}; "
-                + ("'unlimited' is no limit)" if flag == "sight" else "default the first)"),
+                help=f"{axis.help}; a comma-separated list is an axis ({shown}; {default})",
             )
-        elif choices:
-            group.add_argument(f"--{flag}", choices=choices, default=None, help=text)
+        elif axis.words:
+            group.add_argument(axis.flag, choices=axis.words, default=None, help=axis.help)
         else:
-            group.add_argument(f"--{flag}", type=float, default=None, metavar="V", help=text)
+            group.add_argument(
+                axis.flag, type=float, default=None, metavar=axis.metavar, help=axis.help
+            )
     group.add_argument(
         "--record-views",
         action="store_true",

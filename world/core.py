@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import replace
-from typing import Any, Final
+from typing import Final
 
 import numpy as np
 
@@ -23,7 +23,6 @@ from fatswarm.domain.draws import crash_plan
 from fatswarm.domain.figures import known_numbers
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path, Points, path_length
-from fatswarm.domain.robot_model import RobotModel
 from fatswarm.domain.seam import AlgorithmFailure, Configured
 from fatswarm.domain.tolerance import snap
 from fatswarm.world.effects import Effect, Level, Note
@@ -50,17 +49,6 @@ from fatswarm.world.rounds import Rounds
 from fatswarm.world.setup import WorldSetup
 
 FIRST_LOOK: Final = LookRequest()  # an agent's first Look: any round
-
-
-def outside_assumption(algorithm: Configured, model: RobotModel) -> str:
-    """One line if the run's frames are not among those the algorithm assumes, else ''."""
-    if model.frames in algorithm.frames:
-        return ""
-    assumed = ", ".join(f.value for f in algorithm.frames)
-    return (
-        f"algorithm {algorithm.name} assumes frames {assumed}; this run gives it "
-        f"{model.frames.value} (outside its assumption)"
-    )
 
 
 class WorldCore:
@@ -135,39 +123,8 @@ class WorldCore:
         self.gone_since = [self.committed] * n  # no agent seen yet: counted from here
 
     def _header(self) -> Header:
-        """The record's first line for this run."""
-        setup = self.setup
-        return Header(
-            setup.n,
-            setup.seed,
-            setup.scheduler,
-            self.positions,
-            algorithm=self.algorithm.name,
-            params=dict(self.algorithm.values),
-            algorithm_ref=setup.algorithm,
-            extra={
-                "max_rounds": setup.max_rounds,
-                "swarm": setup.swarm,
-                **({} if setup.non_rigid is None else {"non_rigid": setup.non_rigid}),
-                **({} if setup.crash is None else {"crash": setup.crash}),
-                **self._model_fields(),
-                **setup.extra,
-            },
-        )
-
-    def _model_fields(self) -> dict[str, Any]:
-        """The header's robot-model fields: the model (if not the paper's), whether views are
-        recorded, and a note if the algorithm assumes other frames than the run's."""
-        setup, fields = self.setup, dict[str, Any]()
-        model = setup.robot_model
-        if not model.is_paper:
-            fields["model"] = model.to_header()
-        if setup.record_views:
-            fields["record_views"] = True
-        outside = outside_assumption(self.algorithm, model)
-        if outside:
-            fields["assumption"] = outside
-        return fields
+        """The record's first line for this run (`WorldSetup.header`: the settings' codec)."""
+        return self.setup.header(self.algorithm, self.positions)
 
     # -- effects --------------------------------------------------------------------------------
 

@@ -1,8 +1,9 @@
 """What each robot is shown, and the lights it shows: the world's side of the robot model.
 
 The world alone decides what a robot sees (sight, obstruction: `world.sight`), in which frame
-(`fatswarm.domain.frames`), and which colours it reads (`--lights`); it keeps every robot's colour
-and the views it served when `--record-views` asks. Pure: the world core holds one of these.
+(`fatswarm.domain.frames`), how far off (`--noise`), and which colours it reads (`--lights`); it
+keeps every robot's colour and the views it served when `--record-views` asks. Pure: the world
+core holds one of these.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from fatswarm.domain.draws import view_order, view_orders
+from fatswarm.domain.draws import look_noise, view_order, view_orders
 from fatswarm.domain.frames import Frame, draw_frame
 from fatswarm.domain.path import Path, Points
 from fatswarm.domain.robot_model import FrameChange, Lights, RobotModel
@@ -45,8 +46,10 @@ class Looks:
         self._fixed_sign = None if self._fixed is None else _mirror_signs(self._fixed)
         # every robot's colour (palette index; the first at the start); none without lights
         self.colours: list[int] | None = [0] * n if self.palette else None
-        # whether a view is every other robot, with no colours and nothing recorded
-        self.plain = model.sees_all and self.colours is None and not record_views
+        # whether a view is every other robot, exact, with no colours and nothing recorded
+        self.plain = (
+            model.sees_all and not model.noise and self.colours is None and not record_views
+        )
         self.views: dict[int, list[int]] = {}  # robot -> the ids it saw, of Looks not recorded yet
         # views built ahead for one round and one configuration (`prepare`): robot -> its view
         self._ahead: tuple[int, Points, dict[int, Points]] | None = None
@@ -75,6 +78,8 @@ class Looks:
         if self.record_views:
             self.views[robot] = sorted(int(i) for i in ids)
         view = self.frame(robot, look_round).to_local(positions[ids] - positions[robot])
+        if self.model.noise:  # inaccurate sensors: each position seen off by its own error
+            view += self.model.noise * look_noise(self.seed, robot, look_round, len(view))
         if self.colours is None:
             return view, None, None
         lights = self.model.lights

@@ -6,29 +6,29 @@ from __future__ import annotations
 import argparse
 import os
 import shlex
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy.engine.config import (
-    MODEL_FLAGS,
     RunInputError,
     RunSetup,
     check_crash,
     check_fairness,
     check_non_rigid,
 )
-from fatswarm.deploy.flags import flag_given
+from fatswarm.deploy.flags import given_flags
 from fatswarm.deploy.scenarios.starts import load_init, random_start
 from fatswarm.deploy.view.summary import counted, unit
 from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.registry import load_algorithm
-from fatswarm.domain.robot_model import RobotModel
+from fatswarm.domain.robot_model import AXES, AXIS_NAMES, axis_named
 from fatswarm.domain.seam import Configured, parse_assignments
 from fatswarm.world.physics import validate_configuration
-from fatswarm.world.record import RecordFormatError
+from fatswarm.world.record import DEFAULT_SCALE, RecordFormatError
 from fatswarm.world.record_read import read_record
-from fatswarm.world.setup import header_crash, header_non_rigid
+from fatswarm.world.setup import WorldSetup
 
 if TYPE_CHECKING:
     from fatswarm.domain.path import Points
@@ -37,121 +37,53 @@ if TYPE_CHECKING:
 
 def resolve_resume(args: argparse.Namespace) -> RunSetup:
     """The run `--resume` continues: the --record file's header (n, a, seed, scheduler, start,
-    round cap) and committed rounds; raises one of `input_errors()` for a record that cannot be
-    continued or a flag given that contradicts it (flags that agree with it are fine)."""
+    round cap, adversary, robot model) and committed rounds; raises one of `input_errors()` for a
+    record that cannot be continued, a flag that no run takes, or flags given that contradict the
+    record (all of them named in one line, by `check_against_header`; flags that agree with it
+    are fine)."""
     # the whole lock-step engine: the CLI imports this module (through deploy.commands.run) to
     # build its parser
-    from fatswarm.deploy.engine.lockstep import default_max_rounds
+    from fatswarm.deploy.engine.lockstep import LOCKSTEP_SWARM, default_max_rounds
 
     path: str = args.record
     record = read_resumable(path)
     h = record.header
     if h.seed is None:
         raise RunInputError(f"--resume: {path} does not say its seed; its run cannot be continued")
-    cap = _recorded_cap(h)
-    if args.max_rounds is not None and args.max_rounds < 1:
-        raise RunInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
-    check_against_header(args, h, cap, path)
-    if h.scheduler != "scripted" and args.schedule is not None:
-        raise RunInputError(
-            f"--schedule only goes with --scheduler scripted; {path}'s run has "
-            f"scheduler={h.scheduler}"
-        )
+    recorded = WorldSetup.from_header(h, LOCKSTEP_SWARM, None)  # (its header is not written again)
+    _check_values(args, h, path)
+    check_against_header(args, recorded, path)
     params = Configured.of(load_algorithm(h.algorithm_ref), h.n, h.params)
     params.check_start(h.initial)
     initial = validate_configuration(h.initial)
-    fairness = recorded_fairness(args, h, path)
-    schedule = args.schedule
-    if schedule is None and isinstance(h.extra.get("schedule"), str):
-        schedule = h.extra["schedule"]  # the script the run was made with, where it was
+    fairness = args.fairness if args.fairness is not None else recorded.fairness
+    # the script the run was made with, where it was, unless --schedule says where it is now
+    schedule = args.schedule if args.schedule is not None else recorded.schedule
     scheduler = make_scheduler(h.scheduler, h.n, h.seed, schedule, fairness)
+    cap = (
+        recorded.max_rounds
+        if recorded.max_rounds is not None and recorded.max_rounds >= 1
+        else None
+    )
     if cap is None:  # a header without its cap: as the run would have had it
         cap = args.max_rounds or default_max_rounds(h.n, h.scheduler)
-    return RunSetup(
-        h.seed,
-        params,
-        initial,
-        scheduler,
-        cap,
-        record,
-        h.algorithm_ref,
-        non_rigid=recorded_non_rigid(args, h, path),
-        crash=recorded_crash(args, h, path),
-        robot_model=recorded_model(args, h, path),
-        record_views=h.extra.get("record_views") is True,
-    )
+    return RunSetup(replace(recorded, initial=initial, max_rounds=cap), params, scheduler, record)
 
 
-def recorded_model(args: argparse.Namespace, header: Header, path: str) -> RobotModel:
-    """The header's robot model (none: the paper's); RunInputError for a model flag that says
-    otherwise than the record (or a --record-views the record was not made with)."""
-    recorded = RobotModel.from_header(header.extra.get("model"))
-    says = recorded.to_header()
-    for key in MODEL_FLAGS:
-        given = getattr(args, key, None)
-        if given is not None and given != says[key]:
-            flag = "--" + key.replace("_", "-")
-            raise RunInputError(
-                f"{flag} {given} contradicts {path}, whose run has {key}={says[key]}; "
-                f"drop {flag} to resume it"
-            )
-    if getattr(args, "record_views", False) and header.extra.get("record_views") is not True:
+def _check_values(args: argparse.Namespace, header: Header, path: str) -> None:
+    """Refuse a flag given with --resume that no run takes (whatever the record says): a round
+    cap < 1, a --schedule without the scripted scheduler, a fairness bound for a scheduler that
+    ignores it, a non-rigid delta or a crash count out of range (RunInputError)."""
+    if args.max_rounds is not None and args.max_rounds < 1:
+        raise RunInputError(f"--max-rounds must be at least 1, got {args.max_rounds}")
+    if header.scheduler != "scripted" and args.schedule is not None:
         raise RunInputError(
-            f"--record-views contradicts {path}, whose run does not record views; drop it"
+            f"--schedule only goes with --scheduler scripted; {path}'s run has "
+            f"scheduler={header.scheduler}"
         )
-    return recorded
-
-
-def _recorded_cap(header: Header) -> int | None:
-    """The header's round cap, if it says one (a whole number >= 1)."""
-    saved = header.extra.get("max_rounds")
-    return saved if isinstance(saved, int) and not isinstance(saved, bool) and saved >= 1 else None
-
-
-def recorded_fairness(args: argparse.Namespace, header: Header, path: str) -> int | None:
-    """The fairness bound of the resumed run: --fairness, else the header's (None: neither says
-    one); RunInputError for a --fairness that says otherwise than the record."""
     check_fairness(args.fairness, header.scheduler)
-    recorded_k = header.extra.get("fairness")
-    if isinstance(recorded_k, int) and args.fairness is not None and args.fairness != recorded_k:
-        raise RunInputError(
-            f"--fairness {args.fairness} contradicts {path}, whose run has "
-            f"fairness={recorded_k}; drop --fairness to resume it"
-        )
-    return (
-        args.fairness
-        if args.fairness is not None
-        else (recorded_k if isinstance(recorded_k, int) else None)
-    )
-
-
-def recorded_non_rigid(args: argparse.Namespace, header: Header, path: str) -> float | None:
-    """The header's non-rigid delta (None: rigid moves); RunInputError for a --non-rigid that is
-    not a finite number > 0 or that says otherwise than the record."""
-    delta = header_non_rigid(header)
-    given: float | None = getattr(args, "non_rigid", None)
-    check_non_rigid(given)
-    if given is not None and given != delta:
-        says = "rigid moves" if delta is None else f"non_rigid={delta:g}"
-        raise RunInputError(
-            f"--non-rigid {given:g} contradicts {path}, whose run has {says}; "
-            "drop --non-rigid to resume it"
-        )
-    return delta
-
-
-def recorded_crash(args: argparse.Namespace, header: Header, path: str) -> int | None:
-    """The header's crash count f (None: no crashes); RunInputError for a --crash that is not
-    0 < f < n or that says otherwise than the record."""
-    f = header_crash(header)
-    given: int | None = getattr(args, "crash", None)
-    check_crash(given, header.n)
-    if given is not None and given != f:
-        says = "no crashes" if f is None else f"crash={f}"
-        raise RunInputError(
-            f"--crash {given} contradicts {path}, whose run has {says}; drop --crash to resume it"
-        )
-    return f
+    check_non_rigid(getattr(args, "non_rigid", None))
+    check_crash(getattr(args, "crash", None), header.n)
 
 
 def read_resumable(path: str) -> RunRecord:
@@ -232,79 +164,123 @@ def stopped_line(
     return f"{after}; {then} with `fatswarm run{mode} --record {shlex.quote(record)} --resume`"
 
 
-def check_against_header(
-    args: argparse.Namespace, header: Header, cap: int | None, path: str
-) -> None:
-    """Refuse (RunInputError, one line) a flag given with --resume that contradicts the record's
-    header, naming the flag and both values; `cap`: the header's round cap, if it says one."""
-    h = header
-    checks: list[tuple[str, str, Any, Any, str]] = [
-        ("-n", "n", args.n, h.n, f"n={h.n}"),
-        ("-a", "a", args.a, h.a, f"a={_number(h.a)}"),
-        ("--seed", "seed", args.seed, h.seed, f"seed={h.seed}"),
-        ("--scheduler", "scheduler", args.scheduler, h.scheduler, f"scheduler={h.scheduler}"),
-        ("--max-rounds", "max_rounds", args.max_rounds, cap, f"max_rounds={cap}"),
+@dataclass(frozen=True, slots=True)
+class Contradiction:
+    """A flag given with --resume that says otherwise than the record."""
+
+    flag: str  # `-n`, `--frame-change`
+    given: str  # the flag as given: `-n 12`, `--param a=5`
+    recorded: str  # what the record says, after "whose run": `has n=8`
+
+
+def check_against_header(args: argparse.Namespace, recorded: WorldSetup, path: str) -> None:
+    """Refuse (RunInputError, one line) the flags given with --resume that contradict the
+    record's settings (`WorldSetup.from_header`): every one of them, each with both values."""
+    found = contradictions(args, recorded)
+    if found:
+        said = "; ".join(f"{c.given} contradicts {path}, whose run {c.recorded}" for c in found)
+        flags = ", ".join(dict.fromkeys(c.flag for c in found))
+        raise RunInputError(f"{said}; drop {flags} to resume it")
+
+
+def contradictions(args: argparse.Namespace, recorded: WorldSetup) -> list[Contradiction]:
+    """Every flag given with --resume that contradicts the record's settings, in one pass over
+    them: the algorithm and its parameters, n, a, seed, scheduler, round cap, fairness, start,
+    adversary, each axis of the robot model (`AXES`) and --record-views. A flag not given never
+    contradicts (its default may be the record's)."""
+    h = recorded
+    given = given_flags(args)
+    found: list[Contradiction] = []
+    for name, text in parse_assignments(list(given.get("param") or [])).items():
+        value = h.params.get(name)
+        if value is None or (str(value) != text and _as_number(text) != value):
+            found.append(Contradiction("--param", f"--param {name}={text}", f"has {name}={value}"))
+    cap = h.max_rounds if h.max_rounds is not None and h.max_rounds >= 1 else None
+    side = _side(h)
+    # (flag, dest, the record's value, what it says after "whose run"); `known`: False where
+    # the record does not say (an old header without its cap or fairness): no flag contradicts
+    rows: list[tuple[str, str, object, str, bool]] = [
+        ("--algorithm", "algorithm", h.algorithm, f"has algorithm {h.algorithm}", True),
+        ("-n", "n", h.n, f"has n={h.n}", True),
+        ("-a", "a", side, f"has a={_number(side)}", True),
+        ("--seed", "seed", h.seed, f"has seed={h.seed}", True),
+        ("--scheduler", "scheduler", h.scheduler, f"has scheduler={h.scheduler}", True),
+        ("--max-rounds", "max_rounds", cap, f"has max_rounds={cap}", cap is not None),
+        (
+            "--fairness",
+            "fairness",
+            h.fairness,
+            f"has fairness={h.fairness}",
+            h.fairness is not None,
+        ),
+        ("--non-rigid", "non_rigid", h.non_rigid, _says_non_rigid(h.non_rigid), True),
+        (
+            "--crash",
+            "crash",
+            h.crash,
+            "has no crashes" if h.crash is None else f"has crash={h.crash}",
+            True,
+        ),
+        *(
+            (a.flag, a.name, v, f"has {a.name}={a.text(v) or 'none'}", True)
+            for a in AXES
+            for v in [h.robot_model.value(a.name)]
+        ),
+        ("--record-views", "record_views", h.record_views, "does not record views", True),
     ]
-    if flag_given(args, "algorithm") and args.algorithm != header.algorithm_ref:
-        raise RunInputError(
-            f"--algorithm {args.algorithm} contradicts {path}, whose run has "
-            f"algorithm {header.algorithm_ref}; drop --algorithm to resume it"
-        )
-    _check_params(args, header, path)
-    for flag, dest, value, recorded, says in checks:
-        if flag_given(args, dest) and recorded is not None and value != recorded:
-            shown = _number(value) if isinstance(value, float) else value
-            raise RunInputError(
-                f"{flag} {shown} contradicts {path}, whose run has {says}; drop {flag} to resume it"
-            )
-    if args.init is not None:
-        _check_init(args.init, h, path)
-    elif flag_given(args, "start") and h.seed is not None:
-        _check_start(args.start, h, path)
+    for flag, dest, theirs, says, known in rows:
+        if dest in given and known and _value(dest, given[dest]) != theirs:
+            mine = given[dest]
+            shown = "" if mine is True else f" {_number(mine) if isinstance(mine, float) else mine}"
+            found.append(Contradiction(flag, f"{flag}{shown}", says))
+    if "init" in given:
+        _check_init(given["init"], h, found)
+    elif "start" in given:
+        _check_start(given["start"], h, found)
+    return found
 
 
-def _check_params(args: argparse.Namespace, header: Header, path: str) -> None:
-    """Refuse a --param whose value is not the record's."""
-    for name, text in parse_assignments(list(getattr(args, "param", []) or [])).items():
-        recorded = header.params.get(name)
-        if recorded is None or (str(recorded) != text and _as_number(text) != recorded):
-            raise RunInputError(
-                f"--param {name}={text} contradicts {path}, whose run has "
-                f"{name}={recorded}; drop --param to resume it"
-            )
+def _value(dest: str, given: object) -> object:
+    """A flag's value as the settings hold it (a robot-model axis's: its member or number)."""
+    return axis_named(dest).check(given) if dest in AXIS_NAMES else given
 
 
-def _check_init(init: str, header: Header, path: str) -> None:
-    """Refuse an --init file whose start is not the record's."""
-    h = header
+def _says_non_rigid(delta: float | None) -> str:
+    return "has rigid moves" if delta is None else f"has non_rigid={delta:g}"
+
+
+def _check_init(init: str, recorded: WorldSetup, found: list[Contradiction]) -> None:
+    """An --init file whose start is not the record's."""
+    h = recorded
     positions, _ = load_init(init)
     if len(positions) != h.n:
-        raise RunInputError(
-            f"--init {init} contradicts {path}, whose run has n={h.n} "
-            f"(the file {len(positions)} robots); drop --init to resume it"
-        )
+        says = f"has n={h.n} (the file {len(positions)} robots)"
+        found.append(Contradiction("--init", f"--init {init}", says))
+        return
     where = _first_difference(validate_configuration(positions), h.initial)
     if where is not None:
         robot, mine, theirs = where
-        raise RunInputError(
-            f"--init {init} contradicts {path}, whose run started "
-            f"elsewhere (robot {robot} at {theirs}, not at {mine} as in the "
-            "file); drop --init to resume it"
-        )
+        says = f"started elsewhere (robot {robot} at {theirs}, not at {mine} as in the file)"
+        found.append(Contradiction("--init", f"--init {init}", says))
 
 
-def _check_start(kind: str, header: Header, path: str) -> None:
-    """Refuse a --start kind whose start of the record's seed is not the record's start."""
-    h = header
-    assert h.seed is not None
-    where = _first_difference(random_start(h.n, h.seed, kind, h.a), h.initial)
+def _check_start(kind: str, recorded: WorldSetup, found: list[Contradiction]) -> None:
+    """A --start kind whose start of the record's seed is not the record's start."""
+    h = recorded
+    where = _first_difference(random_start(h.n, h.seed, kind, _side(h)), h.initial)
     if where is not None:
         robot, mine, theirs = where
-        raise RunInputError(
-            f"--start {kind} contradicts {path}, whose run did not start "
-            f"from the {kind} start of seed {h.seed} (robot {robot} at "
-            f"{theirs}, not at {mine}); drop --start to resume it"
+        says = (
+            f"did not start from the {kind} start of seed {h.seed} (robot {robot} at "
+            f"{theirs}, not at {mine})"
         )
+        found.append(Contradiction("--start", f"--start {kind}", says))
+
+
+def _side(recorded: WorldSetup) -> float:
+    """The paper's side `a` of the record's run, as its header gives it (`Header.a`)."""
+    value = recorded.params.get("a", DEFAULT_SCALE)
+    return float(value) if isinstance(value, (int, float)) else DEFAULT_SCALE
 
 
 def _as_number(text: str) -> float | None:
@@ -329,14 +305,12 @@ def _first_difference(mine: Points, theirs: Points) -> tuple[int, str, str] | No
 
 
 __all__ = [
+    "Contradiction",
     "check_against_header",
+    "contradictions",
     "drop_torn_end",
     "ended",
     "read_resumable",
-    "recorded_crash",
-    "recorded_fairness",
-    "recorded_model",
-    "recorded_non_rigid",
     "resolve_resume",
     "stopped_line",
 ]

@@ -15,6 +15,7 @@ is the CLI's (`RunConfig`): its refusals name flags, which `run` words as its ow
 
 from __future__ import annotations
 
+import inspect
 import numbers
 import os
 import re
@@ -38,7 +39,7 @@ from fatswarm.deploy.engine.lockstep import RunResult as LockstepResult
 from fatswarm.deploy.engine.notebook import RunRecord, RunResult
 from fatswarm.domain.figures import run_derived, summary_values
 from fatswarm.domain.path import Points
-from fatswarm.domain.robot_model import RobotModel
+from fatswarm.domain.robot_model import AXES, AXIS_NAMES, Axis, RobotModel
 from fatswarm.world import record_read
 from fatswarm.world.record import RecordWriter
 from fatswarm.world.record import RunRecord as RecordLines
@@ -69,14 +70,10 @@ def run(
     max_rounds: int | None = None,
     non_rigid: float | None = None,
     crash: int | None = None,
-    visibility: str = "transparent",
-    sight: float | None = None,
-    lights: str = "full",
-    frames: str = "y-axis",
-    frame_change: str = "fixed",
     record_views: bool = False,
     record: str | os.PathLike[str] | None = None,
     on_round: Callable[[RoundReport], None] | None = None,
+    **model: object,
 ) -> RunResult:
     """Run one configuration in lock step and return how it ended (`RunResult`).
 
@@ -86,8 +83,10 @@ def run(
     may be stopped anywhere after the robot travelled delta, drawn from `seed`); None: rigid.
     `crash`: f robots the adversary crashes for good (which and when drawn from `seed`,
     `world.core.crash_plan`; the goal is then judged on the live robots); None: no crashes.
-    `visibility`, `sight`, `lights`, `frames`, `frame_change`: the robot model, as the flags of
-    `fatswarm run` (docs/model.md); `record_views`: each record line names what each looker saw.
+    `**model`: the robot model, one keyword per axis (`fatswarm.domain.robot_model.AXES`:
+    visibility, sight, lights, frames, frame_change...), as the flags of `fatswarm run`
+    (docs/model.md; the signature lists them); `record_views`: each record line names what each
+    looker saw.
     Raises a ValueError in these keywords' words for what it refuses: one of `input_errors()`
     (fatswarm.deploy.engine.config), or `RunArgumentError` for a keyword of the wrong type.
     """
@@ -106,7 +105,7 @@ def run(
             max_rounds=_whole("max_rounds", max_rounds),
             non_rigid=_number("non_rigid", non_rigid),
             crash=_whole("crash", crash),
-            model=_model(visibility, sight, lights, frames, frame_change),
+            model=_model(model),
             record_views=_flag("record_views", record_views),
         )
         return _run_config(config, _path("record", record), _callback(on_round))
@@ -132,12 +131,7 @@ def _run_config(
             max_rounds=setup.max_rounds,
             record=writer,
             on_round=on_round,
-            algorithm_ref=setup.algorithm_ref,
-            header_extra=config.header_extra(networked=False, n=setup.params.n),
-            non_rigid=setup.non_rigid,
-            crash=setup.crash,
-            robot_model=setup.robot_model,
-            record_views=setup.record_views,
+            settings=setup.settings,
         )
     finally:
         if writer is not None:
@@ -155,11 +149,30 @@ def _run_config(
 
 # --- the keywords, checked in the API's words ----------------------------------------------------
 
-KEYWORDS: Final = frozenset(
-    {"n", "algorithm", "params", "seed", "start", "init", "positions", "scheduler", "schedule"}
-    | {"fairness", "max_rounds", "non_rigid", "crash", "visibility", "sight", "lights", "frames"}
-    | {"frame_change", "record_views", "record", "on_round"}
-)
+
+def _signature() -> inspect.Signature:
+    """`run`'s signature with one keyword per axis of the robot model (`AXES`) in place of
+    `**model`, each with its default: what `help(fatswarm.run)` and editors show."""
+    shown = inspect.signature(run)
+    kept = [p for p in shown.parameters.values() if p.kind is not p.VAR_KEYWORD]
+    axes = [
+        inspect.Parameter(
+            a.name,
+            inspect.Parameter.KEYWORD_ONLY,
+            default=_plain_default(a),
+            annotation="str" if a.choices else "float | None" if a.unset else "float",
+        )
+        for a in AXES
+    ]
+    return shown.replace(parameters=[*kept, *axes])
+
+
+def _plain_default(axis: Axis) -> object:
+    return str(axis.default) if isinstance(axis.default, str) else axis.default
+
+
+run.__signature__ = _signature()  # type: ignore[attr-defined]
+KEYWORDS: Final = frozenset(inspect.signature(run).parameters)
 _PHRASES: Final = (  # whole phrases first, then every flag left (below) by its keyword
     (re.compile(r"^-n (\S+) disagrees with the (\d+) robots of "),
      r"n=\1 disagrees with the \2 robots of init "),
@@ -239,17 +252,20 @@ def _path(name: str, value: object) -> str | None:
     return path
 
 
-def _model(
-    visibility: object, sight: object, lights: object, frames: object, change: object
-) -> RobotModel:
-    """The robot model of the keywords; ModelError (its values) or RunArgumentError (types)."""
-    return RobotModel.of(
-        _text("visibility", visibility),
-        _number("sight", sight),
-        _text("lights", lights),
-        _text("frames", frames),
-        _text("frame_change", change),
-    )
+def _model(given: Mapping[str, object]) -> RobotModel:
+    """The robot model of the axes' keywords (`AXES`; unset ones: the paper's); RunArgumentError
+    for a keyword that is no axis or a value of the wrong type, ModelError for a bad value."""
+    unknown = sorted(set(given) - set(AXIS_NAMES))
+    if unknown:
+        raise RunArgumentError(f"run() got an unexpected keyword argument {unknown[0]!r}")
+    values = {
+        axis.name: _text(axis.name, given[axis.name])
+        if axis.choices is not None
+        else _number(axis.name, given[axis.name])
+        for axis in AXES
+        if axis.name in given
+    }
+    return RobotModel.of(**values)
 
 
 def _callback(value: object) -> Callable[[RoundReport], None] | None:

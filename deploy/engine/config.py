@@ -1,20 +1,20 @@
 """One run's configuration, frozen: what the CLI, the Python API and the parts are built from.
 
 `RunConfig` holds what a user asks for (flags or keyword arguments); `resolve()` checks it and
-builds the run (`RunSetup`): the algorithm configured for n robots, the start on the grid, the
-scheduler and the round cap. `header_extra()` is what the record's header adds so that the run can
-be repeated exactly. Every refusal is one of `input_errors()`, with a message saying what to fix.
+builds the run (`RunSetup`): its settings (`world.setup.WorldSetup`, the one type the record's
+header is written from and read back to: the start on the grid, the round cap, the adversary, the
+model, how it was made), the algorithm configured for n robots and the scheduler. Every refusal is
+one of `input_errors()`, with a message saying what to fix.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Final
+from typing import TYPE_CHECKING, Final
 
 import numpy as np
 
@@ -22,7 +22,7 @@ from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
-from fatswarm.domain.robot_model import PAPER_MODEL, Lights, ModelError, RobotModel
+from fatswarm.domain.robot_model import AXES, PAPER_MODEL, Lights, ModelError, RobotModel
 from fatswarm.domain.seam import AlgorithmError, AlgorithmParamsError, Configured, parse_assignments
 from fatswarm.domain.tolerance import UnsupportedInputError, check_supported
 from fatswarm.domain.version import __version__
@@ -30,6 +30,7 @@ from fatswarm.domain.version import __version__
 if TYPE_CHECKING:
     from fatswarm.coordinator.schedule import Scheduler
     from fatswarm.world.record import RunRecord
+    from fatswarm.world.setup import WorldSetup
 
 DEFAULT_N: Final = 8
 DEFAULT_A: Final = 4.0
@@ -97,13 +98,18 @@ class RunConfig:
             command=tuple(getattr(args, "_argv", None) or sys.argv),
         )
 
-    def resolve(self) -> RunSetup:
-        """Check everything and build the run; raises one of `input_errors()`."""
+    def resolve(self, *, networked: bool = False, swarm: str = "lockstep") -> RunSetup:
+        """Check everything and build the run: its settings (`WorldSetup`, what the header says)
+        and what they build; raises one of `input_errors()`. `networked`: the header keeps the
+        move timeout; `swarm`: the swarm the world serves (a networked run's is the launcher's)."""
         # an agent imports this module (through deploy.flags), never the schedulers
-        from fatswarm.coordinator.schedule import make_scheduler
+        from fatswarm.coordinator.schedule import default_fairness, make_scheduler
 
         # the whole lock-step engine: the CLI imports this module to build its parser
         from fatswarm.deploy.engine.lockstep import default_max_rounds, run_reach
+
+        # the world's records and physics: an agent imports this module, never them
+        from fatswarm.world.setup import WorldSetup, absolute
 
         if self.scheduler != "scripted" and self.schedule is not None:
             raise RunInputError("--schedule only goes with --scheduler scripted")
@@ -121,74 +127,92 @@ class RunConfig:
             params=self.params,
             positions=self.positions,
         )
-        scheduler = make_scheduler(
-            self.scheduler, setting.n, self.seed, self.schedule, self.fairness
-        )
+        n = setting.n
+        scheduler = make_scheduler(self.scheduler, n, self.seed, self.schedule, self.fairness)
         reach = run_reach(setting, initial) if self.scheduler in ASYNC_NAMES else 0.0
-        max_rounds = self.max_rounds or default_max_rounds(setting.n, self.scheduler, reach)
-        check_crash(self.crash, setting.n)
+        max_rounds = self.max_rounds or default_max_rounds(n, self.scheduler, reach)
+        check_crash(self.crash, n)
         check_lights(self.model, setting)
-        return RunSetup(
+        settings = WorldSetup(
+            swarm,
+            n,
             self.seed,
-            setting,
+            self.scheduler,
             initial,
-            scheduler,
             max_rounds,
-            algorithm_ref=self.algorithm,
-            config=self,
+            algorithm=self.algorithm,
+            params=dict(setting.values),
             non_rigid=self.non_rigid,
             crash=self.crash,
             robot_model=self.model,
             record_views=self.record_views,
+            version=__version__,
+            start=self.start if self.positions is None and self.init is None else None,
+            init=absolute(self.init),
+            fairness=(
+                int(self.fairness or default_fairness(n))
+                if self.scheduler in FAIR_SCHEDULERS
+                else None
+            ),
+            schedule=absolute(self.schedule),
+            move_timeout=float(self.move_timeout_s) if networked else None,
+            command=self.command or None,
         )
-
-    def header_extra(self, *, networked: bool, n: int) -> dict[str, Any]:
-        """What the record's header adds: the software version, start kind (or file), fairness
-        (as resolved for n robots), schedule file, move timeout (networked), the command line."""
-        # an agent imports this module (through deploy.flags), never the schedulers
-        from fatswarm.coordinator.schedule import default_fairness
-
-        extra: dict[str, Any] = {"fatswarm_version": __version__}
-        if self.positions is None and self.init is None:
-            extra["start"] = self.start
-        elif self.init is not None:
-            extra["init"] = os.path.abspath(self.init)
-        if self.scheduler in ("ssync", "centralized"):
-            extra["fairness"] = int(self.fairness or default_fairness(n))
-        if self.schedule is not None:
-            extra["schedule"] = os.path.abspath(self.schedule)
-        if networked:
-            extra["move_timeout"] = float(self.move_timeout_s)
-        if self.command:
-            extra["command"] = list(self.command)
-        return extra
+        return RunSetup(settings, setting, scheduler)
 
 
 @dataclass(frozen=True, slots=True)
 class RunSetup:
-    """What the flags of `fatswarm run` ask for, checked: the start, parameters and scheduler."""
+    """A run ready to go: its settings (`WorldSetup`: what the record's header says, through its
+    one codec) and what they build, the algorithm configured for n robots and the scheduler.
+    `resumed`: the record whose committed rounds go on (--resume)."""
 
-    seed: int
+    settings: WorldSetup
     params: Configured  # the algorithm and its parameters for n robots
-    initial: Points
     scheduler: Scheduler
-    max_rounds: int
-    resumed: RunRecord | None = None  # --resume: the record whose committed rounds go on
-    algorithm_ref: str = "uniform-circle"  # how every process loads the algorithm
-    config: RunConfig | None = None  # what was asked for (None: a resumed record's run)
-    non_rigid: float | None = None  # the adversary's delta (world.faults.cut_path); None: rigid
-    crash: int | None = None  # f robots crashed for good (world.core.crash_plan); None: none
-    robot_model: RobotModel = PAPER_MODEL  # sight, obstruction, lights, frames (docs/model.md)
-    record_views: bool = False  # each record line names what each looker saw
+    resumed: RunRecord | None = None
 
+    @property
+    def seed(self) -> int:
+        return self.settings.seed
 
-MODEL_FLAGS: Final = ("visibility", "sight", "lights", "frames", "frame_change")
+    @property
+    def initial(self) -> Points:
+        """The (n, 2) start."""
+        return self.settings.initial
+
+    @property
+    def max_rounds(self) -> int:
+        """The round cap (ended cycles under an async model)."""
+        assert self.settings.max_rounds is not None  # `resolve` and --resume always set it
+        return self.settings.max_rounds
+
+    @property
+    def algorithm_ref(self) -> str:
+        """How every process loads the algorithm: a name or module:attribute."""
+        return self.settings.algorithm
+
+    @property
+    def non_rigid(self) -> float | None:
+        return self.settings.non_rigid
+
+    @property
+    def crash(self) -> int | None:
+        return self.settings.crash
+
+    @property
+    def robot_model(self) -> RobotModel:
+        return self.settings.robot_model
+
+    @property
+    def record_views(self) -> bool:
+        return self.settings.record_views
 
 
 def model_from_args(args: argparse.Namespace) -> RobotModel:
-    """The robot model that `--visibility`, `--sight`, `--lights`, `--frames` and `--frame-change`
-    ask for (unset ones: the paper's); raises ModelError."""
-    given = {key: getattr(args, key, None) for key in MODEL_FLAGS}
+    """The robot model that the flags of its axes (`AXES`: `--visibility`, `--sight`...) ask for
+    (unset ones: the paper's); raises ModelError."""
+    given = {a.name: getattr(args, a.name, None) for a in AXES}
     return RobotModel.of(**{k: v for k, v in given.items() if v is not None})
 
 
@@ -336,7 +360,6 @@ __all__ = [
     "DEFAULT_N",
     "DEFAULT_SCHEDULER",
     "DEFAULT_START",
-    "MODEL_FLAGS",
     "RunConfig",
     "RunInputError",
     "RunSetup",

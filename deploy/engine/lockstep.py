@@ -14,7 +14,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Final
 
 import numpy as np
@@ -146,6 +146,7 @@ def run_lockstep(
     crash: int | None = None,
     robot_model: RobotModel = PAPER_MODEL,
     record_views: bool = False,
+    settings: WorldSetup | None = None,
 ) -> RunResult:
     """Run until formed, stalled or `max_rounds` (default `default_max_rounds`).
 
@@ -160,7 +161,8 @@ def run_lockstep(
     stopped after delta, `world.faults.cut_path`); None for rigid moves. `crash`: f robots the
     adversary crashes for good (`world.core.crash_plan`); None for none. `robot_model`: sight,
     obstruction, lights and frames (docs/model.md); `record_views`: each record line names what
-    each looker saw.
+    each looker saw. `settings`: the run's settings whole (`RunConfig.resolve`'s), in place of
+    `algorithm_ref` ... `record_views`: what its header says, how the run was made among it.
     Raises InvalidConfigurationError for an invalid start, the algorithm's refusal of the start
     (UnsupportedInputError for the paper's, outside the supported range), ValueError if n
     disagrees with params, HistoryMismatchError for a history this run would not have produced.
@@ -171,20 +173,24 @@ def run_lockstep(
     if n != setting.n:
         raise ValueError(f"the start has {n} robots but params say n={setting.n}")
     cap = _cap(max_rounds, setting, scheduler.name, positions)
-    setup = WorldSetup(
-        swarm=LOCKSTEP_SWARM,
-        n=n,
-        seed=seed,
-        scheduler=scheduler.name,
-        initial=positions,
-        max_rounds=cap,
-        algorithm=algorithm_ref or setting.name,
-        params=dict(setting.values),
-        extra=dict(header_extra or {}),
-        non_rigid=non_rigid,
-        crash=crash,
-        robot_model=robot_model,
-        record_views=record_views,
+    setup = (
+        replace(settings, swarm=LOCKSTEP_SWARM, initial=positions, max_rounds=cap)
+        if settings is not None
+        else WorldSetup(
+            swarm=LOCKSTEP_SWARM,
+            n=n,
+            seed=seed,
+            scheduler=scheduler.name,
+            initial=positions,
+            max_rounds=cap,
+            algorithm=algorithm_ref or setting.name,
+            params=dict(setting.values),
+            extra=dict(header_extra or {}),
+            non_rigid=non_rigid,
+            crash=crash,
+            robot_model=robot_model,
+            record_views=record_views,
+        )
     )
     world, checked = _open(setup, setting, scheduler, history)
     if history is not None:

@@ -30,8 +30,18 @@ from fatswarm.deploy.hunt.search import (
     start_families,
 )
 from fatswarm.deploy.hunt.shrink import DEFAULT_SHRINK_RUNS
-from fatswarm.deploy.sweep.command import _jobs, _stop_on_signals
-from fatswarm.deploy.sweep.executor import ClusterError, add_cluster_argument, open_workers
+from fatswarm.deploy.sweep.batch_flags import (
+    add_adversary_arguments,
+    add_jobs_argument,
+    add_max_rounds_argument,
+    add_param_argument,
+    add_quiet_argument,
+    add_scheduler_argument,
+    add_sizes_argument,
+    jobs_of,
+    stop_on_signals,
+)
+from fatswarm.deploy.sweep.executor import ClusterError, open_workers
 from fatswarm.deploy.sweep.grid import (
     SweepInputError,
     model_suffix,
@@ -90,13 +100,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help=f"the algorithm hunted (default {DEFAULT_ALGORITHM}; a registered name, "
         "module:attribute or path/to/file.py:attribute)",
     )
-    p.add_argument(
-        "--param",
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="a parameter of the algorithm, the same in every run (repeatable)",
-    )
+    add_param_argument(p, "the algorithm")
     _add_search_arguments(p)
     add_robot_model_arguments(p, lists=True)
     _add_budget_arguments(p)
@@ -105,38 +109,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _add_search_arguments(p: argparse.ArgumentParser) -> None:
     """What the candidate runs are drawn from: models, adversary, sizes, start families, cap."""
-    p.add_argument(
-        "--scheduler",
-        action="append",
-        default=[],
-        metavar="NAMES",
-        help=f"schedulers (models) to draw from: {', '.join(hunt_models())} (default: all of them)",
-    )
-    p.add_argument(
-        "--non-rigid",
-        action="append",
-        default=[],
-        metavar="DELTA",
-        help="non-rigid moves in every run: the adversary may stop a move after DELTA (> 0, "
-        "robot radii), or 'rigid' (default rigid: rigid moves)",
-    )
-    p.add_argument(
-        "--crash",
-        action="append",
-        default=[],
-        metavar="F",
-        help="F robots crash for good in every run (n is then drawn above F), or 0 or 'none' "
-        "(default none)",
-    )
-    p.add_argument(
-        "-n",
-        "--n",
-        action="append",
-        default=[],
-        metavar="SIZES",
-        dest="n",
-        help=f"numbers of robots to draw from, e.g. 3..12 or 4,8 (default {DEFAULT_SIZES})",
-    )
+    add_scheduler_argument(p, "to draw from", ", ".join(hunt_models()))
+    add_adversary_arguments(p, lists=False)
+    add_sizes_argument(p, "to draw from, e.g. 3..12 or 4,8", DEFAULT_SIZES)
     p.add_argument(
         "--starts",
         "--start",
@@ -147,13 +122,7 @@ def _add_search_arguments(p: argparse.ArgumentParser) -> None:
         "rows and stacked-rows, so that earlier hunts draw what they drew; --start, sweep's "
         "name, is the same flag)",
     )
-    p.add_argument(
-        "--max-rounds",
-        type=int,
-        default=None,
-        metavar="R",
-        help="round cap of every run (default: the scheduler's for n, as fatswarm run)",
-    )
+    add_max_rounds_argument(p)
 
 
 def _add_budget_arguments(p: argparse.ArgumentParser) -> None:
@@ -192,14 +161,7 @@ def _add_budget_arguments(p: argparse.ArgumentParser) -> None:
 
 def _add_hunt_run_arguments(p: argparse.ArgumentParser) -> None:
     """How the hunt runs: workers, seed, where failures go, progress."""
-    p.add_argument(
-        "--jobs",
-        type=int,
-        default=None,
-        metavar="J",
-        help="worker processes (default: one per core)",
-    )
-    add_cluster_argument(p)
+    add_jobs_argument(p)
     p.add_argument(
         "--seed",
         type=int,
@@ -215,12 +177,7 @@ def _add_hunt_run_arguments(p: argparse.ArgumentParser) -> None:
         help=f"where failures are saved, one folder each (default {DEFAULT_OUT}; a "
         "new or empty directory)",
     )
-    p.add_argument(
-        "-q",
-        "--quiet",
-        action="store_true",
-        help="no progress while running (the summary is still printed)",
-    )
+    add_quiet_argument(p)
 
 
 def build_hunt(args: argparse.Namespace) -> Hunt:
@@ -332,7 +289,7 @@ def main(args: argparse.Namespace) -> int:
     try:
         hunt = build_hunt(args)
         budget = build_budget(args)
-        jobs = _jobs(args.jobs)
+        jobs = jobs_of(args.jobs)
         if args.seed is not None and not 0 <= args.seed < 2**63:
             raise HuntInputError(f"--seed must be a whole number >= 0, got {args.seed}")
         check_out(args.out)
@@ -380,7 +337,7 @@ def _hunt(args: argparse.Namespace, hunt: Hunt, budget: Budget, jobs: int) -> in
         with open_workers(jobs, args.cluster) as workers:
             if not args.quiet:
                 _say(_plan_text(hunt, budget, seed, workers.where, args.out))
-            with _stop_on_signals() as stopped, progress:
+            with stop_on_signals() as stopped, progress:
                 tally, complete = run_hunt(
                     hunt, seed, budget, workers, args.out, progress.show, lambda: bool(stopped[0])
                 )

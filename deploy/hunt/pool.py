@@ -163,8 +163,8 @@ def replay_files(hunt: Hunt, case: Case, folder: str) -> Failure | None:
             max_rounds=setup.max_rounds,
             stop_early=False,
             record=writer,
-            header_extra=config.header_extra(networked=False, n=setup.params.n),
             robot_model=setup.robot_model,
+            settings=setup.settings,
         )
     finally:
         writer.close()

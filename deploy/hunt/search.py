@@ -42,6 +42,7 @@ from fatswarm.world.physics import (
 
 if TYPE_CHECKING:
     from fatswarm.deploy.engine.lockstep import RoundReport
+    from fatswarm.world.setup import WorldSetup
 
 HUNT_STREAM: Final = 0x4B17  # keeps the hunt's draws apart from every other seeded stream
 SEED_MASK: Final = 0xFFFFFFFF
@@ -325,8 +326,8 @@ def run_case(
     max_rounds: int,
     stop_early: bool = True,
     record: Any = None,
-    header_extra: dict[str, Any] | None = None,
     robot_model: RobotModel = PAPER_MODEL,
+    settings: WorldSetup | None = None,
 ) -> Outcome:
     """Run one start under `scheduler` and `robot_model` in lock step and classify it.
 
@@ -336,8 +337,9 @@ def run_case(
     is the failure; a run formed with no collision is none. A start or parameters the algorithm
     or the supported range refuse is `refused`, not a failure; once running, an overlap physics
     raises is an INVARIANT failure, anything else the run raises an ERROR failure. `record`: a
-    journal to write the run to (`world.record.RecordWriter`), with `header_extra` in its header
-    (and, with the hunt's `record_views`, what each looker saw).
+    journal to write the run to (`world.record.RecordWriter`; with the hunt's `record_views`, what
+    each looker saw). `settings`: the run's settings whole (a saved case's replay: its header says
+    how it was made), in place of the hunt's adversary and `robot_model`.
     """
     # the whole lock-step engine: the CLI imports this module (through deploy.hunt.command)
     # to build its parser
@@ -361,9 +363,9 @@ def run_case(
             non_rigid=hunt.non_rigid,
             crash=hunt.crash,
             record=record,
-            header_extra=header_extra,
             robot_model=robot_model,
             record_views=hunt.record_views and record is not None,
+            settings=settings,
         )
     except _Found as stop:
         return Outcome(stop.failure, tuple(watch.active), rounds=len(watch.active))

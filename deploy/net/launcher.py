@@ -7,6 +7,7 @@ process with a Zenoh session) in its own process group; whatever happens, `Child
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import logging
 import os
 import secrets
@@ -168,25 +169,8 @@ def write_header(setup: RunSetup, record: str, swarm: str) -> None:
     # here, not at the top: only a new networked run needs the world's cores (not `--help`)
     from fatswarm.world.core import WorldCore
     from fatswarm.world.journal import perform
-    from fatswarm.world.setup import WorldSetup
 
-    assert setup.config is not None
-    extra = setup.config.header_extra(networked=True, n=setup.params.n)
-    world = WorldSetup(
-        swarm,
-        setup.params.n,
-        setup.seed,
-        setup.scheduler.name,
-        setup.initial,
-        setup.max_rounds,
-        algorithm=setup.algorithm_ref,
-        params=dict(setup.params.values),
-        extra=extra,
-        non_rigid=setup.non_rigid,
-        crash=setup.crash,
-        robot_model=setup.robot_model,
-        record_views=setup.record_views,
-    )
+    world = dataclasses.replace(setup.settings, swarm=swarm)
     with RecordWriter(record, fsync=True) as journal:
         perform(WorldCore(world, setup.params).take_effects(), journal)
 
@@ -509,12 +493,7 @@ def _world_gone(children: Children) -> ExitCode:
 
 def _schedule_of(setup: RunSetup) -> str | None:
     """The schedule file of a scripted run: the one asked for, or the one its record names."""
-    if setup.config is not None:
-        return setup.config.schedule
-    if setup.resumed is not None:
-        named = setup.resumed.header.extra.get("schedule")
-        return named if isinstance(named, str) else None
-    return None
+    return setup.settings.schedule
 
 
 def print_summary(record: str, out: Any) -> Outcome | None:

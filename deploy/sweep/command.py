@@ -12,22 +12,26 @@ import importlib.util
 import os
 import signal
 import sys
-import threading
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager, suppress
-from types import FrameType
+from collections.abc import Sequence
+from contextlib import suppress
 from typing import TYPE_CHECKING, Final
 
 from fatswarm.coordinator.schedule import NAMES
 from fatswarm.deploy.engine.config import DEFAULT_START, check_lights, input_errors
 from fatswarm.deploy.flags import add_robot_model_arguments, check_writable
 from fatswarm.deploy.scenarios.starts import KINDS
-from fatswarm.deploy.sweep.executor import (
-    ClusterError,
-    Workers,
-    add_cluster_argument,
-    open_workers,
+from fatswarm.deploy.sweep.batch_flags import (
+    add_adversary_arguments,
+    add_jobs_argument,
+    add_max_rounds_argument,
+    add_param_argument,
+    add_quiet_argument,
+    add_scheduler_argument,
+    add_sizes_argument,
+    jobs_of,
+    stop_on_signals,
 )
+from fatswarm.deploy.sweep.executor import ClusterError, Workers, open_workers
 from fatswarm.deploy.sweep.figures import draw_figures
 from fatswarm.deploy.sweep.grid import (
     Grid,
@@ -69,7 +73,7 @@ MISSING_SCIPY: Final = (
 )
 DESCRIPTION: Final = (
     "Run a grid of lock-step runs (algorithm x n x start kind x scheduler x non-rigid delta x "
-    "robot model (visibility x sight x lights x frames x frame change) x crash count x seeds) "
+    "robot model (its axes: docs/model.md) x crash count x seeds) "
     "on every core, appending one CSV row per run (outcome, cost, the "
     "distance's ratio to the optimal-assignment bound, the virtual time of async runs, wall "
     "time, the configuration and the `fatswarm run --lockstep` command that repeats it). "
@@ -90,20 +94,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.description = DESCRIPTION
     p.epilog = EPILOG
     _add_grid_arguments(p)
-    p.add_argument(
-        "--param",
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="a parameter of the algorithms, the same for every run (repeatable)",
-    )
-    p.add_argument(
-        "--max-rounds",
-        type=int,
-        default=None,
-        metavar="R",
-        help="round cap of every run (default: the scheduler's, as fatswarm run)",
-    )
+    add_param_argument(p, "the algorithms")
+    add_max_rounds_argument(p)
     add_robot_model_arguments(p, lists=True)
     _add_output_arguments(p)
 
@@ -119,14 +111,7 @@ def _add_grid_arguments(p: argparse.ArgumentParser) -> None:
         help=f"algorithms to run (default {DEFAULT_ALGORITHM}; a registered name, "
         "module:attribute or path/to/file.py:attribute)",
     )
-    p.add_argument(
-        "-n",
-        "--n",
-        action="append",
-        default=[],
-        metavar="SIZES",
-        help=f"numbers of robots, e.g. 4,8,16 or 4..32:4 (default {DEFAULT_SIZES})",
-    )
+    add_sizes_argument(p, "e.g. 4,8,16 or 4..32:4", DEFAULT_SIZES)
     p.add_argument(
         "--start",
         "--starts",
@@ -136,29 +121,8 @@ def _add_grid_arguments(p: argparse.ArgumentParser) -> None:
         help=f"random start kinds: {', '.join(KINDS)} (default {DEFAULT_START}; --starts, "
         "hunt's name, is the same flag)",
     )
-    p.add_argument(
-        "--scheduler",
-        action="append",
-        default=[],
-        metavar="NAMES",
-        help=f"schedulers (models) to run under: {usable} (default: all of them)",
-    )
-    p.add_argument(
-        "--non-rigid",
-        action="append",
-        default=[],
-        metavar="DELTAS",
-        help="non-rigid adversaries' deltas (> 0, robot radii) and/or 'rigid', e.g. "
-        "rigid,1,0.1 (default rigid: rigid moves only)",
-    )
-    p.add_argument(
-        "--crash",
-        action="append",
-        default=[],
-        metavar="COUNTS",
-        help="crash counts F (F robots crash for good, 0 < F < n; a cell with F >= n "
-        "is left out) and/or 0 or 'none', e.g. 0,1,2 (default none)",
-    )
+    add_scheduler_argument(p, "to run under", usable)
+    add_adversary_arguments(p, lists=True)
     p.add_argument(
         "--seeds",
         action="append",
@@ -177,14 +141,7 @@ def _add_output_arguments(p: argparse.ArgumentParser) -> None:
         metavar="CSV",
         help=f"the table to append to (default {DEFAULT_OUT}); its rows are skipped",
     )
-    p.add_argument(
-        "--jobs",
-        type=int,
-        default=None,
-        metavar="J",
-        help="worker processes (default: one per core)",
-    )
-    add_cluster_argument(p)
+    add_jobs_argument(p)
     p.add_argument(
         "--plot",
         metavar="DIR",
@@ -197,12 +154,7 @@ def _add_output_arguments(p: argparse.ArgumentParser) -> None:
         "if it exists), a line per algorithm, scheduler, non-rigid delta, crash "
         "count and robot model",
     )
-    p.add_argument(
-        "-q",
-        "--quiet",
-        action="store_true",
-        help="no progress while running (the summary is still printed)",
-    )
+    add_quiet_argument(p)
 
 
 def build_grid(args: argparse.Namespace) -> Grid:
@@ -275,7 +227,7 @@ def main(args: argparse.Namespace) -> int:
     refused: tuple[type[Exception], ...] = (SweepInputError, *input_errors())
     try:
         grid = build_grid(args)
-        jobs = _jobs(args.jobs)
+        jobs = jobs_of(args.jobs)
         _check_plot(args.plot)
         _check_summary_md(args.summary_md)
         table = RunTable.open(args.out, models=grid.has_models)
@@ -321,7 +273,7 @@ def _run(
 
     progress = make_progress(len(todo), quiet=args.quiet or not todo)
     try:
-        with _stop_on_signals() as stopped, progress:
+        with stop_on_signals() as stopped, progress:
             complete = run_all(todo, workers, record, lambda: stopped[0] is not None)
     except TableWriteError as exc:
         _say(
@@ -401,15 +353,6 @@ def _plan_text(out: str, total: int, present: int, other: int, where: str) -> st
     )
 
 
-def _jobs(given: int | None) -> int:
-    if given is None:
-        affinity = getattr(os, "sched_getaffinity", None)
-        return len(affinity(0)) if affinity is not None else (os.cpu_count() or 1)
-    if given < 1:
-        raise SweepInputError(f"--jobs must be at least 1, got {given}")
-    return int(given)
-
-
 def _check_plot(folder: str | None) -> None:
     if folder is None:
         return
@@ -449,29 +392,6 @@ def _plot(cells: Sequence[Cell], folder: str) -> int:
         return _fail(f"cannot write the figures in {folder}: {exc.strerror or exc}")
     _say("figures: " + ", ".join(written))
     return ExitCode.OK
-
-
-# -- signals ----------------------------------------------------------------------------------
-
-
-@contextmanager
-def _stop_on_signals() -> Iterator[list[int | None]]:
-    """While inside, Ctrl-C and SIGTERM only set the flag yielded (`[signal number]`), so the
-    pool loop stops at a step of its own choosing: no row is half written, no worker left."""
-    stopped: list[int | None] = [None]
-    if threading.current_thread() is not threading.main_thread():
-        yield stopped
-        return
-
-    def note(signum: int, frame: FrameType | None) -> None:
-        stopped[0] = stopped[0] or signum
-
-    previous = {sig: signal.signal(sig, note) for sig in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        yield stopped
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
 
 
 def _show_failures(rows: Sequence[dict[str, str]], out_path: str) -> None:

@@ -7,7 +7,6 @@ configuration and key. The CSV schema is `deploy/sweep/table.py`, the summary of
 from __future__ import annotations
 
 import argparse
-import enum
 import itertools
 import math
 import re
@@ -19,13 +18,13 @@ from typing import Any, Final
 from fatswarm.coordinator.schedule import NAMES, ScheduleError, make_scheduler
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.robot_model import (
-    MODEL_KEYS,
+    AXES,
+    AXIS_NAMES,
     PAPER_MODEL,
-    FrameChange,
-    Frames,
-    Lights,
+    Axis,
+    ModelError,
     RobotModel,
-    Visibility,
+    axis_named,
 )
 from fatswarm.domain.seam import Algorithm, ParamValue, parse_assignments, resolve_values
 
@@ -47,22 +46,14 @@ KEY_COLUMNS: Final = (
     "max_rounds",
     "non_rigid",
     "crash",
-    *MODEL_KEYS,  # visibility, sight, lights, frames, frame_change: the robot model
+    *AXIS_NAMES,  # the robot model's axes (`robot_model.AXES`): visibility, sight, lights...
 )
 # The robot model's key columns, blank for an axis at the paper's value: a table of the paper's
 # model alone has none of them (the table's schema, `deploy/sweep/table.py`).
-MODEL_COLUMNS: Final = MODEL_KEYS
+MODEL_COLUMNS: Final = AXIS_NAMES
 RIGID: Final = "rigid"  # --non-rigid's word for rigid moves (the default)
 NO_CRASH: Final = ("0", "none")  # --crash's words for no crash (the default)
 UNLIMITED: Final = "unlimited"  # --sight's word for unlimited sight (the default)
-# The robot model's axes of words (--sight is of distances), by key; the first value of each is
-# the paper's.
-MODEL_CHOICES: Final[Mapping[str, type[enum.StrEnum]]] = {
-    "visibility": Visibility,
-    "lights": Lights,
-    "frames": Frames,
-    "frame_change": FrameChange,
-}
 
 
 class SweepInputError(ValueError):
@@ -162,74 +153,57 @@ def parse_crash(texts: Iterable[str]) -> tuple[int | None, ...]:
 
 def model_flag(key: str) -> str:
     """The flag of a robot-model key: `--frame-change` for frame_change."""
-    return "--" + key.replace("_", "-")
+    return axis_named(key).flag
+
+
+def parse_axis(texts: Iterable[str], axis: Axis) -> tuple[Any, ...]:
+    """A robot-model axis's values (`Axis.parse`: `--sight 6,unlimited`, `--frames chirality`),
+    in the order given, without repeats (`6` and `6.0` are one); default (the paper's,);
+    raises SweepInputError."""
+    out: dict[Any, None] = {}
+    for item in split_values(texts):
+        try:
+            out.setdefault(axis.parse(item), None)
+        except ModelError as exc:
+            if axis.choices is None:  # what the distances are, or the word for none
+                raise SweepInputError(str(exc)) from None
+            raise SweepInputError(
+                f"{axis.flag} takes {', '.join(axis.words)} (a comma list), got {item!r}"
+            ) from None
+    return tuple(out) or (axis.check(axis.default),)
 
 
 def parse_sight(texts: Iterable[str]) -> tuple[float | None, ...]:
-    """`--sight`: distances (finite, > 0, robot radii) and/or `unlimited` (None), in the order
-    given, without repeats (`6` and `6.0` are one); default (None,), unlimited sight only."""
-    out: dict[float | None, None] = {}
-    for item in split_values(texts):
-        if item.lower() == UNLIMITED:
-            out.setdefault(None, None)
-            continue
-        try:
-            distance = float(item)
-        except ValueError:
-            distance = math.nan
-        if not (math.isfinite(distance) and distance > 0):
-            raise SweepInputError(
-                f"--sight takes distances > 0 (robot radii) or {UNLIMITED}, got {item!r}"
-            )
-        out.setdefault(distance, None)
-    return tuple(out) or (None,)
+    """`--sight`: distances (finite, > 0, robot radii) and/or `unlimited` (None) (`parse_axis`)."""
+    return parse_axis(texts, axis_named("sight"))
 
 
 def parse_choices(texts: Iterable[str], key: str) -> tuple[str, ...]:
-    """A robot-model axis of words (`MODEL_CHOICES`: `--visibility`, `--lights`, `--frames`,
-    `--frame-change`): its values in the order given, without repeats; default the paper's."""
-    choices = [member.value for member in MODEL_CHOICES[key]]
-    values = split_values(texts)
-    for value in values:
-        if value not in choices:
-            raise SweepInputError(
-                f"{model_flag(key)} takes {', '.join(choices)} (a comma list), got {value!r}"
-            )
-    return values or (choices[0],)
+    """A robot-model axis of words (`--visibility`, `--lights`, `--frames`, `--frame-change`):
+    its values in the order given, without repeats; default the paper's (`parse_axis`)."""
+    return tuple(str(value) for value in parse_axis(texts, axis_named(key)))
 
 
 def parse_robot_models(given: Mapping[str, Iterable[str] | None]) -> tuple[RobotModel, ...]:
-    """The robot models of the flags' texts by key (MODEL_KEYS; a key missing or None: the
-    paper's value): every combination, visibility slowest, then sight, lights, frames and frame
-    change, each axis in the order given. One model, the paper's, when no axis is given."""
-    axes: list[Sequence[Any]] = [
-        parse_sight(given.get(key) or ())
-        if key == "sight"
-        else parse_choices(given.get(key) or (), key)
-        for key in MODEL_KEYS
-    ]
+    """The robot models of the flags' texts by key (`AXES`; a key missing or None: the paper's
+    value): every combination, the first axis slowest (visibility, then sight, lights, frames,
+    frame change...), each axis in the order given. One model, the paper's, when no axis is
+    given."""
+    axes = [parse_axis(given.get(a.name) or (), a) for a in AXES]
     return tuple(RobotModel.of(*values) for values in itertools.product(*axes))
 
 
 def robot_models_of(args: argparse.Namespace) -> tuple[RobotModel, ...]:
     """The robot models of `add_robot_model_arguments(p, lists=True)`'s flags
     (`parse_robot_models`); raises SweepInputError."""
-    return parse_robot_models({key: getattr(args, key, None) for key in MODEL_KEYS})
+    return parse_robot_models({a.name: getattr(args, a.name, None) for a in AXES})
 
 
 def model_suffix(robot_model: RobotModel) -> str:
-    """The robot model's axes that are not the paper's, each as `+WORD`: the visibility
+    """The robot model's axes that are not the paper's, each as `+TAGVALUE`: the visibility
     (`+opaque`, `+opaque-centres`), `+sightV`, `+lights-internal` / `+lights-external`, the
-    frames (`+chirality`, `+disoriented`) and `+every-look`; "" for the paper's model."""
-    m, paper = robot_model, PAPER_MODEL
-    words = [
-        str(m.visibility) if m.visibility != paper.visibility else "",
-        "" if m.sight is None else f"sight{m.sight:g}",
-        f"lights-{m.lights}" if m.lights != paper.lights else "",
-        str(m.frames) if m.frames != paper.frames else "",
-        str(m.frame_change) if m.frame_change != paper.frame_change else "",
-    ]
-    return "".join(f"+{word}" for word in words if word)
+    frames (`+chirality`, `+disoriented`), `+every-look`...; "" for the paper's model."""
+    return "".join(f"+{a.tag}{a.label(robot_model.value(a.name))}" for a in robot_model.changed())
 
 
 def model_label(
@@ -252,22 +226,16 @@ def model_label(
 
 def model_cells(robot_model: RobotModel) -> dict[str, str]:
     """The robot model's columns (MODEL_COLUMNS) of a run: each axis as its flag takes it back
-    (sight by repr), blank where it is the paper's (so a run of the paper's model has the key of
-    a row of a table without these columns)."""
-    paper = PAPER_MODEL.to_header()
-    return {
-        key: "" if value == paper[key] else value_text(value) if key == "sight" else str(value)
-        for key, value in robot_model.to_header().items()
-    }
+    (numbers by repr), blank where it is the paper's (so a run of the paper's model has the key
+    of a row of a table without these columns)."""
+    changed = robot_model.changed()
+    return {a.name: a.text(robot_model.value(a.name)) if a in changed else "" for a in AXES}
 
 
 def model_of_cells(cells: Mapping[str, str]) -> RobotModel:
     """The robot model of a row's MODEL_COLUMNS cells (`model_cells` read back; blank or missing:
-    the paper's value); raises ModelError or ValueError for a cell no model writes."""
-    given: dict[str, Any] = {key: cells.get(key, "") for key in MODEL_KEYS}
-    if given["sight"]:
-        given["sight"] = float(given["sight"])
-    return RobotModel.of(**{key: value for key, value in given.items() if value})
+    the paper's value); raises ModelError for a cell no model writes."""
+    return RobotModel.of(**{a.name: a.parse(cells[a.name]) for a in AXES if cells.get(a.name)})
 
 
 def model_argv(robot_model: RobotModel) -> list[str]:

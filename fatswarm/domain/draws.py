@@ -24,6 +24,7 @@ CUT_STREAM: Final = 0xC07A  # where the non-rigid adversary stops a move
 CRASH_STREAM: Final = 0xC4A5  # which robots the crash adversary stops for good, and when
 ROTATION_STREAM: Final = 0x2074  # each private frame's rotation (--frames chirality, disoriented)
 FRAME_LOOK_STREAM: Final = 0xF1A5  # mirrors drawn by key (disoriented, --frame-change every-look)
+NOISE_STREAM: Final = 0x9015  # the sensors' error on each position a Look shows (--noise)
 
 
 def view_order(seed: int, round_no: int, robot: int, k: int) -> np.ndarray:
@@ -111,6 +112,16 @@ def _mix64(x: int) -> int:
     x = ((x ^ (x >> 30)) * 0xBF58476D1CE4E5B9) & _MASK64
     x = ((x ^ (x >> 27)) * 0x94D049BB133111EB) & _MASK64
     return x ^ (x >> 31)
+
+
+def look_noise(seed: int, robot: int, look_round: int, k: int) -> np.ndarray:
+    """The standard normal errors of robot `robot`'s Look of round `look_round` (an async run:
+    its instant) on the k positions it shows, (k, 2), row i for the view's row i: a seeded
+    generator of its own per (seed, robot, Look), so every run mode (and a re-Look) draws the
+    same and no other draw of the run shifts it. `--noise` scales them by sigma."""
+    rng = np.random.default_rng([NOISE_STREAM, seed & 0xFFFFFFFF, robot, look_round])
+    errors: np.ndarray = rng.standard_normal((k, 2))
+    return errors
 
 
 def draw_flip(seed: int, robot: int) -> bool:

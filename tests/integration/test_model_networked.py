@@ -1,6 +1,7 @@
 """Every robot-model axis, networked (real processes on loopback) against lock step: the same
-record, line for line, for sight, obstruction, each lights model, each frames model and a frame
-per Look, composed with the round and async schedulers, non-rigid moves and crashes."""
+record, line for line, for sight, obstruction, each lights model, each frames model, a frame
+per Look and noisy sensors (the world draws each Look's error in both), composed with the round
+and async schedulers, non-rigid moves and crashes."""
 
 from __future__ import annotations
 
@@ -33,6 +34,9 @@ CASES = {
         "--visibility", "opaque-centres", "--crash", "1", "--record-views",
     ],
     "paper-chirality-ssync": ["--scheduler", "ssync", "--frames", "chirality"],
+    "noise-chirality-ssync-views": [
+        "--scheduler", "ssync", "--noise", "0.02", "--frames", "chirality", "--record-views",
+    ],
     "gathering-sight-opaque-async-views": [
         "--algorithm", "gathering", "--scheduler", "async", "--sight", "8",
         "--visibility", "opaque", "--record-views",

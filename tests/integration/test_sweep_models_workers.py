@@ -70,12 +70,13 @@ def test_a_sweep_over_frames_and_sight_has_a_row_per_model_equal_to_fatswarm_run
     first: dict[tuple[str, ...], dict[str, str]] = {}
     for row in rows:
         first.setdefault(tuple(row[c] for c in MODEL_COLUMNS), row)
-    assert set(first) == {
-        ("", "", "", "", ""),
-        ("", "", "", "chirality", ""),
-        ("", "6.0", "", "", ""),
-        ("", "6.0", "", "chirality", ""),
-    }
+    models = (
+        {},
+        {"frames": "chirality"},
+        {"sight": "6.0"},
+        {"sight": "6.0", "frames": "chirality"},
+    )
+    assert set(first) == {tuple(cells.get(c, "") for c in MODEL_COLUMNS) for cells in models}
     for label in ("fsync ", "fsync+chirality ", "fsync+sight6 ", "fsync+sight6+chirality "):
         assert label in summary
     for row in first.values():  # one run of each model, against the API

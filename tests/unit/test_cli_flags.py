@@ -13,7 +13,7 @@ import pytest
 
 from fatswarm import __version__
 from fatswarm.deploy import cli
-from fatswarm.deploy.commands import run
+from fatswarm.deploy.commands import run, run_lockstep
 from fatswarm.deploy.engine import estimate
 from fatswarm.deploy.view import summary
 from fatswarm.domain.outcome import ExitCode
@@ -215,7 +215,7 @@ def test_lockstep_accepts_networked_flags_left_at_their_defaults(
 def test_json_prints_the_summary_as_one_object_and_progress_on_stderr(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    monkeypatch.setattr(run, "PROGRESS_SECONDS", 0.0)  # a progress line every round
+    monkeypatch.setattr(run_lockstep, "PROGRESS_SECONDS", 0.0)  # a progress line every round
     target = tmp_path / "run.jsonl"
     code = fatswarm(
         [
@@ -294,7 +294,7 @@ def test_the_estimate_grows_with_n_and_the_scheduler_and_stops_at_the_cap() -> N
 def test_the_progress_line_shows_an_eta(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    monkeypatch.setattr(run, "PROGRESS_SECONDS", 0.0)
+    monkeypatch.setattr(run_lockstep, "PROGRESS_SECONDS", 0.0)
     fatswarm(["run", "--lockstep", "-n", "5", "--seed", "1", "--scheduler", "fsync"])
     lines = [x for x in capsys.readouterr().err.splitlines() if x.startswith("round ")]
     assert lines and all(" eta" in x and "(round cap)" in x for x in lines), lines

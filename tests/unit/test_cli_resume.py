@@ -280,3 +280,28 @@ def test_networked_resume_runs_the_records_seed_scheduler_and_robots(
     assert setup.resumed is not None and len(setup.resumed.rounds) > 0
     assert record == str(ssync_cut)
     assert "pass --seed" not in capsys.readouterr().err
+
+
+@MODES
+def test_every_contradicting_flag_is_named_in_one_line(
+    mode: list[str], ssync_cut: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    before = ssync_cut.read_text()
+    flags = ["-n", "12", "--seed", "4", "--crash", "2", "--frames", "chirality", "--record-views"]
+    code = fatswarm([*mode, "--record", str(ssync_cut), "--resume", "-q", *flags])
+    assert code == ExitCode.BAD_INPUT
+    one_line_refusal(
+        capsys,
+        "-n 12 contradicts",
+        "n=8",
+        "--seed 4 contradicts",
+        "seed=3",
+        "--crash 2 contradicts",
+        "no crashes",
+        "--frames chirality contradicts",
+        "frames=y-axis",
+        "--record-views contradicts",
+        "does not record views",
+        "drop -n, --seed, --crash, --frames, --record-views to resume it",
+    )
+    assert ssync_cut.read_text() == before

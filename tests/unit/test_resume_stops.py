@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from fatswarm.deploy import cli
-from fatswarm.deploy.commands import run
+from fatswarm.deploy.commands import run_lockstep
 from fatswarm.deploy.commands.resume import stopped_line
 from fatswarm.deploy.engine import estimate
 from fatswarm.deploy.engine.lockstep import RoundReport
@@ -30,14 +30,14 @@ def stop_after(monkeypatch: pytest.MonkeyPatch) -> Iterator[list[BaseException |
     """`[exception, round]`: the lock step raises the exception (once one is set) as soon as that
     round is committed."""
     how: list[BaseException | int | None] = [None, 4]
-    seen = run._Watch.__call__
+    seen = run_lockstep._Watch.__call__
 
-    def watch(self: run._Watch, report: RoundReport) -> None:
+    def watch(self: run_lockstep._Watch, report: RoundReport) -> None:
         seen(self, report)
         if how[0] is not None and report.entry.round == how[1]:
             raise how[0]  # type: ignore[misc]
 
-    monkeypatch.setattr(run._Watch, "__call__", watch)
+    monkeypatch.setattr(run_lockstep._Watch, "__call__", watch)
     yield how
     monkeypatch.undo()
 

@@ -17,6 +17,7 @@ from fatswarm.coordinator.schedule import NAMES
 from fatswarm.deploy import cli
 from fatswarm.deploy.sweep.grid import (
     KEY_COLUMNS,
+    MODEL_COLUMNS,
     Grid,
     RunSpec,
     SweepInputError,
@@ -191,7 +192,8 @@ def test_parameters_are_canonical_so_one_run_is_one_key() -> None:
 def test_key_cells_are_the_first_columns_and_the_command_repeats_the_run() -> None:
     spec = RunSpec("gathering", 6, "dense", "ssync", 3, (("tolerance", "0.01"),), 50)
     assert spec.key() == (
-        ("gathering", "6", "dense", "ssync", "3", "tolerance=0.01", "50", "", "") + ("",) * 5
+        ("gathering", "6", "dense", "ssync", "3", "tolerance=0.01", "50", "", "")
+        + ("",) * len(MODEL_COLUMNS)  # the robot model's columns (`AXES`), blank: the paper's
     )
     assert COLUMNS[: len(KEY_COLUMNS)] == KEY_COLUMNS
     assert shlex.split(spec.command()) == [

@@ -129,6 +129,7 @@ def test_model_cells_are_blank_at_the_papers_values_and_read_back() -> None:
         "lights": "",
         "frames": "chirality",
         "frame_change": "",
+        "noise": "",
     }
     every = RobotModel.of("opaque-centres", 0.1, "external", "disoriented", "every-look")
     for model in (PAPER_MODEL, m, every):
@@ -137,9 +138,10 @@ def test_model_cells_are_blank_at_the_papers_values_and_read_back() -> None:
 
 
 def test_the_model_is_in_the_key_and_a_papers_run_has_the_key_it_always_had() -> None:
-    assert KEY_COLUMNS[-5:] == MODEL_COLUMNS and COLUMNS[: len(KEY_COLUMNS)] == KEY_COLUMNS
+    axes = len(MODEL_COLUMNS)
+    assert KEY_COLUMNS[-axes:] == MODEL_COLUMNS and COLUMNS[: len(KEY_COLUMNS)] == KEY_COLUMNS
     plain, chiral = spec(), spec(RobotModel.of(frames="chirality"))
-    assert plain.key()[-5:] == ("",) * 5 and plain.model == "fsync"
+    assert plain.key()[-axes:] == ("",) * axes and plain.model == "fsync"
     assert dict(zip(KEY_COLUMNS, chiral.key(), strict=True))["frames"] == "chirality"
     assert chiral.model == "fsync+chirality"
     models = parse_robot_models({"frames": ["y-axis,chirality"], "sight": ["unlimited,6"]})
