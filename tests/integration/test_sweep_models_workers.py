@@ -70,7 +70,7 @@ def test_a_sweep_over_frames_and_sight_has_a_row_per_model_equal_to_fatswarm_run
     first: dict[tuple[str, ...], dict[str, str]] = {}
     for row in rows:
         first.setdefault(tuple(row[c] for c in MODEL_COLUMNS), row)
-    models = (
+    models: tuple[dict[str, str], ...] = (
         {},
         {"frames": "chirality"},
         {"sight": "6.0"},
