@@ -6,7 +6,6 @@ Python API (through `deploy.engine.config.RunConfig.resolve`).
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Final
@@ -152,11 +151,6 @@ def outside_assumption(algorithm: Configured, model: RobotModel) -> str:
     )
 
 
-def absolute(path: str | None) -> str | None:
-    """A file setting as the header keeps it: absolute (the run repeats from any directory)."""
-    return None if path is None else os.path.abspath(path)
-
-
 def _is_int(value: object) -> bool:
     return isinstance(value, int) and not isinstance(value, bool)
 
@@ -181,7 +175,6 @@ __all__ = [
     "MADE_KEYS",
     "SETTINGS_KEYS",
     "WorldSetup",
-    "absolute",
     "outside_assumption",
     "setup_from_header",
 ]

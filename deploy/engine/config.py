@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -109,7 +110,7 @@ class RunConfig:
         from fatswarm.deploy.engine.lockstep import default_max_rounds, run_reach
 
         # the world's records and physics: an agent imports this module, never them
-        from fatswarm.world.setup import WorldSetup, absolute
+        from fatswarm.world.setup import WorldSetup
 
         if self.scheduler != "scripted" and self.schedule is not None:
             raise RunInputError("--schedule only goes with --scheduler scripted")
@@ -148,13 +149,13 @@ class RunConfig:
             record_views=self.record_views,
             version=__version__,
             start=self.start if self.positions is None and self.init is None else None,
-            init=absolute(self.init),
+            init=_absolute(self.init),
             fairness=(
                 int(self.fairness or default_fairness(n))
                 if self.scheduler in FAIR_SCHEDULERS
                 else None
             ),
-            schedule=absolute(self.schedule),
+            schedule=_absolute(self.schedule),
             move_timeout=float(self.move_timeout_s) if networked else None,
             command=self.command or None,
         )
@@ -207,6 +208,11 @@ class RunSetup:
     @property
     def record_views(self) -> bool:
         return self.settings.record_views
+
+
+def _absolute(path: str | None) -> str | None:
+    """A file setting as the header keeps it: absolute (the run repeats from any directory)."""
+    return None if path is None else os.path.abspath(path)
 
 
 def model_from_args(args: argparse.Namespace) -> RobotModel:
