@@ -32,7 +32,7 @@ def test_the_wheel_holds_every_module_of_the_tree_once(tmp_path: Path) -> None:
     source.mkdir()
     for name in ("pyproject.toml", "README.md"):
         shutil.copy2(ROOT / name, source / name)
-    for folder in FOLDERS:  # fatswarm/'s links come along as links
+    for folder in FOLDERS:
         shutil.copytree(
             ROOT / folder,
             source / folder,

@@ -9,8 +9,10 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-# the checkout's folders installed under the fatswarm name (fatswarm/ links to them)
-FOLDERS = ("fatswarm", "agent", "coordinator", "world", "deploy")
+FOLDERS = ("fatswarm",)  # the checkout's folder of the package
+# the checkout's top-level links into it (agent -> fatswarm/agent ...), kept for reading: from the
+# checkout's root each is importable under its own name, which its __init__.py refuses
+LINKS = ("agent", "coordinator", "world", "deploy")
 
 
 def loaded_files(modules: Mapping[str, object]) -> dict[str, str]:

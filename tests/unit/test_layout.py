@@ -1,6 +1,6 @@
-"""One name per module: the checkout's folders agent/, coordinator/, world/ and deploy/ are the
-packages fatswarm.agent ... fatswarm.deploy (fatswarm/ links to them), every module loads under
-that name alone, and every folder of modules is a package, so the wheel finds it."""
+"""One name per module: the packages live under fatswarm/ (the checkout's top-level agent/,
+coordinator/, world/ and deploy/ are links into it, for reading), every module loads under its
+fatswarm.* name alone, and every folder of modules is a package, so the wheel finds it."""
 
 from __future__ import annotations
 
@@ -12,21 +12,23 @@ import sys
 from pathlib import Path
 
 import pytest
-from module_names import FOLDERS, ROOT, loaded_files, second_names  # tests/support
+from module_names import LINKS, ROOT, loaded_files, second_names  # tests/support
 
 import fatswarm
 
-TOP_LEVEL = [folder for folder in FOLDERS if folder != "fatswarm"]
+TOP_LEVEL = list(LINKS)
 
 
 def test_every_folder_of_modules_is_a_package_that_setuptools_finds() -> None:
     # [tool.setuptools.packages.find] skips a folder without __init__.py: its modules would be
     # missing from the wheel, though they import from the checkout (as a namespace package)
     package = ROOT / "fatswarm"
-    assert [(package / f).resolve() for f in TOP_LEVEL] == [ROOT / f for f in TOP_LEVEL]
+    # the top-level names are links into fatswarm/, which holds the code itself
+    assert [(ROOT / f).resolve() for f in TOP_LEVEL] == [package / f for f in TOP_LEVEL]
+    assert not any((package / f).is_symlink() for f in TOP_LEVEL)
     folders = [
         Path(folder)
-        for folder, _, files in os.walk(package, followlinks=True)
+        for folder, _, files in os.walk(package)
         if any(f.endswith(".py") for f in files)
     ]
     assert len(folders) >= 14
@@ -51,12 +53,12 @@ def test_the_tests_load_every_module_of_fatswarm_under_one_name() -> None:
 
 def test_a_second_name_is_seen() -> None:
     # the check itself: world.record beside fatswarm.world.record, and __main__ beside its name
-    record = str(ROOT / "world" / "record.py")
+    record = str(ROOT / "fatswarm" / "world" / "record.py")
     assert second_names({"fatswarm.world.record": record, "world.record": record}) == [
         f"{record}: loaded as fatswarm.world.record, world.record"
     ]
     assert second_names({"world.record": record}) == [f"{record}: loaded as world.record"]
-    parts = str(ROOT / "deploy" / "net" / "parts.py")
+    parts = str(ROOT / "fatswarm" / "deploy" / "net" / "parts.py")
     assert second_names({"__main__": parts}) == []
     assert len(second_names({"__main__": parts, "fatswarm.deploy.net.parts": parts})) == 1
     elsewhere = str(Path("/elsewhere/fatswarm/world/record.py"))
