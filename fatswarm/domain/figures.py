@@ -560,7 +560,7 @@ def record_schema(template: Mapping[str, Any]) -> dict[str, Any]:
     derived_help = ", ".join(f.name for f in derived_figures())
     result["description"] = (
         "The last line: how the run ended (absent while it runs, or if it never ended). "
-        f"Figures that follow from the positions ({derived_help or 'none'}) are not written: "
+        f"Figures that follow from the round lines ({derived_help or 'none'}) are not written: "
         "readers derive them (fatswarm.domain.figures)."
     )
     return schema

@@ -336,9 +336,11 @@ class WorldCore:
         kind = failure_kind(failed)
         if kind not in self.failure_kinds:
             self.failure_kinds.add(kind)
+            now = self.model.time()  # an async run's instant is its virtual time
+            when = f"round {round_no}" if now is None else f"time {now:g}"
             self._note(
                 Level.WARNING,
-                f"robot {robot}, round {round_no}: the algorithm failed ({failed}); it stays "
+                f"robot {robot}, {when}: the algorithm failed ({failed}); it stays "
                 "(failures of this kind are counted, not logged again)",
             )
 

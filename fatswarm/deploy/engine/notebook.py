@@ -177,10 +177,15 @@ def record_columns(record: RecordLines) -> dict[str, np.ndarray[Any, Any]]:
         "distance": distance.ravel(),
         "collided": collided.ravel(),
         **{
-            f.name: np.repeat(np.array([_nan(f, e) for e in record.rounds]), n)
+            f.name: np.repeat(np.array([_nan(f, e) for e in record.rounds], dtype=_dtype(f)), n)
             for f in round_figures()
         },
     }
+
+
+def _dtype(figure: figures.Figure) -> type:
+    """A figure's column type: a count that always applies is int64 (failures), else float64."""
+    return np.int64 if figure.type is int and not figure.optional else np.float64
 
 
 def _nan(figure: figures.Figure, entry: RoundEntry) -> float:
