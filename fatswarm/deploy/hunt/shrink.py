@@ -254,9 +254,10 @@ def shrink(hunt: Hunt, case: Case, kind: str, *, budget: int = DEFAULT_SHRINK_RU
 
 def _horizon(failure: Failure) -> int | None:
     """How far a proposal is run while shrinking a failure that shows in a round (a collision,
-    an invariant, a compute, an error): a little past where the best case so far fails. A proposal failing
-    later is passed over (a smaller shrink, never a wrong one: a run's rounds before its cap do
-    not depend on the cap); it saves running every proposal that does not fail to its cap."""
+    an invariant, a failed compute, an error): a little past where the best case so far fails. A
+    proposal failing later is passed over (a smaller shrink, never a wrong one: a run's rounds
+    before its cap do not depend on the cap); it saves running every proposal that does not fail
+    to its cap."""
     if failure.kind in (COLLISION, INVARIANT, COMPUTE, ERROR):
         return HORIZON_FACTOR * failure.round + HORIZON_SLACK
     return None
