@@ -13,17 +13,21 @@ import pytest
 import fatswarm
 from fatswarm.deploy import cli
 from fatswarm.deploy.engine.lockstep import RunResult as LockstepResult
+from fatswarm.deploy.sweep import pool, table
+from fatswarm.deploy.sweep.grid import RunSpec
 from fatswarm.deploy.view.summary import Outcome, summary_json
 from fatswarm.domain import figures
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.path import Line, to_record
 from fatswarm.domain.path import Path as Route
+from fatswarm.domain.robot_model import RobotModel
 from fatswarm.domain.seam import MAX_FAILURE, failure_kind, failure_text
 from fatswarm.domain.wire import ProtocolError, pack
 from fatswarm.world.protocol import LookRequest, MoveSubmitted
 from fatswarm.world.record_read import read_record
 
 VIEW_ERROR = "ViewError: the view holds"
+OPAQUE = RobotModel.of(visibility="opaque")
 
 # lock-step runs of the paper's algorithm on views it does not expect: (flags, exit code)
 FORMED_THROUGH_FAILURES = ["-n", "5", "--seed", "2", "--visibility", "opaque", "--scheduler",
@@ -199,3 +203,13 @@ def test_a_lockstep_run_stopped_by_its_round_cap_after_failures_goes_on_as_the_w
     part.write_text(json.dumps(header, separators=(",", ":")) + "\n" + "".join(lines[1:-1]))
     assert run(["--record", str(part), "--resume"]) == ExitCode.FORMED
     assert part.read_text() == whole.read_text()
+
+
+def test_a_sweep_row_counts_the_failures_and_names_the_first() -> None:
+    spec = RunSpec("uniform-circle", 6, "clustered", "ssync", 3, robot_model=OPAQUE)
+    run = pool.run_spec(spec)
+    row = table.make_row(spec, run, "0")
+    assert run.status == "stalled" and int(row["failures"]) > 0
+    assert row["first_failure"].startswith("robot ") and VIEW_ERROR in row["first_failure"]
+    clean = table.make_row(spec, table.RunFigures("formed", rounds=2, derived={"failures": 0}), "0")
+    assert (clean["failures"], clean["first_failure"]) == ("0", "")
