@@ -4,6 +4,7 @@ scheduler, and a lock-step run with failures resumes byte for byte."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -15,9 +16,10 @@ from fatswarm.deploy import cli
 from fatswarm.deploy.engine.lockstep import RunResult as LockstepResult
 from fatswarm.deploy.sweep import pool, table
 from fatswarm.deploy.sweep.grid import RunSpec
+from fatswarm.deploy.view import panels
 from fatswarm.deploy.view.summary import Outcome, summary_json
 from fatswarm.domain import figures
-from fatswarm.domain.outcome import ExitCode
+from fatswarm.domain.outcome import ExitCode, Status
 from fatswarm.domain.path import Line, to_record
 from fatswarm.domain.path import Path as Route
 from fatswarm.domain.robot_model import RobotModel
@@ -213,3 +215,14 @@ def test_a_sweep_row_counts_the_failures_and_names_the_first() -> None:
     assert row["first_failure"].startswith("robot ") and VIEW_ERROR in row["first_failure"]
     clean = table.make_row(spec, table.RunFigures("formed", rounds=2, derived={"failures": 0}), "0")
     assert (clean["failures"], clean["first_failure"]) == ("0", "")
+
+
+def test_the_dashboard_says_how_often_the_algorithm_failed() -> None:
+    frame = panels.Frame(
+        round=4, n=6, scheduler="ssync", positions=np.zeros((6, 2)), status=Status.STALLED
+    )
+    assert "failed" not in panels.outcome_text(frame)
+    assert "failures" not in dict(panels.tail_rows(frame))
+    failing = dataclasses.replace(frame, derived={"failures": 6.0})
+    assert panels.outcome_text(failing).endswith("0 collisions, the algorithm failed 6 times")
+    assert dict(panels.tail_rows(failing))["failures"] == "6"
