@@ -22,10 +22,11 @@ from fatswarm.domain import figures
 from fatswarm.domain.outcome import ExitCode, Status
 from fatswarm.domain.path import Line, to_record
 from fatswarm.domain.path import Path as Route
+from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.robot_model import RobotModel
 from fatswarm.domain.seam import MAX_FAILURE, failure_kind, failure_text
 from fatswarm.domain.wire import ProtocolError, pack
-from fatswarm.world.protocol import LookRequest, MoveSubmitted
+from fatswarm.world.protocol import LookRequest, MoveSubmitted, Snapshot
 from fatswarm.world.record_read import read_record
 
 VIEW_ERROR = "ViewError: the view holds"
@@ -226,3 +227,24 @@ def test_the_dashboard_says_how_often_the_algorithm_failed() -> None:
     failing = dataclasses.replace(frame, derived={"failures": 6.0})
     assert panels.outcome_text(failing).endswith("0 collisions, the algorithm failed 6 times")
     assert dict(panels.tail_rows(failing))["failures"] == "6"
+
+
+def test_the_agent_sends_a_failed_compute_in_its_move_and_says_each_kind_once(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    from fatswarm.agent import service  # the agent's shell: `_move` is its Compute, no I/O
+
+    robot = service.Robot(load_algorithm("uniform-circle"))
+    cfg = service.AgentConfig("s", 2)
+    caplog.set_level("INFO", logger="fatswarm.agent")
+    moves = []
+    for round_no, seen in ((3, 4), (4, 3)):
+        view = np.array([[3.0 * (k + 1), 0.0] for k in range(seen)])
+        snapshot = Snapshot(round_no, 6, "uniform-circle", {"a": 4.0}, view)
+        moves.append(MoveSubmitted.decode(service._move(cfg, snapshot, robot)))
+    assert [(m.robot, m.round, bool(m.path), m.failed) for m in moves] == [
+        (2, 3, False, "ViewError: the view holds 4 robots, expected n-1 = 5"),
+        (2, 4, False, "ViewError: the view holds 3 robots, expected n-1 = 5"),
+    ]
+    said = [r for r in caplog.records if "compute failed" in r.getMessage()]
+    assert len(said) == 1 and said[0].exc_info is None  # one line for the kind, no traceback
