@@ -241,9 +241,11 @@ def run_matrix(out: Path) -> dict[str, str]:
     table = list(csvlib.reader(csv.read_text().splitlines()))
     if "wall_s" not in table[0]:
         sys.exit("record_matrix: the sweep's table has no wall_s column")
-    # wall_s differs from run to run; min_gap, a column added since, is left out so that a
-    # manifest saved before it still compares (its cells are checked by tests/unit/test_min_gap.py)
-    keep = [i for i, column in enumerate(table[0]) if column not in ("wall_s", "min_gap")]
+    # wall_s differs from run to run; min_gap, failures and first_failure, columns added since,
+    # are left out so that a manifest saved before them still compares (their cells are checked
+    # by tests/unit/test_min_gap.py and tests/unit/test_compute_failures.py)
+    added = ("wall_s", "min_gap", "failures", "first_failure")
+    keep = [i for i, column in enumerate(table[0]) if column not in added]
     rows = [[row[i] for i in keep] for row in table]
     hashes["sweep"] = hashlib.sha256(json.dumps(rows).encode()).hexdigest()
     print(f"{'sweep':28} {hashes['sweep']}", flush=True)

@@ -28,7 +28,13 @@ from typing import Any
 from fatswarm.domain.lights import glance_of
 from fatswarm.domain.path import Path, Points
 from fatswarm.domain.registry import DEFAULT, load_algorithm
-from fatswarm.domain.seam import Algorithm, AlgorithmParamsError, Configured
+from fatswarm.domain.seam import (
+    Algorithm,
+    AlgorithmParamsError,
+    Configured,
+    failure_kind,
+    failure_text,
+)
 from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.protocol import (
     LookRequest,
@@ -70,6 +76,7 @@ class Robot:
     def __init__(self, algorithm: Algorithm[Any]) -> None:
         self.algorithm = algorithm
         self._setting: Configured | None = None
+        self.failure_kinds: set[str] = set()  # the kinds of failed compute said on the log
 
     def look_compute(self, snapshot: Snapshot) -> tuple[Path, int | None]:
         """The path relative to the robot in its frame, and the colour it shows next (a luminous
@@ -344,8 +351,10 @@ def _err_text(reply: Any) -> str:
 
 
 def _move(cfg: AgentConfig, snapshot: Snapshot, robot: Robot) -> bytes:
-    """Compute in the private frame: the encoded move for the snapshot's round (b"": it stays out
-    of this round, and says why)."""
+    """Compute in the private frame: the encoded move for the snapshot's round. A compute that
+    raises gives a move that stays and says why (`MoveSubmitted.failed`: the world books it at
+    once, no move timeout); b"" for a snapshot it cannot act on (another algorithm, refused
+    parameters): it stays out of this round, and says why on its log."""
     t0, cpu0 = time.perf_counter(), time.thread_time()
     round_no = snapshot.round
     try:
@@ -354,9 +363,19 @@ def _move(cfg: AgentConfig, snapshot: Snapshot, robot: Robot) -> bytes:
     except (WrongAlgorithmError, AlgorithmParamsError) as exc:
         log.error("round %d: staying put: %s", round_no, exc)
         return b""
-    except Exception:  # a bug in compute must not kill the robot: it stays put this round
-        log.exception("round %d: compute failed, staying put", round_no)
-        return b""
+    except Exception as exc:  # a bug in compute must not kill the robot: it stays this round
+        failed = failure_text(exc)
+        kind = failure_kind(failed)
+        if kind not in robot.failure_kinds:  # one line per kind of failure, no traceback
+            robot.failure_kinds.add(kind)
+            log.info(  # the world says it on the run's log, once a kind, for every robot
+                "round %d: compute failed (%s); staying (failures of this kind are counted by "
+                "the world, not logged again)",
+                round_no,
+                failed,
+            )
+        log.debug("round %d: compute failed", round_no, exc_info=True)
+        return MoveSubmitted.failing(cfg.robot, round_no, failed).encode()
     if log.isEnabledFor(logging.DEBUG):
         log.debug(
             "round %d: compute %.2f ms (CPU %.2f ms)",

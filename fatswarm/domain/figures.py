@@ -17,7 +17,7 @@ import json
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Final
+from typing import Any, Final, Protocol
 
 import numpy as np
 
@@ -46,10 +46,13 @@ class Summary(enum.StrEnum):
     COUNT = "count"  # how many rounds, or entries of them
     MIN = "min"  # the smallest value of any round
     MAX = "max"  # the largest value of any round
+    FIRST = "first"  # the value of the first round that has one
 
 
 FigureValue = int | float | str | None
 Derive = Callable[[Points], float | None]  # a round's value from the (n, 2) positions after it
+# a round's value from its number and its line's other fields (`RoundEntry.extra`)
+Tally = Callable[[int, Mapping[str, Any]], FigureValue]
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,6 +72,7 @@ class Figure:
     label: str = ""  # the dashboard's and summary text's words for it (default: the name)
     optional: bool = False  # None where it does not apply (no rounds, one robot, a round model)
     derive: Derive | None = None
+    tally: Tally | None = None  # instead of `derive`: from the round line's other fields
     schema: Mapping[str, Any] = field(default_factory=dict)
     csv: str = ""  # a format spec: "d", ".6f"
     kept_on_error: bool = False
@@ -127,6 +131,25 @@ def min_gap(positions: Points) -> float | None:
         dx, dy = along[second] - along[first], across[second] - across[first]
         best2 = min(best2, float(np.min(dx * dx + dy * dy)))
     return math.sqrt(best2) - 2 * RADIUS
+
+
+def failures(round_no: int, line: Mapping[str, Any]) -> int:
+    """How many computes of a round failed: the entries of its line's `failed`."""
+    del round_no
+    failed = line.get("failed")
+    return len(failed) if isinstance(failed, Mapping) else 0
+
+
+def first_failure(round_no: int, line: Mapping[str, Any]) -> str | None:
+    """The round's first failed compute (the least robot's), as the verdict names it: `robot 2
+    in round 3: ViewError: ...` (`cycle` for an async run's line: it has a `look`); None if none
+    failed."""
+    failed = line.get("failed")
+    if not isinstance(failed, Mapping) or not failed:
+        return None
+    robot = min(failed, key=lambda r: int(r) if str(r).isdigit() else -1)
+    word = "cycle" if "look" in line else "round"
+    return f"robot {robot} in {word} {round_no}: {failed[robot]}"
 
 
 _NUMBER: Final = {"$ref": "#/$defs/number", "minimum": 0}
@@ -258,6 +281,30 @@ FIGURES: tuple[Figure, ...] = (
         derive=min_gap,
         csv=".6f",
     ),
+    Figure(
+        "failures",
+        int,
+        "",
+        "Computes that failed (the algorithm raised; the robot stayed): the entries of the round "
+        "lines' `failed`, over the run. Derived from the round lines, never written on the "
+        "result line: every record has it (0 before the field existed, as none was counted).",
+        Summary.SUM,
+        Place.CSV | Place.SUMMARY | Place.DATAFRAME,
+        tally=failures,
+        csv="d",
+    ),
+    Figure(
+        "first_failure",
+        str,
+        "",
+        "The run's first failed compute, as the verdict names it (`robot 2 in round 3: "
+        "ViewError: ...`); None if no compute failed.",
+        Summary.FIRST,
+        Place.CSV | Place.SUMMARY,
+        label="first failure",
+        optional=True,
+        tally=first_failure,
+    ),
 )
 
 
@@ -267,13 +314,27 @@ def place(where: Place, figures: Iterable[Figure] | None = None) -> tuple[Figure
 
 
 def derived_figures() -> tuple[Figure, ...]:
-    """The figures that follow from the positions after each round."""
-    return tuple(f for f in FIGURES if f.derive is not None)
+    """The figures that follow from each round: the positions after it (`derive`), or its line's
+    other fields (`tally`)."""
+    return tuple(f for f in FIGURES if f.derive is not None or f.tally is not None)
 
 
-def derived(positions: Points) -> dict[str, float | None]:
-    """Every derived figure of the (n, 2) positions after a round, by name."""
-    return {f.name: f.derive(positions) for f in FIGURES if f.derive is not None}
+def derived(
+    positions: Points, round_no: int = 0, line: Mapping[str, Any] | None = None
+) -> dict[str, FigureValue]:
+    """Every derived figure of a round, by name: of the (n, 2) positions after it, and of its
+    number and line's other fields (`line`: `RoundEntry.extra`; None: a line with none)."""
+    return {f.name: round_value(f, positions, round_no, line) for f in derived_figures()}
+
+
+def round_value(
+    figure: Figure, positions: Points, round_no: int = 0, line: Mapping[str, Any] | None = None
+) -> FigureValue:
+    """One derived figure's value for a round (see `derived`)."""
+    if figure.derive is not None:
+        return figure.derive(positions)
+    assert figure.tally is not None, f"{figure.name} is not derived"
+    return figure.tally(round_no, line or {})
 
 
 def summarise(how: Summary, so_far: FigureValue, value: FigureValue) -> FigureValue:
@@ -283,6 +344,8 @@ def summarise(how: Summary, so_far: FigureValue, value: FigureValue) -> FigureVa
         return so_far
     if so_far is None or how == Summary.LAST:
         return value
+    if how == Summary.FIRST:
+        return so_far
     if how == Summary.MIN:
         return min(so_far, value)
     if how == Summary.MAX:
@@ -291,33 +354,54 @@ def summarise(how: Summary, so_far: FigureValue, value: FigureValue) -> FigureVa
 
 
 class RunFolder:
-    """The run's values of the derived figures so far, fed the positions after each round (a
-    round that left every robot where it was, to the bit, reuses the last round's values: the
-    world core feeds every committed round, and many change nothing)."""
+    """The run's values of the derived figures so far, fed the positions after each round and
+    its line's other fields (a round that left every robot where it was, to the bit, reuses the
+    last round's values of the positions: the world core feeds every committed round, and many
+    change nothing)."""
 
     def __init__(self, values: Mapping[str, FigureValue] | None = None) -> None:
         self.values: dict[str, FigureValue] = dict(values or {})
-        self._last: tuple[Points, dict[str, float | None]] | None = None
+        self._last: tuple[Points, dict[str, FigureValue]] | None = None
 
-    def add(self, positions: Points) -> None:
+    def add(
+        self, positions: Points, round_no: int = 0, line: Mapping[str, Any] | None = None
+    ) -> None:
         pts = np.asarray(positions, dtype=np.float64)
         if self._last is not None and np.array_equal(self._last[0], pts):
             rounds = self._last[1]
         else:
-            rounds = derived(pts)
+            rounds = {f.name: f.derive(pts) for f in derived_figures() if f.derive is not None}
             self._last = (pts.copy(), rounds)
         for f in derived_figures():
-            self.values[f.name] = summarise(f.summary, self.values.get(f.name), rounds.get(f.name))
+            value = rounds.get(f.name) if f.tally is None else f.tally(round_no, line or {})
+            self.values[f.name] = summarise(f.summary, self.values.get(f.name), value)
 
     def snapshot(self) -> dict[str, FigureValue]:
         return {f.name: self.values.get(f.name) for f in derived_figures()}
 
 
-def run_derived(rounds: Iterable[Points]) -> dict[str, FigureValue]:
-    """The run's values of the derived figures from the positions after each of its rounds."""
+class RoundLine(Protocol):
+    """A round of a record as the derived figures read it (`RoundEntry`)."""
+
+    @property
+    def round(self) -> int: ...
+
+    @property
+    def positions(self) -> Points: ...
+
+    @property
+    def extra(self) -> Mapping[str, Any]: ...
+
+
+def run_derived(rounds: Iterable[Points | RoundLine]) -> dict[str, FigureValue]:
+    """The run's values of the derived figures from each of its rounds: its line (a record's
+    `RoundEntry`), or the positions after it alone (a line without other fields)."""
     folder = RunFolder()
-    for positions in rounds:
-        folder.add(positions)
+    for entry in rounds:
+        if isinstance(entry, np.ndarray) or not hasattr(entry, "extra"):
+            folder.add(np.asarray(entry, dtype=np.float64))
+        else:
+            folder.add(entry.positions, entry.round, entry.extra)
     return folder.snapshot()
 
 
@@ -380,8 +464,8 @@ ROUND_FIELDS: tuple[LineField, ...] = (
     ),
     LineField(
         "timed_out",
-        "Active robots whose move did not arrive in time (their agent was slow, gone, or its "
-        "compute failed).",
+        "Active robots whose move did not arrive in time (their agent was slow or gone; a "
+        "compute that failed is `failed`).",
         _SOME,
     ),
     LineField(
@@ -429,6 +513,17 @@ ROUND_FIELDS: tuple[LineField, ...] = (
             "additionalProperties": {"$ref": "#/$defs/robots"},
         },
     ),
+    LineField(
+        "failed",
+        "Active robots whose compute failed (the algorithm raised), keyed by robot number as a "
+        "string: why, one line (`Type: message`); each stayed. Written only when one did.",
+        {
+            "type": "object",
+            "propertyNames": {"pattern": "^(0|[1-9][0-9]*)$"},
+            "additionalProperties": {"type": "string", "maxLength": 200},
+            "minProperties": 1,
+        },
+    ),
 )
 ROBOT_LISTS: Final = ("timed_out", "crashed", "recovered", "cut", "crash")  # written if not empty
 ASYNC_TIMES: Final = ("look", "start", "end", "origin")  # an async cycle's line has all four
@@ -465,7 +560,7 @@ def record_schema(template: Mapping[str, Any]) -> dict[str, Any]:
     derived_help = ", ".join(f.name for f in derived_figures())
     result["description"] = (
         "The last line: how the run ended (absent while it runs, or if it never ended). "
-        f"Figures that follow from the positions ({derived_help or 'none'}) are not written: "
+        f"Figures that follow from the round lines ({derived_help or 'none'}) are not written: "
         "readers derive them (fatswarm.domain.figures)."
     )
     return schema
@@ -517,17 +612,22 @@ __all__ = [
     "FigureValue",
     "LineField",
     "Place",
+    "RoundLine",
     "RunFolder",
     "Summary",
+    "Tally",
     "cell",
     "derived",
     "derived_figures",
+    "failures",
+    "first_failure",
     "json_copy",
     "known_numbers",
     "min_gap",
     "names",
     "place",
     "record_schema",
+    "round_value",
     "run_derived",
     "schema_text",
     "shown",

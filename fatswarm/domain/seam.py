@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import traceback
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -43,6 +44,26 @@ class AlgorithmFailure(RuntimeError):
         failure = AlgorithmFailure(f"{what} raised {type(exc).__name__}: {exc}{where}")
         failure.__cause__ = exc
         return failure
+
+
+MAX_FAILURE = 200  # characters of a failed compute's one line (`failure_text`), wire and record
+
+
+def failure_text(exc: BaseException) -> str:
+    """A compute that raised, in one line: `Type: message` (its first line, at most MAX_FAILURE
+    characters): what the move message and the round line's `failed` carry."""
+    message = str(exc).strip().splitlines()
+    text = f"{type(exc).__name__}: {message[0]}" if message else type(exc).__name__
+    return text if len(text) <= MAX_FAILURE else text[: MAX_FAILURE - 3] + "..."
+
+
+def failure_kind(text: str) -> str:
+    """What a failure is, apart from the robot and round it hit (its numbers masked): logs say
+    each kind once ("ViewError: the view holds # robots, expected n-# = #")."""
+    return _NUMBER.sub("#", text)
+
+
+_NUMBER = re.compile(r"\d+(?:\.\d+)?(?:e[-+]?\d+)?")
 
 
 class AlgorithmParamsError(ValueError):
@@ -310,6 +331,7 @@ class Configured:
 
 
 __all__ = [
+    "MAX_FAILURE",
     "MAX_PARAMS",
     "Algorithm",
     "AlgorithmError",
@@ -322,6 +344,8 @@ __all__ = [
     "RoundPlanner",
     "assumed_frames",
     "checked",
+    "failure_kind",
+    "failure_text",
     "parse_assignments",
     "resolve_values",
 ]

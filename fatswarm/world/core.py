@@ -23,7 +23,7 @@ from fatswarm.domain.draws import crash_plan
 from fatswarm.domain.figures import known_numbers
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path, Points, path_length
-from fatswarm.domain.seam import AlgorithmFailure, Configured
+from fatswarm.domain.seam import AlgorithmFailure, Configured, failure_kind
 from fatswarm.domain.tolerance import snap
 from fatswarm.world.effects import Effect, Level, Note
 from fatswarm.world.faults import crash_after, stuck_in
@@ -97,6 +97,8 @@ class WorldCore:
         self.looked: set[int] = set()
         self.held: dict[int, Path] = {}  # world axes, relative to the robot
         self.held_colours: dict[int, int] = {}  # the colours of the held moves (luminous)
+        self.failed: dict[int, str] = {}  # held robots whose compute raised: why (they stay)
+        self.failure_kinds: set[str] = set()  # the kinds of failure said on the log so far
         self.looks = Looks(setup.robot_model, algorithm, n, setup.seed, setup.record_views)
         self.missing: set[int] = set()  # live active robots of the open round without a move
         self.noticed: tuple[int, tuple[int, ...]] | None = None  # last moves notice sent
@@ -171,6 +173,7 @@ class WorldCore:
                 recovered=entry.extra.get("recovered", ()),
                 stuck=stuck_in(self.crash_plan, entry.round),
                 relit=relit,
+                line=entry.extra,
             )
         )
 
@@ -217,6 +220,7 @@ class WorldCore:
             booking.traveled,
             len(collisions),
             changed=True if booking.relit else None,
+            line=booking.line,
         )
         self.positions, self.committed = booking.after, round_no
         self.active = tuple(active)
@@ -289,11 +293,19 @@ class WorldCore:
         if robot != msg.robot:
             self.reject("move-wrong-robot", f"robot {msg.robot} sent as robot {robot}")
             return False
-        return self.hold(robot, msg.round, msg.path, msg.colour)
+        return self.hold(robot, msg.round, msg.path, msg.colour, msg.failed)
 
-    def hold(self, robot: int, round_no: int, path: Path, colour: int | None) -> bool:
+    def hold(
+        self,
+        robot: int,
+        round_no: int,
+        path: Path,
+        colour: int | None,
+        failed: str | None = None,
+    ) -> bool:
         """`move` of what a MoveSubmitted from robot `robot` itself carries (the lock step hands
-        it over without the message); False if refused (counted)."""
+        it over without the message); False if refused (counted). `failed`: its compute raised
+        (why, one line): it stays, and the round line says why (`failed`)."""
         if round_no != self.open_round:
             self.reject("move-wrong-round", f"robot {robot} round {round_no} != {self.open_round}")
         elif robot not in self.active_set:
@@ -304,6 +316,12 @@ class WorldCore:
             self.reject("move-duplicate", f"robot {robot} round {round_no}")
         elif not self._colour_ok(colour):
             self.reject("move-bad-colour", f"robot {robot} colour {colour}")
+        elif failed is not None:
+            self.held[robot] = Path()
+            self.failed[robot] = failed
+            self.missing.discard(robot)
+            self._said(robot, round_no, failed)
+            return True
         else:
             self.held[robot] = self.looks.to_world(robot, round_no, path)
             if colour is not None:
@@ -311,6 +329,20 @@ class WorldCore:
             self.missing.discard(robot)
             return True
         return False
+
+    def _said(self, robot: int, round_no: int, failed: str) -> None:
+        """Log a failed compute the first time one of its kind comes (`failure_kind`: the
+        numbers masked); the rest are counted (the round lines' `failed`, the run's failures)."""
+        kind = failure_kind(failed)
+        if kind not in self.failure_kinds:
+            self.failure_kinds.add(kind)
+            now = self.model.time()  # an async run's instant is its virtual time
+            when = f"round {round_no}" if now is None else f"time {now:g}"
+            self._note(
+                Level.WARNING,
+                f"robot {robot}, {when}: the algorithm failed ({failed}); it stays "
+                "(failures of this kind are counted, not logged again)",
+            )
 
     def _colour_ok(self, colour: int | None) -> bool:
         """Whether a move may carry `colour`: none, or one of a luminous algorithm's palette."""

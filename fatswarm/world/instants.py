@@ -60,6 +60,7 @@ class Instants:
         # robot -> (when, colour): a luminous robot's colour shows at the end of its Compute
         self._showing: dict[int, tuple[float, int]] = {}
         self._relit = False  # a colour changed since the last cycle line
+        self._failing: dict[int, str] = {}  # robot -> why its compute raised, until its cycle ends
 
     def reply_fields(self) -> dict[str, Any]:
         known, unset = self.clock.looks()
@@ -118,6 +119,7 @@ class Instants:
         w.active_set = frozenset(due)
         # a crashed robot is held as staying: nobody waits for its agent
         w.looked, w.held, w.noticed = set(), {r: Path() for r in crashing}, None
+        w.failed = {}
         w.missing = {r for r in due if w.alive[r] and r not in crashing}
 
     def commit(self, req: Commit) -> tuple[ControlReply, bool]:
@@ -164,12 +166,14 @@ class Instants:
                 moved.append(robot)
             if robot not in w.held:
                 w.timeouts[robot] += 1
+            if robot in w.failed:  # its cycle line says why it stayed
+                self._failing[robot] = w.failed[robot]
             w.last_active[robot] = round_no
             done = self.clock.submit(robot, world, compute, wait, cut=cut)
             if done is not None and self._cycle(done, timed_out=robot not in w.held):
                 break
         w.committed, w.moved = round_no, tuple(moved)
-        w.open_round, w.looked, w.held, w.missing = 0, set(), {}, set()
+        w.open_round, w.looked, w.held, w.missing, w.failed = 0, set(), {}, set(), {}
         w.views_changed()
         if w.status == Status.RUNNING:
             self._settle()
@@ -213,6 +217,7 @@ class Instants:
         k = w.tracker.snapshot().rounds + 1
         paths = {done.robot: done.path} if done.path else {}
         traveled = {done.robot: done.traveled} if done.path else {}
+        failed = self._failing.pop(done.robot, None)
         entry = round_entry(
             k,
             (done.robot,),
@@ -231,6 +236,7 @@ class Instants:
                 ("timed_out", [done.robot] if timed_out else []),
             ),
             model=w.looks.round_fields([done.robot]),
+            failed=None if failed is None else {done.robot: failed},
         )
         # its move changed the configuration even when the line before is of the same instant
         moved = done.traveled > MOVE_TOLERANCE or self._relit or None
@@ -244,6 +250,7 @@ class Instants:
                 traveled,
                 len(done.collisions),
                 changed=moved,
+                line=entry.extra,
             )
         finally:
             w.emit(Committed(entry, w.tracker.snapshot()))

@@ -39,6 +39,9 @@ class RoundBooking:
     stuck: Collection[int] = ()  # robots the crash adversary crashes in this round, for good
     relit: bool = False  # a colour changed: the configuration changed, though none may have moved
     lengths: Mapping[int, float] | None = None  # the paths' lengths physics measured, where it did
+    # the round line's other fields (`RoundEntry.extra`): its `failed` robots stayed without
+    # asking to, and the run's figures derived from the line (failures) count them
+    line: Mapping[str, Any] | None = None
 
 
 class Books(Protocol):
@@ -54,6 +57,7 @@ class Books(Protocol):
     looked: set[int]
     held: dict[int, Path]  # moves of the open round, world axes, relative to each robot
     held_colours: dict[int, int]  # the colours of the held moves (a luminous algorithm's)
+    failed: dict[int, str]  # held robots of the open round whose compute raised: why
     looks: Looks  # what each robot sees, and every robot's colour
     missing: set[int]  # live active robots of the open round without a move
     noticed: tuple[int, tuple[int, ...]] | None  # the last moves notice sent

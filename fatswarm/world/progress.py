@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Final
+from typing import Any, Final
 
 import numpy as np
 
@@ -108,6 +108,7 @@ class ProgressTracker:
         traveled: Mapping[int, float] | None = None,
         collisions: int = 0,
         changed: bool | None = None,
+        line: Mapping[str, Any] | None = None,
     ) -> Status | None:
         """Account one committed round; returns the status (None while the run goes on).
 
@@ -115,6 +116,9 @@ class ProgressTracker:
         positions around the round; `traveled`: arc length each mover covered. `changed`: whether
         the configuration changed, if the caller knows better than `before`/`after` (an async
         cycle whose move ended at the instant of the previous line moved all the same).
+        `line`: the round line's other fields (`RoundEntry.extra`): its `failed` robots stayed
+        without asking to (a run cannot be formed while one fails), and the figures derived
+        from the line (failures) count them.
         """
         if self._status is not None:
             raise RuntimeError(f"the run already ended ({self._status}); no more rounds")
@@ -126,14 +130,15 @@ class ProgressTracker:
         self._count(active_set, movers, traveled, collisions)
         before_arr = np.asarray(before, dtype=np.float64)
         after_arr = np.asarray(after, dtype=np.float64)
-        self._derived.add(after_arr)
+        self._derived.add(after_arr, self._rounds, line)
+        failed = (line or {}).get("failed") or {}
         if changed if changed is not None else configuration_changed(before_arr, after_arr):
             # The robots active this round looked at the old configuration: start counting afresh.
             self._seen_since_change = set()
             self._wanting_since_change = set()
         else:
             self._seen_since_change |= active_set
-            self._wanting_since_change |= set(movers)
+            self._wanting_since_change |= set(movers) | {int(r) for r in failed}
             if len(self._seen_since_change) == self.n:
                 formed = not self._wanting_since_change and bool(self.goal(after_arr))
                 self._status = Status.FORMED if formed else Status.STALLED

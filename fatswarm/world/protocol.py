@@ -24,7 +24,7 @@ from fatswarm.domain.path import (
     Points,
     to_record,
 )
-from fatswarm.domain.seam import ParamValue
+from fatswarm.domain.seam import MAX_FAILURE, ParamValue
 from fatswarm.domain.wire import (
     MAX_COORD,
     MAX_ROBOTS,
@@ -131,12 +131,18 @@ def robot_of_alive_key(key: str) -> int | None:
 class MoveSubmitted:
     """Robot `robot` wants to follow `path` in round `round` (relative to itself, in its private
     frame: the world brings it to world axes) and, for a luminous algorithm, to show `colour`
-    (an index in its palette) from the start of the move."""
+    (an index in its palette) from the start of the move.
+
+    `failed`: its compute raised (`Type: message`, one line, fatswarm.domain.seam.failure_text):
+    it stays (an empty path, no colour), and the world books why at once instead of waiting out
+    the move timeout. Optional on the wire: a world that does not know it takes a move that stays.
+    """
 
     robot: int
     round: int
     path: Path
     colour: int | None = None
+    failed: str | None = None
 
     def encode(self) -> bytes:
         """msgpack bytes."""
@@ -147,6 +153,8 @@ class MoveSubmitted:
         }
         if self.colour is not None:
             body["colour"] = int(self.colour)
+        if self.failed is not None:
+            body["failed"] = self.failed[:MAX_FAILURE]
         return pack("move", body)
 
     @staticmethod
@@ -154,11 +162,15 @@ class MoveSubmitted:
         """Parse and validate (finite, bounded coordinates); raises ProtocolError."""
         obj = unpack(data, "move")
         path = checked_path(obj.get("path"))
+        failed = None if "failed" not in obj else get_str(obj, "failed", MAX_FAILURE)
+        if failed is not None and (path or "colour" in obj):
+            raise ProtocolError("a move that 'failed' stays: no path, no colour")
         return MoveSubmitted(
             robot=get_int(obj, "robot", 0, MAX_ROBOTS - 1),
             round=get_int(obj, "round", 1, 2**62),
             path=path,
             colour=None if "colour" not in obj else get_int(obj, "colour", 0, MAX_COLOURS - 1),
+            failed=failed,
         )
 
     @staticmethod
@@ -168,6 +180,11 @@ class MoveSubmitted:
         if colour is not None and not 0 <= colour < MAX_COLOURS:
             raise ProtocolError(f"'colour' must be an integer in [0, {MAX_COLOURS - 1}]")
         return MoveSubmitted(robot, round_no, checked_path(to_record(path)), colour)
+
+    @staticmethod
+    def failing(robot: int, round_no: int, failed: str) -> MoveSubmitted:
+        """The move of a robot whose compute raised (`failed`: why, one line): it stays."""
+        return MoveSubmitted(robot, round_no, Path(), None, failed[:MAX_FAILURE])
 
 
 # --- world -> observers -----------------------------------------------------------------------

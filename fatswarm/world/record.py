@@ -83,9 +83,10 @@ class RoundEntry:
     extra: dict[str, Any] = field(default_factory=dict)
 
     @property
-    def derived(self) -> dict[str, float | None]:
-        """The declared figures of the positions after this round, by name."""
-        return figures.derived(self.positions)
+    def derived(self) -> dict[str, figures.FigureValue]:
+        """The declared figures of this round (of the positions after it, of its line), by
+        name."""
+        return figures.derived(self.positions, self.round, self.extra)
 
 
 def round_entry(
@@ -99,13 +100,15 @@ def round_entry(
     times: Mapping[str, Any] | None = None,
     robots: Sequence[tuple[str, Sequence[int]]] = (),
     model: Mapping[str, Any] | None = None,
+    failed: Mapping[int, str] | None = None,
 ) -> RoundEntry:
     """The one builder of a round line, for the round models and the async ones (a cycle).
 
     `paths`: each mover's world-frame path (a robot that stays has none); `covered`: the arc
     length each covered (0 where absent). The other fields in the line's order: an async cycle's
     `times` (look, start, end, origin), the robot lists (`ROBOT_LISTS`, each written only when
-    not empty, in the order given), then the model's (lights, views).
+    not empty, in the order given), then the model's (lights, views), then `failed` (robot ->
+    why its compute raised, written only when some did).
     """
     extra: dict[str, Any] = dict(times or {})
     for key, listed in robots:
@@ -113,6 +116,8 @@ def round_entry(
         if listed:
             extra[key] = list(listed)
     extra.update(model or {})
+    if failed:
+        extra["failed"] = {str(r): text for r, text in sorted(failed.items())}
     return RoundEntry(
         round_no,
         tuple(active),

@@ -37,7 +37,7 @@ class Rounds:
             return w.reply(True), False  # a coordinator retrying: keep what is held
         w.open_round, w.active = req.round, req.active
         w.active_set = frozenset(req.active)
-        w.looked, w.held, w.noticed = set(), {}, None
+        w.looked, w.held, w.noticed, w.failed = set(), {}, None, {}
         w.missing = {r for r in req.active if w.alive[r]}
         return w.reply(True), True
 
@@ -70,8 +70,10 @@ class Rounds:
             if path
         }
         stuck = stuck_in(w.crash_plan, round_no)
+        failed = dict(sorted(w.failed.items()))
         for robot in w.stuck | frozenset(stuck):  # a crashed robot's moves are not applied
             paths.pop(robot, None)
+            failed.pop(robot, None)
         cut = self._cut(round_no, before, paths)
         colours, w.held_colours = w.held_colours, {}
         relit = w.looks.show(colours, skip=w.stuck | frozenset(stuck))  # as the moves start
@@ -96,6 +98,7 @@ class Rounds:
                 ("crash", stuck),
             ),
             model=w.looks.round_fields(w.looked),
+            failed=failed,
         )
         try:  # the round is the record's even when the goal raises while it is booked
             w.account(
@@ -113,11 +116,12 @@ class Rounds:
                     stuck=stuck,
                     relit=relit,
                     lengths=outcome.lengths,
+                    line=entry.extra,
                 )
             )
         finally:
             w.emit(Committed(entry, w.tracker.snapshot()))
-        w.open_round, w.looked, w.held, w.missing = 0, set(), {}, set()
+        w.open_round, w.looked, w.held, w.missing, w.failed = 0, set(), {}, set(), {}
         if w.tracker.status is not None:
             w.finish()
 

@@ -274,6 +274,10 @@ KINDS: dict[str, tuple[Callable[[Path], None], Callable[[list[RecordLine]], bool
             and not rounds_with("lights")(lines)
         ),
     ),
+    "compute-failed": (  # the paper's algorithm refuses a view short of n - 1 robots
+        lockstep("-n", "6", "--seed", "3", "--visibility", "opaque", "--scheduler", "ssync"),
+        lambda lines: rounds_with("failed")(lines) and status("stalled")(lines),
+    ),
     "outside-assumption": (
         lockstep("-n", "5", "--seed", "1", "--frames", "chirality"),
         lambda lines: header_has("model", "assumption")(lines) and status("stalled")(lines),

@@ -5,7 +5,9 @@ summary; a scratch figure added in a test reaches each of them with no other edi
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 import json
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -214,3 +216,43 @@ def test_a_table_written_before_a_new_model_column_resumes_with_it_blank(
     finally:
         again.close()
     assert out.read_text().startswith(table.header_line(table.columns()))
+
+
+def _lit(round_no: int, line: Mapping[str, object]) -> int:
+    """A scratch figure of the round line: its `lights` entries (0 without)."""
+    del round_no
+    lights = line.get("lights")
+    return len(lights) if isinstance(lights, list) else 0
+
+
+TALLY_SCRATCH = figures.Figure(
+    "lit_scratch",
+    int,
+    "",
+    "A scratch figure of the round line's other fields.",
+    figures.Summary.SUM,
+    figures.Place.CSV | figures.Place.SUMMARY | figures.Place.DATAFRAME,
+    tally=_lit,
+    csv="d",
+)
+
+
+def test_a_scratch_figure_of_the_round_line_reaches_progress_records_summary_and_dataframe(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    monkeypatch.setattr(figures, "FIGURES", (*figures.FIGURES, TALLY_SCRATCH))
+    tracker = ProgressTracker(3, lambda _: False)
+    tracker.observe([0], [], START, START, line={"lights": ["a", "b", "c"]})
+    tracker.observe([1], [], START, START)
+    assert tracker.snapshot().derived["lit_scratch"] == 3  # its SUM over the rounds
+    target = tmp_path / "run.jsonl"
+    with RecordWriter(target) as w:
+        w.header(3, 1, "fsync", START, algorithm="gathering", params={})
+        w.append(round_entry(1, (0, 1, 2), {}, {}, START, model={"lights": ["a", "b", "c"]}))
+        w.append(round_entry(2, (0, 1, 2), {}, {}, START, model={"lights": ["a", "b", "c"]}))
+    record = fatswarm.read_record(target)
+    assert record.rounds[0].derived["lit_scratch"] == 3
+    assert api.summary(record)["lit_scratch"] == 6
+    assert "lit_scratch" in table.columns()
+    if importlib.util.find_spec("pandas") is not None:
+        assert record.to_dataframe().lit_scratch.tolist() == [3] * 6

@@ -16,6 +16,8 @@ from fatswarm.deploy import cli
 from fatswarm.deploy.hunt import pool
 from fatswarm.deploy.hunt.pool import Tally
 from fatswarm.deploy.hunt.search import (
+    COMPUTE,
+    STALLED,
     Case,
     Hunt,
     configure,
@@ -27,6 +29,7 @@ from fatswarm.deploy.hunt.search import (
 )
 from fatswarm.deploy.hunt.shrink import decimals, drop_robots, replay, shrink
 from fatswarm.deploy.sweep.grid import sweep_schedulers
+from fatswarm.domain.robot_model import RobotModel
 
 ROOT = Path(__file__).resolve().parents[2]
 PLANTED = f"{ROOT / 'tests' / 'data' / 'always_right.py'}:ALGORITHM"
@@ -144,6 +147,21 @@ def test_the_paper_algorithm_formed_cleanly_is_no_failure() -> None:
     for i in range(6):
         outcome, case = run_candidate(paper, draw_candidate(paper, 11, i))
         assert outcome.failure is None and case is None and outcome.status == "formed"
+
+
+def test_a_run_whose_computes_fail_is_filed_as_the_algorithm_failing_not_a_stall() -> None:
+    opaque = RobotModel.of(visibility="opaque")
+    paper = Hunt(families=("clustered",), sizes=(6,), models=("ssync",), robot_models=(opaque,))
+    kinds = []
+    for i in range(4):
+        outcome, case = run_candidate(paper, draw_candidate(paper, 3, i))
+        assert outcome.failure is not None and case is not None
+        kinds.append(outcome.failure.kind)
+        if outcome.failure.kind == COMPUTE:
+            assert outcome.failure.detail.startswith("the algorithm failed: robot ")
+            assert "ViewError: the view holds" in outcome.failure.detail
+            assert replay(paper, case).failure == outcome.failure  # the case replays it
+    assert COMPUTE in kinds and STALLED not in kinds
 
 
 # -- the command --------------------------------------------------------------------------------

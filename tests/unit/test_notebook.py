@@ -170,6 +170,7 @@ def test_the_dataframe_has_one_row_per_robot_per_round() -> None:
             "distance",
             "collided",
             "min_gap",  # the round's, derived from the positions (fatswarm.domain.figures)
+            "failures",  # the round's failed computes, from its line's `failed`
         ]
     )
     assert df[["round", "robot"]].values.tolist() == [
@@ -190,6 +191,7 @@ def test_the_dataframe_has_one_row_per_robot_per_round() -> None:
         "float64",
         "bool",
         "float64",
+        "int64",
     ]
 
 

@@ -249,12 +249,11 @@ ALGORITHM = Faulty()
 @pytest.mark.parametrize(
     ("mode", "says"),
     [
-        ("raise", "compute raised ZeroDivisionError"),
-        ("none", "compute raised TypeError: compute returned NoneType, not a Path"),
-        ("nan", "sent a move the world refuses"),
+        ("raise", "ZeroDivisionError: division by zero"),
+        ("none", "TypeError: compute returned NoneType, not a Path"),
     ],
 )
-def test_a_failing_compute_in_lock_step_leaves_the_robot_timed_out_as_networked(
+def test_a_failing_compute_in_lock_step_stays_and_the_round_line_says_why(
     tmp_path: Path, mode: str, says: str, caplog: pytest.LogCaptureFixture
 ) -> None:
     source = tmp_path / "faulty.py"
@@ -269,11 +268,39 @@ def test_a_failing_compute_in_lock_step_leaves_the_robot_timed_out_as_networked(
         max_rounds=4,
         record=record,
     )
+    # every robot active, none asked to stay: the run stalls at once, and counts its failures
+    assert (result.status, result.rounds, result.moves) == ("stalled", 1, 0)
+    assert result.derived["failures"] == 3
+    assert result.derived["first_failure"] == f"robot 0 in round 1: {says}"
+    (entry,) = read_record(record).rounds
+    assert "timed_out" not in entry.extra
+    assert entry.extra["failed"] == {"0": says, "1": says, "2": says}
+    said = [r.getMessage() for r in caplog.records if "the algorithm failed" in r.getMessage()]
+    assert len(said) == 1 and says in said[0]  # one line for the kind, no traceback
+
+
+def test_a_move_the_world_refuses_in_lock_step_leaves_the_robot_timed_out_as_networked(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    source = tmp_path / "faulty.py"
+    source.write_text(FAULTY)
+    record = tmp_path / "run.jsonl"
+    result = fatswarm.run(
+        3,
+        algorithm=f"{source}:ALGORITHM",
+        params={"mode": "nan"},
+        seed=1,
+        scheduler="fsync",
+        max_rounds=4,
+        record=record,
+    )
     assert (result.status, result.rounds, result.moves) == ("max_rounds", 4, 0)
+    assert result.derived["failures"] == 0
     rounds = read_record(record).rounds
     assert all(entry.extra["timed_out"] == [0, 1, 2] for entry in rounds)
     faults = [r.getMessage() for r in caplog.records if r.name == "fatswarm.lockstep"]
-    assert len(faults) == 3 and says in faults[0] and "only counted" in faults[-1]
+    assert len(faults) == 3 and "sent a move the world refuses" in faults[0]
+    assert "only counted" in faults[-1]
 
 
 def test_a_goal_that_raises_ends_the_lockstep_run_with_one_line_naming_its_line(

@@ -371,7 +371,7 @@ def _record_summary(record: RecordLines) -> dict[str, str | int | float | None]:
         "seed": record.header.seed,
         "scheduler": record.header.scheduler,
         "algorithm": record.header.algorithm,
-        **summary_values(run_derived(entry.positions for entry in record.rounds)),
+        **summary_values(run_derived(record.rounds)),
     }
 
 

@@ -31,7 +31,7 @@ from fatswarm.domain.figures import FigureValue
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import MAX_SEGMENTS, Arc, Line, Path, Points, vertices
 from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
-from fatswarm.domain.seam import AlgorithmFailure, Configured, checked
+from fatswarm.domain.seam import AlgorithmFailure, Configured, checked, failure_text
 from fatswarm.domain.tolerance import enclosing_circle
 from fatswarm.domain.wire import MAX_COORD, MAX_SWEEP, ProtocolError
 from fatswarm.world.core import WorldCore
@@ -57,7 +57,7 @@ ROUNDS_PER_STEP: Final = {"fsync": 10, "ssync": 40}  # others (centralized, scri
 CYCLES_PER_STEP_PER_ROBOT: Final = 40  # the async models: 40 n
 ASYNC_REACH_UNIT: Final = 40.0  # robot radii of reach the plain async cap covers (moves ~ 80)
 LOCKSTEP_SWARM: Final = "lockstep"
-SHOWN_FAULTS: Final = 3  # an algorithm's failing computes logged in full; the rest are counted
+SHOWN_FAULTS: Final = 3  # moves the world refuses logged in full; the rest are counted
 
 log = logging.getLogger("fatswarm.lockstep")
 
@@ -270,7 +270,7 @@ class _Bus:
         self.clock = 0.0  # virtual time: it moves only to a deadline nothing else can meet first
         self.events: list[Event] = []  # for the coordinator: the open round's moves notice
         self.looks = 0
-        self.faults = 0  # computes that raised or gave no valid path (the robot stayed)
+        self.faults = 0  # moves the world refused (the robot timed out)
         self.compute: Callable[[Seen], tuple[Path, int | None]]
         if compute is not None:
             user, params = compute, setting.params
@@ -355,31 +355,35 @@ class _Bus:
             if planned is not None:
                 if not world.admit_look(robot):
                     continue
-                decided: tuple[Path, int | None] | None = (planned[robot], None)
+                decided: tuple[Path, int | None] | str = (planned[robot], None)
             else:
                 seen = world.view_of(robot)  # what its snapshot would carry
                 if seen is None:
                     continue
-                decided = self._computed(robot, round_no, seen)
+                decided = self._computed(seen)
             self.looks += 1
-            move = None if decided is None else self._delivered(robot, round_no, *decided)
-            if move is not None:  # else as a networked agent whose compute failed: it stays
+            move = (
+                decided if isinstance(decided, str) else self._delivered(robot, round_no, *decided)
+            )
+            if isinstance(move, str):  # its compute raised: it stays and says why, as an agent
+                world.hold(robot, round_no, Path(), None, move)
+            elif move is not None:  # else as a move the world refuses: it times out
                 world.hold(robot, round_no, *move)
 
-    def _computed(self, robot: int, round_no: int, seen: Seen) -> tuple[Path, int | None] | None:
-        """Robot `robot`'s path in its frame and next colour, or None where a networked agent
-        would send none: its compute raised, or returned something that is not a path."""
+    def _computed(self, seen: Seen) -> tuple[Path, int | None] | str:
+        """The robot's path in its frame and next colour, or why its compute failed (raised, or
+        returned something that is not a path: `failure_text`), as its agent would send it."""
         try:
             return self.compute(seen)
-        except Exception as exc:  # a bug in the algorithm: the robot stays put, as networked
-            self._fault(robot, round_no, f"compute raised {type(exc).__name__}: {exc}")
-            return None
+        except Exception as exc:  # the algorithm's failure: the robot stays, as networked
+            return failure_text(exc)
 
     def _delivered(
         self, robot: int, round_no: int, path: Path, colour: int | None
-    ) -> tuple[Path, int | None] | None:
+    ) -> tuple[Path, int | None] | str | None:
         """The path and colour as the world receives them from an agent (the wire's checks,
-        `MoveSubmitted.of`), or None if the world would refuse them (counted, said on the log)."""
+        `MoveSubmitted.of`); None if the world would refuse them (counted, said on the log); why,
+        if the path cannot even be encoded (an agent's encoding raises: its compute failed)."""
         try:
             if colour is None and plain_path(path):
                 return path, None
@@ -389,11 +393,11 @@ class _Bus:
             self.world.reject("move-garbage", f"robot {robot} round {round_no}: {exc}")
             self._fault(robot, round_no, f"sent a move the world refuses: {exc}")
         except Exception as exc:  # a path that cannot even be encoded: the algorithm's bug
-            self._fault(robot, round_no, f"compute raised {type(exc).__name__}: {exc}")
+            return failure_text(exc)
         return None
 
     def _fault(self, robot: int, round_no: int, problem: str) -> None:
-        """Count a robot that stays put for its algorithm's fault; the first ones in full."""
+        """Count a robot that stays put for a move the world refuses; the first ones in full."""
         self.faults += 1
         if self.faults <= SHOWN_FAULTS:
             log.warning(
@@ -468,8 +472,8 @@ class _CheckedScheduler:
 
 def _check_history(history: Sequence[RoundEntry]) -> None:
     """Refuse rounds out of order, or with robots timed out (a networked run's slow agents cannot
-    be redone in lock step; an algorithm's failing compute could, but the record cannot say
-    which it was)."""
+    be redone in lock step; a compute that failed is no time-out: the line's `failed` says it,
+    and a lock step redoes it)."""
     for round_no, entry in enumerate(history, start=1):
         if entry.round != round_no:
             raise HistoryMismatchError(f"round {entry.round} comes where round {round_no} should")
@@ -482,9 +486,9 @@ def _check_history(history: Sequence[RoundEntry]) -> None:
         timed_out = entry.extra.get("timed_out")
         if timed_out:
             raise HistoryMismatchError(
-                f"round {round_no}: robots {timed_out} timed out (slow "
-                "agents, or a compute that failed), which a lock step "
-                "cannot tell apart, so it cannot redo them"
+                f"round {round_no}: robots {timed_out} timed out (slow or "
+                "gone agents, or moves the world refused), which a lock "
+                "step cannot redo"
             )
 
 

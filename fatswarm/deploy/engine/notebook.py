@@ -20,6 +20,7 @@ from fatswarm.deploy.engine.lockstep import RunResult as LockstepResult
 from fatswarm.domain import figures
 from fatswarm.domain.path import Points
 from fatswarm.domain.seam import ParamValue
+from fatswarm.world.record import RoundEntry
 from fatswarm.world.record import RunRecord as RecordLines
 
 if TYPE_CHECKING:
@@ -176,16 +177,20 @@ def record_columns(record: RecordLines) -> dict[str, np.ndarray[Any, Any]]:
         "distance": distance.ravel(),
         "collided": collided.ravel(),
         **{
-            f.name: np.repeat(np.array([_nan(f, e.positions) for e in record.rounds]), n)
+            f.name: np.repeat(np.array([_nan(f, e) for e in record.rounds], dtype=_dtype(f)), n)
             for f in round_figures()
         },
     }
 
 
-def _nan(figure: figures.Figure, positions: Points) -> float:
+def _dtype(figure: figures.Figure) -> type:
+    """A figure's column type: a count that always applies is int64 (failures), else float64."""
+    return np.int64 if figure.type is int and not figure.optional else np.float64
+
+
+def _nan(figure: figures.Figure, entry: RoundEntry) -> float:
     """A round's value of a derived figure, NaN where it does not apply (pandas' missing)."""
-    assert figure.derive is not None
-    value = figure.derive(positions)
+    value = figures.round_value(figure, entry.positions, entry.round, entry.extra)
     return math.nan if value is None else float(value)
 
 

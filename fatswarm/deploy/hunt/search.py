@@ -28,6 +28,7 @@ from fatswarm.deploy.scenarios.starts import KINDS as RANDOM_KINDS
 from fatswarm.deploy.scenarios.starts import overlapping_pair, random_start
 from fatswarm.deploy.sweep.grid import ParamText, SweepInputError, sweep_schedulers
 from fatswarm.domain import tolerance
+from fatswarm.domain.figures import first_failure
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
@@ -52,10 +53,12 @@ PAPER: Final = "uniform-circle"  # the algorithm whose SEC promise is checked (d
 # Failure kinds, in the order a summary lists them.
 COLLISION: Final = "collision"  # physics stopped a robot at contact
 INVARIANT: Final = "invariant"  # overlap, or a robot left the SEC when the algorithm promises not
+COMPUTE: Final = "compute"  # the algorithm's compute raised (the robot stayed): its round line's
+# `failed`, whatever the run then did (a stall of failing robots is one of these, not a stall)
 STALLED: Final = "stalled"  # every robot stays, the goal does not hold
 MAX_ROUNDS: Final = "max_rounds"  # the round cap came first
 ERROR: Final = "error"  # the run raised (the algorithm's goal, say), not a refusal of its input
-KINDS: Final = (COLLISION, INVARIANT, STALLED, MAX_ROUNDS, ERROR)
+KINDS: Final = (COLLISION, INVARIANT, COMPUTE, STALLED, MAX_ROUNDS, ERROR)
 
 # The models whose rounds are semi-synchronous: every active robot looks at the same
 # configuration and moves before the next round. The scripted scheduler replays such rounds. The
@@ -413,6 +416,9 @@ class _RoundWatch:
                 break
         if broken is not None:
             return Failure(INVARIANT, report.entry.round, f"round {report.entry.round}: {broken}")
+        first = first_failure(report.entry.round, report.entry.extra)
+        if first is not None:
+            return Failure(COMPUTE, report.entry.round, f"the algorithm failed: {first}")
         return None
 
     def ended(self, status: str, rounds: int) -> Outcome:
@@ -483,6 +489,7 @@ def scriptable(model: str) -> bool:
 
 __all__ = [
     "COLLISION",
+    "COMPUTE",
     "ERROR",
     "INVARIANT",
     "KINDS",

@@ -13,6 +13,7 @@ import numpy as np
 from fatswarm.coordinator.schedule import Scripted, make_scheduler
 from fatswarm.deploy.hunt.search import (
     COLLISION,
+    COMPUTE,
     ERROR,
     INVARIANT,
     Case,
@@ -253,20 +254,22 @@ def shrink(hunt: Hunt, case: Case, kind: str, *, budget: int = DEFAULT_SHRINK_RU
 
 def _horizon(failure: Failure) -> int | None:
     """How far a proposal is run while shrinking a failure that shows in a round (a collision,
-    an invariant, an error): a little past where the best case so far fails. A proposal failing
-    later is passed over (a smaller shrink, never a wrong one: a run's rounds before its cap do
-    not depend on the cap); it saves running every proposal that does not fail to its cap."""
-    if failure.kind in (COLLISION, INVARIANT, ERROR):
+    an invariant, a failed compute, an error): a little past where the best case so far fails. A
+    proposal failing later is passed over (a smaller shrink, never a wrong one: a run's rounds
+    before its cap do not depend on the cap); it saves running every proposal that does not fail
+    to its cap."""
+    if failure.kind in (COLLISION, INVARIANT, COMPUTE, ERROR):
         return HORIZON_FACTOR * failure.round + HORIZON_SLACK
     return None
 
 
 def _cut_after(case: Case, outcome: Outcome) -> Case:
-    """A case failing by a collision or an invariant needs no script past its failing round."""
+    """A case failing by a collision, an invariant or a compute needs no script past its failing
+    round."""
     assert outcome.failure is not None
     if (
         case.rounds is not None
-        and outcome.failure.kind in (COLLISION, INVARIANT)
+        and outcome.failure.kind in (COLLISION, INVARIANT, COMPUTE)
         and (0 < outcome.failure.round < len(case.rounds))
     ):
         return replace(case, rounds=case.rounds[: outcome.failure.round])

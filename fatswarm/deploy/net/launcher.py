@@ -536,7 +536,7 @@ def read_outcome(record: str) -> Outcome | None:
         params=dict(h.params),
         time=res.time,
         crashes=crashes_in(rec.rounds),  # (an async record's cycles name none)
-        derived=run_derived(r.positions for r in rec.rounds),
+        derived=run_derived(rec.rounds),
     ).noted(h.extra)
 
 

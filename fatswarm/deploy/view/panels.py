@@ -174,7 +174,9 @@ def outcome_text(frame: Frame) -> str:
         )
     else:
         return f"running: round {frame.round}"
-    return f"{head}, {frame.collisions_total} collisions"
+    failed = int(frame.derived.get("failures") or 0)  # computes that raised (docs/record.md)
+    said = f", the algorithm failed {failed} time{'' if failed == 1 else 's'}" if failed else ""
+    return f"{head}, {frame.collisions_total} collisions{said}"
 
 
 def run_lines(frame: Frame, width: int) -> list[str]:
@@ -264,7 +266,8 @@ def derived_rows(frame: Frame) -> list[Row]:
 
 
 def tail_rows(frame: Frame) -> list[Row]:
-    """This round, collisions, the chosen robot's Look, the rate (live), alive and timeouts."""
+    """This round, collisions, the chosen robot's Look, the rate (live), alive, timeouts and
+    failed computes."""
     stopped = f"  {len(frame.stopped)} stopped" if frame.stopped else ""
     rows: list[Row] = [
         ("this round", f"{len(frame.active)} active  {len(frame.moved)} moved{stopped}"),
@@ -278,6 +281,9 @@ def tail_rows(frame: Frame) -> list[Row]:
         rows.append(("alive", f"{sum(frame.alive)} / {frame.n}"))
     if sum(frame.timeouts):
         rows.append(("timeouts", str(sum(frame.timeouts))))
+    failed = int(frame.derived.get("failures") or 0)  # computes that raised, over the run
+    if failed:
+        rows.append(("failures", str(failed)))
     return rows
 
 

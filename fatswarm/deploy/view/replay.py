@@ -77,7 +77,7 @@ def build_frames(record: RunRecord, source: str = "replay") -> list[Frame]:
             last_active[robot] = rr.round
         collisions_total += len(rr.collisions)
         positions = rr.positions
-        so_far.add(positions)
+        so_far.add(positions, rr.round, rr.extra)
         frames.append(
             frame(
                 round=rr.round,

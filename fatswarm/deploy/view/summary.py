@@ -109,7 +109,23 @@ def counted(k: int, word: str) -> str:
 
 def verdict(outcome: Outcome) -> str:
     """One line: formed or not, in how many rounds (ended cycles under an async model), and
-    whether robots collided on the way; a run stopped by its cap says which cap."""
+    whether robots collided on the way; a run stopped by its cap says which cap; a run whose
+    algorithm failed (computes that raised) says how often and the first failure, under every
+    scheduler alike."""
+    return ended(outcome) + failed_text(outcome.derived)
+
+
+def failed_text(values: Mapping[str, figures.FigureValue]) -> str:
+    """`; the algorithm failed 37 times, first robot 2 in round 3: ViewError: ...` from the run's
+    `failures` and `first_failure` figures ("" when no compute failed)."""
+    k, first = values.get("failures"), values.get("first_failure")
+    if not isinstance(k, int) or k <= 0:
+        return ""
+    return f"; the algorithm failed {counted(k, 'time')}" + (f", first {first}" if first else "")
+
+
+def ended(outcome: Outcome) -> str:
+    """The verdict without the algorithm's failures."""
     k, word = outcome.collisions, unit(outcome.scheduler)
     rounds = counted(outcome.rounds, word)
     collisions = counted(k, "collision")
@@ -156,11 +172,14 @@ def summary(outcome: Outcome) -> str:
 
 def derived_text(values: Mapping[str, figures.FigureValue]) -> str:
     """`  min gap 0.412`: the run's derived figures shown in the summary, each with its words
-    (one it does not know, or that does not apply, is left out)."""
+    (one it does not know, or that does not apply, is left out; a text, such as the first
+    failure, is the verdict's to say)."""
     return "".join(
         f"  {f.words} {figures.shown(value)}"
         for f in figures.derived_figures()
-        if figures.Place.SUMMARY in f.places and (value := values.get(f.name)) is not None
+        if figures.Place.SUMMARY in f.places
+        and f.type is not str
+        and (value := values.get(f.name)) is not None
     )
 
 
