@@ -259,7 +259,9 @@ def test_gathering_keeps_the_contract() -> None:
         "params",
         "hunt",
     )
-    assert checked.looks > 100 and checked.hunt_runs > 10 and checked.refused == 0
+    # the hunt is budgeted in seconds: how many runs fit depends on the machine's load, so only
+    # that it ran is pinned (a count here failed CI on a loaded machine: 8 runs in 1 s)
+    assert checked.looks > 100 and checked.hunt_runs >= 1 and checked.refused == 0
 
 
 def test_the_object_itself_is_checked_as_its_reference_is() -> None:
