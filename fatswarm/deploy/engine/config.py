@@ -209,6 +209,11 @@ class RunSetup:
     def record_views(self) -> bool:
         return self.settings.record_views
 
+    @property
+    def outside(self) -> str:
+        """The line saying how the run is outside its algorithm's assumptions ('' if within)."""
+        return self.settings.outside(self.params)
+
 
 def _absolute(path: str | None) -> str | None:
     """A file setting as the header keeps it: absolute (the run repeats from any directory)."""

@@ -126,7 +126,13 @@ def configured(params: Params | Configured) -> Configured:
     """The run's algorithm: a `Configured` as given, or the paper's algorithm for `Params`."""
     if isinstance(params, Configured):
         return params
-    return Configured(UNIFORM_CIRCLE, params.n, {"a": float(params.a)}, params)
+    return Configured(
+        UNIFORM_CIRCLE,
+        params.n,
+        {"a": float(params.a)},
+        params,
+        assumptions=UNIFORM_CIRCLE.assumptions,
+    )
 
 
 def run_lockstep(
