@@ -229,6 +229,16 @@ class RobotModel:
             metavar="SIGMA",
         ),
     )
+    bodies: Bodies = field(
+        default=Bodies.FAT,
+        metadata=axis(
+            help="fat: unit discs that touch but never overlap (the paper's); points: radius 0, "
+            "robots may meet and share a point (multiplicity), meeting is no collision",
+            literature="fat robots / point robots",
+            tag="",
+            always=False,
+        ),
+    )
 
     @staticmethod
     def of(*values: object, **named: object) -> RobotModel:

@@ -23,7 +23,7 @@ from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
-from fatswarm.domain.robot_model import AXES, PAPER_MODEL, Lights, ModelError, RobotModel
+from fatswarm.domain.robot_model import AXES, PAPER_MODEL, Bodies, Lights, ModelError, RobotModel
 from fatswarm.domain.seam import AlgorithmError, AlgorithmParamsError, Configured, parse_assignments
 from fatswarm.domain.tolerance import UnsupportedInputError, check_supported
 from fatswarm.domain.version import __version__
@@ -127,6 +127,7 @@ class RunConfig:
             self.algorithm,
             params=self.params,
             positions=self.positions,
+            bodies_are_points=self.model.bodies is Bodies.POINTS,
         )
         n = setting.n
         scheduler = make_scheduler(self.scheduler, n, self.seed, self.schedule, self.fairness)
@@ -300,11 +301,13 @@ def resolve_start(
     *,
     params: Mapping[str, object] | None = None,
     positions: Points | None = None,
+    bodies_are_points: bool = False,
 ) -> tuple[Configured, Points]:
     """The algorithm (configured) and (n, 2) start that `--init` or `-n`/`--seed`/`--start`,
     `--algorithm`, `--param` and `-a` ask for, valid and supported by the algorithm; raises one of
     `input_errors()`. Shared by `fatswarm run` and `fatswarm world`, so both refuse the same start
-    the same way. Random starts are drawn at the scale of a parameter `a`, if there is one."""
+    the same way. Random starts are drawn at the scale of a parameter `a`, if there is one.
+    `bodies_are_points`: point robots, which may share a point (no overlap to refuse)."""
     # an agent imports this module (through deploy.flags), never physics
     from fatswarm.world.physics import validate_configuration
 
@@ -328,7 +331,7 @@ def resolve_start(
         setting = Configured.of(chosen, DEFAULT_N if n is None else n, given)
         initial = _random_positions(setting, seed, kind)
     setting.check_start(initial)
-    return setting, validate_configuration(initial)
+    return setting, validate_configuration(initial, bodies_are_points=bodies_are_points)
 
 
 def _given_positions(positions: Points, n: int | None) -> Points:

@@ -30,7 +30,7 @@ from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel
 from fatswarm.domain.figures import FigureValue
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import MAX_SEGMENTS, Arc, Line, Path, Points, vertices
-from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
+from fatswarm.domain.robot_model import PAPER_MODEL, Bodies, RobotModel
 from fatswarm.domain.seam import AlgorithmFailure, Configured, checked
 from fatswarm.domain.tolerance import enclosing_circle
 from fatswarm.domain.wire import MAX_COORD, MAX_SWEEP, ProtocolError
@@ -174,7 +174,9 @@ def run_lockstep(
     disagrees with params, HistoryMismatchError for a history this run would not have produced.
     """
     setting = configured(params)
-    positions = validate_configuration(initial)  # a fresh float64 copy, on the grid
+    model = robot_model if settings is None else settings.robot_model
+    points = model.bodies is Bodies.POINTS  # point robots may share a point
+    positions = validate_configuration(initial, bodies_are_points=points)  # a copy, on the grid
     n = len(positions)
     if n != setting.n:
         raise ValueError(f"the start has {n} robots but params say n={setting.n}")
