@@ -66,3 +66,16 @@ def test_point_robots_record_the_same_run_networked_and_in_lock_step(
         assert b.result is not None and str(b.result.status) == "formed"
         final = b.rounds[-1].positions
         assert np.ptp(final[:, 0]) <= 1e-6 and np.ptp(final[:, 1]) <= 1e-6
+
+
+def test_point_robots_that_start_at_shared_points_run_the_same_networked(tmp_path: Path) -> None:
+    init = tmp_path / "start.json"
+    init.write_text('{"positions": [[0, 0], [0, 0], [3, 1], [3, 1], [10, -2]]}')
+    flags = ["--init", str(init), "--seed", "1", "-q", "--bodies", "points"]
+    flags += ["--algorithm", f"{MEET}:ONCE", "--scheduler", "ssync"]
+    net, lock = tmp_path / "net.jsonl", tmp_path / "lock.jsonl"
+    code, out = _fatswarm_run([*flags, "--record", str(net), "--no-dashboard"])
+    assert code == 0, out
+    code, out = _fatswarm_run([*flags, "--record", str(lock), "--lockstep"])
+    assert code == 0, out
+    assert_same_run(read_record(str(net)), read_record(str(lock)))

@@ -110,3 +110,13 @@ def test_a_fat_algorithm_among_points_runs_outside_its_assumption() -> None:
     assert "assumes bodies fat; this run gives it points" in result.outside
     setting = Configured.of(GATHERING, 3)
     assert dataclasses.replace(setting).assumptions.bodies == (Bodies.FAT,)
+
+
+def test_an_init_file_of_point_robots_may_share_points(tmp_path: Path) -> None:
+    from fatswarm.deploy.scenarios.starts import InitFileError, load_init
+
+    init = tmp_path / "start.json"
+    init.write_text('{"positions": [[0, 0], [0, 0]]}')
+    assert load_init(str(init), points=True)[0].tolist() == [[0.0, 0.0], [0.0, 0.0]]
+    with pytest.raises(InitFileError, match="overlap"):
+        load_init(str(init))

@@ -254,7 +254,7 @@ def _says_non_rigid(delta: float | None) -> str:
 def _check_init(init: str, recorded: WorldSetup, found: list[Contradiction]) -> None:
     """An --init file whose start is not the record's."""
     h = recorded
-    positions, _ = load_init(init)
+    positions, _ = load_init(init, points=h.robot_model.bodies is Bodies.POINTS)
     if len(positions) != h.n:
         says = f"has n={h.n} (the file {len(positions)} robots)"
         found.append(Contradiction("--init", f"--init {init}", says))

@@ -323,7 +323,7 @@ def resolve_start(
         initial = _given_positions(positions, n)
         setting = Configured.of(chosen, len(initial), given)
     elif init is not None:
-        initial, file_a = _init_positions(init, n)
+        initial, file_a = _init_positions(init, n, bodies_are_points)
         if has_a and "a" not in given and file_a is not None:
             given["a"] = file_a
         setting = Configured.of(chosen, len(initial), given)
@@ -346,12 +346,13 @@ def _given_positions(positions: Points, n: int | None) -> Points:
     return initial
 
 
-def _init_positions(init: str, n: int | None) -> tuple[Points, float | None]:
-    """The (n, 2) start of the `--init` file and its side `a` (None: the file has none)."""
+def _init_positions(init: str, n: int | None, points: bool = False) -> tuple[Points, float | None]:
+    """The (n, 2) start of the `--init` file and its side `a` (None: the file has none);
+    `points`: of point robots (they may share a point)."""
     # an agent imports this module (through deploy.flags), never the starts
     from fatswarm.deploy.scenarios.starts import load_init
 
-    initial, file_a = load_init(init)  # finite numbers, as check_supported needs
+    initial, file_a = load_init(init, points=points)  # finite numbers, as check_supported needs
     if n is not None and n != len(initial):
         raise RunInputError(f"-n {n} disagrees with the {len(initial)} robots of {init}; drop -n")
     return initial, file_a
