@@ -45,7 +45,7 @@ class Assumptions:
     None for any; `movement` likewise. Words are taken as the flags give them ("y-axis"); sight's
     None is unlimited.
 
-    Not undeclared: an axis an algorithm does not name is any value, but frames, whose default is
+    Undeclared: an axis an algorithm does not name is any value, but frames, whose default is
     the paper's (`y-axis`), as it was before an algorithm could declare more than its frames.
 
     `multiplicity` and `knows_n` are not conditions of a run but what the world gives the
