@@ -14,7 +14,9 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
+from fatswarm.domain.assumptions import Assumptions
 from fatswarm.domain.path import STAY, Line, Path, Points
+from fatswarm.domain.robot_model import Bodies, Visibility
 from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue
 from fatswarm.domain.tolerance import CONTACT
 
@@ -26,13 +28,16 @@ ROUNDING_REL: Final = 1e-12  # G from world positions vs a robot's view: a few u
 
 @dataclass(frozen=True, slots=True)
 class GatheringParams:
-    """n robots; a robot stays when its step would be at most `tolerance` (> 0, finite)."""
+    """n robots (None: not known, as the world gives it, `Gathering.assumptions`); a robot stays
+    when its step would be at most `tolerance` (> 0, finite)."""
 
-    n: int
+    n: int | None
     tolerance: float = DEFAULT_TOLERANCE
 
     def __post_init__(self) -> None:
-        if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
+        if self.n is not None and (
+            isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1
+        ):
             raise AlgorithmParamsError(f"n must be a whole number >= 1, got {self.n!r}")
         tol = self.tolerance
         if (
@@ -87,10 +92,19 @@ class Gathering:
             "a robot stays when its step would be at most this (> 0)",
         ),
     )
-    # the centre of gravity and the nearest gap are the same in any frame: no agreement needed
-    frames: tuple[str, ...] = ("y-axis", "chirality", "disoriented")
+    # the centre of gravity and the nearest gap are the same in any frame: no agreement needed;
+    # the centre is of the robots seen (all: transparent, unlimited), n is never used (the view's
+    # size); the step cap keeps discs of radius 1 apart for any partial move (docs/algorithms.md)
+    assumptions: Assumptions = Assumptions(
+        visibility=(Visibility.TRANSPARENT,),
+        sight=(None,),
+        frames=None,
+        noise=(0.0,),
+        bodies=(Bodies.FAT,),
+        knows_n=False,
+    )
 
-    def make_params(self, n: int, values: Mapping[str, ParamValue]) -> GatheringParams:
+    def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> GatheringParams:
         tol = values.get("tolerance", DEFAULT_TOLERANCE)
         if isinstance(tol, bool) or not isinstance(tol, (int, float)):
             raise AlgorithmParamsError(f"tolerance must be a number, got {tol!r}")

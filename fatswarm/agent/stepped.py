@@ -10,12 +10,14 @@ non-rigid moves, so it keeps its structure: every Look plans afresh from where t
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Final
 
 from fatswarm.agent import uniform_circle
 from fatswarm.agent.params import Params
+from fatswarm.domain.assumptions import PAPER_ASSUMPTIONS, Assumptions
 from fatswarm.domain.path import Path, Points, truncate
 from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue
 
@@ -64,8 +66,10 @@ class SteppedUniformCircle:
         *uniform_circle.UniformCircle.parameters,
         ParamSpec("step", DEFAULT_STEP, "longest move, in robot radii (> 0)"),
     )
+    # the paper's model, but for any scheduler (async its aim)
+    assumptions: Assumptions = dataclasses.replace(PAPER_ASSUMPTIONS, schedulers=None)
 
-    def make_params(self, n: int, values: Mapping[str, ParamValue]) -> SteppedParams:
+    def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> SteppedParams:
         step = values.get("step", DEFAULT_STEP)
         if isinstance(step, bool) or not isinstance(step, (int, float)) or not 0 < step < 1e6:
             raise AlgorithmParamsError(f"step must be a distance > 0, got {step!r}")

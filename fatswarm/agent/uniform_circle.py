@@ -13,7 +13,8 @@ from typing import Final
 
 from fatswarm.agent import algorithm, geometry
 from fatswarm.agent.canonical import SharedForm
-from fatswarm.agent.params import Params
+from fatswarm.agent.params import Params, ParamsError
+from fatswarm.domain.assumptions import PAPER_ASSUMPTIONS, Assumptions
 from fatswarm.domain.path import STAY, Path, Points
 from fatswarm.domain.seam import ParamSpec, ParamValue
 from fatswarm.domain.tolerance import check_supported
@@ -72,8 +73,12 @@ class UniformCircle:
     parameters: tuple[ParamSpec, ...] = (
         ParamSpec("a", DEFAULT_A, "least side of the polygon the robots form (the paper: a > 3)"),
     )
+    # the paper's section 2: transparent unit discs seeing all, Y agreed, SSYNC, rigid, n given
+    assumptions: Assumptions = PAPER_ASSUMPTIONS
 
-    def make_params(self, n: int, values: Mapping[str, ParamValue]) -> Params:
+    def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> Params:
+        if n is None:
+            raise ParamsError("the paper's algorithm is given n (it declares knows_n)")
         a = values.get("a", DEFAULT_A)
         assert isinstance(a, (int, float)) and not isinstance(a, bool)
         return Params(n, float(a))  # raises ParamsError, an AlgorithmParamsError

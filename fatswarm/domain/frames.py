@@ -72,6 +72,8 @@ PAPER_FRAME: Final = Frame()
 def draw_frame(model: RobotModel, seed: int, robot: int, look_round: int) -> Frame:
     """Robot `robot`'s frame for its Look in round `look_round` under `model`: a pure function of
     the seed, the robot and (with `--frame-change every-look`) the round of its Look."""
+    if model.frames is Frames.BOTH_AXES:
+        return PAPER_FRAME  # both axes agreed: the world's, translated to the robot
     every = model.frame_change is FrameChange.EVERY_LOOK
     keys = (robot, look_round) if every else (robot,)
     if model.frames is Frames.Y_AXIS:

@@ -42,6 +42,14 @@ class Frames(enum.StrEnum):
     Y_AXIS = "y-axis"  # shared Y direction and sense, X mirrored at random (the paper's)
     CHIRALITY = "chirality"  # a random rotation each, a common handedness
     DISORIENTED = "disoriented"  # a random rotation and a random reflection each
+    BOTH_AXES = "both-axes"  # every frame a translation of the world's: both axes agreed
+
+
+class Bodies(enum.StrEnum):
+    """What a robot is: a disc of radius 1 (the unit of every distance) or a point."""
+
+    FAT = "fat"  # unit discs that touch but never overlap (the paper's)
+    POINTS = "points"  # radius 0: robots may meet and share a position (multiplicity)
 
 
 class FrameChange(enum.StrEnum):
@@ -195,8 +203,9 @@ class RobotModel:
         metadata=axis(
             help="the robots' private frames: y-axis (shared Y, X mirrored at random: the "
             "paper's), chirality (a random rotation, common handedness), disoriented (a random "
-            "rotation and reflection)",
-            literature="one-axis agreement / chirality / disorientation",
+            "rotation and reflection), both-axes (every frame a translation of the world's: "
+            "oblot-sim's default)",
+            literature="one-axis agreement / chirality / disorientation / total agreement",
         ),
     )
     frame_change: FrameChange = field(
@@ -218,6 +227,16 @@ class RobotModel:
             tag="noise",
             always=False,
             metavar="SIGMA",
+        ),
+    )
+    bodies: Bodies = field(
+        default=Bodies.FAT,
+        metadata=axis(
+            help="fat: unit discs that touch but never overlap (the paper's); points: radius 0, "
+            "robots may meet and share a point (multiplicity), meeting is no collision",
+            literature="fat robots / point robots",
+            tag="",
+            always=False,
         ),
     )
 
@@ -318,6 +337,7 @@ __all__ = [
     "MODEL_KEYS",
     "PAPER_MODEL",
     "Axis",
+    "Bodies",
     "FrameChange",
     "Frames",
     "Lights",

@@ -9,14 +9,16 @@ write one.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import re
 import traceback
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol, TypeVar, cast, runtime_checkable
+from typing import Any, Final, Protocol, TypeVar, cast, runtime_checkable
 
+from fatswarm.domain.assumptions import Assumptions
 from fatswarm.domain.lights import Glance, LightsError, Lit, colour_index, palette
 from fatswarm.domain.path import Path, Points
 from fatswarm.domain.robot_model import Frames, ModelError
@@ -133,7 +135,8 @@ class Algorithm(Protocol[P]):
     - `name`: the name a run is recorded under (letters, digits, '-', '_', '.').
     - `summary`: one line for `fatswarm algorithms` and `--help`.
     - `parameters`: what `--param NAME=VALUE` may set, with defaults.
-    - `make_params(n, values)`: the parameter object for n robots and the complete, typed values
+    - `make_params(n, values)`: the parameter object for n robots (None for an algorithm that
+      declares it does not know n: `Assumptions.knows_n`) and the complete, typed values
       (defaults filled in); raises AlgorithmParamsError for a value it refuses.
     - `compute(view, params)`: the path of the robot that sees `view`, (k, 2) positions of the
       others it sees (k = n - 1 under the paper's model) relative to itself in its private frame
@@ -145,9 +148,10 @@ class Algorithm(Protocol[P]):
 
     A luminous algorithm declares `colours` (a tuple of names, the first every robot's at the
     start) and `compute_lit(view, glance, params) -> Lit` (fatswarm/domain/lights.py), which
-    fatswarm calls instead of `compute`. `frames`, a tuple of `Frames` names, says which frames the
-    algorithm assumes (default: the paper's, `("y-axis",)`); a run under others goes ahead and
-    says so.
+    fatswarm calls instead of `compute`. `assumptions` (fatswarm/domain/assumptions.py) says what
+    the algorithm's paper assumes on every axis of the model, the schedulers and the moves; a run
+    outside them goes ahead and says so. An algorithm without it may declare `frames` alone, a
+    tuple of `Frames` names (default: the paper's, `("y-axis",)`), and assumes nothing else.
 
     Optional hooks, looked up by name: `check_start(positions, params)` refuses a start the
     algorithm does not support (raise AlgorithmParamsError or a ValueError subclass);
@@ -160,7 +164,7 @@ class Algorithm(Protocol[P]):
     summary: str
     parameters: tuple[ParamSpec, ...]
 
-    def make_params(self, n: int, values: Mapping[str, ParamValue]) -> P: ...
+    def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> P: ...
 
     def compute(self, view: Points, params: P) -> Path: ...
 
@@ -198,8 +202,32 @@ def parse_assignments(texts: list[str] | tuple[str, ...]) -> dict[str, str]:
     return out
 
 
+def assumptions_of(algorithm: object) -> Assumptions:
+    """What `algorithm` declares it assumes: its `assumptions` (default: any value of every axis
+    but frames, the paper's), with its `frames` if it declares them too (as an algorithm did
+    before it could declare more; a subclass may narrow its parent's frames so); raises
+    AlgorithmError for a declaration that is not one."""
+    declared = getattr(algorithm, "assumptions", None)
+    if declared is None:
+        declared = NO_ASSUMPTIONS
+    if not isinstance(declared, Assumptions):
+        raise AlgorithmError(
+            f"algorithm {getattr(algorithm, 'name', '?')}: assumptions must be an Assumptions "
+            f"(fatswarm.domain.assumptions), got {type(declared).__name__}"
+        )
+    if getattr(algorithm, "frames", None) is None:
+        return declared
+    return dataclasses.replace(declared, frames=_frames(algorithm))
+
+
 def assumed_frames(algorithm: object) -> tuple[Frames, ...]:
-    """The frames `algorithm` declares it assumes (default the paper's); raises AlgorithmError."""
+    """The frames `algorithm` declares it assumes (default the paper's; every one for any);
+    raises AlgorithmError."""
+    return assumptions_of(algorithm).frames or tuple(Frames)
+
+
+def _frames(algorithm: object) -> tuple[Frames, ...]:
+    """The frames an algorithm without `assumptions` declares (default the paper's)."""
     declared = getattr(algorithm, "frames", (Frames.Y_AXIS,))
     try:
         if not isinstance(declared, tuple) or not declared:
@@ -225,6 +253,9 @@ def checked(compute: Callable[[Points], Path]) -> Callable[[Points], Path]:
     return run
 
 
+NO_ASSUMPTIONS: Final = Assumptions()  # an algorithm's that declares none: the paper's frames
+
+
 class RoundPlanner(Protocol):
     """An algorithm's optional fast path for a lock step: every robot of a round at once."""
 
@@ -245,7 +276,7 @@ class Configured:
     values: Mapping[str, ParamValue]
     params: Any  # the algorithm's own parameter object
     colours: tuple[str, ...] = ()  # its palette (fatswarm/domain/lights.py); () if not luminous
-    frames: tuple[Frames, ...] = (Frames.Y_AXIS,)  # the frames it assumes
+    assumptions: Assumptions = NO_ASSUMPTIONS  # what it assumes (default: the paper's frames)
 
     @staticmethod
     def of(
@@ -258,8 +289,14 @@ class Configured:
             colours = palette(algorithm)
         except LightsError as exc:
             raise AlgorithmError(str(exc)) from None
-        params = algorithm.make_params(n, values)
-        return Configured(algorithm, n, values, params, colours, assumed_frames(algorithm))
+        assumptions = assumptions_of(algorithm)
+        params = algorithm.make_params(n if assumptions.knows_n else None, values)
+        return Configured(algorithm, n, values, params, colours, assumptions)
+
+    @property
+    def frames(self) -> tuple[Frames, ...]:
+        """The frames the algorithm assumes (every one if any)."""
+        return self.assumptions.frames or tuple(Frames)
 
     @property
     def luminous(self) -> bool:
@@ -343,6 +380,7 @@ __all__ = [
     "Points",
     "RoundPlanner",
     "assumed_frames",
+    "assumptions_of",
     "checked",
     "failure_kind",
     "failure_text",

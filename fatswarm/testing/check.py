@@ -39,7 +39,8 @@ def _chosen(subject: Subject, checks: Iterable[str] | None) -> tuple[str, ...]:
             raise ValueError(f"unknown checks {unknown}; choose from {', '.join(CHECKS)}")
     else:
         asked = {"path", "palette", "oblivious", "order", "params", "hunt"}
-        asked |= {_FRAME_CHECKS[frames] for frames in subject.frames}
+        # both-axes frames are the world's, translated: no invariance to check
+        asked |= {_FRAME_CHECKS[f] for f in subject.frames if f in _FRAME_CHECKS}
     if not subject.colours:
         asked.discard("palette")
     return tuple(name for name in CHECKS if name in asked and name != "seam")

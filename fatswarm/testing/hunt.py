@@ -20,7 +20,8 @@ from fatswarm.deploy.hunt.search import (
 )
 from fatswarm.deploy.hunt.shrink import shrink
 from fatswarm.deploy.sweep.grid import params_text
-from fatswarm.domain.robot_model import RobotModel
+from fatswarm.domain.robot_model import Bodies, RobotModel
+from fatswarm.domain.seam import assumptions_of
 from fatswarm.testing.look import Look
 from fatswarm.testing.report import AlgorithmContractError
 from fatswarm.testing.subject import Subject
@@ -42,8 +43,8 @@ def run_hunt(
     subject: Subject, seed: int, budget_s: float, sizes: Sequence[int], schedulers: Sequence[str]
 ) -> tuple[int, int]:
     """Lock-step runs drawn as `fatswarm hunt` draws them (every start family, `sizes`,
-    `schedulers`; the paper's model under each of the frames the algorithm declares), from
-    `seed`, until `budget_s` has passed (one run at least): (runs, starts the algorithm refused).
+    `schedulers`; the paper's model under each of the frames and bodies the algorithm declares),
+    from `seed`, until `budget_s` has passed (one run at least): (runs, starts refused).
     Raises AlgorithmContractError at the first failure, shrunk."""
     runs = refused = 0
     refusal = ""
@@ -55,7 +56,11 @@ def run_hunt(
             families=start_families(),
             sizes=tuple(sizes),
             models=tuple(schedulers),
-            robot_models=tuple(RobotModel(frames=frames) for frames in subject.frames),
+            robot_models=tuple(
+                RobotModel(frames=frames, bodies=bodies)
+                for frames in subject.frames
+                for bodies in assumptions_of(subject.algorithm).bodies or (Bodies.FAT,)
+            ),
         )
         started = time.monotonic()
         deadline = started + budget_s

@@ -90,9 +90,12 @@ class AsyncWorld:
     (the world core serves the Looks themselves from `positions`).
     """
 
-    def __init__(self, positions: Points, first_looks: Sequence[float]) -> None:
+    def __init__(
+        self, positions: Points, first_looks: Sequence[float], *, points: bool = False
+    ) -> None:
         """`first_looks`: each robot's first Look time; math.inf for one the adversary sets
-        later (`set_look`)."""
+        later (`set_look`). `points`: point robots (no contact: `apply_round`)."""
+        self.points = points
         self.positions: Points = snap(np.array(positions, dtype=np.float64))
         self.n = len(self.positions)
         if len(first_looks) != self.n:
@@ -125,7 +128,7 @@ class AsyncWorld:
         if dt > 0 and movers:
             here = {r: (float(self.positions[r, 0]), float(self.positions[r, 1])) for r in movers}
             window = {r: truncate(here[r], self._robots[r].rest, dt) for r in movers}
-            outcome = apply_round(self.positions, window)
+            outcome = apply_round(self.positions, window, points=self.points)
             for r in movers:
                 robot = self._robots[r]
                 covered = float(outcome.traveled.get(r, 0.0))

@@ -77,6 +77,7 @@ class WorldCore:
         if is_async(setup):
             setup = async_setup(setup, history)
         self.setup, self.epoch, self.algorithm = setup, epoch, algorithm
+        self._outside = setup.outside(algorithm)  # the run goes ahead outside its assumptions
         self._effects: list[Effect] = []
         n = setup.n
         # On the grid, so that every robot's view is exact (fatswarm/domain/tolerance.py); a start
@@ -462,6 +463,7 @@ class WorldCore:
             lights=self.looks.names(),
             palette=self.algorithm.colours,
             derived=known_numbers(self.tracker.snapshot().derived),
+            outside=self._outside,
         )
 
     def _algorithm_figures(self) -> dict[str, float]:

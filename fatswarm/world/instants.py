@@ -54,7 +54,9 @@ class Instants:
 
     def __init__(self, books: Books) -> None:
         self.books = books
-        self.clock = AsyncWorld(books.positions, [math.inf] * books.setup.n)
+        self.clock = AsyncWorld(
+            books.positions, [math.inf] * books.setup.n, points=books.looks.points
+        )
         self._last = books.positions.copy()
         self._delays: dict[int, tuple[float, float]] = {}
         # robot -> (when, colour): a luminous robot's colour shows at the end of its Compute

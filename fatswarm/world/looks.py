@@ -16,7 +16,7 @@ import numpy as np
 from fatswarm.domain.draws import look_noise, view_order, view_orders
 from fatswarm.domain.frames import Frame, draw_frame
 from fatswarm.domain.path import Path, Points
-from fatswarm.domain.robot_model import FrameChange, Lights, RobotModel
+from fatswarm.domain.robot_model import Bodies, FrameChange, Lights, RobotModel
 from fatswarm.domain.seam import Configured
 from fatswarm.world.sight import seen
 
@@ -38,6 +38,10 @@ class Looks:
         self.model, self.n, self.seed = model, n, seed
         self.palette = setting.colours
         self.record_views = record_views
+        # point bodies: robots may share a point; an algorithm without multiplicity detection
+        # sees each occupied point once (and not its own: docs/model.md, "Bodies")
+        self.points = model.bodies is Bodies.POINTS
+        self.once = self.points and not setting.assumptions.multiplicity
         self._fixed: list[Frame] | None = (
             [draw_frame(model, seed, r, 0) for r in range(n)]
             if model.frame_change is FrameChange.FIXED
@@ -48,7 +52,11 @@ class Looks:
         self.colours: list[int] | None = [0] * n if self.palette else None
         # whether a view is every other robot, exact, with no colours and nothing recorded
         self.plain = (
-            model.sees_all and not model.noise and self.colours is None and not record_views
+            model.sees_all
+            and not model.noise
+            and self.colours is None
+            and not record_views
+            and not self.once
         )
         self.views: dict[int, list[int]] = {}  # robot -> the ids it saw, of Looks not recorded yet
         # views built ahead for one round and one configuration (`prepare`): robot -> its view
@@ -75,6 +83,8 @@ class Looks:
             return self.frame(robot, look_round).to_local(others[order]), None, None
         ids = self.seen_by(positions, robot)
         ids = ids[view_order(self.seed, look_round, robot, len(ids))]
+        if self.once:
+            ids = _each_point_once(positions, robot, ids)
         if self.record_views:
             self.views[robot] = sorted(int(i) for i in ids)
         view = self.frame(robot, look_round).to_local(positions[ids] - positions[robot])
@@ -119,7 +129,7 @@ class Looks:
         """The ids of the robots `robot` sees now, ascending."""
         if self.model.sees_all:
             return np.delete(np.arange(self.n), robot)
-        return seen(positions, robot, self.model.visibility, self.model.sight)
+        return seen(positions, robot, self.model.visibility, self.model.sight, points=self.points)
 
     def to_world(self, robot: int, look_round: int, path: Path) -> Path:
         """A path robot `robot` computed in the frame of its Look, in world axes."""
@@ -161,6 +171,21 @@ class Looks:
         if self.record_views:
             extra["views"] = {str(r): self.views.pop(r, []) for r in sorted(lookers)}
         return extra
+
+
+def _each_point_once(positions: Points, robot: int, ids: np.ndarray) -> np.ndarray:
+    """`ids` (in view order) less every robot at a point already shown, or at `robot`'s own
+    point: what a robot without multiplicity detection sees of point robots. Positions are on the
+    grid, so robots at one point have the very same coordinates."""
+    own = (float(positions[robot, 0]), float(positions[robot, 1]))
+    shown: set[tuple[float, float]] = {own}
+    keep = []
+    for i in ids.tolist():
+        point = (float(positions[i, 0]), float(positions[i, 1]))
+        if point not in shown:
+            shown.add(point)
+            keep.append(i)
+    return np.asarray(keep, dtype=ids.dtype)
 
 
 def _mirror_signs(frames: Sequence[Frame]) -> np.ndarray:

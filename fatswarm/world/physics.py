@@ -3,6 +3,8 @@
 Robots are unit discs. Every robot of a round follows its path from t = 0 at unit speed (time equals
 arc length). A robot whose disc would overlap another stops at first contact; stopped robots are
 still obstacles for the rest of the round. Discs never overlap, at any time of the round.
+Point robots (`--bodies points`, `points=True`) have no extent: every mover covers its whole path,
+robots may meet and share a point, and nothing is a collision.
 
 Method: an event loop over the pairs whose path boxes come within 2; per pair, adaptive subdivision
 of time proves intervals overlap-free with lower bounds on the distance (exact for straight relative
@@ -137,13 +139,14 @@ def _first_overlap(points: Points, rows: IntArray) -> tuple[int, int, float] | N
     return None
 
 
-def validate_configuration(positions: Points) -> Points:
+def validate_configuration(positions: Points, *, bodies_are_points: bool = False) -> Points:
     """Return positions on the grid as an (n, 2) float64 copy or raise InvalidConfigurationError.
 
     Positions are snapped to the nearest multiples of GRID (moving each by at most 6.6e-10), so
     that every robot's view is exact (fatswarm/domain/tolerance.py). Refused: a wrong shape, no
     robot, NaN or infinite coordinates, coordinates beyond +-MAX_COORD, two centres closer than
-    2 - CONTACT_SLACK (overlapping unit discs) once on the grid.
+    2 - CONTACT_SLACK (overlapping unit discs) once on the grid, unless `bodies_are_points` (point
+    robots may share a point).
     """
     points = _as_points(positions)
     far = float(np.abs(points).max())
@@ -153,6 +156,8 @@ def validate_configuration(positions: Points) -> Points:
             f"{GRID:.2g} stay exact), got {far:.6g}"
         )
     points = snap(points)
+    if bodies_are_points:
+        return points
     pair = _first_overlap(points, np.arange(len(points), dtype=np.intp))
     if pair is not None:
         a, b, dist = pair
@@ -382,13 +387,16 @@ def _snap_one(final: Points, robot: int, neighbours: IntArray) -> None:
     final[robot] = chosen + 0.0
 
 
-def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
+def apply_round(
+    positions: Points, paths: Mapping[int, Path], *, points: bool = False
+) -> RoundOutcome:
     """Move every robot of `paths` along its path (world frame) at once, stopping at contact.
 
     All movers start at t = 0 and move at unit speed; a robot whose disc would overlap another
     (centres closer than 2 - CONTACT_SLACK) stops at first contact and the contact is recorded
     (both robots if both were moving). An empty path means stay. `positions` is not modified.
-    Movers end on the grid (fatswarm/domain/tolerance.py): `_snap_movers`.
+    Movers end on the grid (fatswarm/domain/tolerance.py): `_snap_movers`. `points`: the robots
+    are points: no contact, each mover covers its path and ends on the nearest grid point.
     Raises InvalidConfigurationError (bad positions, a mover overlapping at the start),
     InvalidRoundError (unknown robot) or PathFormatError (non-finite or oversized path) before
     anything moves; PhysicsInvariantError if discs overlap afterwards (a physics bug).
@@ -405,6 +413,10 @@ def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
     mo = build_motion(local, moves, shift)
     if not len(mo.robots):
         return RoundOutcome(positions=start, traveled=traveled)
+    if points:  # nothing to meet: every mover to its end (mo.stop is its length), on the grid
+        final = start.copy()
+        final[mo.robots] = snap(positions_at(mo, mo.robots, mo.stop) + np.array(origin))
+        return _outcome(start, final, mo, dict(moves), traveled, [])
     # Every pair that can meet: a robot never leaves its path's box, so no other pair can overlap,
     # before, during or after the round (stills among themselves are the caller's business).
     pi, pj = _candidate_pairs(mo, mo.robots, np.arange(len(start), dtype=np.intp))
@@ -429,7 +441,19 @@ def apply_round(positions: Points, paths: Mapping[int, Path]) -> RoundOutcome:
             raise PhysicsInvariantError(
                 f"physics bug: robots {a} and {b} overlap after the round (centres {dist!r} apart)"
             )
-    world_paths = dict(moves)
+    return _outcome(start, final, mo, dict(moves), traveled, collisions)
+
+
+def _outcome(
+    start: Points,
+    final: Points,
+    mo: Motion,
+    world_paths: dict[int, Path],
+    traveled: dict[int, float],
+    collisions: list[Collision],
+) -> RoundOutcome:
+    """The round's outcome: `final` positions, each mover's path length and the length it
+    covered (its whole path unless stopped), and the contacts."""
     starts = start.tolist()  # Python floats: the same values, read faster than numpy scalars
     rows = zip(mo.robots.tolist(), mo.stop.tolist(), mo.total.tolist(), strict=True)
     lengths: dict[int, float] = {}

@@ -127,6 +127,9 @@ def robot_of_alive_key(key: str) -> int | None:
     return int(m.group(1)) if m else None
 
 
+MAX_OUTSIDE = 2000  # characters of the line saying a run is outside its assumptions
+
+
 @dataclass(frozen=True, slots=True)
 class MoveSubmitted:
     """Robot `robot` wants to follow `path` in round `round` (relative to itself, in its private
@@ -224,6 +227,7 @@ class WorldState:
     # the run's figures derived from the positions so far (fatswarm.domain.figures: min_gap, its
     # least over the rounds), by name; only those known (a figure without a value yet is left out)
     derived: dict[str, float] = field(default_factory=dict)
+    outside: str = ""  # how the run is outside its algorithm's assumptions ('' if within)
 
     @property
     def a(self) -> float:
@@ -260,6 +264,7 @@ class WorldState:
                     else {}
                 ),
                 **({"derived": derived_wire(self.derived)} if self.derived else {}),
+                **({"outside": self.outside} if self.outside else {}),
             },
         )
 
@@ -308,6 +313,7 @@ class WorldState:
             agents=agents,
             **get_lights(obj, n),
             derived=get_derived(obj),
+            outside=get_str(obj, "outside", MAX_OUTSIDE) if "outside" in obj else "",
         )
 
 

@@ -77,7 +77,10 @@ class Rounds:
         cut = self._cut(round_no, before, paths)
         colours, w.held_colours = w.held_colours, {}
         relit = w.looks.show(colours, skip=w.stuck | frozenset(stuck))  # as the moves start
-        outcome = apply_round(before, paths) if paths else RoundOutcome(before.copy())
+        points = w.looks.points  # point bodies: no contact (world/physics.py)
+        outcome = (
+            apply_round(before, paths, points=points) if paths else RoundOutcome(before.copy())
+        )
         after = np.asarray(outcome.positions, dtype=np.float64)
         traveled = {r: float(outcome.traveled.get(r, 0.0)) for r in paths}
         timed_out = [r for r in w.active if r not in w.held]

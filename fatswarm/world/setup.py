@@ -12,6 +12,7 @@ from typing import Any, Final
 
 import numpy as np
 
+from fatswarm.domain.assumptions import outside_line
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT
 from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
@@ -76,8 +77,12 @@ class WorldSetup:
             algorithm=algorithm.name,
             params=dict(algorithm.values),
             algorithm_ref=self.algorithm,
-            extra=self.header_fields(outside_assumption(algorithm, self.robot_model)),
+            extra=self.header_fields(self.outside(algorithm)),
         )
+
+    def outside(self, algorithm: Configured) -> str:
+        """The line saying how this run is outside `algorithm`'s assumptions ('' if within)."""
+        return outside_assumption(algorithm, self.robot_model, self.scheduler, self.non_rigid)
 
     def header_fields(self, assumption: str = "") -> dict[str, Any]:
         """The header's fields beyond the start and the algorithm, in the order it writes them
@@ -140,15 +145,16 @@ def setup_from_header(header: Header, swarm: str, max_rounds: int | None) -> Wor
     return WorldSetup.from_header(header, swarm, max_rounds)
 
 
-def outside_assumption(algorithm: Configured, model: RobotModel) -> str:
-    """One line if the run's frames are not among those the algorithm assumes, else ''."""
-    if model.frames in algorithm.frames:
-        return ""
-    assumed = ", ".join(f.value for f in algorithm.frames)
-    return (
-        f"algorithm {algorithm.name} assumes frames {assumed}; this run gives it "
-        f"{model.frames.value} (outside its assumption)"
-    )
+def outside_assumption(
+    algorithm: Configured,
+    model: RobotModel,
+    scheduler: str | None = None,
+    non_rigid: float | None = None,
+) -> str:
+    """One line if the run (its model, scheduler and moves; a scheduler of None is not checked)
+    is outside what the algorithm declares it assumes (`Assumptions`), else ''."""
+    outside = algorithm.assumptions.outside(model, scheduler, non_rigid)
+    return outside_line(algorithm.name, outside)
 
 
 def _is_int(value: object) -> bool:

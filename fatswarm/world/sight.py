@@ -25,6 +25,14 @@ beta = asin((1 - GRAZE_SLACK) / d) of k's direction, open. What it implies:
 - A sight line tangent to a nearer disc and to j (a common tangent through the observer) is not
   blocked by that disc: j is seen along it, though a shift of j by 1e-6 hides it (pinned too).
 
+Point robots (`--bodies points`, `points=True`): both opaque rules are the literature's
+collinearity: k hides j iff k lies on the segment between the observer and j, strictly between
+them: its centre within GRAZE_SLACK of the segment's line, farther than GRAZE_SLACK from the
+observer and nearer than j by more than GRAZE_SLACK along it. "On the segment" is thus within the
+clearance slack, 10x above the grid's snapping (fatswarm/domain/tolerance.py): a robot sent to a
+point of the segment is still on it once snapped. Robots that share a point hide nothing of one
+another, and one at the observer's own point hides nothing.
+
 "k in front of j": two disjoint equal discs are separated by the bisector of their centres, so
 along every ray that meets both, the nearer-centred one comes first (at equal distances no ray
 meets both interiors). k can block j only if |k| < |j|, decided once per pair without rays. Discs
@@ -61,24 +69,36 @@ _Floats = NDArray[np.float64]
 _Bools = NDArray[np.bool_]
 
 
-def seen(positions: Points, observer: int, rule: Visibility, sight: float | None) -> _Indices:
+def seen(
+    positions: Points,
+    observer: int,
+    rule: Visibility,
+    sight: float | None,
+    *,
+    points: bool = False,
+) -> _Indices:
     """Indices (ascending, int64) of the robots other than `observer` that it sees.
 
     `sight` None is unlimited; a robot at centre distance <= sight * (1 + SIGHT_REL) is within
     sight (so one placed exactly at distance `sight` is seen). Bodies block whether within sight
-    or not.
+    or not. `points`: the robots are points (collinearity hides, see the module's docstring).
     """
     pts, how = _checked(positions, rule, sight)
-    return _seen_one(pts, _checked_observer(observer, len(pts)), how, sight)
+    return _seen_one(pts, _checked_observer(observer, len(pts)), how, sight, points)
 
 
 def seen_all(
-    positions: Points, observers: Sequence[int], rule: Visibility, sight: float | None
+    positions: Points,
+    observers: Sequence[int],
+    rule: Visibility,
+    sight: float | None,
+    *,
+    points: bool = False,
 ) -> dict[int, _Indices]:
     """`seen` for several observers, keyed by observer (the input is checked once)."""
     pts, how = _checked(positions, rule, sight)
     chosen = [_checked_observer(o, len(pts)) for o in observers]
-    return {o: _seen_one(pts, o, how, sight) for o in chosen}
+    return {o: _seen_one(pts, o, how, sight, points) for o in chosen}
 
 
 def _checked(
@@ -109,7 +129,9 @@ def _checked_observer(observer: int, n: int) -> int:
     return index
 
 
-def _seen_one(pts: _Floats, observer: int, rule: Visibility, sight: float | None) -> _Indices:
+def _seen_one(
+    pts: _Floats, observer: int, rule: Visibility, sight: float | None, points: bool = False
+) -> _Indices:
     """The robots `observer` sees, for checked input."""
     rel = pts - pts[observer]
     dist = np.hypot(rel[:, 0], rel[:, 1])
@@ -120,6 +142,8 @@ def _seen_one(pts: _Floats, observer: int, rule: Visibility, sight: float | None
     cand = np.flatnonzero(within).astype(np.int64)
     if rule is Visibility.TRANSPARENT or cand.size == 0:
         return cand
+    if points:  # both opaque rules: collinearity
+        return cand[~_points_blocked(rel, dist, cand)]
     if rule is Visibility.OPAQUE_CENTRES:
         return cand[~_centres_blocked(rel, dist, cand)]
     return cand[~_discs_hidden(rel, dist, cand)]
@@ -138,6 +162,18 @@ def _centres_blocked(rel: _Floats, dist: _Floats, cand: _Indices) -> _Bools:
     inside = (dot > 0.0) & (dot < dj * dj)
     blocked = inside & (np.abs(cross) < (ROBOT_RADIUS - GRAZE_SLACK) * dj)
     blocked[np.arange(cand.size), cand] = False  # j itself (the observer has dot = 0)
+    return np.asarray(blocked.any(axis=1), dtype=np.bool_)
+
+
+def _points_blocked(rel: _Floats, dist: _Floats, cand: _Indices) -> _Bools:
+    """Per candidate j: does a third point lie on the segment O-j, strictly between (within
+    GRAZE_SLACK of its line, more than GRAZE_SLACK from either end along it)?"""
+    pj = rel[cand]
+    dj = dist[cand][:, None]
+    dot = pj @ rel.T  # |j| times k's coordinate along O-j
+    cross = pj[:, 0, None] * rel[None, :, 1] - pj[:, 1, None] * rel[None, :, 0]
+    inside = (dot > GRAZE_SLACK * dj) & (dot < (dj - GRAZE_SLACK) * dj)
+    blocked = inside & (np.abs(cross) < GRAZE_SLACK * dj) & np.isfinite(dist)[None, :]
     return np.asarray(blocked.any(axis=1), dtype=np.bool_)
 
 

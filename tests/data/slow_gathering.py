@@ -22,7 +22,7 @@ class SlowGathering(Gathering):
 
     name = "slow-gathering"
 
-    def make_params(self, n: int, values: Mapping[str, ParamValue]) -> GatheringParams:
+    def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> GatheringParams:
         if multiprocessing.parent_process() is not None:
             if os.environ.get("FATSWARM_TEST_DIE"):
                 os.kill(os.getpid(), signal.SIGKILL)

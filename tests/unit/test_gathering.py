@@ -138,8 +138,8 @@ def test_the_registry_finds_it_by_name_and_parameters_parse_from_text() -> None:
     assert alg is ALGORITHM
     assert "gathering" in available()
     configured = Configured.of(alg, 5, {"tolerance": "0.01"})
-    assert configured.params == GatheringParams(5, 0.01)
+    assert configured.params == GatheringParams(None, 0.01)  # it declares it does not know n
     assert configured.describe() == "gathering tolerance=0.01"
-    assert Configured.of(alg, 5).params == GatheringParams(5, 1e-3)
+    assert Configured.of(alg, 5).params == GatheringParams(None, 1e-3)
     with pytest.raises(AlgorithmParamsError, match="no parameter 'a'"):
         Configured.of(alg, 5, {"a": "4"})

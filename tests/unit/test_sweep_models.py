@@ -130,9 +130,11 @@ def test_model_cells_are_blank_at_the_papers_values_and_read_back() -> None:
         "frames": "chirality",
         "frame_change": "",
         "noise": "",
+        "bodies": "",
     }
     every = RobotModel.of("opaque-centres", 0.1, "external", "disoriented", "every-look")
-    for model in (PAPER_MODEL, m, every):
+    points = RobotModel.of(bodies="points", frames="both-axes")
+    for model in (PAPER_MODEL, m, every, points):
         assert model_of_cells(model_cells(model)) == model
     assert model_of_cells({}) == PAPER_MODEL
 

@@ -4,6 +4,7 @@ pytest plugin's pieces that need no run (its flags, its entry point)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import tomllib
 from collections.abc import Mapping
@@ -145,7 +146,7 @@ class Dividing(Gathering):
 
     name = "dividing"
 
-    def make_params(self, n: int, values: Mapping[str, ParamValue]) -> GatheringParams:
+    def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> GatheringParams:
         tol = values["tolerance"]
         assert isinstance(tol, float)
         _ = 1.0 / tol
@@ -155,7 +156,7 @@ class Dividing(Gathering):
 class TwoLines(Gathering):
     name = "two-lines"
 
-    def make_params(self, n: int, values: Mapping[str, ParamValue]) -> GatheringParams:
+    def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> GatheringParams:
         if values["tolerance"] == 0.0:
             raise AlgorithmParamsError("tolerance must be > 0\n(it is a distance)")
         return super().make_params(n, values)
@@ -165,8 +166,10 @@ class PerRobot(Gathering):
     """make_params divides by n - 1: n = 1 raises."""
 
     name = "per-robot"
+    assumptions = dataclasses.replace(Gathering.assumptions, knows_n=True)  # it uses n
 
-    def make_params(self, n: int, values: Mapping[str, ParamValue]) -> GatheringParams:
+    def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> GatheringParams:
+        assert n is not None
         _ = 1 / (n - 1)
         return super().make_params(n, values)
 
@@ -445,8 +448,10 @@ def test_params_are_those_the_views_and_the_hunt_use() -> None:
 
 def test_an_algorithm_refusing_every_size_asked_for_says_so() -> None:
     class Big(Gathering):
-        def make_params(self, n: int, values: Mapping[str, ParamValue]) -> GatheringParams:
-            if n < 20:
+        assumptions = dataclasses.replace(Gathering.assumptions, knows_n=True)  # it uses n
+
+        def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> GatheringParams:
+            if n is None or n < 20:
                 raise AlgorithmParamsError("needs n >= 20")
             return super().make_params(n, values)
 

@@ -1,4 +1,4 @@
-"""`fatswarm algorithms`: the registered algorithms, or one algorithm's parameters, as text."""
+"""`fatswarm algorithms`: the registered algorithms, or one, with parameters and assumptions."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import sys
 
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.registry import available, load_algorithm
-from fatswarm.domain.seam import AlgorithmError
+from fatswarm.domain.seam import AlgorithmError, assumptions_of
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -23,7 +23,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def describe(ref: str) -> str:
-    """An algorithm's name, summary and parameters (name, default, help), one per line."""
+    """An algorithm's name, summary, parameters (name, default, help) and what it assumes
+    (`Assumptions`), one per line."""
     algorithm = load_algorithm(ref)
     lines = [f"{algorithm.name}: {algorithm.summary}"]
     flags = [f"--param {spec.name}={spec.default!r}" for spec in algorithm.parameters]
@@ -32,6 +33,8 @@ def describe(ref: str) -> str:
         lines.append(f"  {flag:<{width}}  {spec.help}")
     if not algorithm.parameters:
         lines.append("  (no parameters)")
+    lines.append("  assumes (a run outside goes ahead and says so):")
+    lines += [f"    {line}" for line in assumptions_of(algorithm).lines()]
     return "\n".join(lines)
 
 

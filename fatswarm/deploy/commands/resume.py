@@ -23,7 +23,7 @@ from fatswarm.deploy.view.summary import counted, unit
 from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.registry import load_algorithm
-from fatswarm.domain.robot_model import AXES, AXIS_NAMES, axis_named
+from fatswarm.domain.robot_model import AXES, AXIS_NAMES, Bodies, axis_named
 from fatswarm.domain.seam import Configured, parse_assignments
 from fatswarm.world.physics import validate_configuration
 from fatswarm.world.record import DEFAULT_SCALE, RecordFormatError
@@ -55,7 +55,9 @@ def resolve_resume(args: argparse.Namespace) -> RunSetup:
     check_against_header(args, recorded, path)
     params = Configured.of(load_algorithm(h.algorithm_ref), h.n, h.params)
     params.check_start(h.initial)
-    initial = validate_configuration(h.initial)
+    initial = validate_configuration(
+        h.initial, bodies_are_points=recorded.robot_model.bodies is Bodies.POINTS
+    )
     fairness = args.fairness if args.fairness is not None else recorded.fairness
     # the script the run was made with, where it was, unless --schedule says where it is now
     schedule = args.schedule if args.schedule is not None else recorded.schedule
@@ -252,12 +254,15 @@ def _says_non_rigid(delta: float | None) -> str:
 def _check_init(init: str, recorded: WorldSetup, found: list[Contradiction]) -> None:
     """An --init file whose start is not the record's."""
     h = recorded
-    positions, _ = load_init(init)
+    positions, _ = load_init(init, points=h.robot_model.bodies is Bodies.POINTS)
     if len(positions) != h.n:
         says = f"has n={h.n} (the file {len(positions)} robots)"
         found.append(Contradiction("--init", f"--init {init}", says))
         return
-    where = _first_difference(validate_configuration(positions), h.initial)
+    points = h.robot_model.bodies is Bodies.POINTS
+    where = _first_difference(
+        validate_configuration(positions, bodies_are_points=points), h.initial
+    )
     if where is not None:
         robot, mine, theirs = where
         says = f"started elsewhere (robot {robot} at {theirs}, not at {mine} as in the file)"

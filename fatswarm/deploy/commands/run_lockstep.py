@@ -186,23 +186,23 @@ def _lockstep_setup(args: argparse.Namespace, seed: int) -> tuple[RunSetup, Reco
 
 def model_fields(setup: RunSetup) -> dict[str, Any]:
     """The header fields a run's summary names: its model (if not the paper's) and the line saying
-    that its frames are outside the algorithm's assumption (if they are)."""
-    # here, not at the top: the CLI imports this module to build its parser
-    from fatswarm.world.setup import outside_assumption
-
+    that it is outside the algorithm's assumptions (if it is)."""
     model = setup.robot_model
     return {
         "model": None if model.is_paper else model.to_header(),
-        "assumption": outside_assumption(setup.params, model) or None,
+        "assumption": setup.outside or None,
     }
 
 
 def _announce(
     args: argparse.Namespace, setup: RunSetup, forecast: Estimate, *, seed_given: bool
 ) -> None:
-    """The drawn seed (of a new run), where a resumed run goes on from, and, for a large or long
-    run, the estimate (of what is left), on stderr."""
+    """That the run is outside its algorithm's assumptions (if it is), the drawn seed (of a new
+    run), where a resumed run goes on from, and, for a large or long run, the estimate (of what is
+    left), on stderr."""
     n = setup.params.n
+    if setup.outside:  # the run goes ahead: that is the experiment
+        print(f"fatswarm run: {setup.outside}", file=sys.stderr)
     if not seed_given and setup.resumed is None:
         print(f"seed {setup.seed} (pass --seed {setup.seed} to repeat this run)", file=sys.stderr)
     if setup.resumed is not None:

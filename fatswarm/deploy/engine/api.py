@@ -144,6 +144,7 @@ def _run_config(
         algorithm=setup.params.name,
         params=dict(setup.params.values),
         record=record,
+        outside=setup.outside,
     )
 
 
@@ -331,7 +332,8 @@ def summary(of: LockstepResult | RecordLines) -> dict[str, str | int | float | N
     record: status ("formed", "stalled", "max_rounds"; "unfinished" for a record without a
     result line), rounds, epochs, moves, total_distance, collisions, looks, time (the virtual
     time of an async run, else None), n, seed, scheduler and algorithm (None where unknown),
-    then the figures that follow from the positions (fatswarm.domain.figures: min_gap...)."""
+    then the figures that follow from the positions (fatswarm.domain.figures: min_gap...), and
+    `outside`, the line saying how the run is outside its algorithm's assumptions, if it is."""
     if isinstance(of, RecordLines):
         return _record_summary(of)
     if not isinstance(of, LockstepResult):
@@ -351,13 +353,14 @@ def summary(of: LockstepResult | RecordLines) -> dict[str, str | int | float | N
         "scheduler": None if known is None else known.scheduler,
         "algorithm": None if known is None else known.algorithm,
         **summary_values(of.derived),
+        **({"outside": known.outside} if known is not None and known.outside else {}),
     }
 
 
 def _record_summary(record: RecordLines) -> dict[str, str | int | float | None]:
     """`summary` of a record: counted from its lines (the result line's figures where it has
     them: epochs and time are not counted), the derived figures from its positions."""
-    res = record.result
+    res, outside = record.result, record.header.extra.get("assumption")
     return {
         "status": "unfinished" if res is None else str(res.status),
         "rounds": len(record.rounds) if res is None else int(res.rounds),
@@ -372,6 +375,7 @@ def _record_summary(record: RecordLines) -> dict[str, str | int | float | None]:
         "scheduler": record.header.scheduler,
         "algorithm": record.header.algorithm,
         **summary_values(run_derived(record.rounds)),
+        **({"outside": outside} if isinstance(outside, str) and outside else {}),
     }
 
 

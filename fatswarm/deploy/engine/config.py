@@ -23,7 +23,7 @@ from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
-from fatswarm.domain.robot_model import AXES, PAPER_MODEL, Lights, ModelError, RobotModel
+from fatswarm.domain.robot_model import AXES, PAPER_MODEL, Bodies, Lights, ModelError, RobotModel
 from fatswarm.domain.seam import AlgorithmError, AlgorithmParamsError, Configured, parse_assignments
 from fatswarm.domain.tolerance import UnsupportedInputError, check_supported
 from fatswarm.domain.version import __version__
@@ -127,6 +127,7 @@ class RunConfig:
             self.algorithm,
             params=self.params,
             positions=self.positions,
+            bodies_are_points=self.model.bodies is Bodies.POINTS,
         )
         n = setting.n
         scheduler = make_scheduler(self.scheduler, n, self.seed, self.schedule, self.fairness)
@@ -208,6 +209,11 @@ class RunSetup:
     @property
     def record_views(self) -> bool:
         return self.settings.record_views
+
+    @property
+    def outside(self) -> str:
+        """The line saying how the run is outside its algorithm's assumptions ('' if within)."""
+        return self.settings.outside(self.params)
 
 
 def _absolute(path: str | None) -> str | None:
@@ -295,11 +301,13 @@ def resolve_start(
     *,
     params: Mapping[str, object] | None = None,
     positions: Points | None = None,
+    bodies_are_points: bool = False,
 ) -> tuple[Configured, Points]:
     """The algorithm (configured) and (n, 2) start that `--init` or `-n`/`--seed`/`--start`,
     `--algorithm`, `--param` and `-a` ask for, valid and supported by the algorithm; raises one of
     `input_errors()`. Shared by `fatswarm run` and `fatswarm world`, so both refuse the same start
-    the same way. Random starts are drawn at the scale of a parameter `a`, if there is one."""
+    the same way. Random starts are drawn at the scale of a parameter `a`, if there is one.
+    `bodies_are_points`: point robots, which may share a point (no overlap to refuse)."""
     # an agent imports this module (through deploy.flags), never physics
     from fatswarm.world.physics import validate_configuration
 
@@ -315,7 +323,7 @@ def resolve_start(
         initial = _given_positions(positions, n)
         setting = Configured.of(chosen, len(initial), given)
     elif init is not None:
-        initial, file_a = _init_positions(init, n)
+        initial, file_a = _init_positions(init, n, bodies_are_points)
         if has_a and "a" not in given and file_a is not None:
             given["a"] = file_a
         setting = Configured.of(chosen, len(initial), given)
@@ -323,7 +331,7 @@ def resolve_start(
         setting = Configured.of(chosen, DEFAULT_N if n is None else n, given)
         initial = _random_positions(setting, seed, kind)
     setting.check_start(initial)
-    return setting, validate_configuration(initial)
+    return setting, validate_configuration(initial, bodies_are_points=bodies_are_points)
 
 
 def _given_positions(positions: Points, n: int | None) -> Points:
@@ -338,12 +346,13 @@ def _given_positions(positions: Points, n: int | None) -> Points:
     return initial
 
 
-def _init_positions(init: str, n: int | None) -> tuple[Points, float | None]:
-    """The (n, 2) start of the `--init` file and its side `a` (None: the file has none)."""
+def _init_positions(init: str, n: int | None, points: bool = False) -> tuple[Points, float | None]:
+    """The (n, 2) start of the `--init` file and its side `a` (None: the file has none);
+    `points`: of point robots (they may share a point)."""
     # an agent imports this module (through deploy.flags), never the starts
     from fatswarm.deploy.scenarios.starts import load_init
 
-    initial, file_a = load_init(init)  # finite numbers, as check_supported needs
+    initial, file_a = load_init(init, points=points)  # finite numbers, as check_supported needs
     if n is not None and n != len(initial):
         raise RunInputError(f"-n {n} disagrees with the {len(initial)} robots of {init}; drop -n")
     return initial, file_a

@@ -30,7 +30,7 @@ from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel
 from fatswarm.domain.figures import FigureValue
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import MAX_SEGMENTS, Arc, Line, Path, Points, vertices
-from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
+from fatswarm.domain.robot_model import PAPER_MODEL, Bodies, RobotModel
 from fatswarm.domain.seam import AlgorithmFailure, Configured, checked, failure_text
 from fatswarm.domain.tolerance import enclosing_circle
 from fatswarm.domain.wire import MAX_COORD, MAX_SWEEP, ProtocolError
@@ -126,7 +126,13 @@ def configured(params: Params | Configured) -> Configured:
     """The run's algorithm: a `Configured` as given, or the paper's algorithm for `Params`."""
     if isinstance(params, Configured):
         return params
-    return Configured(UNIFORM_CIRCLE, params.n, {"a": float(params.a)}, params)
+    return Configured(
+        UNIFORM_CIRCLE,
+        params.n,
+        {"a": float(params.a)},
+        params,
+        assumptions=UNIFORM_CIRCLE.assumptions,
+    )
 
 
 def run_lockstep(
@@ -168,7 +174,9 @@ def run_lockstep(
     disagrees with params, HistoryMismatchError for a history this run would not have produced.
     """
     setting = configured(params)
-    positions = validate_configuration(initial)  # a fresh float64 copy, on the grid
+    model = robot_model if settings is None else settings.robot_model
+    points = model.bodies is Bodies.POINTS  # point robots may share a point
+    positions = validate_configuration(initial, bodies_are_points=points)  # a copy, on the grid
     n = len(positions)
     if n != setting.n:
         raise ValueError(f"the start has {n} robots but params say n={setting.n}")

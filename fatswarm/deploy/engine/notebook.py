@@ -51,6 +51,8 @@ class RunResult(LockstepResult):
     algorithm: str
     params: dict[str, ParamValue] = field(default_factory=dict)
     record: str | None = None  # where its record was written, None if it was not
+    # how the run is outside its algorithm's assumptions (the header's `assumption`), '' if within
+    outside: str = ""
 
     @classmethod
     def of(cls, result: LockstepResult, **run: Any) -> RunResult:
@@ -60,6 +62,7 @@ class RunResult(LockstepResult):
     def __repr__(self) -> str:
         time = "" if self.time is None else f", time={self.time:.3f}"
         record = "" if self.record is None else f", record={self.record!r}"
+        record += f", outside={self.outside!r}" if self.outside else ""
         return (
             f"RunResult(status={str(self.status)!r}, rounds={self.rounds}, n={self.n}, "
             f"seed={self.seed}, scheduler={self.scheduler!r}, algorithm={self.algorithm!r}, "

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Final, TypeVar
 from fatswarm.coordinator.schedule import NAMES
 from fatswarm.deploy.engine.config import check_lights, check_non_rigid, input_errors
 from fatswarm.deploy.flags import add_robot_model_arguments
-from fatswarm.deploy.hunt.report import make_progress, print_summary
+from fatswarm.deploy.hunt.report import make_progress, outside_text, print_summary
 from fatswarm.deploy.hunt.search import (
     SEED_BOUND,
     Hunt,
@@ -55,7 +55,7 @@ from fatswarm.deploy.sweep.grid import (
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
-from fatswarm.domain.seam import Configured
+from fatswarm.domain.seam import Configured, assumptions_of
 
 if TYPE_CHECKING:
     from fatswarm.deploy.hunt.pool import Budget, Tally
@@ -337,6 +337,8 @@ def _hunt(args: argparse.Namespace, hunt: Hunt, budget: Budget, jobs: int) -> in
         with open_workers(jobs, args.cluster) as workers:
             if not args.quiet:
                 _say(_plan_text(hunt, budget, seed, workers.where, args.out))
+                if _outside(hunt):  # the hunt goes ahead: that is the experiment
+                    _say(_outside(hunt))
             with stop_on_signals() as stopped, progress:
                 tally, complete = run_hunt(
                     hunt, seed, budget, workers, args.out, progress.show, lambda: bool(stopped[0])
@@ -356,9 +358,17 @@ def _hunt(args: argparse.Namespace, hunt: Hunt, budget: Budget, jobs: int) -> in
             f"rerun with --seed {seed} to hunt again"
         )
         return ExitCode.INTERRUPTED if stopped[0] == signal.SIGINT else ExitCode.TERMINATED
-    print_summary(tally, sys.stdout)
+    print_summary(tally, sys.stdout, _outside(hunt))
     _say(_end_text(tally, seed, args.out))
     return ExitCode.NOT_FORMED if tally.saved else ExitCode.OK
+
+
+def _outside(hunt: Hunt) -> str:
+    """Which of the hunt's draws are outside its algorithm's assumptions ('' if none)."""
+    algorithm = load_algorithm(hunt.algorithm)  # loaded and checked before the hunt began
+    return outside_text(
+        algorithm.name, assumptions_of(algorithm), hunt.models, hunt.robot_models, hunt.non_rigid
+    )
 
 
 def _plan_text(hunt: Hunt, budget: Budget, seed: int, where: str, out: str) -> str:

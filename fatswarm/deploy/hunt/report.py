@@ -15,6 +15,7 @@ from rich.table import Table
 
 from fatswarm.deploy.hunt.files import kind_counts
 from fatswarm.deploy.sweep.grid import model_label
+from fatswarm.domain.assumptions import Assumptions, Outside
 from fatswarm.domain.robot_model import RobotModel
 
 if TYPE_CHECKING:
@@ -153,14 +154,36 @@ def summary_table(saved: Sequence[Saved]) -> Table:
     return table
 
 
-def print_summary(tally: Tally, out: TextIO) -> None:
-    """The counts of every kind found, then the table of saved failures, to `out`."""
+def outside_text(
+    algorithm: str,
+    assumptions: Assumptions,
+    schedulers: Sequence[str],
+    robot_models: Sequence[RobotModel],
+    non_rigid: float | None,
+) -> str:
+    """The line saying which of a hunt's draws are outside the algorithm's assumptions, each way
+    once (`frames chirality`, `scheduler async`), '' when every draw is within them."""
+    ways: dict[Outside, None] = {}
+    for model in robot_models:
+        for scheduler in schedulers:
+            ways.update(dict.fromkeys(assumptions.outside(model, scheduler, non_rigid)))
+    if not ways:
+        return ""
+    said = "; ".join(f"{o.what} {o.given} (it assumes {o.assumed})" for o in ways)
+    return f"outside the assumptions of algorithm {algorithm}: {said}"
+
+
+def print_summary(tally: Tally, out: TextIO, outside: str = "") -> None:
+    """The counts of every kind found, the line saying which draws were outside the algorithm's
+    assumptions (if any were), then the table of saved failures, to `out`."""
     tty = out.isatty()
     console = Console(file=out, width=None if tty else 200, no_color=not tty, highlight=False)
     found = kind_counts(tally.kinds) or "none"
     console.print(f"{tally.runs} runs, {tally.refused} starts refused; failures found: {found}")
+    if outside:
+        console.print(outside)
     if tally.saved:
         console.print(summary_table(tally.saved))
 
 
-__all__ = ["make_progress", "print_summary", "summary_table"]
+__all__ = ["make_progress", "outside_text", "print_summary", "summary_table"]

@@ -33,7 +33,7 @@ from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
-from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
+from fatswarm.domain.robot_model import PAPER_MODEL, Bodies, RobotModel
 from fatswarm.domain.seam import Configured
 from fatswarm.world.physics import (
     InvalidConfigurationError,
@@ -350,10 +350,13 @@ def run_case(
 
     try:  # the input first: refused here, it is no failure
         setting = configure(hunt, len(positions))
-        setting.check_start(validate_configuration(positions))
+        points = robot_model.bodies is Bodies.POINTS
+        setting.check_start(validate_configuration(positions, bodies_are_points=points))
     except input_errors() as exc:
         return Outcome(None, refused=f"{type(exc).__name__}: {exc}")
-    watch = _RoundWatch(invariants(hunt, setting, model, robot_model), positions, stop_early)
+    watch = _RoundWatch(
+        invariants(hunt, setting, model, robot_model), positions, stop_early, points
+    )
     try:
         result = run_lockstep(
             positions,
@@ -383,8 +386,15 @@ class _RoundWatch:
     """The round callback of `run_case`: the active sets so far, and the first collision or broken
     invariant (raising `_Found` there with `stop_early`)."""
 
-    def __init__(self, checks: list[InvariantCheck], positions: Points, stop_early: bool) -> None:
+    def __init__(
+        self,
+        checks: list[InvariantCheck],
+        positions: Points,
+        stop_early: bool,
+        points: bool = False,
+    ) -> None:
         self.checks = checks
+        self.points = points  # point robots: sharing a point is no overlap
         self.stop_early = stop_early
         self.active: list[tuple[int, ...]] = []
         self.found: list[Failure] = []
@@ -409,7 +419,7 @@ class _RoundWatch:
                 f"robot {hit.robot} stopped at contact with robot {hit.other} "
                 f"in round {report.entry.round}",
             )
-        broken = overlap(after)
+        broken = None if self.points else overlap(after)
         for check in self.checks if broken is None else ():
             broken = check(self.before, after)
             if broken is not None:

@@ -86,6 +86,8 @@ def run_networked(args: argparse.Namespace, resolve_run: Resolver) -> int:
     pace: float = args.pace
     if pace is None:
         pace = watchable_pace(setup.params.n, setup.scheduler.name) if live_dashboard(args) else 0.0
+    if setup.outside and not args.quiet:  # the run goes ahead: that is the experiment
+        print(f"fatswarm run: {setup.outside}", file=sys.stderr)
     if setup.resumed is None and args.seed is None and not args.quiet:
         print(f"seed {seed} (pass --seed {seed} to repeat this run)", file=sys.stderr)
     cost, machine = capacity.estimate_networked(setup.params.n, args.spawn), capacity.this_machine()

@@ -286,9 +286,9 @@ def _coordinate(value: Any, path: str, i: int) -> float:
     return float(value)
 
 
-def load_init(path: str) -> tuple[Points, float | None]:
+def load_init(path: str, *, points: bool = False) -> tuple[Points, float | None]:
     """Read `{"positions": [[x, y], ...], "a": 4.0}` (a optional: absent, not null) -> ((n, 2)
-    positions, a or None).
+    positions, a or None). `points`: point robots, which may share a point (no overlap check).
 
     Raises InitFileError with a one-line message saying what to fix.
     """
@@ -296,7 +296,7 @@ def load_init(path: str) -> tuple[Points, float | None]:
     if not isinstance(data, dict) or "positions" not in data:
         raise InitFileError(f'init file {path} must hold {{"positions": [[x, y], ...], "a": 4.0}}')
     pts = _positions(data["positions"], path)
-    bad = overlapping_pair(pts)
+    bad = None if points else overlapping_pair(pts)
     if bad is not None:
         i, j, dist = bad
         raise InitFileError(

@@ -137,6 +137,7 @@ def run_spec(spec: RunSpec) -> RunFigures:
         values=values,
         round_cap=cap,
         warning=warnings.text(),
+        outside=setup.outside,
         time=result.time,
         derived=dict(result.derived),
     )

@@ -28,6 +28,7 @@ CONTEXT_COLUMNS: Final = (
     "round_cap",
     "error",
     "warning",
+    "outside",
     "fatswarm_version",
     "command",
 )
@@ -90,6 +91,7 @@ class RunFigures:
     round_cap: int | None = None
     error: str = ""  # what the run raised (status ERROR)
     warning: str = ""  # the first warning the run logged (a robot's compute failed...)
+    outside: str = ""  # how the run is outside its algorithm's assumptions ('' if within)
     time: float | None = None  # async models: the virtual time the run ended; None: rounds
     # the run's figures that follow from the positions (fatswarm.domain.figures), by name
     derived: Mapping[str, figures.FigureValue] = field(default_factory=dict)
@@ -150,6 +152,7 @@ def make_row(spec: RunSpec, run: RunFigures, version: str) -> dict[str, str]:
         "round_cap": "" if run.round_cap is None else str(run.round_cap),
         "error": one_line(run.error),
         "warning": one_line(run.warning),
+        "outside": one_line(run.outside),
         "fatswarm_version": version,
         "command": spec.command(),
     }

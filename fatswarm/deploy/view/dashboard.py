@@ -286,6 +286,7 @@ def frame_from_state(
         lights=state.lights,
         palette=tuple(sorted(state.palette)),  # names sorted, as replay and plot colour them
         derived=dict(state.derived),
+        outside=state.outside,
     )
 
 

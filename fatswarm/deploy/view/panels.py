@@ -71,6 +71,7 @@ class Frame:
     unfinished: bool = False  # replay: the record's last round, and it has no result line
     # the run's figures derived from the positions, so far (fatswarm.domain.figures), by name
     derived: dict[str, float] = field(default_factory=dict)
+    outside: str = ""  # how the run is outside its algorithm's assumptions ('' if within)
 
     def __post_init__(self) -> None:
         side = self.params.get("a")
@@ -360,10 +361,13 @@ def wrapped(text: str, width: int) -> list[str]:
 
 
 def footer_lines(frame: Frame, keys: str | None, width: int) -> list[Text]:
-    """The outcome, then the key help, each wrapped to the footer panel's inside (`width` is the
+    """The outcome, the line saying that the run is outside its algorithm's assumptions (if it
+    is), then the key help, each wrapped to the footer panel's inside (`width` is the
     terminal's): nothing is cut, however narrow the terminal."""
     inside = width - 4  # the panel's borders and padding
     lines = [Text(line) for line in wrapped(outcome_text(frame), inside)]
+    if frame.outside:  # the run went ahead outside its algorithm's assumptions: said each frame
+        lines += [Text(line, style="yellow") for line in wrapped(frame.outside, inside)]
     lines += [Text(line, style="dim") for line in wrapped(keys, inside)] if keys else []
     return lines
 
