@@ -40,7 +40,8 @@ from fatswarm.deploy.net.part_agents import agent_command, agents_command
 from fatswarm.deploy.net.zconf import loopback_endpoint, make_config
 from fatswarm.deploy.scenarios.starts import random_start
 from fatswarm.domain.wire import ProtocolError
-from fatswarm.world.protocol import WorldState, agent_alive_any_key, robot_of_alive_key, state_key
+from fatswarm.world.observers import WorldState
+from fatswarm.world.protocol import agent_alive_any_key, robot_of_alive_key, state_key
 
 FREE_ALGORITHM = (
     f"{Path(__file__).resolve().parents[1] / 'tests' / 'data' / 'always_right.py'}:ALGORITHM"

@@ -30,9 +30,9 @@ from fatswarm.world.faults import crash_after, stuck_in
 from fatswarm.world.instants import Instants, async_setup, is_async
 from fatswarm.world.looks import Looks, Seen
 from fatswarm.world.model import Model, RoundBooking
+from fatswarm.world.observers import AgentInfo, WorldState
 from fatswarm.world.progress import ProgressTracker
 from fatswarm.world.protocol import (
-    AgentInfo,
     Begin,
     ControlReply,
     ControlRequest,
@@ -41,7 +41,6 @@ from fatswarm.world.protocol import (
     MovesHeld,
     MoveSubmitted,
     Snapshot,
-    WorldState,
 )
 from fatswarm.world.readout import CoreReadout
 from fatswarm.world.record import Header, Result, RoundEntry, RunRecord

@@ -26,6 +26,7 @@ from fatswarm.world.core import WorldCore
 from fatswarm.world.inbox import Inbox
 from fatswarm.world.instants import is_async
 from fatswarm.world.journal import Journal, perform
+from fatswarm.world.observers import WorldState
 from fatswarm.world.protocol import (
     MAX_CONTROL_BYTES,
     MAX_LOOK_BYTES,
@@ -33,7 +34,6 @@ from fatswarm.world.protocol import (
     ControlReply,
     LookRequest,
     MoveSubmitted,
-    WorldState,
     agent_alive_any_key,
     alive_key,
     control_key,

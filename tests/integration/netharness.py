@@ -17,7 +17,8 @@ import pytest
 from fatswarm.deploy.net.children import Children
 from fatswarm.deploy.net.zconf import loopback_endpoint, make_config
 from fatswarm.domain.wire import ProtocolError
-from fatswarm.world.protocol import WorldState, state_key
+from fatswarm.world.observers import WorldState
+from fatswarm.world.protocol import state_key
 from fatswarm.world.record import RecordWriter, RunRecord, result_figures
 from fatswarm.world.record_read import read_record
 

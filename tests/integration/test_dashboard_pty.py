@@ -27,7 +27,8 @@ import numpy as np
 import pytest
 
 from fatswarm.domain.outcome import Status
-from fatswarm.world.protocol import AgentInfo, WorldState, state_key
+from fatswarm.world.observers import AgentInfo, WorldState
+from fatswarm.world.protocol import state_key
 
 pytestmark = pytest.mark.integration
 

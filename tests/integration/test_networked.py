@@ -26,11 +26,11 @@ from netharness import (
 from fatswarm.domain.path import Line
 from fatswarm.domain.path import Path as RobotPath
 from fatswarm.domain.wire import ProtocolError
+from fatswarm.world.observers import WorldState
 from fatswarm.world.protocol import (
     Begin,
     Commit,
     MoveSubmitted,
-    WorldState,
     control_key,
     move_key,
     snapshot_key,

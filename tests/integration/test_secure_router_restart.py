@@ -18,7 +18,8 @@ from fatswarm.deploy.net.children import Children
 from fatswarm.deploy.net.zconf import free_port, make_config
 from fatswarm.deploy.secure.plan import Plan
 from fatswarm.domain.wire import ProtocolError
-from fatswarm.world.protocol import WorldState, state_key
+from fatswarm.world.observers import WorldState
+from fatswarm.world.protocol import state_key
 from fatswarm.world.record_read import read_record
 
 pytestmark = pytest.mark.integration

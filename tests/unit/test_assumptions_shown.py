@@ -26,7 +26,7 @@ from fatswarm.domain.outcome import Status
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
 from fatswarm.domain.seam import assumptions_of
-from fatswarm.world.protocol import AgentInfo, WorldState
+from fatswarm.world.observers import AgentInfo, WorldState
 
 ASYNC = (
     "algorithm uniform-circle assumes scheduler fsync, ssync, centralized, scripted; "

@@ -41,7 +41,7 @@ from fatswarm.deploy.view.dashboard import (
 from fatswarm.domain.outcome import ENDED, Status
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.seam import Configured
-from fatswarm.world.protocol import AgentInfo, WorldState
+from fatswarm.world.observers import AgentInfo, WorldState
 
 
 def render_text(frame: Frame, width: int = 120, height: int = 40) -> str:

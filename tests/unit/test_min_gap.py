@@ -22,7 +22,7 @@ from fatswarm.deploy.view.dashboard import frame_from_state
 from fatswarm.domain.figures import min_gap
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.wire import unpack
-from fatswarm.world.protocol import AgentInfo, WorldState
+from fatswarm.world.observers import AgentInfo, WorldState
 
 
 def brute(positions: np.ndarray) -> float:

@@ -196,7 +196,7 @@ def test_the_observers_state_carries_every_robots_colour_for_the_live_dashboard(
     from fatswarm.deploy.view.dashboard import frame_from_state
     from fatswarm.domain.outcome import Status
     from fatswarm.domain.wire import ProtocolError
-    from fatswarm.world.protocol import AgentInfo, WorldState
+    from fatswarm.world.observers import AgentInfo, WorldState
 
     agents = (AgentInfo(True, 0, 0.0, 0),) * 2
     state = WorldState(

@@ -20,12 +20,12 @@ from fatswarm.domain.wire import (
     pack,
     robot_of_key,
 )
+from fatswarm.world.observers import AgentInfo, WorldState
 from fatswarm.world.protocol import (
     MAX_CONTROL_BYTES,
     MAX_LOOK_BYTES,
     MAX_MOVE_BYTES,
     MAX_NOTICE_BYTES,
-    AgentInfo,
     Begin,
     Commit,
     ControlReply,
@@ -34,7 +34,6 @@ from fatswarm.world.protocol import (
     MovesHeld,
     MoveSubmitted,
     Snapshot,
-    WorldState,
     decode_control,
     move_key,
     moves_held_key,

@@ -30,7 +30,8 @@ from fatswarm.deploy.view.dashboard import (
 from fatswarm.deploy.view.summary import counted, unit
 from fatswarm.domain.outcome import ENDED, ExitCode, exit_code_for
 from fatswarm.domain.wire import ProtocolError, check_swarm
-from fatswarm.world.protocol import WorldState, state_key
+from fatswarm.world.observers import WorldState
+from fatswarm.world.protocol import state_key
 
 
 def _open_session(connect: str, config: str | None = None) -> Any:

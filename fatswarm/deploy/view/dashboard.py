@@ -56,7 +56,7 @@ from fatswarm.deploy.view.panels import (
 from fatswarm.domain.outcome import ENDED, Status
 
 if TYPE_CHECKING:
-    from fatswarm.world.protocol import WorldState
+    from fatswarm.world.observers import WorldState
 
 # Canvas layers: where several meet in one cell, the highest number wins. A robot in a colour
 # (lights) is drawn on LAYER_LIGHT + k, k its colour's number (`lights.light_number`).
