@@ -16,7 +16,7 @@ from typing import IO, Any, Final
 
 import numpy as np
 
-from fatswarm.domain import figures
+from fatswarm.domain import figures, record_lines
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path, Points, to_record
 from fatswarm.domain.seam import ParamValue
@@ -69,7 +69,7 @@ class Move:
 @dataclass(frozen=True, slots=True)
 class RoundEntry:
     """One committed round: who was active, who moved how, positions after (n, 2), contacts;
-    `extra`: the line's other fields (fatswarm.domain.figures.ROUND_FIELDS), in the line's order.
+    `extra`: the line's other fields (record_lines.ROUND_FIELDS), in the line's order.
 
     `derived`: the figures that follow from the positions (fatswarm.domain.figures: computed when
     asked, never written, so that every record, old ones too, has them).
@@ -112,7 +112,7 @@ def round_entry(
     """
     extra: dict[str, Any] = dict(times or {})
     for key, listed in robots:
-        assert key in figures.ROBOT_LISTS, f"{key!r} is no robot list of the round line"
+        assert key in record_lines.ROBOT_LISTS, f"{key!r} is no robot list of the round line"
         if listed:
             extra[key] = list(listed)
     extra.update(model or {})
@@ -147,7 +147,7 @@ class Result:
 
 def result_figures() -> tuple[str, ...]:
     """The names of `Result`'s figure fields, in the line's order."""
-    head = {f.name for f in figures.RESULT_HEAD}
+    head = {f.name for f in record_lines.RESULT_HEAD}
     return tuple(f.name for f in fields(Result) if f.name not in head and f.name != "extra")
 
 

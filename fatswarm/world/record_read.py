@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from fatswarm.domain import figures
+from fatswarm.domain import figures, record_lines
 from fatswarm.domain.outcome import ENDED, Status
 from fatswarm.domain.path import PathFormatError, Points, from_record
 from fatswarm.world.physics import Collision
@@ -157,7 +157,7 @@ def _round(entry: Mapping[str, Any], n: int, expected: int | None) -> RoundEntry
     collisions = entry.get("collisions", [])
     if not isinstance(collisions, list):
         raise _LineError(f"'collisions' must be a list, got {collisions!r}")
-    known = {f.name for f in figures.ROUND_FIELDS if f.required}
+    known = {f.name for f in record_lines.ROUND_FIELDS if f.required}
     return RoundEntry(
         round=number,
         active=tuple(_robot(r, n, "an 'active' entry") for r in active),
@@ -173,7 +173,7 @@ def _result(entry: Mapping[str, Any], n: int) -> Result:
     if status not in ENDED:
         raise _LineError(f"'status' must be one of {', '.join(ENDED)}, got {status!r}")
     counted = {name: _figure(entry, name) for name in result_figures()}
-    known = {f.name for f in figures.RESULT_HEAD} | set(counted)
+    known = {f.name for f in record_lines.RESULT_HEAD} | set(counted)
     return Result(
         Status(status),
         _int(entry, "rounds", 0),

@@ -19,7 +19,7 @@ from fatswarm.deploy.sweep import grid, table
 from fatswarm.deploy.sweep.grid import RunSpec
 from fatswarm.deploy.sweep.pool import RunTable
 from fatswarm.deploy.view import panels, summary
-from fatswarm.domain import figures
+from fatswarm.domain import figures, record_lines
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Points
 from fatswarm.world.progress import ProgressTracker
@@ -62,25 +62,25 @@ def scratch(monkeypatch: pytest.MonkeyPatch) -> None:
 
 def test_the_schema_file_is_what_the_declaration_generates() -> None:
     on_disk = json.loads(SCHEMA.read_text(encoding="utf-8"))  # as JSON: its layout is free
-    assert on_disk == figures.record_schema(on_disk), (
-        "docs/record.schema.json is stale: python -m fatswarm.domain.figures"
+    assert on_disk == record_lines.record_schema(on_disk), (
+        "docs/record.schema.json is stale: python -m fatswarm.domain.record_lines"
     )
 
 
 def test_regenerating_the_schema_rewrites_only_a_stale_file(tmp_path: Path) -> None:
     target = tmp_path / "record.schema.json"
     target.write_text(SCHEMA.read_text(encoding="utf-8"))
-    assert not figures.write_record_schema(str(target))  # up to date: left as written
+    assert not record_lines.write_record_schema(str(target))  # up to date: left as written
     stale = json.loads(target.read_text())
     del stale["$defs"]["result"]["properties"]["epochs"]
     target.write_text(json.dumps(stale))
-    assert figures.write_record_schema(str(target))
+    assert record_lines.write_record_schema(str(target))
     assert json.loads(target.read_text()) == json.loads(SCHEMA.read_text(encoding="utf-8"))
 
 
 def test_the_result_line_carries_the_declared_result_figures_typed() -> None:
     declared = {f.name for f in figures.place(figures.Place.RESULT_LINE)}
-    head = {f.name for f in figures.RESULT_HEAD}
+    head = {f.name for f in record_lines.RESULT_HEAD}
     assert set(result_figures()) == declared - head
     typed = {f.name: f.type for f in dataclasses.fields(Result)}
     for f in figures.place(figures.Place.RESULT_LINE):
@@ -114,7 +114,7 @@ def test_the_round_line_builder_writes_only_declared_fields(tmp_path: Path) -> N
         model={"lights": ["off", "off", "off"]},
     )
     assert list(entry.extra) == ["look", "start", "end", "origin", "timed_out", "lights"]
-    declared = {f.name for f in figures.ROUND_FIELDS}
+    declared = {f.name for f in record_lines.ROUND_FIELDS}
     assert set(entry.extra) <= declared
     with pytest.raises(AssertionError, match="no robot list"):
         round_entry(1, (0,), {}, {}, START, robots=(("nobody", [0]),))
@@ -184,7 +184,7 @@ def test_a_scratch_figure_reaches_the_progress_summary_json_and_schema(
     outcome = dataclasses.replace(outcome, derived={"x_spread": 3.0})
     assert json.loads(summary.summary_json(outcome, 0))["x_spread"] == 3.0
     assert "x spread 3.000" in summary.summary(outcome)
-    schema = figures.record_schema(json.loads(SCHEMA.read_text(encoding="utf-8")))
+    schema = record_lines.record_schema(json.loads(SCHEMA.read_text(encoding="utf-8")))
     assert "line_scratch" in schema["$defs"]["result"]["properties"]
     assert "x_spread" in schema["$defs"]["result"]["description"]  # derived: not written
 
