@@ -15,6 +15,7 @@ from typing import Final
 
 import numpy as np
 
+from fatswarm.agent.geometry import Circle, sec
 from fatswarm.domain.path import STAY, Line, Path, Points
 from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue
 
@@ -77,6 +78,13 @@ def with_self(view: Points) -> Points:
     return pts
 
 
+def circle_of(points: Points) -> Circle:
+    """The smallest enclosing circle (`fatswarm.agent.geometry.sec`) of `points` taken in sorted
+    order, so that its rounding does not depend on the order of the view's rows."""
+    pts = np.asarray(points, dtype=np.float64)
+    return sec(pts[np.lexsort((pts[:, 1], pts[:, 0]))])
+
+
 def go_to(target: tuple[float, float], params: OblotParams) -> Path:
     """A straight move to `target` (the peer's `LinearPath`), or STAY when it is within
     `tolerance` of the origin (exactly the origin under the peer's rule, tolerance 0)."""
@@ -117,8 +125,10 @@ __all__ = [
     "PEER_EPSILON",
     "STAY",
     "TOLERANCE_SPEC",
+    "Circle",
     "OblotParams",
     "OblotRuleError",
+    "circle_of",
     "gathered",
     "go_to",
     "make_oblot_params",

@@ -13,13 +13,13 @@ import math
 from collections.abc import Mapping
 from typing import Final
 
-from fatswarm.agent.geometry import sec
 from fatswarm.agent.oblot_common import (
     PEER_EPSILON,
     STAY,
     TOLERANCE_SPEC,
     OblotParams,
     OblotRuleError,
+    circle_of,
     gathered,
     go_to,
     make_oblot_params,
@@ -28,7 +28,7 @@ from fatswarm.agent.oblot_common import (
     with_self,
 )
 from fatswarm.domain.path import Path, Point, Points
-from fatswarm.domain.seam import ParamSpec, ParamValue
+from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue
 
 # TODO(issue 27, the model branch's fatswarm.domain.assumptions.Assumptions): declare, at merge,
 #   assumptions = Assumptions(visibility=(Visibility.TRANSPARENT,), sight=(None,), frames=None,
@@ -196,6 +196,20 @@ def _leader(pts: list[Point], centre: Point, radius: float) -> int:
     return best_order[0]
 
 
+def _check_n(n: int) -> None:
+    """Rule 1 (`:21-26`): refuse n = 2 and odd n (OblotRuleError)."""
+    if n == 2:
+        raise OblotRuleError(
+            "gathering with multiplicity does not support 2 robots "
+            "(GatheringWithMultiplicity.java:21)"
+        )
+    if n % 2:
+        raise OblotRuleError(
+            f"gathering with multiplicity does not support an odd n = {n} "
+            "(GatheringWithMultiplicity.java:24)"
+        )
+
+
 def _pick_one(pts: list[Point]) -> Point:
     """The peer's "pick a random one" (`:78-79`, `:83`), which is robot 0 (robot 1 for robot 0
     itself): no anonymous robot can name it. Ours: the nearest other robot, then the smallest x,
@@ -230,20 +244,18 @@ class OblotGatheringMultiplicity:
     def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> OblotParams:
         return make_oblot_params(n, values)
 
+    def check_start(self, positions: Points, params: OblotParams) -> None:
+        """Refuse n = 2 and odd n before the run (rule 1: the peer throws at the first Look)."""
+        try:
+            _check_n(len(positions))
+        except OblotRuleError as exc:
+            raise AlgorithmParamsError(str(exc)) from None
+
     def compute(self, view: Points, params: OblotParams) -> Path:
         """The path of rules 1-10; raises OblotRuleError where the peer throws."""
         arr = with_self(view)
         n = len(arr)
-        if n == 2:
-            raise OblotRuleError(
-                "gathering with multiplicity does not support 2 robots "
-                "(GatheringWithMultiplicity.java:21)"
-            )
-        if n % 2:
-            raise OblotRuleError(
-                f"gathering with multiplicity does not support an odd n = {n} "
-                "(GatheringWithMultiplicity.java:24)"
-            )
+        _check_n(n)
         pts: list[Point] = [(float(x), float(y)) for x, y in arr]
         dense = _dense_target(pts)
         if dense is not None:
@@ -251,7 +263,7 @@ class OblotGatheringMultiplicity:
         cob = centre_of_biangularity(pts)
         if cob is not None:
             return go_to(cob, params)
-        circle = sec(arr)
+        circle = circle_of(arr)
         c, r = circle.center, circle.radius
         robot_at_c = any(same_point(p, c) for p in pts)
         leader = _leader(pts, c, r)

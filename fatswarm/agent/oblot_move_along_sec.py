@@ -10,14 +10,13 @@ from typing import Final
 
 import numpy as np
 
-from fatswarm.agent.geometry import sec
 from fatswarm.agent.oblot_common import (
     GOAL_REL,
     PEER_EPSILON,
     STAY,
     TOLERANCE_SPEC,
     OblotParams,
-    OblotRuleError,
+    circle_of,
     make_oblot_params,
     with_self,
 )
@@ -46,8 +45,8 @@ class OblotMoveAlongSEC:
     `clockwise = false` (`:19-23`).
 
     Where the peer is silent: a robot exactly at the circle's centre has no nearest point (the
-    peer divides by zero there, `Util/Circle.java:62`): ours refuses (OblotRuleError). All robots
-    at one point (radius 0): the peer's path has length 0; ours stays.
+    peer divides by zero there, `Util/Circle.java:62`, and its robot goes to NaN): ours stays, the
+    smallest rule. All robots at one point (radius 0): the peer's path has length 0; ours stays.
     """
 
     name: str = "oblot-move-along-sec"
@@ -56,14 +55,14 @@ class OblotMoveAlongSEC:
         "half a turn along it (never stays)"
     )
     parameters: tuple[ParamSpec, ...] = (TOLERANCE_SPEC,)
-    frames: tuple[str, ...] = ("y-axis", "chirality")  # TODO(model): ("both-axes", "chirality")
+    frames: tuple[str, ...] = ("chirality",)  # TODO(model): ("both-axes", "chirality")
 
     def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> OblotParams:
         return make_oblot_params(n, values)
 
     def compute(self, view: Points, params: OblotParams) -> Path:
         """A Line to the circle (none when on it), then an anticlockwise half turn."""
-        circle = sec(with_self(view))
+        circle = circle_of(with_self(view))
         cx, cy = circle.center
         r = circle.radius
         if not r > 0.0:
@@ -71,11 +70,8 @@ class OblotMoveAlongSEC:
         here = math.hypot(cx, cy)  # the robot's distance from the centre
         segments: list[Segment] = []
         if not (r * (1.0 - PEER_EPSILON) < here < r * (1.0 + PEER_EPSILON)):
-            if here == 0.0:
-                raise OblotRuleError(
-                    "the robot stands at the circle's centre: no nearest point on it "
-                    "(MoveAlongSEC.java:18, Circle.java:62)"
-                )
+            if here == 0.0:  # at the centre: no nearest point (the peer divides by zero)
+                return STAY
             f = r / here
             on_x, on_y = cx + (0.0 - cx) * f, cy + (0.0 - cy) * f
             if math.hypot(on_x, on_y) > params.tolerance:
@@ -88,7 +84,7 @@ class OblotMoveAlongSEC:
         pts = np.asarray(positions, dtype=np.float64)
         if len(pts) <= 1:
             return True
-        circle = sec(pts)
+        circle = circle_of(pts)
         cx, cy = circle.center
         off = np.abs(np.hypot(pts[:, 0] - cx, pts[:, 1] - cy) - circle.radius)
         return bool(float(off.max()) <= GOAL_REL * max(1.0, circle.radius))
@@ -98,7 +94,7 @@ class OblotMoveAlongSEC:
         pts = np.asarray(positions, dtype=np.float64)
         if len(pts) == 0:
             return {"off circle": 0.0}
-        circle = sec(pts)
+        circle = circle_of(pts)
         cx, cy = circle.center
         off = np.abs(np.hypot(pts[:, 0] - cx, pts[:, 1] - cy) - circle.radius)
         return {"off circle": float(off.max())}

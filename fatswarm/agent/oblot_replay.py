@@ -14,12 +14,13 @@ from __future__ import annotations
 
 import enum
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from fatswarm.agent.geometry import sec
 from fatswarm.agent.oblot_common import OblotParams
 from fatswarm.domain.path import Arc, Line, Path, Point, Points, end_point, point_at, segment_length
 from fatswarm.domain.seam import Algorithm
@@ -261,16 +262,89 @@ def _refusals(
     return failed
 
 
+@dataclass(frozen=True, slots=True)
+class Outcome:
+    """A free run: the first round after which the goal held (None: never), the rounds run, and
+    how it stopped: "goal", "cap" or "error" (with the refusal in `error`)."""
+
+    goal_round: int | None
+    rounds_run: int
+    stopped: str
+    error: str | None = None
+
+
+def peer_goal(peer: str, start: Points) -> Callable[[Points], bool]:
+    """The goal the peer's recorded runs were cut at (tests/data/oblot/README.md): every robot
+    within 1e-9 * max(1, the start's diameter) of robot 0; for MoveAlongSEC, every robot on the
+    smallest enclosing circle of the current positions within 1e-9 * max(1, its radius)."""
+    if peer == "MoveAlongSEC":
+
+        def on_circle(pos: Points) -> bool:
+            circle = sec(pos)
+            cx, cy = circle.center
+            off = np.abs(np.hypot(pos[:, 0] - cx, pos[:, 1] - cy) - circle.radius)
+            return bool(float(off.max()) <= 1e-9 * max(1.0, circle.radius))
+
+        return on_circle
+    diff = start[:, np.newaxis, :] - start[np.newaxis, :, :]
+    bound = 1e-9 * max(1.0, float(np.hypot(diff[..., 0], diff[..., 1]).max()))
+
+    def gathered(pos: Points) -> bool:
+        return bool(float(np.hypot(pos[:, 0] - pos[0, 0], pos[:, 1] - pos[0, 1]).max()) <= bound)
+
+    return gathered
+
+
+def simulate(
+    start: Points,
+    frames: Sequence[PeerFrame],
+    algorithm: Algorithm[Any],
+    goal: Callable[[Points], bool],
+    ssync: bool,
+    rigid: bool,
+    rng: np.random.Generator,
+    cap: int,
+    mover: Mover = Mover.FATSWARM,
+) -> Outcome:
+    """A free run of the port from `start` with draws of the peer's kind (not its draws): under
+    SSYNC a uniformly random subset of 1 to n - 1 robots a round (for n = 1, the robot), under
+    non-rigid moves one distance a round, uniform in [1, 5), for every active robot."""
+    pos = np.asarray(start, dtype=np.float64).copy()
+    n = len(pos)
+    params = OblotParams(n, 0.0)
+    for k in range(1, cap + 1):
+        if ssync and n > 1:
+            active = sorted(int(i) for i in rng.permutation(n)[: 1 + int(rng.integers(n - 1))])
+        else:
+            active = list(range(n))
+        budget = 0.0 if rigid else float(rng.uniform(1.0, 5.0))
+        new = pos.copy()
+        for i in active:
+            own = (float(pos[i, 0]), float(pos[i, 1]))
+            try:
+                local = algorithm.compute(view_of(pos, i, frames[i]), params)
+            except ValueError as exc:
+                return Outcome(None, k, "error", f"{type(exc).__name__}: {exc}")
+            new[i] = move(own, frames[i].path_to_global(local, own), rigid, budget, mover)
+        pos = new
+        if goal(pos):
+            return Outcome(k, k, "goal")
+    return Outcome(None, cap, "cap")
+
+
 __all__ = [
     "COMPARE_REL",
     "PEER_ALGORITHMS",
     "Mover",
+    "Outcome",
     "PeerCrash",
     "PeerFrame",
     "Replay",
     "RoundResult",
     "frames_of",
     "move",
+    "peer_goal",
     "replay",
+    "simulate",
     "view_of",
 ]
