@@ -19,10 +19,13 @@ from fatswarm.agent.oblot_common import (
 from fatswarm.domain.path import Path, Points
 from fatswarm.domain.seam import ParamSpec, ParamValue
 
-# TODO(issue 27, the model branch's fatswarm.domain.assumptions.Assumptions): declare, at merge,
-#   assumptions = Assumptions(visibility=(Visibility.TRANSPARENT,), sight=(None,), frames=None,
-#       noise=(0.0,), bodies=(Bodies.POINTS,), multiplicity=True, knows_n=False,
-#       schedulers=("fsync", "ssync"), movement=(Movement.RIGID, Movement.NON_RIGID))
+# TODO(merge, issue 27): with the model branch's fatswarm.domain.assumptions, delete `frames`
+# in the class below and declare the peer's model instead (docs/ports.md, "Assumptions"):
+#     assumptions: Assumptions = Assumptions(
+#         visibility=("transparent",), sight=(None,), frames=None, noise=(0.0,),
+#         bodies=("points",), multiplicity=True, knows_n=False,
+#         schedulers=("fsync", "ssync"), movement=("rigid", "non-rigid"),
+#     )
 # The peer's robots see every robot (`Simulator/Simulation.java:101`), one row per robot
 # (multiplicity), as points; the centre of gravity needs no agreement on axes (any frame).
 

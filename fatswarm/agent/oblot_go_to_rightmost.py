@@ -21,10 +21,13 @@ from fatswarm.agent.oblot_common import (
 from fatswarm.domain.path import Path, Points
 from fatswarm.domain.seam import ParamSpec, ParamValue
 
-# TODO(issue 27, the model branch's fatswarm.domain.assumptions.Assumptions): declare, at merge,
-#   assumptions = Assumptions(visibility=(Visibility.TRANSPARENT,), sight=(None,),
-#       frames=(Frames.BOTH_AXES,), noise=(0.0,), bodies=(Bodies.POINTS,), multiplicity=True,
-#       knows_n=False, schedulers=("fsync", "ssync"), movement=(Movement.RIGID, Movement.NON_RIGID))
+# TODO(merge, issue 27): with the model branch's fatswarm.domain.assumptions, delete `frames`
+# in the class below and declare the peer's model instead (docs/ports.md, "Assumptions"):
+#     assumptions: Assumptions = Assumptions(
+#         visibility=("transparent",), sight=(None,), frames=("both-axes",), noise=(0.0,),
+#         bodies=("points",), multiplicity=True, knows_n=False,
+#         schedulers=("fsync", "ssync"), movement=("rigid", "non-rigid"),
+#     )
 # "Rightmost" is the robot's own x: the robots gather only if they agree on the x axis, as the
 # peer's default frames do (one shared transformation, `Main.java:47-53`): both-axes.
 # Until `both-axes` exists in this branch the declaration below is the nearest existing word,

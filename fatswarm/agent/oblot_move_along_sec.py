@@ -27,11 +27,13 @@ HALF_TURN: Final = math.pi
 """The arc's sweep: anticlockwise in the robot's frame (`clockwise = false`,
 `algorithms/MoveAlongSEC.java:20`); the peer's world turns it the other way (docs/ports.md)."""
 
-# TODO(issue 27, the model branch's fatswarm.domain.assumptions.Assumptions): declare, at merge,
-#   assumptions = Assumptions(visibility=(Visibility.TRANSPARENT,), sight=(None,),
-#       frames=(Frames.BOTH_AXES, Frames.CHIRALITY), noise=(0.0,), bodies=(Bodies.POINTS,),
-#       multiplicity=True, knows_n=False, schedulers=("fsync", "ssync"),
-#       movement=(Movement.RIGID, Movement.NON_RIGID))
+# TODO(merge, issue 27): with the model branch's fatswarm.domain.assumptions, delete `frames`
+# in the class below and declare the peer's model instead (docs/ports.md, "Assumptions"):
+#     assumptions: Assumptions = Assumptions(
+#         visibility=("transparent",), sight=(None,), frames=("both-axes", "chirality"),
+#         noise=(0.0,), bodies=("points",), multiplicity=True, knows_n=False,
+#         schedulers=("fsync", "ssync"), movement=("rigid", "non-rigid"),
+#     )
 # The circle needs no agreement on axes; the arc's sense (anticlockwise) needs a common handedness.
 
 

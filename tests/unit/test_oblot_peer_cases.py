@@ -21,6 +21,7 @@ from fatswarm.agent.oblot_replay import (
     COMPARE_REL,
     PEER_ALGORITHMS,
     Mover,
+    PeerFrame,
     frames_of,
     move,
     replay,
@@ -297,3 +298,36 @@ def test_the_peer_view_holds_the_others_in_the_robots_frame() -> None:
     assert isinstance(line, Line)
     assert frame.to_global(line.end, own) == pytest.approx(centre_of_gravity(pos), abs=1e-12)
     assert len(with_self(view)) == 7
+
+
+def test_the_worlds_grid_alone_parts_gathering_multiplicity_from_the_peer() -> None:
+    """The runs the world cannot match (test_oblot_world.py, WORLD_DISAGREE) replayed here in the
+    peer's shared frame S, from S(start), both-axes robots: exact, they equal the peer; with every
+    position snapped to fatswarm's 2^-30 grid, they part at the world's round (a robot just put on
+    the circle is off it by up to 2^-31, and the peer's rules test 1e-13)."""
+    grid = 2.0**-30
+    port = load_algorithm("oblot-gathering-multiplicity")
+    same = PeerFrame(1.0, 0.0, False)
+    for name, first in (("n6-hexagon", 1), ("n16-random", 3), ("n32-random", 3)):
+        case = _case("GatheringWithMultiplicity", f"GatheringWithMultiplicity-{name}-FSYNC-rigid")
+        frame = frames_of(case)[0]
+        for snap in (False, True):
+            pos = np.asarray([frame.to_local((x, y), (0.0, 0.0)) for x, y in case["start"]])
+            if snap:
+                pos = np.round(pos / grid) * grid
+            parted = None
+            for rnd in case["rounds"]:
+                new = pos.copy()
+                for i in range(len(pos)):
+                    own = (float(pos[i, 0]), float(pos[i, 1]))
+                    try:
+                        local = port.compute(view_of(pos, i, same), OblotParams(len(pos), 0.0))
+                    except ValueError:
+                        continue
+                    new[i] = move(own, same.path_to_global(local, own), True, 0.0, Mover.FATSWARM)
+                pos = np.round(new / grid) * grid if snap else new
+                back = [frame.to_global((float(x), float(y)), (0.0, 0.0)) for x, y in pos]
+                if not np.allclose(back, rnd["positions"], rtol=0, atol=1e-8):
+                    parted = int(rnd["round"])
+                    break
+            assert parted == (first if snap else None), (name, snap)
