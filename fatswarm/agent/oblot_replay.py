@@ -22,7 +22,17 @@ import numpy as np
 
 from fatswarm.agent.geometry import sec
 from fatswarm.agent.oblot_common import OblotParams
-from fatswarm.domain.path import Arc, Line, Path, Point, Points, end_point, point_at, segment_length
+from fatswarm.domain.path import (
+    Arc,
+    Line,
+    Path,
+    Point,
+    Points,
+    end_point,
+    path_length,
+    point_at,
+    segment_length,
+)
 from fatswarm.domain.seam import Algorithm
 
 PEER_ALGORITHMS: dict[str, str] = {
@@ -166,24 +176,16 @@ def move(start: Point, path: Path, rigid: bool, budget: float, mover: Mover) -> 
 
 def _rigid_crash(paths: Sequence[tuple[Point, Path]]) -> bool:
     """The peer's rigid round ends when its longest path does (at least 1 unit of time), placing
-    that robot by interpolation at exactly its end, where a path with an arc runs off its array."""
-    lengths = [
-        (sum_len, any(isinstance(s, Arc) for s in path.segments))
-        for start, path in paths
-        for sum_len in [_length(start, path)]
-    ]
-    if not lengths:
+    that robot by interpolation at exactly its end, where a path with an arc runs off its array
+    (`RobotPaths/CombinedPath.java:60-67`, `Schedulers/SSyncScheduler.java:96`)."""
+    if not paths:
         return False
-    longest = max(length for length, _ in lengths)
-    return longest >= 1.0 and any(arc for length, arc in lengths if length == longest)
-
-
-def _length(start: Point, path: Path) -> float:
-    total, here = 0.0, start
-    for seg in path.segments:
-        total += segment_length(here, seg)
-        here = end_point(here, Path((seg,)))
-    return total
+    lengths = [path_length(start, path) for start, path in paths]
+    longest = max(lengths)
+    return longest >= 1.0 and any(
+        length == longest and any(isinstance(s, Arc) for s in path.segments)
+        for length, (_, path) in zip(lengths, paths, strict=True)
+    )
 
 
 def replay(
