@@ -152,7 +152,7 @@ def centre_of_biangularity(pts: list[Point]) -> Point | None:
 
 
 def _leader(pts: list[Point], centre: Point, radius: float) -> int:
-    """Rule 8 (`:98-144`): the index in `pts` of the leader: of all strings of angles (every start,
+    """Rule 5 (`:98-144`): the index in `pts` of the leader: of all strings of angles (every start,
     both senses), the lexicographically smallest, exact comparison (`:152-172`); in its order, the
     first robot not on the circle, else its first (`:135-143`).
 
@@ -222,18 +222,19 @@ def _pick_one(pts: list[Point]) -> Point:
 
 class OblotGatheringMultiplicity:
     """oblot-sim's proof-of-concept gathering for an even n > 2 with multiplicity detection
-    (`algorithms/GatheringWithMultiplicity.java:14-17`). Rules, in the order applied:
+    (`algorithms/GatheringWithMultiplicity.java:14-17`). Rules, in the order applied (numbered as
+    in docs/ports.md):
 
     1. n = 2 or odd n: refuse (`:21-26`).
     2. Some point holds more robots than any other: go there (`:29-38`; two such points: refuse).
     3. A centre of biangularity exists: go there (`:40-43`).
-    4-7. The smallest enclosing circle and its centre c (`:46-47`), whether a robot stands at c
+    4. The smallest enclosing circle and its centre c (`:46-47`), whether a robot stands at c
        (`:49`), the string of angles and whether it is mixed (some angle below 1e-13, `:52-60`),
        NI, the robots inside the circle by more than 1e-13 (`:63`).
-    8-9. Only the leader moves (`:66-67`).
-    10. The leader (`:70-87`): no robot at c, not mixed: out to the circle if NI > 1 (`:72-73`),
-        else to c (`:74-75`); no robot at c, mixed: to one robot (`:77-79`); a robot at c: to one
-        robot if not mixed (`:82-83`), to c if mixed (`:84-85`).
+    5. The leader, by the smallest string of angles (`:98-144`).
+    6. Only the leader moves (`:66-67`): no robot at c, not mixed: out to the circle if NI > 1
+       (`:72-73`), else to c (`:74-75`); no robot at c, mixed: to one robot (`:77-79`); a robot
+       at c: to one robot if not mixed (`:82-83`), to c if mixed (`:84-85`).
     """
 
     name: str = "oblot-gathering-multiplicity"
