@@ -24,7 +24,9 @@ from fatswarm.agent.oblot_replay import (
     PeerFrame,
     frames_of,
     move,
+    peer_goal,
     replay,
+    simulate,
     view_of,
 )
 from fatswarm.domain.path import Arc, Line
@@ -331,3 +333,28 @@ def test_the_worlds_grid_alone_parts_gathering_multiplicity_from_the_peer() -> N
                     parted = int(rnd["round"])
                     break
             assert parted == (first if snap else None), (name, snap)
+
+
+def test_free_runs_from_the_peers_table_match_its_fsync_rigid_counts() -> None:
+    """bench/bench_oblot.py's free runs (`simulate`) on the table's 140 starts: FSYNC with rigid
+    moves is the peer's very run, and GoToCoG and GoToRightMost reach the goal in the same round
+    as the peer in every one of them (round 1)."""
+    with open(DATA / "table.json", encoding="utf-8") as fh:
+        table = json.load(fh)
+    for peer in ("GoToCoG", "GoToRightMost"):
+        port = load_algorithm(PEER_ALGORITHMS[peer])
+        theirs = table["results"][peer]["FSYNC rigid"]
+        for st, want in zip(table["starts"], theirs, strict=True):
+            start = np.asarray(st["start"], dtype=np.float64)
+            frame = PeerFrame(float(st["frame"][0]), float(st["frame"][1]), bool(st["frame"][2]))
+            got = simulate(
+                start,
+                [frame] * len(start),
+                port,
+                peer_goal(peer, start),
+                False,
+                True,
+                np.random.default_rng(0),
+                5,
+            )
+            assert (got.stopped, got.goal_round) == (want["stopped"], want["goal_round"])
