@@ -25,6 +25,11 @@ BUILTIN = {
     "gathering": "fatswarm.agent.gathering:ALGORITHM",
     "uniform-circle-stepped": "fatswarm.agent.stepped:ALGORITHM",
     "uniform-circle-lights": "fatswarm.agent.luminous:ALGORITHM",
+    # oblot-sim's four algorithms, ported (docs/ports.md)
+    "oblot-go-to-cog": "fatswarm.agent.oblot_go_to_cog:ALGORITHM",
+    "oblot-go-to-rightmost": "fatswarm.agent.oblot_go_to_rightmost:ALGORITHM",
+    "oblot-gathering-multiplicity": "fatswarm.agent.oblot_gathering_multiplicity:ALGORITHM",
+    "oblot-move-along-sec": "fatswarm.agent.oblot_move_along_sec:ALGORITHM",
 }
 _NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
 

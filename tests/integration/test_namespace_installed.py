@@ -48,6 +48,13 @@ def test_the_installed_package_registers_its_algorithms_as_entry_points(tmp_path
     assert done.stdout.strip() == str(
         [
             ("gathering", "fatswarm.agent.gathering:ALGORITHM"),
+            (
+                "oblot-gathering-multiplicity",
+                "fatswarm.agent.oblot_gathering_multiplicity:ALGORITHM",
+            ),
+            ("oblot-go-to-cog", "fatswarm.agent.oblot_go_to_cog:ALGORITHM"),
+            ("oblot-go-to-rightmost", "fatswarm.agent.oblot_go_to_rightmost:ALGORITHM"),
+            ("oblot-move-along-sec", "fatswarm.agent.oblot_move_along_sec:ALGORITHM"),
             ("uniform-circle", "fatswarm.agent.uniform_circle:ALGORITHM"),
             ("uniform-circle-lights", "fatswarm.agent.luminous:ALGORITHM"),
             ("uniform-circle-stepped", "fatswarm.agent.stepped:ALGORITHM"),

@@ -1,0 +1,68 @@
+"""oblot-sim's `GoToCoG`, ported: every robot moves straight to the centre of gravity of all the
+positions it sees, its own included (docs/ports.md, "oblot-go-to-cog").
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Final
+
+from fatswarm.agent.oblot_common import (
+    TOLERANCE_SPEC,
+    OblotParams,
+    gathered,
+    go_to,
+    make_oblot_params,
+    spread,
+)
+from fatswarm.domain.path import Path, Points
+from fatswarm.domain.seam import ParamSpec, ParamValue
+
+# TODO(merge, issue 27): with the model branch's fatswarm.domain.assumptions, delete `frames`
+# in the class below and declare the peer's model instead (docs/ports.md, "Assumptions"):
+#     assumptions: Assumptions = Assumptions(
+#         visibility=("transparent",), sight=(None,), frames=None, noise=(0.0,),
+#         bodies=("points",), multiplicity=True, knows_n=False,
+#         schedulers=("fsync", "ssync"), movement=("rigid", "non-rigid"),
+#     )
+# The peer's robots see every robot (`Simulator/Simulation.java:101`), one row per robot
+# (multiplicity), as points; the centre of gravity needs no agreement on axes (any frame).
+
+
+class OblotGoToCoG:
+    """Rule 1: sum every position, the robot's own (the origin) included, and divide by n
+    (`algorithms/GoToCoG.java:13-17`). Rule 2: move straight there (`:17`).
+
+    The peer sums in robot-id order; a fatswarm robot's view has no order, so the sum is exact
+    (`math.fsum`) and the same for every order of the rows: it differs from the peer's by rounding.
+    """
+
+    name: str = "oblot-go-to-cog"
+    summary: str = (
+        "oblot-sim's GoToCoG: move to the centre of gravity of all n points (points, multiplicity)"
+    )
+    parameters: tuple[ParamSpec, ...] = (TOLERANCE_SPEC,)
+    frames: tuple[str, ...] = ("y-axis", "chirality", "disoriented")
+
+    def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> OblotParams:
+        return make_oblot_params(n, values)
+
+    def compute(self, view: Points, params: OblotParams) -> Path:
+        """A Line to the centre of gravity of the view and the origin, or STAY there."""
+        n = len(view) + 1  # the robot itself, at the origin, adds nothing to the sums
+        gx = math.fsum(view[:, 0].tolist()) / n if len(view) else 0.0
+        gy = math.fsum(view[:, 1].tolist()) / n if len(view) else 0.0
+        return go_to((gx, gy), params)
+
+    def goal(self, positions: Points, params: OblotParams) -> bool:
+        """Every robot at one point (within GOAL_REL of the largest coordinate)."""
+        return gathered(positions)
+
+    def figures(self, positions: Points, params: OblotParams) -> dict[str, float]:
+        return spread(positions)
+
+
+ALGORITHM: Final = OblotGoToCoG()
+
+__all__ = ["ALGORITHM", "OblotGoToCoG"]
