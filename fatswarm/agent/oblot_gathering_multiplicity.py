@@ -27,16 +27,11 @@ from fatswarm.agent.oblot_common import (
     spread,
     with_self,
 )
+from fatswarm.domain.assumptions import Assumptions, Movement
 from fatswarm.domain.path import Path, Point, Points
+from fatswarm.domain.robot_model import Bodies, Visibility
 from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue
 
-# TODO(merge, issue 27): with the model branch's fatswarm.domain.assumptions, delete `frames`
-# in the class below and declare the peer's model instead (docs/ports.md, "Assumptions"):
-#     assumptions: Assumptions = Assumptions(
-#         visibility=("transparent",), sight=(None,), frames=None, noise=(0.0,),
-#         bodies=("points",), multiplicity=True, knows_n=False,
-#         schedulers=("fsync", "ssync"), movement=("rigid", "non-rigid"),
-#     )
 # "multiplicity detection and infinite visibility for an even amount of robots > 2" (`:14-17`);
 # n is the view's length (`:21,24`); no rule needs axes the robots agree on (the leftmost point of
 # `:182` only starts a test whose outcome is geometric).
@@ -243,7 +238,17 @@ class OblotGatheringMultiplicity:
         "detection gather (dense point, centre of biangularity, leader by string of angles)"
     )
     parameters: tuple[ParamSpec, ...] = (TOLERANCE_SPEC,)
-    frames: tuple[str, ...] = ("y-axis", "chirality", "disoriented")
+    assumptions: Assumptions = Assumptions(
+        visibility=(Visibility.TRANSPARENT,),
+        sight=(None,),
+        frames=None,
+        noise=(0.0,),
+        bodies=(Bodies.POINTS,),
+        multiplicity=True,
+        knows_n=False,
+        schedulers=("fsync", "ssync"),
+        movement=(Movement.RIGID, Movement.NON_RIGID),
+    )
 
     def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> OblotParams:
         return make_oblot_params(n, values)

@@ -16,16 +16,11 @@ from fatswarm.agent.oblot_common import (
     make_oblot_params,
     spread,
 )
+from fatswarm.domain.assumptions import Assumptions, Movement
 from fatswarm.domain.path import Path, Points
+from fatswarm.domain.robot_model import Bodies, Visibility
 from fatswarm.domain.seam import ParamSpec, ParamValue
 
-# TODO(merge, issue 27): with the model branch's fatswarm.domain.assumptions, delete `frames`
-# in the class below and declare the peer's model instead (docs/ports.md, "Assumptions"):
-#     assumptions: Assumptions = Assumptions(
-#         visibility=("transparent",), sight=(None,), frames=None, noise=(0.0,),
-#         bodies=("points",), multiplicity=True, knows_n=False,
-#         schedulers=("fsync", "ssync"), movement=("rigid", "non-rigid"),
-#     )
 # The peer's robots see every robot (`Simulator/Simulation.java:101`), one row per robot
 # (multiplicity), as points; the centre of gravity needs no agreement on axes (any frame).
 
@@ -43,7 +38,17 @@ class OblotGoToCoG:
         "oblot-sim's GoToCoG: move to the centre of gravity of all n points (points, multiplicity)"
     )
     parameters: tuple[ParamSpec, ...] = (TOLERANCE_SPEC,)
-    frames: tuple[str, ...] = ("y-axis", "chirality", "disoriented")
+    assumptions: Assumptions = Assumptions(
+        visibility=(Visibility.TRANSPARENT,),
+        sight=(None,),
+        frames=None,
+        noise=(0.0,),
+        bodies=(Bodies.POINTS,),
+        multiplicity=True,
+        knows_n=False,
+        schedulers=("fsync", "ssync"),
+        movement=(Movement.RIGID, Movement.NON_RIGID),
+    )
 
     def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> OblotParams:
         return make_oblot_params(n, values)

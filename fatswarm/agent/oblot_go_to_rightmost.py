@@ -18,16 +18,11 @@ from fatswarm.agent.oblot_common import (
     make_oblot_params,
     spread,
 )
+from fatswarm.domain.assumptions import Assumptions, Movement
 from fatswarm.domain.path import Path, Points
+from fatswarm.domain.robot_model import Bodies, Frames, Visibility
 from fatswarm.domain.seam import ParamSpec, ParamValue
 
-# TODO(merge, issue 27): with the model branch's fatswarm.domain.assumptions, delete `frames`
-# in the class below and declare the peer's model instead (docs/ports.md, "Assumptions"):
-#     assumptions: Assumptions = Assumptions(
-#         visibility=("transparent",), sight=(None,), frames=("both-axes",), noise=(0.0,),
-#         bodies=("points",), multiplicity=True, knows_n=False,
-#         schedulers=("fsync", "ssync"), movement=("rigid", "non-rigid"),
-#     )
 # "Rightmost" is the robot's own x: the robots gather only if they agree on the x axis, as the
 # peer's default frames do (one shared transformation, `Main.java:47-53`): both-axes.
 # Until `both-axes` exists in this branch the declaration below is the nearest existing word,
@@ -48,7 +43,17 @@ class OblotGoToRightMost:
         "oblot-sim's GoToRightMost: move to the robot of largest x (needs frames that agree on x)"
     )
     parameters: tuple[ParamSpec, ...] = (TOLERANCE_SPEC,)
-    frames: tuple[str, ...] = ("y-axis",)  # TODO(model): ("both-axes",), see the note above
+    assumptions: Assumptions = Assumptions(
+        visibility=(Visibility.TRANSPARENT,),
+        sight=(None,),
+        frames=(Frames.BOTH_AXES,),
+        noise=(0.0,),
+        bodies=(Bodies.POINTS,),
+        multiplicity=True,
+        knows_n=False,
+        schedulers=("fsync", "ssync"),
+        movement=(Movement.RIGID, Movement.NON_RIGID),
+    )
 
     def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> OblotParams:
         return make_oblot_params(n, values)

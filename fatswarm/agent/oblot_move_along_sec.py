@@ -20,20 +20,15 @@ from fatswarm.agent.oblot_common import (
     make_oblot_params,
     with_self,
 )
+from fatswarm.domain.assumptions import Assumptions, Movement
 from fatswarm.domain.path import Arc, Line, Path, Points, Segment
+from fatswarm.domain.robot_model import Bodies, Frames, Visibility
 from fatswarm.domain.seam import ParamSpec, ParamValue
 
 HALF_TURN: Final = math.pi
 """The arc's sweep: anticlockwise in the robot's frame (`clockwise = false`,
 `algorithms/MoveAlongSEC.java:20`); the peer's world turns it the other way (docs/ports.md)."""
 
-# TODO(merge, issue 27): with the model branch's fatswarm.domain.assumptions, delete `frames`
-# in the class below and declare the peer's model instead (docs/ports.md, "Assumptions"):
-#     assumptions: Assumptions = Assumptions(
-#         visibility=("transparent",), sight=(None,), frames=("both-axes", "chirality"),
-#         noise=(0.0,), bodies=("points",), multiplicity=True, knows_n=False,
-#         schedulers=("fsync", "ssync"), movement=("rigid", "non-rigid"),
-#     )
 # The circle needs no agreement on axes; the arc's sense (anticlockwise) needs a common handedness.
 
 
@@ -57,7 +52,17 @@ class OblotMoveAlongSEC:
         "half a turn along it (never stays)"
     )
     parameters: tuple[ParamSpec, ...] = (TOLERANCE_SPEC,)
-    frames: tuple[str, ...] = ("chirality",)  # TODO(model): ("both-axes", "chirality")
+    assumptions: Assumptions = Assumptions(
+        visibility=(Visibility.TRANSPARENT,),
+        sight=(None,),
+        frames=(Frames.BOTH_AXES, Frames.CHIRALITY),
+        noise=(0.0,),
+        bodies=(Bodies.POINTS,),
+        multiplicity=True,
+        knows_n=False,
+        schedulers=("fsync", "ssync"),
+        movement=(Movement.RIGID, Movement.NON_RIGID),
+    )
 
     def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> OblotParams:
         return make_oblot_params(n, values)

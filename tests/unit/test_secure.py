@@ -238,11 +238,12 @@ def test_no_message_on_the_wire_carries_a_seed_or_a_frame() -> None:
     which the agents get on their command line only."""
     import dataclasses
 
+    from fatswarm.world import observers
     from fatswarm.world import protocol as world_wire
 
     messages = [
         c
-        for m in (world_wire,)
+        for m in (world_wire, observers)
         for c in vars(m).values()
         if isinstance(c, type) and dataclasses.is_dataclass(c) and c.__module__ == m.__name__
     ]
