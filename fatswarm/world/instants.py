@@ -60,6 +60,9 @@ class Instants:
         # robot -> (when, colour): a luminous robot's colour shows at the end of its Compute
         self._showing: dict[int, tuple[float, int]] = {}
         self._relit = False  # a colour changed since the last cycle line
+        # the end of the last cycle line that changed the configuration: a cycle whose Look came
+        # before it planned on the old one (its line is booked when its move ends, after it)
+        self._changed_at = -math.inf
 
     def reply_fields(self) -> dict[str, Any]:
         known, unset = self.clock.looks()
@@ -235,6 +238,7 @@ class Instants:
         # its move changed the configuration even when the line before is of the same instant
         moved = done.traveled > MOVE_TOLERANCE or self._relit or None
         self._relit = False
+        stale = done.look < self._changed_at
         try:  # the cycle is the record's even when the goal raises while it is booked
             w.tracker.observe(
                 [done.robot],
@@ -244,10 +248,13 @@ class Instants:
                 traveled,
                 len(done.collisions),
                 changed=moved,
+                stale=stale,
             )
         finally:
             w.emit(Committed(entry, w.tracker.snapshot()))
         self._last = done.positions
+        if moved:
+            self._changed_at = done.end
         w.positions = done.positions
         w.collisions_total += len(done.collisions)
         w.last_length[done.robot] = done.traveled
