@@ -17,6 +17,11 @@ GRID: Final = 2.0**-GRID_BITS
 """Every committed position is a multiple of GRID (about 9.3e-10). Differences of such numbers are
 exact while they stay below 2**(53 - GRID_BITS) = 2**23, so every robot's view is an exact
 translate (and mirror) of every other robot's view: all robots compute on the very same bits."""
+SNAP_DISTANCE: Final = 2.0 * GRID
+"""The most snapping both ends of a segment to the grid can change its length: each coordinate of
+the difference moves by at most GRID, so the length by at most sqrt(2) * GRID (about 1.3e-9),
+rounded up. A distance given exactly before the snap (a robot placed at exactly the sight
+distance V, a touching pair) is within this of it after."""
 MAX_COORD: Final = 2.0e6
 """Supported start coordinates: |x|, |y| <= MAX_COORD. With swarms of radius <= MAX_SPAN the run
 stays inside |x|, |y| < 2**22, where differences of grid values are exact (see GRID)."""
