@@ -158,6 +158,22 @@ def shown_beyond(value: float, limit: float) -> str:
     return repr(value)
 
 
+def shown_apart(value: float, limit: float) -> str:
+    """`value` with as few decimals (at least one) as keep it on its own side of `limit`: a
+    distance just below a bound never reads as the bound or above it ("1.99999989", not "2")."""
+    if not abs(value) < 1e9 or value == limit:
+        return repr(value)
+    for decimals in range(1, 17):
+        text = f"{value:.{decimals}f}"
+        if (float(text) < limit) == (value < limit) and float(text) != limit:
+            return text
+    return repr(value)
+
+
+OVERLAP_SHOWN: Final = f"2 - {OVERLAP_SLACK:g} = {OVERLAP_DISTANCE!r}"
+"""The overlap bound as a refusal names it."""
+
+
 def check_supported(positions: NDArray[np.float64], a: float) -> None:
     """Raise UnsupportedInputError unless the start, `a` and the run's reach are in the supported
     range.

@@ -154,7 +154,9 @@ def test_a_pair_collides_under_async_on_a_stale_view_and_the_run_ends_formed() -
     import fatswarm
 
     result = fatswarm.run(
-        positions=np.array([[0.0, 0.0], [2.5, 0.0]]), algorithm="gathering", scheduler="async",
+        positions=np.array([[0.0, 0.0], [2.5, 0.0]]),
+        algorithm="gathering",
+        scheduler="async",
         seed=1,
     )
     assert (result.collisions, result.status, result.rounds) == (1, "formed", 6)

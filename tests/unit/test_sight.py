@@ -357,7 +357,10 @@ def test_a_robot_placed_at_exactly_the_sight_distance_is_seen_after_the_snap(sig
         for reach, expected in ((sight, [1]), (sight + 1e-8, [])):
             for angle in angles:
                 pair = np.array(
-                    [centre, (centre[0] + reach * math.cos(angle), centre[1] + reach * math.sin(angle))]
+                    [
+                        centre,
+                        (centre[0] + reach * math.cos(angle), centre[1] + reach * math.sin(angle)),
+                    ]
                 )
                 for rule in RULES:
                     assert seen_list(snap(pair), 0, rule, sight) == expected, (centre, angle, rule)
