@@ -201,7 +201,8 @@ class Instants:
         return changed
 
     def _show_due(self) -> None:
-        """The colours whose Compute has ended by now show (a Look at that very time sees them)."""
+        """The colours whose Compute has ended by now show (a Look at that very time sees them,
+        unless it is of the instant at which that Compute began: docs/model.md, rule 7)."""
         due = {r: c for r, (t, c) in self._showing.items() if t <= self.clock.now}
         if due:
             self._relit |= self.books.looks.show(due, skip=self.books.stuck)
