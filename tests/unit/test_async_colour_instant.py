@@ -16,7 +16,7 @@ from fatswarm.deploy.engine.lockstep import run_lockstep
 from fatswarm.domain.adversary import STALE_STEP, make_async
 from fatswarm.domain.lights import Glance, Lit
 from fatswarm.domain.path import Path, Points
-from fatswarm.domain.seam import Configured, ParamValue
+from fatswarm.domain.seam import Configured, ParamSpec, ParamValue
 from fatswarm.world import instants, looks
 
 
@@ -30,7 +30,7 @@ class LightUp:
 
     name = "light-up"
     summary = "stay and show on (test)"
-    parameters = ()
+    parameters: tuple[ParamSpec, ...] = ()
     colours = ("off", "on")
     frames = ("y-axis", "chirality", "disoriented")
 
@@ -65,7 +65,7 @@ def test_a_look_reads_a_colour_from_the_instant_it_shows_but_not_a_simultaneous_
 
     def served(self: Any, positions: Points, robot: int, look_round: int) -> Any:
         seen = view(self, positions, robot, look_round)
-        read.append((clock[0].now, robot, sum(c == 1 for c in seen[1])))
+        read.append((clock[0].now, robot, sum(c == 1 for c in seen[1] or ())))
         return seen
 
     monkeypatch.setattr(instants.Instants, "__init__", keep)
