@@ -77,8 +77,12 @@ def centre_of_gravity(positions: Points) -> tuple[float, float]:
 class Gathering:
     """Go to the centre of gravity, never further than half the gap to the nearest neighbour.
 
-    No collision under any scheduler: robot k stays within step_k <= (d_kj - 2) / 2 of its start for
-    every j, so at every instant |p_i - p_j| >= d_ij - step_i - step_j >= d_ij - (d_ij - 2) = 2.
+    No collision under the round schedulers (fsync, ssync, centralized, scripted; rigid or not,
+    with exact views): the robots that move in a round all Looked at the same positions, robot k
+    stays within step_k <= (d_kj - 2) / 2 of its start for every j, so at every instant
+    |p_i - p_j| >= d_ij - step_i - step_j >= d_ij - (d_ij - 2) = 2. Not under async: a robot may
+    move on a view in which another has not started the step it already chose, and the bound no
+    longer holds ((0, 0) and (2.5, 0), async, seed 1; docs/algorithms.md, "gathering").
     The cap also means a robot touching a neighbour never moves again: the swarm can end as
     touching clumps rather than one (the goal is "nobody would move", not "one cluster").
     """

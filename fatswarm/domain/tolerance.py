@@ -17,6 +17,11 @@ GRID: Final = 2.0**-GRID_BITS
 """Every committed position is a multiple of GRID (about 9.3e-10). Differences of such numbers are
 exact while they stay below 2**(53 - GRID_BITS) = 2**23, so every robot's view is an exact
 translate (and mirror) of every other robot's view: all robots compute on the very same bits."""
+SNAP_DISTANCE: Final = 2.0 * GRID
+"""The most snapping both ends of a segment to the grid can change its length: each coordinate of
+the difference moves by at most GRID, so the length by at most sqrt(2) * GRID (about 1.3e-9),
+rounded up. A distance given exactly before the snap (a robot placed at exactly the sight
+distance V, a touching pair) is within this of it after."""
 MAX_COORD: Final = 2.0e6
 """Supported start coordinates: |x|, |y| <= MAX_COORD. With swarms of radius <= MAX_SPAN the run
 stays inside |x|, |y| < 2**22, where differences of grid values are exact (see GRID)."""
@@ -151,6 +156,22 @@ def shown_beyond(value: float, limit: float) -> str:
         if float(text) != limit:
             return text
     return repr(value)
+
+
+def shown_apart(value: float, limit: float) -> str:
+    """`value` with as few decimals (at least one) as keep it on its own side of `limit`: a
+    distance just below a bound never reads as the bound or above it ("1.99999989", not "2")."""
+    if not abs(value) < 1e9 or value == limit:
+        return repr(value)
+    for decimals in range(1, 17):
+        text = f"{value:.{decimals}f}"
+        if (float(text) < limit) == (value < limit) and float(text) != limit:
+            return text
+    return repr(value)
+
+
+OVERLAP_SHOWN: Final = f"2 - {OVERLAP_SLACK:g} = {OVERLAP_DISTANCE!r}"
+"""The overlap bound as a refusal names it."""
 
 
 def check_supported(positions: NDArray[np.float64], a: float) -> None:

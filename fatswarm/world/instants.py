@@ -63,6 +63,9 @@ class Instants:
         self._showing: dict[int, tuple[float, int]] = {}
         self._relit = False  # a colour changed since the last cycle line
         self._failing: dict[int, str] = {}  # robot -> why its compute raised, until its cycle ends
+        # the end of the last cycle line that changed the configuration: a cycle whose Look came
+        # before it planned on the old one (its line is booked when its move ends, after it)
+        self._changed_at = -math.inf
 
     def reply_fields(self) -> dict[str, Any]:
         known, unset = self.clock.looks()
@@ -204,7 +207,8 @@ class Instants:
         return changed
 
     def _show_due(self) -> None:
-        """The colours whose Compute has ended by now show (a Look at that very time sees them)."""
+        """The colours whose Compute has ended by now show (a Look at that very time sees them,
+        unless it is of the instant at which that Compute began: docs/model.md, rule 7)."""
         due = {r: c for r, (t, c) in self._showing.items() if t <= self.clock.now}
         if due:
             self._relit |= self.books.looks.show(due, skip=self.books.stuck)
@@ -243,6 +247,7 @@ class Instants:
         # its move changed the configuration even when the line before is of the same instant
         moved = done.traveled > MOVE_TOLERANCE or self._relit or None
         self._relit = False
+        stale = done.look < self._changed_at
         try:  # the cycle is the record's even when the goal raises while it is booked
             w.tracker.observe(
                 [done.robot],
@@ -253,10 +258,13 @@ class Instants:
                 len(done.collisions),
                 changed=moved,
                 line=entry.extra,
+                stale=stale,
             )
         finally:
             w.emit(Committed(entry, w.tracker.snapshot()))
         self._last = done.positions
+        if moved:
+            self._changed_at = done.end
         w.positions = done.positions
         w.collisions_total += len(done.collisions)
         w.last_length[done.robot] = done.traveled

@@ -19,7 +19,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from math import isfinite
 from numbers import Real
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 
@@ -38,7 +38,10 @@ from fatswarm.domain.tolerance import (
     GRID,
     MAX_COORD,
     OVERLAP_DISTANCE,
+    OVERLAP_SHOWN,
     OVERLAP_SLACK,
+    SNAP_DISTANCE,
+    shown_apart,
     snap,
     snap_point,
 )
@@ -145,8 +148,9 @@ def validate_configuration(positions: Points, *, bodies_are_points: bool = False
     Positions are snapped to the nearest multiples of GRID (moving each by at most 6.6e-10), so
     that every robot's view is exact (fatswarm/domain/tolerance.py). Refused: a wrong shape, no
     robot, NaN or infinite coordinates, coordinates beyond +-MAX_COORD, two centres closer than
-    2 - CONTACT_SLACK (overlapping unit discs) once on the grid, unless `bodies_are_points` (point
-    robots may share a point).
+    2 - CONTACT_SLACK (overlapping unit discs) as given and on the grid, unless `bodies_are_points`
+    (point robots may share a point). A pair given at least that far apart (touching) stays so
+    on the grid: `_keep_touching`.
     """
     points = _as_points(positions)
     far = float(np.abs(points).max())
@@ -155,17 +159,43 @@ def validate_configuration(positions: Points, *, bodies_are_points: bool = False
             f"coordinates must lie within +-{MAX_COORD:.0f} (where positions on the grid of "
             f"{GRID:.2g} stay exact), got {far:.6g}"
         )
-    points = snap(points)
     if bodies_are_points:
+        return snap(points)
+    return _keep_touching(points, snap(points))
+
+
+TOUCH_SCALE: Final = 2.0 * SNAP_DISTANCE / OVERLAP_DISTANCE
+"""The start's stretch that keeps every touching pair touching on the grid (`_keep_touching`): it
+adds at least 2 * SNAP_DISTANCE to a distance of the overlap bound, where the snap takes away at
+most SNAP_DISTANCE."""
+
+
+def _keep_touching(given: Points, points: Points) -> Points:
+    """`points` (`given` on the grid), unless the snap brought a pair below OVERLAP_DISTANCE: then,
+    if every pair was given at least that far apart (touching, docs/model.md), `given` stretched
+    by 1 + TOUCH_SCALE about its middle, on the grid. Only starts the snap alone would break are
+    stretched. Raises InvalidConfigurationError for a pair given closer (overlapping)."""
+    rows = np.arange(len(points), dtype=np.intp)
+    if _first_overlap(points, rows) is None:
         return points
-    pair = _first_overlap(points, np.arange(len(points), dtype=np.intp))
+    pair = _first_overlap(given, rows)
     if pair is not None:
         a, b, dist = pair
         raise InvalidConfigurationError(
-            f"robots {a} and {b} overlap: their centres are {dist:.9g} apart, closer than 2 "
-            "(unit discs); place every pair of robots at least 2 apart"
+            f"robots {a} and {b} overlap: their centres are {shown_apart(dist, OVERLAP_DISTANCE)} "
+            f"apart, closer than {OVERLAP_SHOWN} (unit discs may touch, not overlap); place every "
+            "pair of robots at least 2 apart"
         )
-    return points
+    mid = snap((given.max(axis=0) + given.min(axis=0)) / 2.0)
+    # about a grid point: the differences are small, exact enough, and snap back exactly
+    stretched = snap((given - mid) * (1.0 + TOUCH_SCALE)) + mid
+    pair = _first_overlap(stretched, rows)
+    if pair is not None:  # beyond the supported range: say so rather than break physics
+        raise InvalidConfigurationError(
+            f"robots {pair[0]} and {pair[1]} touch as given but not on the grid of 2^-30: place "
+            "them a little further apart (1e-8 is plenty)"
+        )
+    return stretched
 
 
 def _finite_number(value: Any) -> bool:

@@ -49,7 +49,8 @@ class ProgressTracker:
     A crashed robot (`crash`) counts as active and staying in every round.
 
     formed:  the algorithm's goal holds for the configuration and every robot has been active
-             since the configuration last changed, each time asking for an empty path;
+             since the configuration last changed, each time asking for an empty path (an async
+             line whose Look came before the last change, `stale`, counts for neither);
     stalled: every robot has been active since the last change, the configuration is unchanged
              and it is not formed (someone wants to move but cannot, or nobody wants to move);
     max_rounds: `max_rounds` rounds were committed without either of the above.
@@ -109,6 +110,7 @@ class ProgressTracker:
         collisions: int = 0,
         changed: bool | None = None,
         line: Mapping[str, Any] | None = None,
+        stale: bool = False,
     ) -> Status | None:
         """Account one committed round; returns the status (None while the run goes on).
 
@@ -118,7 +120,10 @@ class ProgressTracker:
         cycle whose move ended at the instant of the previous line moved all the same).
         `line`: the round line's other fields (`RoundEntry.extra`): its `failed` robots stayed
         without asking to (a run cannot be formed while one fails), and the figures derived
-        from the line (failures) count them.
+        from the line (failures) count them. `stale`:
+        the robots of this line Looked before the last change (an async cycle booked after a move
+        that ended while it computed or moved): they saw the old configuration, so they count
+        neither as having seen this one nor as wanting to move in it.
         """
         if self._status is not None:
             raise RuntimeError(f"the run already ended ({self._status}); no more rounds")
@@ -137,8 +142,9 @@ class ProgressTracker:
             self._seen_since_change = set()
             self._wanting_since_change = set()
         else:
-            self._seen_since_change |= active_set
-            self._wanting_since_change |= set(movers) | {int(r) for r in failed}
+            if not stale:
+                self._seen_since_change |= active_set
+                self._wanting_since_change |= set(movers) | {int(r) for r in failed}
             if len(self._seen_since_change) == self.n:
                 formed = not self._wanting_since_change and bool(self.goal(after_arr))
                 self._status = Status.FORMED if formed else Status.STALLED

@@ -51,15 +51,17 @@ from numpy.typing import NDArray
 
 from fatswarm.domain.path import Points
 from fatswarm.domain.robot_model import Visibility
-from fatswarm.domain.tolerance import CLEAR_SLACK, ROBOT_RADIUS
+from fatswarm.domain.tolerance import CLEAR_SLACK, ROBOT_RADIUS, SNAP_DISTANCE
 
 GRAZE_SLACK: Final = CLEAR_SLACK
 """A sight line passing within this of a disc's rim (outside or inside) is not blocked by it: the
 clearance slack of planned paths (a path may pass that close to a disc, so may a sight line), far
 above rounding, so that a line grazing a disc is clear whatever the frame's rounding."""
 SIGHT_REL: Final = 1e-12
-"""A robot is within sight V iff its centre distance is <= V * (1 + SIGHT_REL): a robot placed at
-distance exactly V is seen despite the rounding of the distance (about 1e-16 relative)."""
+"""A robot is within sight V iff its centre distance is <= V * (1 + SIGHT_REL) + SNAP_DISTANCE: a
+robot placed at distance exactly V is seen despite the rounding of the distance (about 1e-16
+relative) and the snap of both centres to the grid (up to sqrt(2) * 2^-30 absolute: 5.8e-11 of
+V = 10 was found beyond it)."""
 _PREFILTER_SLACK: Final = 1e-9
 """Cosine margin of the cheap angular prefilter, far above rounding: it only selects the pairs
 whose exact angles are then computed, so it must never drop a pair that truly overlaps."""
@@ -79,9 +81,10 @@ def seen(
 ) -> _Indices:
     """Indices (ascending, int64) of the robots other than `observer` that it sees.
 
-    `sight` None is unlimited; a robot at centre distance <= sight * (1 + SIGHT_REL) is within
-    sight (so one placed exactly at distance `sight` is seen). Bodies block whether within sight
-    or not. `points`: the robots are points (collinearity hides, see the module's docstring).
+    `sight` None is unlimited; a robot at centre distance <= `within_sight(sight)` is within
+    sight (so one placed exactly at distance `sight`, then snapped to the grid, is seen). Bodies
+    block whether within sight or not. `points`: the robots are points (collinearity hides, see
+    the module's docstring).
     """
     pts, how = _checked(positions, rule, sight)
     return _seen_one(pts, _checked_observer(observer, len(pts)), how, sight, points)
@@ -129,6 +132,11 @@ def _checked_observer(observer: int, n: int) -> int:
     return index
 
 
+def within_sight(sight: float) -> float:
+    """The largest centre distance at which a robot is within sight `sight` (see SIGHT_REL)."""
+    return sight * (1.0 + SIGHT_REL) + SNAP_DISTANCE
+
+
 def _seen_one(
     pts: _Floats, observer: int, rule: Visibility, sight: float | None, points: bool = False
 ) -> _Indices:
@@ -138,7 +146,7 @@ def _seen_one(
     dist[observer] = math.inf  # never a candidate nor a blocker (its own body is not an obstacle)
     within = np.isfinite(dist)
     if sight is not None:
-        within &= dist <= sight * (1.0 + SIGHT_REL)
+        within &= dist <= within_sight(sight)
     cand = np.flatnonzero(within).astype(np.int64)
     if rule is Visibility.TRANSPARENT or cand.size == 0:
         return cand

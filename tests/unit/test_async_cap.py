@@ -10,7 +10,12 @@ import pytest
 
 from fatswarm.deploy.engine.config import RunConfig
 from fatswarm.deploy.engine.estimate import estimate_lockstep
-from fatswarm.deploy.engine.lockstep import ASYNC_REACH_UNIT, default_max_rounds, run_reach
+from fatswarm.deploy.engine.lockstep import (
+    ASYNC_REACH_UNIT,
+    NON_RIGID_UNIT,
+    default_max_rounds,
+    run_reach,
+)
 
 
 @pytest.mark.parametrize("scheduler", ["fsync", "ssync", "centralized", "async", "async-slowest"])
@@ -45,3 +50,24 @@ def test_the_reach_is_the_larger_of_the_start_and_the_target_circle() -> None:
     wide = np.column_stack([300 * np.cos(angle), 300 * np.sin(angle)])
     assert run_reach(setup.params, wide) == pytest.approx(300.0)
     assert run_reach(setup.params, setup.initial) == pytest.approx(4.0)  # the target: a = 4, n = 6
+
+
+@pytest.mark.parametrize(
+    ("delta", "factor"), [(None, 1), (1.0, 1), (0.5, 1), (0.25, 2), (0.1, 5), (0.05, 10)]
+)
+@pytest.mark.parametrize("scheduler", ["async", "async-slowest"])
+def test_the_async_cap_grows_as_the_non_rigid_delta_shrinks(
+    scheduler: str, delta: float | None, factor: int
+) -> None:
+    # --non-rigid 0.05 runs were cut by the plain cap while still progressing (all formed with 5
+    # times it); from NON_RIGID_UNIT (0.5) up, caps and records stay as they were
+    assert NON_RIGID_UNIT == 0.5
+    assert default_max_rounds(8, scheduler, 0.0, delta) == 5760 * factor
+    assert default_max_rounds(8, scheduler, 100.0, delta) == 5760 * 3 * factor
+    setup = RunConfig(n=8, seed=1, scheduler=scheduler, non_rigid=delta).resolve()
+    assert setup.max_rounds == 5760 * factor
+
+
+@pytest.mark.parametrize("scheduler", ["fsync", "ssync", "centralized"])
+def test_the_round_caps_do_not_grow_with_the_non_rigid_delta(scheduler: str) -> None:
+    assert default_max_rounds(8, scheduler, 0.0, 0.05) == default_max_rounds(8, scheduler)

@@ -143,3 +143,21 @@ def test_the_registry_finds_it_by_name_and_parameters_parse_from_text() -> None:
     assert Configured.of(alg, 5).params == GatheringParams(None, 1e-3)
     with pytest.raises(AlgorithmParamsError, match="no parameter 'a'"):
         Configured.of(alg, 5, {"a": "4"})
+
+
+def test_a_pair_collides_under_async_on_a_stale_view_and_the_run_ends_formed() -> None:
+    # the counterexample to "no collision under any scheduler" (docs/algorithms.md, "gathering"):
+    # robot 0 Looks at t = 3.03 while robot 1, which Looked at 1.76, has not started its step yet
+    # (it starts at 3.04); robot 0 plans 0.125 toward a robot that will be 0.25 nearer, and its
+    # move is stopped at contact. Its cycle ends after robot 1's move did: that Look planned on
+    # the old configuration, so it does not decide the verdict, and the goal holds.
+    import fatswarm
+
+    result = fatswarm.run(
+        positions=np.array([[0.0, 0.0], [2.5, 0.0]]),
+        algorithm="gathering",
+        scheduler="async",
+        seed=1,
+    )
+    assert (result.collisions, result.status, result.rounds) == (1, "formed", 6)
+    assert np.array_equal(result.positions, [[0.25, 0.0], [2.25, 0.0]])

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from fatswarm.domain.path import Arc, Line, Path, PathFormatError, end_point, path_length, point_at
-from fatswarm.domain.tolerance import GRID
+from fatswarm.domain.tolerance import GRID, OVERLAP_DISTANCE, snap
 from fatswarm.world.physics import (
     CONTACT_SLACK,
     Collision,
@@ -360,3 +360,52 @@ def test_two_robots_bound_for_one_point_stop_at_contact_far_from_the_origin(offs
     assert {(c.robot, c.other) for c in out.collisions} == {(0, 1), (1, 0)}
     assert dist(out.positions, 0, 1) >= 2.0 - CONTACT_SLACK
     assert out.traveled[0] == pytest.approx(35.627426, abs=1e-6)
+
+
+def test_a_pair_given_at_the_overlap_bound_is_accepted_and_stays_touching_on_the_grid() -> None:
+    # docs/model.md: centres 2 - 1e-7 apart touch, which is allowed; the snap to the 2^-30 grid
+    # used to bring half of such pairs below the bound and refuse them ("1.9999999 apart")
+    rng = np.random.default_rng(0)
+    accepted = 0
+    for _ in range(1000):
+        centre, turn = rng.uniform(-1e4, 1e4, 2), rng.uniform(0.0, 2.0 * math.pi)
+        pair = np.array(
+            [centre, centre + OVERLAP_DISTANCE * np.array([math.cos(turn), math.sin(turn)])]
+        )
+        if math.dist(pair[0], pair[1]) < OVERLAP_DISTANCE:
+            continue  # the float sum fell an ulp short: not at the bound as given
+        on_grid = validate_configuration(pair)
+        assert np.array_equal(snap(on_grid), on_grid)
+        assert math.dist(on_grid[0], on_grid[1]) >= OVERLAP_DISTANCE
+        assert np.abs(on_grid - pair).max() <= 3 * GRID  # stretched by 1 + 1.9e-9 at most
+        accepted += 1
+    assert accepted > 400
+
+
+def test_a_touching_lattice_at_the_bound_stays_touching_on_the_grid() -> None:
+    def closest(points: np.ndarray) -> float:
+        gaps = np.hypot(*(points[:, None] - points[None]).transpose(2, 0, 1))
+        np.fill_diagonal(gaps, np.inf)
+        return float(gaps.min())
+
+    side = OVERLAP_DISTANCE + 1e-9  # above the float rounding of the lattice's coordinates
+    rows = [
+        (side * i + side / 2 * (j % 2), side * math.sqrt(3) / 2 * j)
+        for j in range(5)
+        for i in range(5)
+    ]
+    for offset in ((0.0, 0.0), (1234.5678, -98.7654321), (-7.3e5, 3.1e5)):
+        lattice = np.array(rows) + np.array(offset)
+        assert OVERLAP_DISTANCE <= closest(lattice) < OVERLAP_DISTANCE + 2e-9
+        on_grid = validate_configuration(lattice)
+        assert closest(on_grid) >= OVERLAP_DISTANCE
+        assert np.abs(on_grid - lattice).max() < 2e-8  # stretched by 1 + 1.9e-9 at most
+
+
+def test_an_overlap_refusal_shows_the_real_distance_and_the_real_bound() -> None:
+    # the bound is 2 - 1e-7, not 2, and a distance just below it must not read as 2 or as it
+    for gap, shown in ((1.9999998992, "1.999999899"), (1.99999989, "1.99999989"), (1.5, "1.5")):
+        with pytest.raises(InvalidConfigurationError) as info:
+            validate_configuration(np.array([[0.0, 0.0], [gap, 0.0]]))
+        message = str(info.value)
+        assert f"centres are {shown}" in message and "2 - 1e-07 = 1.9999999" in message, message

@@ -122,3 +122,13 @@ def test_a_crashed_robot_counts_as_seen_staying_until_it_recovers(uniform: None)
     u.recover([2])
     u.observe([0, 1], [], P0, P0)
     assert u.status is None  # waited for again
+
+
+def test_a_stale_line_counts_neither_as_seen_nor_as_wanting(uniform: None) -> None:
+    # an async cycle Looked before the last change and is booked after it (its blocked move ended
+    # later): its robot saw the old configuration, so it must Look again before the run can end
+    t = ProgressTracker(2, CIRCLE)
+    t.observe([1], [1], P0, P1, {1: 1.0})  # a change
+    assert t.observe([0], [0], P1, P1, {0: 0.0}, stale=True) is None  # not "stalled"
+    assert t.observe([1], [], P1, P1) is None
+    assert t.observe([0], [], P1, P1) == Status.FORMED

@@ -14,8 +14,8 @@ from numpy.typing import NDArray
 
 from fatswarm.domain.path import Points
 from fatswarm.domain.robot_model import Visibility
-from fatswarm.domain.tolerance import CLEAR_SLACK
-from fatswarm.world.sight import GRAZE_SLACK, seen, seen_all
+from fatswarm.domain.tolerance import CLEAR_SLACK, snap
+from fatswarm.world.sight import GRAZE_SLACK, seen, seen_all, within_sight
 
 Floats = NDArray[np.float64]
 
@@ -188,8 +188,9 @@ def test_centre_segment_grazing_within_slack() -> None:
 @pytest.mark.parametrize("rule", RULES)
 def test_sight_limit_includes_exact_distance(rule: Visibility) -> None:
     assert seen_list(pts((0, 0), (3, 4)), 0, rule, 5.0) == [1]
-    assert seen_list(pts((0, 0), (3, 4)), 0, rule, 5.0 - 1e-9) == []
-    assert seen_list(pts((0, 0), (5.0 + 1e-9, 0)), 0, rule, 5.0) == []
+    # beyond V by more than the grid snap's slack (SNAP_DISTANCE, about 1.9e-9): not seen
+    assert seen_list(pts((0, 0), (3, 4)), 0, rule, 5.0 - 1e-8) == []
+    assert seen_list(pts((0, 0), (5.0 + 1e-8, 0)), 0, rule, 5.0) == []
     for turn in np.linspace(0.0, 2 * math.pi, 97):
         far = (5.0 * math.cos(turn), 5.0 * math.sin(turn))
         assert seen_list(pts((1, -2), (1 + far[0], -2 + far[1])), 0, rule, 5.0) == [1]
@@ -343,4 +344,23 @@ def test_rules_nest_and_sight_only_filters(swarm: Points, sight: float) -> None:
         assert found[TRANSPARENT][o] == [k for k in range(len(swarm)) if k != o]
         for rule in RULES:
             limited = seen_list(swarm, o, rule, sight)
-            assert limited == [k for k in found[rule][o] if d[k] <= sight * (1 + 1e-12)]
+            assert limited == [k for k in found[rule][o] if d[k] <= within_sight(sight)]
+
+
+@pytest.mark.parametrize("sight", [2.0, 3.0, 6.0, 10.0, 37.3, 1000.0 / 3.0])
+def test_a_robot_placed_at_exactly_the_sight_distance_is_seen_after_the_snap(sight: float) -> None:
+    # the world snaps every start to the 2^-30 grid (`snap`): a robot put at exactly V from
+    # another can end up to sqrt(2) * 2^-30 further (5.8e-11 of V = 10 was found), and must still
+    # be seen; one put a hair (1e-8) beyond V must not be
+    angles = np.linspace(0.0, 2.0 * math.pi, 720, endpoint=False)
+    for centre in ((0.0, 0.0), (123.456789, -78.9012345), (-1.0e5 / 3.0, 2.0e4 / 7.0)):
+        for reach, expected in ((sight, [1]), (sight + 1e-8, [])):
+            for angle in angles:
+                pair = np.array(
+                    [
+                        centre,
+                        (centre[0] + reach * math.cos(angle), centre[1] + reach * math.sin(angle)),
+                    ]
+                )
+                for rule in RULES:
+                    assert seen_list(snap(pair), 0, rule, sight) == expected, (centre, angle, rule)

@@ -126,3 +126,17 @@ def test_bad_init_file_gives_one_line_error(tmp_path: Path, content: object, mes
 def test_missing_init_file_is_named(tmp_path: Path) -> None:
     with pytest.raises(InitFileError, match="cannot read init file"):
         load_init(str(tmp_path / "absent.json"))
+
+
+def test_an_init_file_pair_just_below_the_overlap_bound_is_refused_with_its_real_distance(
+    tmp_path: Path,
+) -> None:
+    # one float step closer than 2 - 1e-7 used to read "centres 2 apart, need >= 2"
+    from fatswarm.domain.tolerance import OVERLAP_DISTANCE
+
+    gap = float(np.nextafter(OVERLAP_DISTANCE, 0.0))
+    with pytest.raises(InitFileError) as info:
+        load_init(write(tmp_path, {"positions": [[0.0, 0.0], [gap, 0.0]]}))
+    assert "centres 1.9999998999999997 apart, need >= 2 - 1e-07 = 1.9999999" in str(info.value)
+    pts, _ = load_init(write(tmp_path, {"positions": [[0.0, 0.0], [OVERLAP_DISTANCE, 0.0]]}))
+    assert len(pts) == 2  # exactly at the bound: touching, allowed

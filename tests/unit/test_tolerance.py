@@ -19,6 +19,7 @@ from fatswarm.domain.tolerance import (
     UnsupportedInputError,
     check_supported,
     enclosing_circle,
+    shown_apart,
     shown_beyond,
     target_radius_of,
 )
@@ -95,3 +96,19 @@ def test_the_cli_refuses_a_run_that_would_leave_the_range_in_one_line(
         captured = capsys.readouterr()
         assert captured.out == "" and captured.err.count("\n") == 1, captured.err
         assert captured.err.startswith("fatswarm run: the run would reach ")
+
+
+@pytest.mark.parametrize(
+    ("value", "limit", "shown"),
+    [
+        (1.99999989, 1.9999999, "1.99999989"),
+        (1.9999998999999997, 1.9999999, "1.9999998999999997"),
+        (1.5, 1.9999999, "1.5"),
+        (2.00000001, 2.0, "2.00000001"),
+        (2.0, 2.0, "2.0"),
+    ],
+)
+def test_a_value_is_shown_on_its_own_side_of_the_limit(
+    value: float, limit: float, shown: str
+) -> None:
+    assert shown_apart(value, limit) == shown

@@ -137,7 +137,7 @@ def _add_model_arguments(p: argparse.ArgumentParser) -> None:
         help="stop after R rounds (default: 10 (n + 10) for fsync, 40 (n + 10) for "
         "ssync, 10 n (n + 10) otherwise; for the async models 40 n (n + 10) ended cycles, "
         "times ceil(reach / 40) when the radius of the start's or target circle, the reach, "
-        "exceeds 40)",
+        "exceeds 40, and times ceil(0.5 / DELTA) under --non-rigid DELTA below 0.5)",
     )
     p.add_argument(
         "--non-rigid",

@@ -132,7 +132,7 @@ class RunConfig:
         n = setting.n
         scheduler = make_scheduler(self.scheduler, n, self.seed, self.schedule, self.fairness)
         reach = run_reach(setting, initial) if self.scheduler in ASYNC_NAMES else 0.0
-        max_rounds = self.max_rounds or default_max_rounds(n, self.scheduler, reach)
+        max_rounds = self.max_rounds or default_max_rounds(n, self.scheduler, reach, self.non_rigid)
         check_crash(self.crash, n)
         check_lights(self.model, setting)
         settings = WorldSetup(

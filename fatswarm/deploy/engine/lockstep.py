@@ -56,6 +56,11 @@ STEP_SLACK: Final = 10
 ROUNDS_PER_STEP: Final = {"fsync": 10, "ssync": 40}  # others (centralized, scripted): 10 n
 CYCLES_PER_STEP_PER_ROBOT: Final = 40  # the async models: 40 n
 ASYNC_REACH_UNIT: Final = 40.0  # robot radii of reach the plain async cap covers (moves ~ 80)
+# A non-rigid adversary may stop a move after delta: a move then takes more cycles the smaller
+# delta is (up to L / delta for a move of length L). The async cap above was calibrated down to
+# delta = NON_RIGID_UNIT; below it, it grows by ceil(NON_RIGID_UNIT / delta) (at delta = 0.05 the
+# plain cap cut runs that were still progressing, and 5 times it let all of them form).
+NON_RIGID_UNIT: Final = 0.5
 LOCKSTEP_SWARM: Final = "lockstep"
 SHOWN_FAULTS: Final = 3  # moves the world refuses logged in full; the rest are counted
 
@@ -68,14 +73,19 @@ class HistoryMismatchError(ValueError):
     """Committed rounds to resume from that this run would not have produced."""
 
 
-def default_max_rounds(n: int, scheduler: str, reach: float = 0.0) -> int:
+def default_max_rounds(
+    n: int, scheduler: str, reach: float = 0.0, non_rigid: float | None = None
+) -> int:
     """A round cap far above what a correct run needs under `scheduler` (see ROUNDS_PER_STEP);
-    under an async model, in ended cycles, scaled by the run's `reach` (`run_reach`)."""
+    under an async model, in ended cycles, scaled by the run's `reach` (`run_reach`) and by a
+    non-rigid delta below NON_RIGID_UNIT (None: rigid moves)."""
     per_robot = CYCLES_PER_STEP_PER_ROBOT if scheduler in ASYNC_NAMES else 10
     per_step = ROUNDS_PER_STEP.get(scheduler, per_robot * max(1, n))
     cap = per_step * (n + STEP_SLACK)
     if scheduler in ASYNC_NAMES and reach > ASYNC_REACH_UNIT:
         cap *= math.ceil(reach / ASYNC_REACH_UNIT)
+    if scheduler in ASYNC_NAMES and non_rigid is not None and 0.0 < non_rigid < NON_RIGID_UNIT:
+        cap *= math.ceil(NON_RIGID_UNIT / non_rigid)
     return cap
 
 
@@ -90,13 +100,19 @@ def run_reach(setting: Configured, initial: Points) -> float:
     return max(radius, float(target))
 
 
-def _cap(max_rounds: int | None, setting: Configured, scheduler: str, initial: Points) -> int:
-    """`max_rounds`, or the default cap of the run (`default_max_rounds`, with its reach under
-    an async model)."""
+def _cap(
+    max_rounds: int | None,
+    setting: Configured,
+    scheduler: str,
+    initial: Points,
+    non_rigid: float | None = None,
+) -> int:
+    """`max_rounds`, or the default cap of the run (`default_max_rounds`, with its reach and
+    non-rigid delta under an async model)."""
     if max_rounds is not None:
         return max_rounds
     reach = run_reach(setting, initial) if scheduler in ASYNC_NAMES else 0.0
-    return default_max_rounds(len(initial), scheduler, reach)
+    return default_max_rounds(len(initial), scheduler, reach, non_rigid)
 
 
 RoundReport = Committed  # what `on_round` gets: the round's record line and the figures after it
@@ -180,7 +196,7 @@ def run_lockstep(
     n = len(positions)
     if n != setting.n:
         raise ValueError(f"the start has {n} robots but params say n={setting.n}")
-    cap = _cap(max_rounds, setting, scheduler.name, positions)
+    cap = _cap(max_rounds, setting, scheduler.name, positions, non_rigid)
     setup = (
         replace(settings, swarm=LOCKSTEP_SWARM, initial=positions, max_rounds=cap)
         if settings is not None

@@ -135,7 +135,9 @@ class Hunt:
         # to build its parser
         from fatswarm.deploy.engine.lockstep import default_max_rounds
 
-        return self.max_rounds if self.max_rounds is not None else default_max_rounds(n, model)
+        if self.max_rounds is not None:
+            return self.max_rounds
+        return default_max_rounds(n, model, non_rigid=self.non_rigid)
 
 
 @dataclass(frozen=True, slots=True)

@@ -25,7 +25,7 @@ import numpy as np
 from fatswarm.agent.geometry import target_radius
 from fatswarm.domain.draws import START_STREAM
 from fatswarm.domain.path import Points
-from fatswarm.domain.tolerance import CONTACT, snap
+from fatswarm.domain.tolerance import CONTACT, OVERLAP_DISTANCE, OVERLAP_SHOWN, shown_apart, snap
 from fatswarm.world.physics import CONTACT_SLACK
 
 KINDS: Final = ("clustered", "dense", "spread", "loose", "clumped")
@@ -300,7 +300,8 @@ def load_init(path: str, *, points: bool = False) -> tuple[Points, float | None]
     if bad is not None:
         i, j, dist = bad
         raise InitFileError(
-            f"init file {path}: robots {i} and {j} overlap (centres {dist:.6g} apart, need >= 2)"
+            f"init file {path}: robots {i} and {j} overlap (centres "
+            f"{shown_apart(dist, OVERLAP_DISTANCE)} apart, need >= {OVERLAP_SHOWN})"
         )
     if "a" not in data:
         return pts, None
