@@ -22,7 +22,7 @@ from fatswarm.world import instants, looks
 
 @dataclass(frozen=True, slots=True)
 class _Params:
-    n: int
+    n: int | None
 
 
 class LightUp:
@@ -34,7 +34,7 @@ class LightUp:
     colours = ("off", "on")
     frames = ("y-axis", "chirality", "disoriented")
 
-    def make_params(self, n: int, values: Mapping[str, ParamValue]) -> _Params:
+    def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> _Params:
         del values
         return _Params(n)
 
