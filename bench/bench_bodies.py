@@ -83,6 +83,7 @@ def measure(peer: str, entry: dict[str, Any], bodies: str, cap: int) -> dict[str
     start, factor = scaled_start(entry)
     goal = peer_goal(peer, start)
     head = {
+        "cap": cap,
         "peer": peer,
         "n": int(entry["n"]),
         "seed": int(entry["seed"]),
@@ -242,9 +243,10 @@ def fat_table(
     lines = [
         f"**{PEER_ALGORITHMS[peer]}**, points against fat bodies (FSYNC rigid, cap {cap})",
         "",
-        "| n | scale | points: goal | fat: goal | fat: ended | collisions / run | "
-        "runs with contact | first contact | final min_gap | spread / start | extra rounds |",
-        "|--:|---|---|---|---|--:|--:|--:|--:|--:|---|",
+        "| n | scale | points: goal | fat: goal | fat: ended | fat: rounds run | "
+        "collisions / run | runs with contact | first contact | final min_gap | spread / start "
+        "| extra rounds |",
+        "|--:|---|---|---|---|---|--:|--:|--:|--:|--:|---|",
     ]
     for n in sizes:
         pts = {r["seed"]: r for r in runs if r["n"] == n and r["bodies"] == "points"}
@@ -279,13 +281,14 @@ def fat_table(
             "–" if not extra else f"{statistics.median(extra):g} ({min(extra)}–{max(extra)})"
         )
         if lost:
-            extra_text += f"; goal lost in {lost}"
+            extra_text = ("" if not extra else extra_text + "; ") + f"goal lost in {lost}"
         firsts = [r["first_contact"] for r in fat.values() if r["first_contact"] is not None]
         lines.append(
             f"| {n} | {scale} "
             f"| {rounds_cell([r['goal_round'] for r in pts.values()], {})} "
             f"| {rounds_cell([r['goal_round'] for r in fat.values()], {})} "
             f"| {ended_text} "
+            f"| {_range([r['rounds'] for r in fat.values()])} "
             f"| {_med([r['collisions'] for r in fat.values()])} "
             f"| {sum(r['collisions'] > 0 for r in fat.values())}/{len(fat)} "
             f"| {_med(firsts)} "
@@ -294,6 +297,10 @@ def fat_table(
             f"| {extra_text} |"
         )
     return lines
+
+
+def _range(values: Sequence[int]) -> str:
+    return "–" if not values else f"{statistics.median(values):g} ({min(values)}–{max(values)})"
 
 
 def _gap(values: Sequence[float]) -> str:
@@ -336,11 +343,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=2, help="processes (1: none started)")
     parser.add_argument("--quick", action="store_true", help="n = 2, 4, 8 by 3 seeds")
     parser.add_argument("--json", type=Path, help="write every run's outcome here")
+    parser.add_argument("--from-json", type=Path, help="print the tables of a --json file, no run")
     args = parser.parse_args(argv)
     sizes = QUICK_SIZES if args.quick else tuple(int(s) for s in args.sizes.split(","))
     seeds = 3 if args.quick else args.seeds
     peers = args.algorithms.split(",")
     table = load_table()
+    if args.from_json:
+        saved = json.loads(args.from_json.read_text(encoding="utf-8"))
+        saved = [r for r in saved if r["n"] in sizes and r["seed"] < seeds and r["peer"] in peers]
+        print(tables(saved, table, peers, sizes, max(r.get("cap", args.cap) for r in saved)))
+        return 0
     chosen = [st for st in table["starts"] if st["n"] in sizes and st["seed"] < seeds]
     tasks = [(p, st, b, args.cap) for p in peers for st in chosen for b in BODIES]
     began = time.perf_counter()
