@@ -310,6 +310,19 @@ def _gap(values: Sequence[float]) -> str:
     return "0" if abs(med) < 1e-6 else f"{med:.3g}"
 
 
+def factors_table(runs: Sequence[dict[str, Any]], sizes: Sequence[int]) -> list[str]:
+    """The scale factor of every start (the same for every algorithm and both bodies)."""
+    lines = [
+        "The scale factor of each start (seed 0, 1, ...): its centres then are >= 2 apart.",
+        "",
+    ]
+    lines += ["| n | factor by seed |", "|--:|---|"]
+    for n in sizes:
+        by_seed = {r["seed"]: r["factor"] for r in runs if r["n"] == n}
+        lines.append(f"| {n} | " + ", ".join(f"{by_seed[s]:g}" for s in sorted(by_seed)) + " |")
+    return lines
+
+
 def tables(
     runs: Sequence[dict[str, Any]],
     table: dict[str, Any],
@@ -328,6 +341,7 @@ def tables(
         ]
         mine = [r for r in runs if r["peer"] == peer]
         out += [*points_table(peer, mine, peer_runs, sizes), ""]
+    out += [*factors_table(runs, sizes), ""]
     out += ["### Fat bodies against points, same starts", ""]
     for peer in peers:
         out += [*fat_table(peer, [r for r in runs if r["peer"] == peer], sizes, cap), ""]
