@@ -38,6 +38,10 @@ QUICK_SIZES = (2, 4, 8)
 SETTING = "FSYNC rigid"  # the peer's own run: every robot active, moves to the end
 DEFAULT_CAP = 40
 BODIES = ("points", "fat")
+SETTLED = 1e-6
+"""A round in which no centre shifts by more than this is a settled one: what is left is the
+world's grid (2^-30) creeping a robot blocked in contact by a step a round."""
+CREEP = 5  # a run that reaches the cap after this many settled rounds is stuck, creeping
 
 
 def load_table() -> dict[str, Any]:
@@ -90,15 +94,25 @@ def measure(peer: str, entry: dict[str, Any], bodies: str, cap: int) -> dict[str
         "bodies": bodies,
         "factor": factor,
     }
-    seen: dict[str, Any] = {"goal": None, "first_contact": None, "contact_rounds": 0}
+    seen: dict[str, Any] = {
+        "goal": None,
+        "first_contact": None,
+        "contact_rounds": 0,
+        "last_move": 0,
+        "before": start,
+    }
 
     def watch(report: Any) -> None:
         k = int(report.entry.round)
+        after = np.asarray(report.entry.positions, dtype=np.float64)
+        if float(np.hypot(*(after - seen["before"]).T).max()) > SETTLED:
+            seen["last_move"] = k
+        seen["before"] = after
         if report.entry.collisions:
             seen["contact_rounds"] += 1
             if seen["first_contact"] is None:
                 seen["first_contact"] = k
-        if seen["goal"] is None and goal(np.asarray(report.entry.positions, dtype=np.float64)):
+        if seen["goal"] is None and goal(after):
             seen["goal"] = k
 
     try:
@@ -115,7 +129,7 @@ def measure(peer: str, entry: dict[str, Any], bodies: str, cap: int) -> dict[str
         )
     except ValueError as exc:  # the port refuses the start (n = 2, odd n): no run
         return {**head, "goal_round": None, "status": "refused", "rounds": 0, "collisions": 0,
-                "contact_rounds": 0, "first_contact": None, "failures": 0,
+                "contact_rounds": 0, "first_contact": None, "last_move": 0, "failures": 0,
                 "final_min_gap": min_distance(start) - 2.0, "spread_ratio": 1.0,
                 "outside": None, "error": str(exc)}  # fmt: skip
     final = np.asarray(result.positions, dtype=np.float64)
@@ -127,6 +141,7 @@ def measure(peer: str, entry: dict[str, Any], bodies: str, cap: int) -> dict[str
         "collisions": int(result.collisions),
         "contact_rounds": seen["contact_rounds"],
         "first_contact": seen["first_contact"],
+        "last_move": seen["last_move"],
         "failures": int(fatswarm.summary(result).get("failures") or 0),
         "final_min_gap": min_distance(final) - 2.0,
         "spread_ratio": spread_of(final) / spread_of(start),
@@ -243,10 +258,10 @@ def fat_table(
     lines = [
         f"**{PEER_ALGORITHMS[peer]}**, points against fat bodies (FSYNC rigid, cap {cap})",
         "",
-        "| n | scale | points: goal | fat: goal | fat: ended | fat: rounds run | "
+        "| n | scale | points: goal | fat: goal | fat: ended | fat: rounds run | fat: last move | "
         "collisions / run | runs with contact | first contact | final min_gap | spread / start "
         "| extra rounds |",
-        "|--:|---|---|---|---|---|--:|--:|--:|--:|--:|---|",
+        "|--:|---|---|---|---|---|---|--:|--:|--:|--:|--:|---|",
     ]
     for n in sizes:
         pts = {r["seed"]: r for r in runs if r["n"] == n and r["bodies"] == "points"}
@@ -262,7 +277,14 @@ def fat_table(
             "stalled": sum(
                 r["goal_round"] is None and r["status"] == "stalled" for r in fat.values()
             ),
-            "cap": sum(r["status"] == "max_rounds" for r in fat.values()),
+            "cap, still moving": sum(
+                r["status"] == "max_rounds" and r["rounds"] - r["last_move"] < CREEP
+                for r in fat.values()
+            ),
+            "cap, creeping": sum(
+                r["status"] == "max_rounds" and r["rounds"] - r["last_move"] >= CREEP
+                for r in fat.values()
+            ),
             "refused": sum(r["status"] == "refused" for r in fat.values()),
             "formed": sum(r["status"] == "formed" for r in fat.values()),
         }
@@ -289,6 +311,7 @@ def fat_table(
             f"| {rounds_cell([r['goal_round'] for r in fat.values()], {})} "
             f"| {ended_text} "
             f"| {_range([r['rounds'] for r in fat.values()])} "
+            f"| {_range([r['last_move'] for r in fat.values()])} "
             f"| {_med([r['collisions'] for r in fat.values()])} "
             f"| {sum(r['collisions'] > 0 for r in fat.values())}/{len(fat)} "
             f"| {_med(firsts)} "
