@@ -29,15 +29,16 @@ from typing import Any
 import numpy as np
 
 import fatswarm
-from fatswarm.agent.oblot_replay import PEER_ALGORITHMS, PeerFrame, peer_goal
+from fatswarm.agent.oblot_replay import PEER_ALGORITHMS, Mover, PeerFrame, peer_goal, simulate
 from fatswarm.domain.path import Points
+from fatswarm.domain.registry import load_algorithm
 
 TABLE = Path(__file__).resolve().parents[1] / "tests" / "data" / "oblot" / "table.json"
 SIZES = (2, 4, 8, 16, 32, 64)
 QUICK_SIZES = (2, 4, 8)
 SETTING = "FSYNC rigid"  # the peer's own run: every robot active, moves to the end
 DEFAULT_CAP = 40
-BODIES = ("points", "fat")
+BODIES = ("points", "fat", "replay")  # replay: the port without the world, same start
 SETTLED = 1e-6
 """A round in which no centre shifts by more than this is a settled one: what is left is the
 world's grid (2^-30) creeping a robot blocked in contact by a step a round."""
@@ -150,8 +151,41 @@ def measure(peer: str, entry: dict[str, Any], bodies: str, cap: int) -> dict[str
     }
 
 
+def measure_replay(peer: str, entry: dict[str, Any], cap: int) -> dict[str, Any]:
+    """The port of `peer` from the same scaled start without the world
+    (`oblot_replay.simulate`: exact arithmetic, no grid, point robots, FSYNC rigid, the frame
+    the identity as the world's both-axes robots have): where it parts from the world's point
+    run, the world's grid (2^-30) decided."""
+    start, factor = scaled_start(entry)
+    n = len(start)
+    outcome = simulate(
+        start,
+        [PeerFrame(1.0, 0.0, False)] * n,
+        load_algorithm(PEER_ALGORITHMS[peer]),
+        peer_goal(peer, start),
+        False,
+        True,
+        np.random.default_rng(int(entry["seed"])),
+        cap,
+        Mover.FATSWARM,
+    )
+    return {
+        "cap": cap,
+        "peer": peer,
+        "n": n,
+        "seed": int(entry["seed"]),
+        "bodies": "replay",
+        "factor": factor,
+        "goal_round": outcome.goal_round,
+        "status": outcome.stopped,
+        "rounds": outcome.rounds_run,
+        "error": outcome.error,
+    }
+
+
 def _measure_task(task: tuple[str, dict[str, Any], str, int]) -> dict[str, Any]:
-    return measure(*task)
+    peer, entry, bodies, cap = task
+    return measure_replay(peer, entry, cap) if bodies == "replay" else measure(*task)
 
 
 def measure_all(
@@ -168,7 +202,7 @@ def measure_all(
             done = pool.imap(_measure_task, [tasks[i] for i in order], chunksize=1)
             out = list(_progress(done, len(tasks), began))
     else:
-        out = list(_progress((measure(*tasks[i]) for i in order), len(tasks), began))
+        out = list(_progress((_measure_task(tasks[i]) for i in order), len(tasks), began))
     back = [{}] * len(tasks)  # type: list[dict[str, Any]]
     for i, res in zip(order, out, strict=True):
         back[i] = res
@@ -219,8 +253,18 @@ def points_table(
         "| | " + " | ".join(f"n={n}" for n in sizes) + " |",
         "|---|" + "---|" * len(sizes),
     ]
-    ours, theirs = [], []
+    ours, theirs, free = [], [], []
     for n in sizes:
+        alone = [r for r in runs if r["n"] == n and r["bodies"] == "replay"]
+        free.append(
+            rounds_cell(
+                [r["goal_round"] for r in alone],
+                {
+                    "err": sum(r["status"] == "error" for r in alone),
+                    "cap": sum(r["status"] == "cap" for r in alone),
+                },
+            )
+        )
         mine = [r for r in runs if r["n"] == n and r["bodies"] == "points"]
         ours.append(
             rounds_cell(
@@ -247,6 +291,8 @@ def points_table(
             )
         )
     lines.append("| fatswarm (world) | " + " | ".join(ours) + " |")
+    if any(r["bodies"] == "replay" for r in runs):
+        lines.append("| fatswarm port, no world | " + " | ".join(free) + " |")
     lines.append("| oblot-sim | " + " | ".join(theirs) + " |")
     return lines
 
@@ -377,6 +423,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--sizes", default=",".join(map(str, SIZES)), help="n values of table.json")
     parser.add_argument("--seeds", type=int, default=20, help="the first k seeds of each n")
     parser.add_argument("--cap", type=int, default=DEFAULT_CAP, help="rounds at most per run")
+    parser.add_argument("--bodies", default=",".join(BODIES), help="points, fat, replay")
     parser.add_argument("--workers", type=int, default=2, help="processes (1: none started)")
     parser.add_argument("--quick", action="store_true", help="n = 2, 4, 8 by 3 seeds")
     parser.add_argument("--json", type=Path, help="write every run's outcome here")
@@ -392,7 +439,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(tables(saved, table, peers, sizes, max(r.get("cap", args.cap) for r in saved)))
         return 0
     chosen = [st for st in table["starts"] if st["n"] in sizes and st["seed"] < seeds]
-    tasks = [(p, st, b, args.cap) for p in peers for st in chosen for b in BODIES]
+    tasks = [(p, st, b, args.cap) for p in peers for st in chosen for b in args.bodies.split(",")]
     began = time.perf_counter()
     runs = measure_all(tasks, args.workers)
     print(tables(runs, table, peers, sizes, args.cap))

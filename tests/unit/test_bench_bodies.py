@@ -62,10 +62,10 @@ def test_the_tables_show_the_peer_beside_the_world_and_the_goal_fat_bodies_lose(
     bench: ModuleType, table: dict[str, Any]
 ) -> None:
     entry = _start(table, 2, 0)
-    runs = bench.measure_all(
-        [("GoToCoG", entry, "points", 10), ("GoToCoG", entry, "fat", 10)], workers=1
-    )
+    tasks = [("GoToCoG", entry, bodies, 10) for bodies in ("points", "fat", "replay")]
+    runs = bench.measure_all(tasks, workers=1)
     text = bench.tables(runs, table, ["GoToCoG"], [2], 10)
     assert "| fatswarm (world) | 1 (1–1) 1/1 |" in text
+    assert "| fatswarm port, no world | 1 (1–1) 1/1 |" in text
     assert "| oblot-sim | 1 (1–1) 1/1 |" in text
     assert "goal lost in 1" in text
