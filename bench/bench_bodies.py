@@ -1,10 +1,13 @@
 """What bodies cost: the four oblot-sim ports run through fatswarm's world (lock step, FSYNC, rigid,
 both-axes frames) from the peer's own starts, first as point robots beside the peer's count on the
-same starts, then the same starts with fat bodies (unit discs): goal, rounds, collisions, stalls.
+same starts (and beside the port alone, without the world: `--bodies replay`), then the same
+starts with fat bodies (unit discs): goal, rounds, collisions, stalls, the cap.
 
     python bench/bench_bodies.py                      # both tables of docs/results.md (2 workers)
     python bench/bench_bodies.py --quick              # n = 2, 4, 8 by 3 seeds, in seconds
     python bench/bench_bodies.py --json runs.json     # every run's outcome as well
+    python bench/bench_bodies.py --from-json runs.json    # the tables of saved runs, no run
+    python bench/bench_bodies.py --workers 1          # in this process (no process started)
 
 Starts: tests/data/oblot/table.json (uniform in [-10, 10]^2, one shared frame each), the ones of
 n = 2, 4, 8, 16, 32, 64 by 20 seeds. Each start is mapped into its shared frame S (a both-axes
