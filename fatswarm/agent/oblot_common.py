@@ -10,14 +10,37 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Final
 
 import numpy as np
 
 from fatswarm.agent.geometry import Circle, sec
+from fatswarm.domain.assumptions import Assumptions, Movement
 from fatswarm.domain.path import STAY, Line, Path, Points
+from fatswarm.domain.robot_model import Bodies, Frames, Visibility
 from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue
+
+# The model oblot-sim gives its algorithms (docs/ports.md, "Assumptions"): every robot seen
+# (`Simulator/Simulation.java:101`), as points, one row per robot (multiplicity), n not given (the
+# view's length), exact positions, FSYNC and SSYNC, rigid or not; frames are each algorithm's own.
+PEER_MODEL: Final = Assumptions(
+    visibility=(Visibility.TRANSPARENT,),
+    sight=(None,),
+    frames=None,
+    noise=(0.0,),
+    bodies=(Bodies.POINTS,),
+    multiplicity=True,
+    knows_n=False,
+    schedulers=("fsync", "ssync"),
+    movement=(Movement.RIGID, Movement.NON_RIGID),
+)
+
+
+def peer_assumptions(frames: tuple[Frames, ...] | None) -> Assumptions:
+    """PEER_MODEL with what one algorithm needs of the peer's frames (None: any)."""
+    return replace(PEER_MODEL, frames=frames)
+
 
 PEER_EPSILON: Final = 1e-13
 """The peer's one tolerance (`Util/Config.java:30`): absolute for points, angles and the count

@@ -23,13 +23,13 @@ from fatswarm.agent.oblot_common import (
     gathered,
     go_to,
     make_oblot_params,
+    peer_assumptions,
     same_point,
     spread,
     with_self,
 )
-from fatswarm.domain.assumptions import Assumptions, Movement
+from fatswarm.domain.assumptions import Assumptions
 from fatswarm.domain.path import Path, Point, Points
-from fatswarm.domain.robot_model import Bodies, Visibility
 from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue
 
 # "multiplicity detection and infinite visibility for an even amount of robots > 2" (`:14-17`);
@@ -238,17 +238,7 @@ class OblotGatheringMultiplicity:
         "detection gather (dense point, centre of biangularity, leader by string of angles)"
     )
     parameters: tuple[ParamSpec, ...] = (TOLERANCE_SPEC,)
-    assumptions: Assumptions = Assumptions(
-        visibility=(Visibility.TRANSPARENT,),
-        sight=(None,),
-        frames=None,
-        noise=(0.0,),
-        bodies=(Bodies.POINTS,),
-        multiplicity=True,
-        knows_n=False,
-        schedulers=("fsync", "ssync"),
-        movement=(Movement.RIGID, Movement.NON_RIGID),
-    )
+    assumptions: Assumptions = peer_assumptions(None)
 
     def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> OblotParams:
         return make_oblot_params(n, values)

@@ -14,11 +14,11 @@ from fatswarm.agent.oblot_common import (
     gathered,
     go_to,
     make_oblot_params,
+    peer_assumptions,
     spread,
 )
-from fatswarm.domain.assumptions import Assumptions, Movement
+from fatswarm.domain.assumptions import Assumptions
 from fatswarm.domain.path import Path, Points
-from fatswarm.domain.robot_model import Bodies, Visibility
 from fatswarm.domain.seam import ParamSpec, ParamValue
 
 # The peer's robots see every robot (`Simulator/Simulation.java:101`), one row per robot
@@ -38,17 +38,7 @@ class OblotGoToCoG:
         "oblot-sim's GoToCoG: move to the centre of gravity of all n points (points, multiplicity)"
     )
     parameters: tuple[ParamSpec, ...] = (TOLERANCE_SPEC,)
-    assumptions: Assumptions = Assumptions(
-        visibility=(Visibility.TRANSPARENT,),
-        sight=(None,),
-        frames=None,
-        noise=(0.0,),
-        bodies=(Bodies.POINTS,),
-        multiplicity=True,
-        knows_n=False,
-        schedulers=("fsync", "ssync"),
-        movement=(Movement.RIGID, Movement.NON_RIGID),
-    )
+    assumptions: Assumptions = peer_assumptions(None)
 
     def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> OblotParams:
         return make_oblot_params(n, values)

@@ -16,11 +16,12 @@ from fatswarm.agent.oblot_common import (
     gathered,
     go_to,
     make_oblot_params,
+    peer_assumptions,
     spread,
 )
-from fatswarm.domain.assumptions import Assumptions, Movement
+from fatswarm.domain.assumptions import Assumptions
 from fatswarm.domain.path import Path, Points
-from fatswarm.domain.robot_model import Bodies, Frames, Visibility
+from fatswarm.domain.robot_model import Frames
 from fatswarm.domain.seam import ParamSpec, ParamValue
 
 # "Rightmost" is the robot's own x: the robots gather only if they agree on the x axis, as the
@@ -43,17 +44,7 @@ class OblotGoToRightMost:
         "oblot-sim's GoToRightMost: move to the robot of largest x (needs frames that agree on x)"
     )
     parameters: tuple[ParamSpec, ...] = (TOLERANCE_SPEC,)
-    assumptions: Assumptions = Assumptions(
-        visibility=(Visibility.TRANSPARENT,),
-        sight=(None,),
-        frames=(Frames.BOTH_AXES,),
-        noise=(0.0,),
-        bodies=(Bodies.POINTS,),
-        multiplicity=True,
-        knows_n=False,
-        schedulers=("fsync", "ssync"),
-        movement=(Movement.RIGID, Movement.NON_RIGID),
-    )
+    assumptions: Assumptions = peer_assumptions((Frames.BOTH_AXES,))
 
     def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> OblotParams:
         return make_oblot_params(n, values)

@@ -18,11 +18,12 @@ from fatswarm.agent.oblot_common import (
     OblotParams,
     circle_of,
     make_oblot_params,
+    peer_assumptions,
     with_self,
 )
-from fatswarm.domain.assumptions import Assumptions, Movement
+from fatswarm.domain.assumptions import Assumptions
 from fatswarm.domain.path import Arc, Line, Path, Points, Segment
-from fatswarm.domain.robot_model import Bodies, Frames, Visibility
+from fatswarm.domain.robot_model import Frames
 from fatswarm.domain.seam import ParamSpec, ParamValue
 
 HALF_TURN: Final = math.pi
@@ -52,17 +53,7 @@ class OblotMoveAlongSEC:
         "half a turn along it (never stays)"
     )
     parameters: tuple[ParamSpec, ...] = (TOLERANCE_SPEC,)
-    assumptions: Assumptions = Assumptions(
-        visibility=(Visibility.TRANSPARENT,),
-        sight=(None,),
-        frames=(Frames.BOTH_AXES, Frames.CHIRALITY),
-        noise=(0.0,),
-        bodies=(Bodies.POINTS,),
-        multiplicity=True,
-        knows_n=False,
-        schedulers=("fsync", "ssync"),
-        movement=(Movement.RIGID, Movement.NON_RIGID),
-    )
+    assumptions: Assumptions = peer_assumptions((Frames.BOTH_AXES, Frames.CHIRALITY))
 
     def make_params(self, n: int | None, values: Mapping[str, ParamValue]) -> OblotParams:
         return make_oblot_params(n, values)
