@@ -14,6 +14,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
+from fatswarm.agent.params import check_count, check_tolerance
 from fatswarm.domain.assumptions import Assumptions
 from fatswarm.domain.path import STAY, Line, Path, Points
 from fatswarm.domain.robot_model import Bodies, Visibility
@@ -35,17 +36,8 @@ class GatheringParams:
     tolerance: float = DEFAULT_TOLERANCE
 
     def __post_init__(self) -> None:
-        if self.n is not None and (
-            isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1
-        ):
-            raise AlgorithmParamsError(f"n must be a whole number >= 1, got {self.n!r}")
-        tol = self.tolerance
-        if (
-            isinstance(tol, bool)
-            or not isinstance(tol, (int, float))
-            or not (math.isfinite(tol) and tol > 0.0)
-        ):
-            raise AlgorithmParamsError(f"tolerance must be finite and > 0, got {tol!r}")
+        check_count(self.n)
+        check_tolerance(self.tolerance, zero_ok=False)
 
 
 def _steps(to_centre: Points, nearest: Values) -> Values:

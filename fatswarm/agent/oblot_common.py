@@ -16,6 +16,7 @@ from typing import Final
 import numpy as np
 
 from fatswarm.agent.geometry import Circle, sec
+from fatswarm.agent.params import check_count, check_tolerance
 from fatswarm.domain.assumptions import Assumptions, Movement
 from fatswarm.domain.path import STAY, Line, Path, Points
 from fatswarm.domain.robot_model import Bodies, Frames, Visibility
@@ -72,17 +73,8 @@ class OblotParams:
     tolerance: float = 0.0
 
     def __post_init__(self) -> None:
-        if self.n is not None and (
-            isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1
-        ):
-            raise AlgorithmParamsError(f"n must be a whole number >= 1, got {self.n!r}")
-        tol = self.tolerance
-        if (
-            isinstance(tol, bool)
-            or not isinstance(tol, (int, float))
-            or not (math.isfinite(tol) and tol >= 0.0)
-        ):
-            raise AlgorithmParamsError(f"tolerance must be finite and >= 0, got {tol!r}")
+        check_count(self.n)
+        check_tolerance(self.tolerance, zero_ok=True)
 
 
 def make_oblot_params(n: int | None, values: Mapping[str, ParamValue]) -> OblotParams:

@@ -14,6 +14,23 @@ class ParamsError(AlgorithmParamsError):
     """n or a is outside what the algorithm accepts."""
 
 
+def check_count(n: object, error: type[AlgorithmParamsError] = AlgorithmParamsError) -> None:
+    """Refuse an n that is not a whole number >= 1 (`error`, one line); None (not given) passes."""
+    if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 1):
+        raise error(f"n must be a whole number >= 1, got {n!r}")
+
+
+def check_tolerance(tol: object, *, zero_ok: bool) -> None:
+    """Refuse a tolerance that is not a finite number > 0 (>= 0 with `zero_ok`)."""
+    if (
+        isinstance(tol, bool)
+        or not isinstance(tol, (int, float))
+        or not (math.isfinite(tol) and (tol >= 0.0 if zero_ok else tol > 0.0))
+    ):
+        bound = ">= 0" if zero_ok else "> 0"
+        raise AlgorithmParamsError(f"tolerance must be finite and {bound}, got {tol!r}")
+
+
 @dataclass(frozen=True, slots=True)
 class Params:
     """The algorithm's inputs besides the snapshot: n robots, polygon side at least a."""
@@ -22,8 +39,9 @@ class Params:
     a: float = 4.0
 
     def __post_init__(self) -> None:
-        if isinstance(self.n, bool) or not isinstance(self.n, int) or self.n < 1:
-            raise ParamsError(f"n must be a whole number >= 1, got {self.n!r}")
+        if self.n is None:
+            raise ParamsError("n must be a whole number >= 1, got None")
+        check_count(self.n, ParamsError)
         if not isinstance(self.a, (int, float)) or not math.isfinite(self.a):
             raise ParamsError(f"a must be a finite number, got {self.a!r}")
         if self.a <= MIN_SIDE:
