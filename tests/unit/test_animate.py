@@ -187,7 +187,9 @@ def test_video_flags_with_a_still_picture_are_refused(
 ) -> None:
     assert run_plot(SMALL, tmp_path / "x.svg", "--fps", "10", "--rounds", "1..2") == 2
     err = capsys.readouterr().err
-    assert err == "fatswarm plot: --fps and --rounds only apply to a video: write OUT.gif or OUT.mp4\n"
+    assert (
+        err == "fatswarm plot: --fps and --rounds only apply to a video: write OUT.gif or OUT.mp4\n"
+    )
 
 
 def test_an_mp4_without_ffmpeg_says_what_to_install(

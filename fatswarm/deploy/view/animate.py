@@ -63,13 +63,14 @@ class Words:
     rounds: str
     max_frames: str
     assign: str  # between a name and its value: " " for a flag, "=" for a keyword
+    still: str  # what draws one instant
 
     def given(self, name: str, value: object) -> str:
         """`--speed 34` or `speed=34`."""
         return f"{getattr(self, name)}{self.assign}{value}"
 
 
-FLAGS: Final = Words("--fps", "--speed", "--rounds", "--max-frames", " ")
+FLAGS: Final = Words("--fps", "--speed", "--rounds", "--max-frames", " ", "a picture, OUT.png")
 
 
 def parse_rounds(text: str, count: int) -> tuple[int, int]:
@@ -310,7 +311,7 @@ def plan_video(
         f"over {words.given('max_frames', f'{max_frames:,}')}"
     )
     if max_frames == 1:  # one frame is one instant, whatever the speed
-        return f"{over}: one frame shows one instant (a picture: OUT.png); allow 2 or more"
+        return f"{over}: one frame shows one instant ({words.still}); allow 2 or more"
     need = math.ceil((clip.t1 - clip.t0) * fps / (max_frames - 1))
     return (
         f"{over}: pass {words.given('speed', need)} or more, fewer {words.rounds} A..B, a lower "
