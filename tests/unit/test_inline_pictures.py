@@ -8,14 +8,15 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
+import re
 from typing import Any
 
 import numpy as np
 import pytest
 
 from fatswarm.deploy.engine.api import RunRecord, read_record, run
-from fatswarm.deploy.view import inline, plot
-from fatswarm.deploy.view.animate import plan_clip
+from fatswarm.deploy.view import inline, plot, replay
+from fatswarm.deploy.view.animate import clip_line, plan_clip
 from fatswarm.deploy.view.inline import InlineVideo, PictureError
 from fatswarm.deploy.view.lights import Focus, focus_per_round, look_scene
 from fatswarm.deploy.view.scene import Scene, Trails, still_clip
@@ -107,6 +108,16 @@ def test_one_frame_is_never_told_to_pass_speed_0(
     assert run_plot(SMALL, tmp_path / "run.gif", "--max-frames", "1") == 2
     err = capsys.readouterr().err
     assert "--speed 0" not in err and "one frame shows one instant (a picture, OUT.png)" in err
+
+
+def test_the_clip_line_counts_one_round_in_the_singular() -> None:
+    timeline = Timeline(read_record(SMALL))
+    line = clip_line(plan_clip(timeline, None, 4, 1.0), False, "run.gif")
+    assert line.endswith("(3.2 s of video at 4 fps, 1 round per second) to run.gif")
+    assert "2 rounds per second" in clip_line(plan_clip(timeline, None, 4, 2.0), False, "x.gif")
+    assert "1 unit of virtual time per second" in clip_line(
+        plan_clip(timeline, None, 4, 1.0), True, "x.gif"
+    )
 
 
 # --- figure() and look_figure(): Figures to restyle ---------------------------------------------
@@ -237,17 +248,26 @@ def test_a_chosen_robot_is_ringed_and_what_it_did_not_see_is_pale(failing: str) 
     assert scene.discs.get_linewidths()[2] > scene.discs.get_linewidths()[0]
     faces = [to_hex(c) for c in scene.discs.get_facecolor()]
     assert faces[4] == "#e8e8e8" and faces[0] != "#e8e8e8"
-    assert "robot 2: saw 4: 0 1 3 5; compute failed: ViewError" in scene.clock.get_text()
+    assert "robot 2: failed; saw 4: 0 1 3 5" in scene.clock.get_text()
 
 
 def test_focus_says_a_failed_compute(failing: str) -> None:
     record = read_record(failing)
     focus = focus_per_round(record, 2)[2]  # round 2
     assert focus.failed == "ViewError: the view holds 4 robots, expected n-1 = 5"
-    assert focus.line() == f"saw 4: 0 1 3 5; compute failed: {focus.failed}"
-    assert (
-        Focus(1, recorded=False, failed="E: x").line() == "views not recorded; compute failed: E: x"
-    )
+    assert focus.line() == "failed; saw 4: 0 1 3 5"
+    assert Focus(1, recorded=False, failed="E: x").line() == "failed; views not recorded"
+    assert focus_per_round(record, 2)[1].line() == "did not Look this round"
+
+
+def test_replay_of_a_robot_says_its_compute_failed(
+    failing: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    p = argparse.ArgumentParser()
+    replay.add_arguments(p)
+    argv = [failing, "--no-play", "--round", "2", "--robot", "2"]
+    assert replay.main(p.parse_args(argv)) == 0
+    assert re.search(r"robot 2 +failed; saw 4: 0 1 3 5", capsys.readouterr().out)
 
 
 def test_an_async_look_says_cycle(tmp_path: pathlib.Path) -> None:

@@ -108,7 +108,10 @@ def plan_clip(
 
 def clip_line(clip: Clip, is_async: bool, out: str) -> str:
     """`writing 171 frames (8.6 s of video at 20 fps, 2 rounds per second) to run.gif`."""
-    unit = "units of virtual time" if is_async else "rounds"
+    one = f"{clip.speed:g}" == "1"
+    unit = (
+        ("unit" if one else "units") + " of virtual time" if is_async else "round" + "s" * (not one)
+    )
     shown = f"{'cycle lines' if is_async else 'rounds'} {clip.first}..{clip.last}"
     return (
         f"writing {clip.frames:,} frames of {shown} ({clip.seconds:.1f} s of video at "

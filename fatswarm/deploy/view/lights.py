@@ -158,13 +158,13 @@ class Focus:
 
     def line(self) -> str:
         """What it saw, in a few words (the dashboard's counters show it)."""
-        failed = "" if self.failed is None else f"; compute failed: {self.failed}"
+        failed = "" if self.failed is None else "failed; "  # short: the panel is narrow
         if not self.recorded:
-            return "views not recorded" + failed
+            return failed + "views not recorded"
         if not self.looked:
-            return "did not Look this round" + failed
+            return failed + "did not Look this round"
         seen = " ".join(map(str, self.seen)) or "nobody"
-        return f"saw {len(self.seen)}: {seen}{failed}"
+        return f"{failed}saw {len(self.seen)}: {seen}"
 
 
 def focus_per_round(record: RunRecord, robot: int) -> list[Focus]:
