@@ -108,10 +108,8 @@ def plan_clip(
 
 def clip_line(clip: Clip, is_async: bool, out: str) -> str:
     """`writing 171 frames (8.6 s of video at 20 fps, 2 rounds per second) to run.gif`."""
-    one = f"{clip.speed:g}" == "1"
-    unit = (
-        ("unit" if one else "units") + " of virtual time" if is_async else "round" + "s" * (not one)
-    )
+    plural = "" if f"{clip.speed:g}" == "1" else "s"
+    unit = f"unit{plural} of virtual time" if is_async else f"round{plural}"
     shown = f"{'cycle lines' if is_async else 'rounds'} {clip.first}..{clip.last}"
     return (
         f"writing {clip.frames:,} frames of {shown} ({clip.seconds:.1f} s of video at "
