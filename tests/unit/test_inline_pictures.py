@@ -9,6 +9,7 @@ import argparse
 import json
 import pathlib
 import re
+import sys
 from typing import Any
 
 import numpy as np
@@ -280,3 +281,22 @@ def test_an_async_look_says_cycle(tmp_path: pathlib.Path) -> None:
     assert plot.look_title(record, scene).startswith(f"robot 0's Look in cycle {looked}: ")
     missing = look_scene(record, 0, len(record.rounds) + 1)
     assert missing == f"the record has no cycle {len(record.rounds) + 1}"
+
+
+def test_without_matplotlib_a_picture_says_what_to_install_in_one_line(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    record = read_record(SMALL)
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # makes `import matplotlib` fail
+    for settings in ({}, {"round": 1}):
+        with pytest.raises(ImportError) as missing:
+            record.figure(**settings)
+        assert str(missing.value) == (
+            "pictures need matplotlib: pip install 'fatswarm[notebook]' (or matplotlib)"
+        )
+    for picture in (record.animate, record.figure):
+        with pytest.raises(ImportError) as missing:
+            picture()
+        assert str(missing.value) == (
+            "pictures need matplotlib: pip install 'fatswarm[notebook]' (or matplotlib)"
+        )

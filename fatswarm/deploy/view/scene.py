@@ -366,9 +366,11 @@ def _focus_lines(record: RunRecord, timeline: Timeline, robot: int) -> FocusAt:
 
         return in_round
     spans = [
-        (float(entry.extra.get("look", 0.0)), timeline.ends[k], per_line[k])
+        (float(look), timeline.ends[k], per_line[k])
         for k, entry in enumerate(record.rounds)
         if robot in entry.active
+        and isinstance(look := entry.extra.get("look"), (int, float))
+        and not isinstance(look, bool)
     ]
 
     def in_cycle(t: float) -> Focus | None:
