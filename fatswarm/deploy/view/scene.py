@@ -96,46 +96,44 @@ def routes_between(record: RunRecord, first: int, last: int) -> list[Points]:
 
 @dataclass(frozen=True, slots=True)
 class Trails:
-    """Every recorded move cut into short straight pieces placed in time: piece j runs from
-    `ends[j, 0]` at time `starts[j]` to `ends[j, 1]` at time `stops[j]`, by robot `robots[j]`."""
+    """Where each robot went, in time: robot r's recorded moves, sampled at most TRAIL_STEP apart
+    and joined in time order, pass `points[r][j]` at time `times[r][j]` (its moves follow one
+    another: each starts where the one before stopped)."""
 
-    ends: NDArray[np.float64]  # (m, 2, 2)
-    starts: NDArray[np.float64]  # (m,)
-    stops: NDArray[np.float64]  # (m,)
-    robots: NDArray[np.int64]  # (m,)
+    points: tuple[NDArray[np.float64], ...]  # per robot (k, 2)
+    times: tuple[NDArray[np.float64], ...]  # per robot (k,), non-decreasing
 
     @classmethod
     def of(cls, timeline: Timeline) -> Trails:
-        """The pieces of every move of the timeline, TRAIL_STEP long at most."""
-        ends, starts, stops, robots = [], [], [], []
-        for travel in timeline.travels():
+        """The samples of every move of the timeline."""
+        points: list[list[NDArray[np.float64]]] = [[] for _ in range(timeline.n)]
+        times: list[list[NDArray[np.float64]]] = [[] for _ in range(timeline.n)]
+        for travel in sorted(timeline.travels(), key=lambda tr: tr.start):
             covered = truncate(travel.origin, travel.path, travel.traveled)
             if not covered:
                 continue
             pts = sample(travel.origin, covered, TRAIL_STEP)
-            chord = np.hypot(*np.diff(pts, axis=0).T)
-            arc = np.concatenate(([0.0], np.cumsum(chord)))
+            arc = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))))
             scale = travel.traveled / arc[-1] if arc[-1] > 0.0 else 0.0
-            times = travel.start + arc * scale / travel.rate
-            ends.append(np.stack((pts[:-1], pts[1:]), axis=1))
-            starts.append(times[:-1])
-            stops.append(np.minimum(times[1:], travel.done))
-            robots.append(np.full(len(pts) - 1, travel.robot, dtype=np.int64))
-        if not ends:
-            return cls(np.zeros((0, 2, 2)), np.zeros(0), np.zeros(0), np.zeros(0, np.int64))
+            points[travel.robot].append(pts)
+            times[travel.robot].append(
+                np.minimum(travel.start + arc * scale / travel.rate, travel.done)
+            )
         return cls(
-            np.concatenate(ends), np.concatenate(starts), np.concatenate(stops),
-            np.concatenate(robots),
-        )  # fmt: skip
+            tuple(np.concatenate(p) if p else np.zeros((0, 2)) for p in points),
+            tuple(np.concatenate(t) if t else np.zeros(0) for t in times),
+        )
 
-    def until(self, since: float, t: float, positions: Points) -> NDArray[np.float64]:
-        """The pieces travelled from time `since` to time `t`, (k, 2, 2): whole ones, and the
-        piece under way cut at where its robot is now (`positions`, (n, 2))."""
-        done = self.ends[(self.stops > since) & (self.stops <= t)]
-        going = (self.starts < t) & (t < self.stops) & (self.stops > since)
-        cut = self.ends[going].copy()
-        cut[:, 1] = positions[self.robots[going]]
-        return np.concatenate((done, cut))
+    def until(self, since: float, t: float, positions: Points) -> list[NDArray[np.float64]]:
+        """Each robot's way from time `since` to time `t` as a polyline (k, 2) ending where it
+        is at t (`positions`, (n, 2)); robots that went nowhere in that time are left out."""
+        out: list[NDArray[np.float64]] = []
+        for robot, (points, times) in enumerate(zip(self.points, self.times, strict=True)):
+            first = int(np.searchsorted(times, since, side="left"))
+            last = int(np.searchsorted(times, t, side="left"))  # samples strictly before t
+            if last > first:
+                out.append(np.concatenate((points[first:last], positions[robot : robot + 1])))
+        return out
 
 
 def lights_at(timeline: Timeline, t: float) -> tuple[str, ...] | None:
@@ -293,7 +291,7 @@ class Scene:
         t = self.clip.time_of(frame)
         self.positions = self.timeline.at(t)
         self.discs.set_offsets(self.positions)
-        self.trails.set_segments(list(self._trails.until(self.clip.t0, t, self.positions)))
+        self.trails.set_segments(self._trails.until(self.clip.t0, t, self.positions))
         faces: list[Any] = list(self.colours)
         if self.palette:
             lights = lights_at(self.timeline, t)
