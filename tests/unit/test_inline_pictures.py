@@ -35,6 +35,12 @@ def run_plot(*argv: object) -> int:
     return plot.main(p.parse_args([str(a) for a in argv]))
 
 
+def legend_texts(ax: Any) -> list[str]:
+    legend = ax.get_legend()
+    assert legend is not None
+    return [t.get_text() for t in legend.get_texts()]
+
+
 def pyplot_figures() -> list[int]:
     import matplotlib.pyplot as plt
 
@@ -157,8 +163,7 @@ def test_look_figure_shows_a_failed_compute_and_refuses_a_look_that_did_not_happ
     title = fig.axes[0].get_title()
     assert title.startswith("robot 2's Look in round 2: saw 4 of 5")
     assert "its compute failed: ViewError: the view holds 4 robots, expected n-1 = 5" in title
-    legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
-    assert "compute failed" in legend
+    assert "compute failed" in legend_texts(fig.axes[0])
     with pytest.raises(PictureError, match=r"^robot 2 did not Look in round 1 \(it Looked in "):
         record.look_figure(2, 1)
 
@@ -223,7 +228,7 @@ def lit_record(tmp_path: pathlib.Path) -> RunRecord:
 
 
 def legend_of(scene: Scene) -> list[str]:
-    return [t.get_text() for t in scene.ax.get_legend().get_texts()]
+    return legend_texts(scene.ax)
 
 
 def test_the_legend_names_unknown_only_when_a_frame_shows_a_robot_of_unknown_colour(

@@ -15,7 +15,7 @@ import io
 import numbers
 import os
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import TYPE_CHECKING, Final
 
 from fatswarm.deploy.view.animate import DEFAULT_MAX_FRAMES, Words, plan_video, write_gif
 from fatswarm.deploy.view.lights import look_scene
@@ -25,6 +25,9 @@ from fatswarm.deploy.view.scene import Clip, Scene, still_clip, video_title
 from fatswarm.world.record import RunRecord
 from fatswarm.world.record_read import read_record
 from fatswarm.world.timeline import Timeline
+
+if TYPE_CHECKING:  # matplotlib is an optional extra, loaded only to draw
+    from matplotlib.figure import Figure
 
 KEYWORDS: Final = Words("fps", "speed", "rounds", "max_frames", "=", "a picture, figure(round=K)")
 EXTRA: Final = "notebook"  # pip install 'fatswarm[notebook]' brings matplotlib
@@ -116,7 +119,7 @@ def animate(
 
 def figure(
     source: object, round: int | None = None, *, robot: int | None = None, title: str | None = None
-) -> Any:
+) -> Figure:
     """A matplotlib Figure of the record of `source`, returned (not shown, not closed) for the
     caller to restyle: `round` None, the whole run as `fatswarm plot RECORD OUT.png` draws it
     (routes, start and end, the final circle); `round` k, the video's frame after record line k
@@ -135,7 +138,7 @@ def figure(
     return _scene(record, timeline, still_clip(timeline, line), title, robot).fig
 
 
-def look_figure(source: object, robot: int, round: int, *, title: str | None = None) -> Any:
+def look_figure(source: object, robot: int, round: int, *, title: str | None = None) -> Figure:
     """Robot `robot`'s Look in record line `round` as a matplotlib Figure (`fatswarm plot RECORD
     OUT.png --robot I --round K`): every robot where it was then, what it saw, its sight, the
     move it made or why its compute failed. Needs a record made with `record_views=True`."""

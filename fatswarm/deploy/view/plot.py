@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -36,6 +36,9 @@ from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.path import Points, sample, truncate
 from fatswarm.world.record import RecordFormatError, RunRecord, move_origin
 from fatswarm.world.record_read import read_record, torn_end_note
+
+if TYPE_CHECKING:  # matplotlib is an optional extra, loaded only to draw
+    from matplotlib.figure import Figure
 
 FORMATS = (".svg", ".png", *ANIMATIONS)
 DESCRIPTION = (
@@ -122,7 +125,7 @@ def draw(record: RunRecord, out: str, title: str | None = None) -> None:
     run_figure(record, title).savefig(out)
 
 
-def run_figure(record: RunRecord, title: str | None = None) -> Any:
+def run_figure(record: RunRecord, title: str | None = None) -> Figure:
     """The record as one picture, a matplotlib Figure: each robot's route, its start (rings) and
     end (discs, numbered), the final smallest enclosing circle."""
     from matplotlib import colormaps
@@ -221,7 +224,7 @@ def draw_look(record: RunRecord, scene: LookScene, out: str, title: str | None =
     look_figure(record, scene, title).savefig(out)
 
 
-def look_figure(record: RunRecord, scene: LookScene, title: str | None = None) -> Any:
+def look_figure(record: RunRecord, scene: LookScene, title: str | None = None) -> Figure:
     """One Look as a matplotlib Figure: every robot where it was then, the looker ringed with its
     sight circle and the move it made (ringed red, its compute having failed, when it did), the
     robots it saw in their colours, the others pale."""

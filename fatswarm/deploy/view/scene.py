@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,6 +30,10 @@ from fatswarm.deploy.view.summary import model_notes
 from fatswarm.domain.path import Points, sample, truncate
 from fatswarm.world.record import RunRecord, move_origin
 from fatswarm.world.timeline import Timeline
+
+if TYPE_CHECKING:  # matplotlib is an optional extra, loaded only to draw
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 FIGURE_INCHES: Final = 6.0
 DPI: Final = 100  # 600 x 600 pixels: even sizes, as MP4's yuv420p wants
@@ -156,7 +160,7 @@ def video_title(record: RunRecord) -> str:
     )
 
 
-def new_figure(inches: float = FIGURE_INCHES, dpi: float = DPI) -> tuple[Any, Any]:
+def new_figure(inches: float = FIGURE_INCHES, dpi: float = DPI) -> tuple[Figure, Axes]:
     """A bare matplotlib Figure on an Agg canvas and its one axes (no pyplot: nothing shown,
     nothing to close, the caller's backend untouched)."""
     # matplotlib is an optional extra (fatswarm[plot]) and heavy: loaded only to draw
