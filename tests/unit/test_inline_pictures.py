@@ -259,6 +259,18 @@ def test_a_chosen_robot_is_ringed_and_what_it_did_not_see_is_pale(failing: str) 
     assert "robot 2: failed; saw 4: 0 1 3 5" in scene.clock.get_text()
 
 
+def test_a_video_of_a_robot_without_views_says_so_once(
+    tmp_path: pathlib.Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert run_plot(SMALL, tmp_path / "run.gif", "--robot", "1", "--fps", "1") == 0
+    err = capsys.readouterr().err.splitlines()
+    assert err[0] == (
+        "fatswarm plot: the record has no views of what each robot saw: record it with "
+        "--record-views; robot 1 is ringed, nobody is paled"
+    )
+    assert err[1].startswith("fatswarm plot: writing 3 frames")
+
+
 def test_focus_says_a_failed_compute(failing: str) -> None:
     record = read_record(failing)
     focus = focus_per_round(record, 2)[2]  # round 2

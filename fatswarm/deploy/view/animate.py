@@ -23,6 +23,7 @@ from typing import IO, Any, Final
 import numpy as np
 from numpy.typing import NDArray
 
+from fatswarm.deploy.view.lights import NO_VIEWS, has_views
 from fatswarm.deploy.view.scene import DPI, Clip, Scene, lights_at, routes_between
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.world.record import RunRecord
@@ -341,6 +342,8 @@ def main_animation(args: argparse.Namespace, record: RunRecord) -> int:
     if args.out.lower().endswith(".mp4") and not ffmpeg_available():
         say(missing_ffmpeg(args.out) + "\n")
         return ExitCode.BAD_INPUT
+    if robot is not None and not has_views(record):
+        say(f"fatswarm plot: {NO_VIEWS}; robot {robot} is ringed, nobody is paled\n")
     say(f"fatswarm plot: {clip_line(clip, timeline.is_async, args.out)}\n")
     scene = Scene(record, timeline, clip, args.title, robot)
     written = False
