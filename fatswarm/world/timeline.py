@@ -113,6 +113,10 @@ class Timeline:
         """How many record lines (rounds, or ended cycles) have ended by time t."""
         return bisect.bisect_right(self.ends, t)
 
+    def travels(self) -> list[Travel]:
+        """Every recorded move placed in time: by line (rounds), else by robot and start."""
+        return [travel for line in (self._by_round or self._travels) for travel in line]
+
     def _round_at(self, t: float) -> Points:
         rounds = self.record.rounds
         if t == 0.0 or not rounds:

@@ -14,10 +14,10 @@ import pytest
 
 from fatswarm.deploy.view import animate
 from fatswarm.deploy.view.animate import (
-    MISSING_FFMPEG,
     Clip,
     Progress,
     lights_at,
+    missing_ffmpeg,
     parse_rounds,
     plan_clip,
 )
@@ -168,7 +168,8 @@ def test_a_gif_is_written_frame_by_frame(
         (["--fps", "60"], "--fps must be a whole number between 1 and 50 for .gif, got 60"),
         (["--speed", "-1"], "--speed must be a positive number, got -1"),
         (["--max-frames", "5"], "that video would take 31 frames (1.6 s at 20 fps), over "),
-        (["--robot", "1", "--round", "2"], "--robot and --round draw one Look"),
+        (["--robot", "1", "--round", "2"], "--round draws one Look (with --robot)"),
+        (["--robot", "4"], "--robot must be between 0 and 3, got 4"),
     ],
 )
 def test_bad_video_flags_are_refused_in_one_line_before_any_frame(
@@ -186,7 +187,9 @@ def test_video_flags_with_a_still_picture_are_refused(
 ) -> None:
     assert run_plot(SMALL, tmp_path / "x.svg", "--fps", "10", "--rounds", "1..2") == 2
     err = capsys.readouterr().err
-    assert err == "fatswarm plot: --fps, --rounds go with a video: write OUT.gif or OUT.mp4\n"
+    assert (
+        err == "fatswarm plot: --fps and --rounds only apply to a video: write OUT.gif or OUT.mp4\n"
+    )
 
 
 def test_an_mp4_without_ffmpeg_says_what_to_install(
@@ -196,7 +199,9 @@ def test_an_mp4_without_ffmpeg_says_what_to_install(
     monkeypatch.setattr(shutil, "which", lambda name: None)
     out = tmp_path / "run.mp4"
     assert run_plot(SMALL, out) == 2
-    assert capsys.readouterr().err == MISSING_FFMPEG + "\n"
+    assert capsys.readouterr().err == missing_ffmpeg(str(out)) + "\n"
+    assert f"writing {out} needs ffmpeg" in missing_ffmpeg(str(out))
+    assert f"or write {tmp_path / 'run.gif'}, which" in missing_ffmpeg(str(out))
     assert not out.exists()
 
 

@@ -25,7 +25,13 @@ from fatswarm.world.record import RunRecord as RecordLines
 
 if TYPE_CHECKING:
     import pandas as pd
+    from matplotlib.figure import Figure
 
+    from fatswarm.deploy.view.inline import InlineVideo
+
+# PICTURES: the records and results draw themselves through fatswarm.deploy.view.inline, imported
+# in the methods: loaded on first use (matplotlib with it), and the one reach from the engine up to
+# the view (pyproject.toml's contract names it).
 EXTRA: Final = "notebook"  # pip install 'fatswarm[notebook]': pandas (and matplotlib, to animate)
 # One row per robot and round: these, then each round's figures of fatswarm.domain.figures shown
 # in a DataFrame (`columns()`; min_gap...), the same on each row of the round.
@@ -69,6 +75,14 @@ class RunResult(LockstepResult):
             f"collisions={self.collisions}, moves={self.moves}, "
             f"total_distance={self.total_distance:.3f}{time}{record})"
         )
+
+    def animate(self, **settings: Any) -> InlineVideo:
+        """The run's record (written with `record=`) as a video Jupyter shows inline: the frames
+        of `fatswarm plot RECORD OUT.gif`; `settings` are fps, speed, rounds, max_frames, robot,
+        title (fatswarm.deploy.view.inline.animate). Needs matplotlib."""
+        from fatswarm.deploy.view import inline  # PICTURES
+
+        return inline.animate(self, **settings)
 
     def _repr_svg_(self) -> str:
         """Jupyter's picture: start and end discs and the end's smallest enclosing circle."""
@@ -128,6 +142,30 @@ class RunRecord(RecordLines):
             run_text(self.header.n, self.header.scheduler, self.header.seed),
         )
         return frame_svg(self.header.initial, self.final, caption)
+
+    def animate(self, **settings: Any) -> InlineVideo:
+        """The record as a video Jupyter shows inline: the frames of `fatswarm plot RECORD
+        OUT.gif`; `settings` are fps, speed, rounds, max_frames, robot, title
+        (fatswarm.deploy.view.inline.animate). Needs matplotlib."""
+        from fatswarm.deploy.view import inline  # PICTURES
+
+        return inline.animate(self, **settings)
+
+    def figure(self, round: int | None = None, **settings: Any) -> Figure:
+        """A matplotlib Figure to restyle (returned, not shown): the whole run as `fatswarm plot
+        RECORD OUT.png` draws it, or with `round=k` the video's frame after round k; `settings`:
+        robot, title (fatswarm.deploy.view.inline.figure). Needs matplotlib."""
+        from fatswarm.deploy.view import inline  # PICTURES
+
+        return inline.figure(self, round, **settings)
+
+    def look_figure(self, robot: int, round: int, **settings: Any) -> Figure:
+        """Robot `robot`'s Look in round `round` as a matplotlib Figure (`fatswarm plot RECORD
+        OUT.png --robot I --round K`; a record made with record_views=True); `settings`: title
+        (fatswarm.deploy.view.inline.look_figure). Needs matplotlib."""
+        from fatswarm.deploy.view import inline  # PICTURES
+
+        return inline.look_figure(self, robot, round, **settings)
 
     def to_dataframe(self) -> pd.DataFrame:
         """One row per robot per round (record line; an async run's ended cycle): `round` (1,

@@ -1,5 +1,6 @@
 """`fatswarm plot RECORD OUT.gif|OUT.mp4`: the run as a video, robots moving along their paths
-within each round (world/timeline.py), their ids on the discs, contacts marked, lights coloured.
+within each round (world/timeline.py), their ids on the discs, contacts marked, lights coloured;
+the frames are drawn by deploy/view/scene.py (the notebook's `animate()` draws the same).
 
 matplotlib (fatswarm[plot]) draws the frames; a GIF is written a frame at a time with Pillow
 (which comes with matplotlib), an MP4 through ffmpeg. Nothing here imports matplotlib at load.
@@ -22,12 +23,10 @@ from typing import IO, Any, Final
 import numpy as np
 from numpy.typing import NDArray
 
-from fatswarm.deploy.view.dashboard import algorithm_text, enclosing_circle
-from fatswarm.deploy.view.lights import light_hex, lights_of, record_palette
-from fatswarm.deploy.view.summary import model_notes
+from fatswarm.deploy.view.lights import NO_VIEWS, has_views
+from fatswarm.deploy.view.scene import DPI, Clip, Scene, lights_at, routes_between
 from fatswarm.domain.outcome import ExitCode
-from fatswarm.domain.path import Points, sample, truncate
-from fatswarm.world.record import RunRecord, move_origin
+from fatswarm.world.record import RunRecord
 from fatswarm.world.timeline import Timeline
 
 ANIMATIONS: Final = (".gif", ".mp4")
@@ -37,17 +36,6 @@ LONGEST_DEFAULT: Final = 60.0  # seconds: the default speed quickens so that a v
 DEFAULT_MAX_FRAMES: Final = 3000
 MAX_GIF_FPS: Final = 50.0  # GIF frame delays are in hundredths; viewers slow anything faster
 MAX_FPS: Final = 120.0
-FIGURE_INCHES: Final = 6.0
-DPI: Final = 100  # 600 x 600 pixels: even sizes, as MP4's yuv420p wants
-TRAIL_STEP: Final = 0.1
-NO_LIGHT: Final = "#808080"  # a robot whose colour the record does not say (the start)
-CONTACT_COLOUR: Final = "#d62728"
-LABEL_MIN_POINTS: Final = 3.5  # a disc smaller than this (radius, in points) gets no id
-MISSING_FFMPEG: Final = (
-    "fatswarm plot: writing OUT.mp4 needs ffmpeg, which is not on the PATH: install it (e.g. "
-    "`apt install ffmpeg`, `brew install ffmpeg` or `conda install -c conda-forge ffmpeg`), "
-    "or write OUT.gif, which needs nothing more"
-)
 SPEED_HELP: Final = (
     "how fast the video plays: R rounds of the record per second of video (async records: R "
     "units of virtual time, i.e. robot radii at unit speed, per second); within a round robots "
@@ -57,35 +45,33 @@ SPEED_HELP: Final = (
 )
 
 
-# --- what to show: the clip ---------------------------------------------------------------------
+def missing_ffmpeg(out: str) -> str:
+    """Why an MP4 cannot be written here, naming the file asked for."""
+    gif = os.path.splitext(out)[0] + ".gif"
+    return (
+        f"fatswarm plot: writing {out} needs ffmpeg, which is not on the PATH: install it (e.g. "
+        "`apt install ffmpeg`, `brew install ffmpeg` or `conda install -c conda-forge ffmpeg`), "
+        f"or write {gif}, which needs nothing more"
+    )
 
 
 @dataclass(frozen=True, slots=True)
-class Clip:
-    """The video's frames on the record's timeline: frame i (0..frames-1) shows time
-    t0 + (t1 - t0) i / (frames - 1), so the first frame is the positions before round `first`
-    and the last exactly those after round `last`. `speed`: timeline units per second of video."""
+class Words:
+    """How a refusal names the video's settings: the command's flags or the API's keywords."""
 
-    first: int
-    last: int
-    t0: float
-    t1: float
-    frames: int
-    fps: float
-    speed: float
+    fps: str
+    speed: str
+    rounds: str
+    max_frames: str
+    assign: str  # between a name and its value: " " for a flag, "=" for a keyword
+    still: str  # what draws one instant
 
-    def time_of(self, frame: int) -> float:
-        """The timeline time frame `frame` shows."""
-        if self.frames <= 1:
-            return self.t1
-        if frame >= self.frames - 1:
-            return self.t1  # exactly: the end of the last round, as its line says
-        return self.t0 + (self.t1 - self.t0) * frame / (self.frames - 1)
+    def given(self, name: str, value: object) -> str:
+        """`--speed 34` or `speed=34`."""
+        return f"{getattr(self, name)}{self.assign}{value}"
 
-    @property
-    def seconds(self) -> float:
-        """The video's length."""
-        return self.frames / self.fps
+
+FLAGS: Final = Words("--fps", "--speed", "--rounds", "--max-frames", " ", "a picture, OUT.png")
 
 
 def parse_rounds(text: str, count: int) -> tuple[int, int]:
@@ -123,7 +109,8 @@ def plan_clip(
 
 def clip_line(clip: Clip, is_async: bool, out: str) -> str:
     """`writing 171 frames (8.6 s of video at 20 fps, 2 rounds per second) to run.gif`."""
-    unit = "units of virtual time" if is_async else "rounds"
+    plural = "" if f"{clip.speed:g}" == "1" else "s"
+    unit = f"unit{plural} of virtual time" if is_async else f"round{plural}"
     shown = f"{'cycle lines' if is_async else 'rounds'} {clip.first}..{clip.last}"
     return (
         f"writing {clip.frames:,} frames of {shown} ({clip.seconds:.1f} s of video at "
@@ -131,226 +118,36 @@ def clip_line(clip: Clip, is_async: bool, out: str) -> str:
     )
 
 
-# --- the picture: one figure, its moving parts updated per frame ---------------------------------
-
-
-def routes_between(record: RunRecord, first: int, last: int) -> list[Points]:
-    """The paths covered by the moves of lines first..last, each sampled as a (k, 2) polyline."""
-    here = np.array(record.header.initial, dtype=np.float64)
-    out: list[Points] = []
-    for k, entry in enumerate(record.rounds, start=1):
-        if first <= k <= last:
-            for move in entry.moves:
-                start = move_origin(entry, move.robot, here)
-                covered = truncate(start, move.path, move.traveled)
-                if covered:
-                    out.append(sample(start, covered, TRAIL_STEP))
-        here = np.array(entry.positions, dtype=np.float64)
-    return out
-
-
-def lights_at(timeline: Timeline, t: float) -> tuple[str, ...] | None:
-    """Every robot's colour name at time t: under rounds those of the round in progress (a round
-    line's lights hold from its moves' start); async, the last line ended by t. None: unknown."""
-    rounds = timeline.record.rounds
-    done = timeline.lines_done(t) if timeline.is_async else min(math.ceil(t), len(rounds))
-    index = done - 1
-    return lights_of(rounds[index], timeline.n) if index >= 0 else None
-
-
-def video_title(record: RunRecord) -> str:
-    """The run in one line (two with a model other than the paper's)."""
-    header = record.header
-    status = record.result.status if record.result is not None else "unfinished"
-    model, _ = model_notes(header.extra)
-    return (
-        f"{algorithm_text(header.algorithm, header.params)}, n={header.n}, {header.scheduler}, "
-        f"seed {header.seed}: {status}" + ("" if model is None else f"\nmodel: {model}")
-    )
-
-
-class Scene:
-    """The figure of a video and its moving parts: discs, ids, current SEC, contacts, clock.
-
-    `update(frame)` moves them to the clip's time of that frame (`Timeline.at`); `positions` is
-    what the discs show, for tests to compare with the timeline rather than with pixels.
-    """
-
-    def __init__(self, record: RunRecord, timeline: Timeline, clip: Clip, title: str | None):
-        # matplotlib is an optional extra (fatswarm[plot]) and heavy: loaded only to draw
-        import matplotlib
-
-        matplotlib.use("Agg")
-        # once the backend is chosen
-        import matplotlib.pyplot as plt
-
-        self.record, self.timeline, self.clip = record, timeline, clip
-        self.palette = record_palette(record)
-        self.fig, self.ax = plt.subplots(figsize=(FIGURE_INCHES, FIGURE_INCHES), dpi=DPI)
-        self._static(title)
-        self._moving()
-        self.positions: Points = timeline.at(clip.t0)
-
-    def _static(self, title: str | None) -> None:
-        """Axes to scale, the clip's paths faint, the SEC of its last frame (as `plot` draws it)."""
-        from matplotlib.collections import LineCollection
-        from matplotlib.patches import Circle
-
-        ax, clip = self.ax, self.clip
-        ax.set_aspect("equal")
-        routes = routes_between(self.record, clip.first, clip.last)
-        if routes:
-            ax.add_collection(LineCollection(routes, colors="#b0b0b0", lw=0.6, zorder=1))
-        end = self.timeline.at(clip.t1)
-        (cx, cy), rc = enclosing_circle(end)
-        ax.add_patch(Circle((cx, cy), rc, fill=False, ec="black", lw=1.0, zorder=2))
-        ax.plot([cx], [cy], "k+", markersize=6, zorder=2)
-        reach = [self.timeline.at(clip.t0), end, *routes, [[cx - rc, cy - rc], [cx + rc, cy + rc]]]
-        everything: Points = np.vstack([np.asarray(p, dtype=np.float64) for p in reach])
-        lo, hi = everything.min(axis=0) - 1.5, everything.max(axis=0) + 1.5
-        ax.set_xlim(lo[0], hi[0])
-        ax.set_ylim(lo[1], hi[1])
-        ax.set_title(title or video_title(self.record), fontsize=9)
-        ax.set_xlabel("x (robot radii)")
-        ax.set_ylabel("y (robot radii)")
-        ax.grid(True, lw=0.3, alpha=0.5)
-        if self.palette:
-            self._legend()
-        self.fig.tight_layout()
-
-    def _legend(self) -> None:
-        from matplotlib.patches import Patch
-
-        handles = [Patch(color=light_hex(self.palette, name), label=name) for name in self.palette]
-        handles.append(Patch(color=NO_LIGHT, label="unknown"))
-        self.ax.legend(handles=handles, fontsize=7, loc="upper right", title="lights")
-
-    def _moving(self) -> None:
-        """Discs (one collection), their ids, the current SEC, contact marks and the clock."""
-        import matplotlib.pyplot as plt
-        from matplotlib.collections import EllipseCollection
-        from matplotlib.patches import Circle
-
-        n, ax = self.timeline.n, self.ax
-        cmap = plt.get_cmap("tab20")
-        self.colours = [cmap(i % 20) for i in range(n)]
-        self.discs = EllipseCollection(
-            widths=2.0, heights=2.0, angles=0.0, units="xy", offsets=np.zeros((n, 2)),
-            offset_transform=ax.transData, facecolors=self.colours, edgecolors="black",
-            linewidths=0.5, alpha=0.8, zorder=4,
-        )  # fmt: skip
-        ax.add_collection(self.discs)
-        size = _label_points(self.fig, ax)
-        self.labels = [
-            ax.text(0.0, 0.0, str(i), ha="center", va="center", fontsize=size, zorder=5)
-            for i in range(n)
-        ] if size else []  # fmt: skip
-        self.sec = Circle((0.0, 0.0), 0.0, fill=False, ec="#7f7f7f", lw=0.8, ls="--", zorder=2)
-        ax.add_patch(self.sec)
-        self.contacts = ax.scatter(
-            np.zeros(0), np.zeros(0), marker="x", s=60, c=CONTACT_COLOUR, linewidths=2, zorder=6
-        )
-        self._contact_points = _contact_points(self.timeline, self.clip)
-        self.clock = ax.text(
-            0.01, 0.99, "", transform=ax.transAxes, ha="left", va="top", fontsize=8, zorder=7
-        )
-
-    def update(self, frame: int) -> list[Any]:
-        """Show frame `frame` of the clip; the artists that changed."""
-        t = self.clip.time_of(frame)
-        self.positions = self.timeline.at(t)
-        self.discs.set_offsets(self.positions)
-        lights = lights_at(self.timeline, t) if self.palette else None
-        if lights is not None:
-            self.discs.set_facecolor([light_hex(self.palette, c) or NO_LIGHT for c in lights])
-        for label, (x, y) in zip(self.labels, self.positions, strict=True):
-            label.set_position((float(x), float(y)))
-        (cx, cy), rc = enclosing_circle(self.positions)
-        self.sec.set_center((cx, cy))
-        self.sec.set_radius(rc)
-        shown = [p for tc, p in self._contact_points if tc <= t]
-        self.contacts.set_offsets(np.array(shown).reshape(-1, 2))
-        self.clock.set_text(self.clock_text(t, len(shown)))
-        return [self.discs, *self.labels, self.sec, self.contacts, self.clock]
-
-    def clock_text(self, t: float, contacts: int) -> str:
-        """`round 5 of 17 (3 collisions)`, or async `t = 12.30, 45 of 80 cycles ended`."""
-        touched = f" ({contacts} collision{'' if contacts == 1 else 's'})" if contacts else ""
-        count = len(self.timeline.ends)
-        if self.timeline.is_async:
-            done = self.timeline.lines_done(t)
-            return f"t = {t:.2f}, {done} of {count} cycles ended{touched}"
-        if t <= 0.0:
-            return f"start, before round 1 of {count}"
-        return f"round {min(math.ceil(t), count)} of {count}{touched}"
-
-    def close(self) -> None:
-        import matplotlib.pyplot as plt
-
-        plt.close(self.fig)
-
-
-def _label_points(fig: Any, ax: Any) -> float:
-    """The font size of the ids on the discs: about a robot's radius, in points; 0 (no ids) when
-    the discs are too small to hold one."""
-    fig.canvas.draw()  # the axes' final size, after tight_layout
-    (x0, _), (x1, _) = ax.transData.transform([(0.0, 0.0), (1.0, 0.0)])
-    radius = abs(x1 - x0) * 72.0 / fig.dpi
-    return 0.0 if radius < LABEL_MIN_POINTS else min(10.0, 1.1 * radius)
-
-
-def _contact_points(timeline: Timeline, clip: Clip) -> list[tuple[float, tuple[float, float]]]:
-    """Each collision of the clip's range at its time and where the two discs touched (halfway
-    between the two centres at that time)."""
-    out: list[tuple[float, tuple[float, float]]] = []
-    for c in timeline.contacts:
-        if clip.first <= c.line <= clip.last:
-            here = timeline.at(min(max(c.t, 0.0), timeline.end))
-            other = here[c.other] if 0 <= c.other < timeline.n else np.array(c.point)
-            mid = (np.array(c.point) + other) / 2.0
-            out.append((c.t, (float(mid[0]), float(mid[1]))))
-    return out
-
-
 # --- writing ----------------------------------------------------------------------------------
 
 
 class GifStream:
-    """A matplotlib movie writer that writes each GIF frame as it comes (Pillow's own keeps every
-    frame in memory until the end: a gigabyte for a long video). Each frame has its own palette."""
+    """A GIF written a frame at a time into a binary stream (Pillow's own writer keeps every
+    frame in memory until the end: a gigabyte for a long video). Each frame has its own palette
+    and holds only the box that changed since the one before."""
 
-    def __init__(self, fps: float) -> None:
-        self.fps = fps
-        self._fh: IO[bytes] | None = None
+    def __init__(self, fps: float, sink: IO[bytes]) -> None:
+        self.fps, self.sink = fps, sink
         self._previous: NDArray[np.uint8] | None = None  # the last frame's pixels (h, w, 3)
         self.frames = 0
 
-    def setup(self, fig: Any, outfile: str, dpi: float | None = None) -> None:
-        self.fig, self.outfile, self.dpi = fig, outfile, dpi or fig.dpi
-        self._fh = open(outfile, "wb")  # noqa: SIM115  (closed by finish)
-
-    def _supports_transparency(self) -> bool:
-        return False  # matplotlib then paints the background opaque
-
-    def grab_frame(self, **savefig_kwargs: Any) -> None:
+    def grab_frame(self, fig: Any) -> None:
         """Append the figure as it is drawn now as one frame (its own 256-colour palette)."""
         from PIL import GifImagePlugin, Image
 
-        if self._fh is None:
-            raise RuntimeError("GifStream.grab_frame before setup")
-        self.fig.canvas.draw()
-        pixels = np.ascontiguousarray(np.asarray(self.fig.canvas.buffer_rgba())[:, :, :3])
+        fig.canvas.draw()
+        pixels = np.ascontiguousarray(np.asarray(fig.canvas.buffer_rgba())[:, :, :3])
         delay = round(1000.0 / self.fps)
         if self._previous is None:  # the first frame, whole, with the file's header
             image = Image.fromarray(pixels).quantize(colors=256)
             header, _ = GifImagePlugin.getheader(image, info={"loop": 0, "duration": delay})
-            self._fh.writelines(header)
+            self.sink.writelines(header)
             offset = (0, 0)
         else:  # only the box that changed: a frame is mostly the one before
             top, bottom, left, right = _changed_box(self._previous, pixels)
             image = Image.fromarray(pixels[top:bottom, left:right]).quantize(colors=256)
             offset = (left, top)
-        self._fh.writelines(
+        self.sink.writelines(
             GifImagePlugin.getdata(
                 image, offset=offset, duration=delay, disposal=1, include_color_table=True
             )
@@ -359,23 +156,8 @@ class GifStream:
         self.frames += 1
 
     def finish(self) -> None:
-        if self._fh is not None:
-            self._fh.write(b";")  # the GIF trailer
-            self._fh.close()
-            self._fh = None
-
-    def saving(self, fig: Any, outfile: str, dpi: float | None, *args: Any, **kw: Any) -> Any:
-        """What `Animation.save` enters around the frames (matplotlib's writer protocol)."""
-
-        @contextlib.contextmanager
-        def context() -> Any:
-            self.setup(fig, outfile, dpi)
-            try:
-                yield self
-            finally:
-                self.finish()
-
-        return context()
+        """The GIF trailer (the stream stays open: it is the caller's)."""
+        self.sink.write(b";")
 
 
 def _changed_box(before: NDArray[np.uint8], after: NDArray[np.uint8]) -> tuple[int, int, int, int]:
@@ -386,6 +168,22 @@ def _changed_box(before: NDArray[np.uint8], after: NDArray[np.uint8]) -> tuple[i
     if not len(rows):
         return 0, 1, 0, 1
     return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
+
+
+def say(line: str, stream: IO[str] | None = None) -> None:
+    """Write one line of notes or progress to `stream` (standard error); once the reader has
+    gone (`... 2>&1 | head -2`), drop this and every later line and go on with the work."""
+    stream = sys.stderr if stream is None else stream
+    try:
+        stream.write(line)
+        stream.flush()
+    except BrokenPipeError:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        try:  # the flush at exit must not fail again on what is left in the buffer
+            with contextlib.suppress(OSError, ValueError):  # no descriptor: an in-process capture
+                os.dup2(devnull, stream.fileno())
+        finally:
+            os.close(devnull)
 
 
 class Progress:
@@ -399,7 +197,7 @@ class Progress:
         self.said = -1
 
     def __call__(self, done: int, total: int) -> None:
-        done, total = done + 1, max(total, 1)  # matplotlib counts from 0, before the frame
+        done, total = done + 1, max(total, 1)  # counted from 0, before the frame
         step = 100 * done // total if self.tty else 10 * done // total  # percent, or tenths
         if step == self.said or (step == 0 and not self.tty):
             return
@@ -411,12 +209,29 @@ class Progress:
             line = "\r" + line + ("\n" if done >= total else "")
         else:
             line += "\n"
-        self.stream.write(line)
-        self.stream.flush()
+        say(line, self.stream)
+
+
+def write_gif(
+    scene: Scene, sink: IO[bytes], progress: Callable[[int, int], None] | None = None
+) -> int:
+    """Draw every frame of the scene's clip into `sink` as a GIF; the frames written."""
+    gif = GifStream(scene.clip.fps, sink)
+    for frame in range(scene.clip.frames):
+        scene.update(frame)
+        gif.grab_frame(scene.fig)
+        if progress is not None:
+            progress(frame, scene.clip.frames)
+    gif.finish()
+    return gif.frames
 
 
 def write_video(scene: Scene, out: str, progress: Callable[[int, int], None] | None) -> None:
     """Draw every frame of the scene's clip into `out` (.gif or .mp4)."""
+    if out.lower().endswith(".gif"):
+        with open(out, "wb") as sink:
+            write_gif(scene, sink, progress)
+        return
     from matplotlib.animation import FFMpegWriter, FuncAnimation
 
     clip = scene.clip
@@ -424,10 +239,7 @@ def write_video(scene: Scene, out: str, progress: Callable[[int, int], None] | N
         scene.fig, scene.update, frames=clip.frames, interval=1000.0 / clip.fps, blit=False,
         repeat=False, cache_frame_data=False,
     )  # fmt: skip
-    if out.lower().endswith(".gif"):
-        writer: Any = GifStream(clip.fps)
-    else:
-        writer = FFMpegWriter(fps=int(clip.fps), codec="h264", extra_args=["-pix_fmt", "yuv420p"])
+    writer = FFMpegWriter(fps=int(clip.fps), codec="h264", extra_args=["-pix_fmt", "yuv420p"])
     anim.save(out, writer=writer, dpi=DPI, progress_callback=progress)
 
 
@@ -466,54 +278,80 @@ def animation_flags_given(args: argparse.Namespace) -> list[str]:
 def plan(args: argparse.Namespace, timeline: Timeline) -> Clip | str:
     """The clip the flags ask for, or one line saying why they cannot be used."""
     suffix = os.path.splitext(args.out)[1].lower()
-    fps = DEFAULT_FPS if args.fps is None else args.fps
+    return plan_video(timeline, suffix, args.fps, args.speed, args.rounds, args.max_frames, FLAGS)
+
+
+def plan_video(
+    timeline: Timeline,
+    suffix: str,
+    fps: float | None,
+    speed: float | None,
+    rounds: str | None,
+    max_frames: int,
+    words: Words,
+) -> Clip | str:
+    """The clip of a video of kind `suffix` (.gif, .mp4, .html) at `fps` (None: DEFAULT_FPS)
+    and `speed` (None: the default) of `rounds` (`A..B`, None: all), or one line saying why these
+    settings cannot be used, naming them in `words`."""
+    fps = DEFAULT_FPS if fps is None else fps
     top = MAX_GIF_FPS if suffix == ".gif" else MAX_FPS
     if not (math.isfinite(fps) and 1.0 <= fps <= top):
-        return f"--fps must be a whole number between 1 and {top:g} for {suffix}, got {fps:g}"
-    if args.speed is not None and not (math.isfinite(args.speed) and args.speed > 0):
-        return f"--speed must be a positive number, got {args.speed:g}"
-    if args.max_frames < 1:
-        return f"--max-frames must be at least 1, got {args.max_frames}"
+        return f"{words.fps} must be a whole number between 1 and {top:g} for {suffix}, got {fps:g}"
+    if speed is not None and not (math.isfinite(speed) and speed > 0):
+        return f"{words.speed} must be a positive number, got {speed:g}"
+    if max_frames < 1:
+        return f"{words.max_frames} must be at least 1, got {max_frames}"
     try:
-        rounds = None if args.rounds is None else parse_rounds(args.rounds, len(timeline.ends))
+        span = None if rounds is None else parse_rounds(rounds, len(timeline.ends))
     except ValueError as exc:
-        return str(exc)
-    clip = plan_clip(timeline, rounds, fps, args.speed)
-    if clip.frames > args.max_frames:
-        need = (clip.t1 - clip.t0) * fps / (args.max_frames - 1) if args.max_frames > 1 else 0.0
-        return (
-            f"that video would take {clip.frames:,} frames ({clip.seconds:,.1f} s at {fps:g} "
-            f"fps), over --max-frames {args.max_frames:,}: pass --speed {math.ceil(need)} or "
-            "more, fewer --rounds A..B, a lower --fps, or a higher --max-frames"
-        )
-    return clip
+        return str(exc).replace("--rounds", words.rounds)
+    clip = plan_clip(timeline, span, fps, speed)
+    if clip.frames <= max_frames:
+        return clip
+    over = (
+        f"that video would take {clip.frames:,} frames ({clip.seconds:,.1f} s at {fps:g} fps), "
+        f"over {words.given('max_frames', f'{max_frames:,}')}"
+    )
+    if max_frames == 1:  # one frame is one instant, whatever the speed
+        return f"{over}: one frame shows one instant ({words.still}); allow 2 or more"
+    need = math.ceil((clip.t1 - clip.t0) * fps / (max_frames - 1))
+    return (
+        f"{over}: pass {words.given('speed', need)} or more, fewer {words.rounds} A..B, a lower "
+        f"{words.fps}, or a higher {words.max_frames}"
+    )
 
 
 def main_animation(args: argparse.Namespace, record: RunRecord) -> int:
     """Write the video `args.out` of `record`: exit 0, or 2 with one line on a bad flag, a place
-    that cannot be written, or no ffmpeg for an MP4."""
-    if getattr(args, "robot", None) is not None or getattr(args, "round", None) is not None:
-        print(
-            "fatswarm plot: --robot and --round draw one Look: write it to OUT.svg or OUT.png",
-            file=sys.stderr,
+    that cannot be written, or no ffmpeg for an MP4. Notes and progress go to standard error
+    while someone reads it; a reader that goes away stops them, not the video."""
+    if getattr(args, "round", None) is not None:
+        say(
+            "fatswarm plot: --round draws one Look (with --robot): write it to OUT.svg or OUT.png\n"
         )
         return ExitCode.BAD_INPUT
     timeline = Timeline(record)
     clip = plan(args, timeline)
     if isinstance(clip, str):
-        print(f"fatswarm plot: {clip}", file=sys.stderr)
+        say(f"fatswarm plot: {clip}\n")
+        return ExitCode.BAD_INPUT
+    robot = getattr(args, "robot", None)
+    if robot is not None and not 0 <= robot < record.header.n:
+        say(f"fatswarm plot: --robot must be between 0 and {record.header.n - 1}, got {robot}\n")
         return ExitCode.BAD_INPUT
     if args.out.lower().endswith(".mp4") and not ffmpeg_available():
-        print(MISSING_FFMPEG, file=sys.stderr)
+        say(missing_ffmpeg(args.out) + "\n")
         return ExitCode.BAD_INPUT
-    print(f"fatswarm plot: {clip_line(clip, timeline.is_async, args.out)}", file=sys.stderr)
-    scene = Scene(record, timeline, clip, args.title)
+    if robot is not None and not has_views(record):
+        say(f"fatswarm plot: {NO_VIEWS}; robot {robot} is ringed, nobody is paled\n")
+    say(f"fatswarm plot: {clip_line(clip, timeline.is_async, args.out)}\n")
+    scene = Scene(record, timeline, clip, args.title, robot)
     written = False
     try:
         write_video(scene, args.out, Progress(sys.stderr))
         written = True
     except OSError as exc:
-        print(f"fatswarm plot: cannot write {args.out}: {exc.strerror or exc}", file=sys.stderr)
+        say(f"fatswarm plot: cannot write {args.out}: {exc.strerror or exc}\n")
         return ExitCode.BAD_INPUT
     finally:
         scene.close()
@@ -533,14 +371,20 @@ def ffmpeg_available() -> bool:
 
 __all__ = [
     "ANIMATIONS",
+    "FLAGS",
     "Clip",
     "GifStream",
     "Scene",
+    "Words",
     "add_animation_arguments",
     "lights_at",
     "main_animation",
+    "missing_ffmpeg",
     "parse_rounds",
     "plan",
     "plan_clip",
+    "plan_video",
     "routes_between",
+    "say",
+    "write_gif",
 ]

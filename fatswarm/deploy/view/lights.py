@@ -7,7 +7,8 @@ record thus looks the same in `fatswarm replay` and `fatswarm plot`, whichever r
 a legend names the colours. The start (round 0) is drawn without colours: no line records it.
 
 With `--record-views`, a round line also says which robots each robot that Looked in it saw
-(`views`); `Focus` is what one chosen robot saw in one round, for the pictures to highlight.
+(`views`); `Focus` is what one chosen robot saw in one round, for the pictures to highlight, and
+whether its compute then failed (the line's `failed`).
 """
 
 from __future__ import annotations
@@ -20,8 +21,9 @@ import numpy as np
 from rich.text import Text
 
 from fatswarm.domain.path import Path, Points, point_at
-from fatswarm.domain.robot_model import ModelError, RobotModel
+from fatswarm.domain.robot_model import Bodies, ModelError, RobotModel
 from fatswarm.world.record import Header, RoundEntry, RunRecord, move_origin
+from fatswarm.world.timeline import is_async
 
 # Okabe and Ito's colours (told apart under the common colour blindnesses) first, then Paul Tol's
 # "muted" scheme for palettes of more than seven (fatswarm allows 16 colours: MAX_COLOURS).
@@ -114,11 +116,33 @@ def sight_of(header: Header) -> float | None:
         return None
 
 
+def body_radius(header: Header) -> float:
+    """The radius robots are drawn with: 1, the unit (fat robots), or 0 (`--bodies points`)."""
+    try:
+        bodies = RobotModel.from_header(header.extra.get("model")).bodies
+    except ModelError:
+        return 1.0
+    return 0.0 if bodies is Bodies.POINTS else 1.0
+
+
+def failed_of(entry: RoundEntry, robot: int) -> str | None:
+    """Why `robot`'s compute failed in this line (its `failed`: `Type: message`), else None."""
+    failed = entry.extra.get("failed")
+    why = failed.get(str(robot)) if isinstance(failed, Mapping) else None
+    return " ".join(why.split()) if isinstance(why, str) else None
+
+
+def line_word(record: RunRecord) -> str:
+    """What a record line is called: "round", or "cycle" for an async record."""
+    return "cycle" if is_async(record) else "round"
+
+
 @dataclass(frozen=True, slots=True)
 class Focus:
     """What robot `robot` saw in one round: `looked` whether it Looked in it, `seen` the robots it
     saw, from `origin` (where it was at its Look) within `sight` (None: unlimited).
-    `recorded` False: the record holds no views at all (so nothing is dimmed)."""
+    `recorded` False: the record holds no views at all (so nothing is dimmed). `failed`: why its
+    compute failed in this round (`Type: message`), None if it did not."""
 
     robot: int
     looked: bool = False
@@ -126,6 +150,7 @@ class Focus:
     origin: tuple[float, float] | None = None
     sight: float | None = None
     recorded: bool = True
+    failed: str | None = None
 
     def dims(self, other: int) -> bool:
         """Whether robot `other` is drawn dimmed: the chosen robot Looked and did not see it."""
@@ -133,12 +158,13 @@ class Focus:
 
     def line(self) -> str:
         """What it saw, in a few words (the dashboard's counters show it)."""
+        failed = "" if self.failed is None else "failed; "  # short: the panel is narrow
         if not self.recorded:
-            return "views not recorded"
+            return failed + "views not recorded"
         if not self.looked:
-            return "did not Look this round"
+            return failed + "did not Look this round"
         seen = " ".join(map(str, self.seen)) or "nobody"
-        return f"saw {len(self.seen)}: {seen}"
+        return f"{failed}saw {len(self.seen)}: {seen}"
 
 
 def focus_per_round(record: RunRecord, robot: int) -> list[Focus]:
@@ -148,12 +174,12 @@ def focus_per_round(record: RunRecord, robot: int) -> list[Focus]:
     before = record.header.initial
     out = [Focus(robot, sight=sight, recorded=recorded)]
     for entry in record.rounds:
-        views = views_of(entry, n)
+        views, failed = views_of(entry, n), failed_of(entry, robot)
         if robot in views:
             origin = move_origin(entry, robot, before)
-            out.append(Focus(robot, True, views[robot], origin, sight, recorded))
+            out.append(Focus(robot, True, views[robot], origin, sight, recorded, failed))
         else:
-            out.append(Focus(robot, sight=sight, recorded=recorded))
+            out.append(Focus(robot, sight=sight, recorded=recorded, failed=failed))
         before = entry.positions
     return out
 
@@ -185,7 +211,9 @@ def focus_legend(focus: Focus | None) -> Text:
 @dataclass(frozen=True, slots=True)
 class LookScene:
     """Robot `robot`'s Look in round line `round`: every robot's position and colour (None when
-    the record does not say) at that Look, what it saw, and the move it then made."""
+    the record does not say) at that Look, what it saw, and the move it then made, or why its
+    compute failed (`failed`: `Type: message`; None if it did not); `word`: what the record calls
+    a line ("round", or "cycle" under async)."""
 
     robot: int
     round: int
@@ -194,30 +222,34 @@ class LookScene:
     seen: tuple[int, ...]
     sight: float | None
     move: tuple[tuple[float, float], Path, float] | None  # origin, path, arc length covered
+    failed: str | None = None
+    word: str = "round"
 
 
 def look_scene(record: RunRecord, robot: int, round_no: int) -> LookScene | str:
-    """The scene of `robot`'s Look in round `round_no`, or one line saying why there is none."""
-    n = record.header.n
+    """The scene of `robot`'s Look in round `round_no` (async: record line, an ended cycle), or
+    one line saying why there is none."""
+    n, word = record.header.n, line_word(record)
     if not has_views(record):
         return NO_VIEWS
     index = next((i for i, e in enumerate(record.rounds) if e.round == round_no), None)
     if index is None:
-        return f"the record has no round {round_no}"
+        return f"the record has no {word} {round_no}"
     entry = record.rounds[index]
     views = views_of(entry, n)
     if robot not in views:
         looked = [e.round for e in record.rounds if robot in views_of(e, n)]
         shown = ", ".join(map(str, looked[:8])) + (", ..." if len(looked) > 8 else "")
-        where = f"it Looked in rounds {shown}" if looked else "it never Looked with views recorded"
-        return f"robot {robot} did not Look in round {round_no} ({where})"
+        where = f"it Looked in {word}s {shown}" if looked else "it never Looked with views recorded"
+        return f"robot {robot} did not Look in {word} {round_no} ({where})"
     positions, lights = _at_look(record, index)
     move = next((m for m in entry.moves if m.robot == robot), None)
     before = record.rounds[index - 1].positions if index else record.header.initial
     origin = move_origin(entry, robot, before)
     return LookScene(
         robot, round_no, positions, lights, views[robot], sight_of(record.header),
-        None if move is None else (origin, move.path, move.traveled),
+        None if move is None else (origin, move.path, move.traveled), failed_of(entry, robot),
+        word,
     )  # fmt: skip
 
 

@@ -1,8 +1,9 @@
 """`fatswarm plot RECORD OUT.svg|OUT.png`: trajectories, start and end discs and the final circle;
 `OUT.gif|OUT.mp4`: the run as a video (deploy/view/animate.py).
 
-Drawn to scale (equal axes, unit discs) with matplotlib, an optional extra (`fatswarm[plot]`);
-without it the command says how to install it and exits with 2.
+Drawn to scale (equal axes, unit discs; point robots as dots) with matplotlib, an optional extra
+(`fatswarm[plot]`); without it the command says how to install it and exits with 2. `run_figure`
+and `look_figure` return the matplotlib Figure (the notebook's `figure()` and `look_figure()`).
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -23,16 +24,21 @@ from fatswarm.deploy.view.animate import (
 from fatswarm.deploy.view.dashboard import algorithm_text, enclosing_circle
 from fatswarm.deploy.view.lights import (
     LookScene,
+    body_radius,
     light_hex,
     lights_of,
     look_scene,
     record_palette,
 )
+from fatswarm.deploy.view.scene import new_figure
 from fatswarm.deploy.view.summary import model_notes
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.path import Points, sample, truncate
 from fatswarm.world.record import RecordFormatError, RunRecord, move_origin
 from fatswarm.world.record_read import read_record, torn_end_note
+
+if TYPE_CHECKING:  # matplotlib is an optional extra, loaded only to draw
+    from matplotlib.figure import Figure
 
 FORMATS = (".svg", ".png", *ANIMATIONS)
 DESCRIPTION = (
@@ -43,6 +49,9 @@ DESCRIPTION = (
 )
 TRAIL_STEP = 0.1  # world units between samples of a drawn path
 NO_LIGHT = "#808080"  # a robot whose colour the record does not say (the start)
+FAILED_COLOUR = "#d62728"  # the ring of a robot whose compute failed at the Look drawn
+PICTURE_INCHES = 7.0
+POINT_SIZE = 30.0  # a point robot's dot (`--bodies points`), in points squared
 MISSING_MATPLOTLIB = (
     "fatswarm plot needs matplotlib: install it with `pip install 'fatswarm[plot]'` "
     "(or `pip install matplotlib`)"
@@ -113,44 +122,71 @@ def final_lights(record: RunRecord) -> tuple[str, ...] | None:
 
 def draw(record: RunRecord, out: str, title: str | None = None) -> None:
     """Render the record to `out` (format from its suffix); needs matplotlib."""
-    # matplotlib is an optional extra (fatswarm[plot]), and heavy: loaded only to draw
-    import matplotlib
+    run_figure(record, title).savefig(out)
 
-    matplotlib.use("Agg")
-    # once the backend is chosen
-    import matplotlib.pyplot as plt
+
+def run_figure(record: RunRecord, title: str | None = None) -> Figure:
+    """The record as one picture, a matplotlib Figure: each robot's route, its start (rings) and
+    end (discs, numbered), the final smallest enclosing circle."""
+    from matplotlib import colormaps
     from matplotlib.patches import Circle
 
     header = record.header
     end = final_positions(record)
-    fig, ax = plt.subplots(figsize=(7, 7))
+    fig, ax = new_figure(PICTURE_INCHES)
     ax.set_aspect("equal")
     palette = record_palette(record)
+    radius = body_radius(header)
     if palette:
         _draw_lit(ax, record, end, palette)
     else:
-        cmap = plt.get_cmap("tab20")
+        cmap = colormaps["tab20"]
         for i, route in enumerate(trajectories(record)):
             color = cmap(i % 20)
             ax.plot(route[:, 0], route[:, 1], "-", color=color, linewidth=0.8, alpha=0.9)
-            start = header.initial[i]
-            ax.add_patch(Circle((start[0], start[1]), 1.0, fill=False, ls="--", ec=color, lw=0.7))
-            ax.add_patch(
-                Circle((end[i, 0], end[i, 1]), 1.0, fc=color, ec="black", lw=0.5, alpha=0.6)
-            )
+            _robot(ax, header.initial[i], radius, fill=False, ls="--", ec=color, lw=0.7)
+            _robot(ax, end[i], radius, fc=color, ec="black", lw=0.5, alpha=0.6)
     (cx, cy), rc = enclosing_circle(end)
     ax.add_patch(Circle((cx, cy), rc, fill=False, ec="black", lw=1.0, label="final SEC"))
     ax.plot([cx], [cy], "k+", markersize=6)
     everything = np.vstack([header.initial, end, [[cx - rc, cy - rc], [cx + rc, cy + rc]]])
     lo, hi = everything.min(axis=0) - 1.5, everything.max(axis=0) + 1.5
-    for i, (x, y) in enumerate(end):  # ids on the end discs
-        ax.annotate(str(i), (x, y), ha="center", va="center", fontsize=7)
-    _finish(fig, ax, (lo, hi), title or default_title(record, rc), out)
-    plt.close(fig)
+    _ids(ax, end, radius)
+    _finish(fig, ax, (lo, hi), title or default_title(record, rc))
+    return fig
 
 
-def _finish(fig: Any, ax: Any, box: tuple[Points, Points], title: str, out: str) -> None:
-    """Limits, title, axis labels and grid; then write the picture to `out`."""
+def _robot(ax: Any, centre: Any, radius: float, **style: Any) -> None:
+    """One robot: a disc of `radius`, or a dot for a point robot (radius 0), in `style` (a
+    patch's: fc, ec, lw, ls, fill, alpha)."""
+    from matplotlib.patches import Circle
+
+    x, y = float(centre[0]), float(centre[1])
+    if radius > 0.0:
+        ax.add_patch(Circle((x, y), radius, **style))
+        return
+    hollow = style.get("fill") is False
+    ax.scatter(
+        [x], [y], s=POINT_SIZE, marker="o", zorder=3,
+        facecolors="none" if hollow else style.get("fc", NO_LIGHT),
+        edgecolors=style.get("ec", "black"), linewidths=max(style.get("lw", 0.5), 0.6),
+        alpha=style.get("alpha"),
+    )  # fmt: skip
+
+
+def _ids(ax: Any, centres: Any, radius: float) -> None:
+    """Each robot's number: on its disc, or just beside a point robot's dot."""
+    shift = (0.0, 0.0) if radius > 0.0 else (5.0, 5.0)  # points
+    for i, (x, y) in enumerate(centres):
+        ax.annotate(
+            str(i), (x, y), xytext=shift, textcoords="offset points",
+            ha="center" if radius > 0.0 else "left", va="center" if radius > 0.0 else "bottom",
+            fontsize=7,
+        )  # fmt: skip
+
+
+def _finish(fig: Any, ax: Any, box: tuple[Points, Points], title: str) -> None:
+    """Limits, title, axis labels and grid."""
     lo, hi = box
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
@@ -159,44 +195,46 @@ def _finish(fig: Any, ax: Any, box: tuple[Points, Points], title: str, out: str)
     ax.set_ylabel("y (robot radii)")
     ax.grid(True, lw=0.3, alpha=0.5)
     fig.tight_layout()
-    fig.savefig(out)
 
 
 def _draw_lit(ax: Any, record: RunRecord, end: Points, palette: tuple[str, ...]) -> None:
     """Moves in the colour each robot showed during them, start discs dashed grey (no line
     records the start's colours), end discs in the final colours, a legend naming the colours."""
     from matplotlib.collections import LineCollection
-    from matplotlib.patches import Circle, Patch
+    from matplotlib.patches import Patch
 
     routes = lit_routes(record, palette)
     if routes:
         lines = LineCollection([r for r, _ in routes], colors=[c for _, c in routes], lw=0.9)
         ax.add_collection(lines)
     lights = final_lights(record)
-    for i, (x, y) in enumerate(record.header.initial):
-        ax.add_patch(Circle((x, y), 1.0, fill=False, ls="--", ec=NO_LIGHT, lw=0.7))
+    radius = body_radius(record.header)
+    for i, start in enumerate(record.header.initial):
+        _robot(ax, start, radius, fill=False, ls="--", ec=NO_LIGHT, lw=0.7)
         name = lights[i] if lights is not None else None
         fc = light_hex(palette, name) or NO_LIGHT
-        ax.add_patch(Circle((end[i, 0], end[i, 1]), 1.0, fc=fc, ec="black", lw=0.5, alpha=0.6))
+        _robot(ax, end[i], radius, fc=fc, ec="black", lw=0.5, alpha=0.6)
     handles = [Patch(color=light_hex(palette, name), label=name) for name in palette]
     handles.append(Patch(fill=False, ls="--", ec=NO_LIGHT, label="start"))
     ax.legend(handles=handles, fontsize=7, loc="best", title="lights", title_fontsize=7)
 
 
 def draw_look(record: RunRecord, scene: LookScene, out: str, title: str | None = None) -> None:
-    """Render one Look to `out`: every robot where it was then, the looker ringed with its sight
-    circle and the move it made, the robots it saw in their colours, the others pale."""
-    import matplotlib
+    """Render one Look to `out` (format from its suffix); needs matplotlib."""
+    look_figure(record, scene, title).savefig(out)
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+
+def look_figure(record: RunRecord, scene: LookScene, title: str | None = None) -> Figure:
+    """One Look as a matplotlib Figure: every robot where it was then, the looker ringed with its
+    sight circle and the move it made (ringed red, its compute having failed, when it did), the
+    robots it saw in their colours, the others pale."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Circle, Patch
 
     palette, robot = record_palette(record), scene.robot
-    fig, ax = plt.subplots(figsize=(7, 7))
+    fig, ax = new_figure(PICTURE_INCHES)
     ax.set_aspect("equal")
-    _look_discs(ax, scene, palette)
+    _look_discs(ax, scene, palette, body_radius(record.header))
     x0, y0 = scene.positions[robot]
     reach = scene.sight or 0.0
     if scene.sight is not None:
@@ -212,33 +250,38 @@ def draw_look(record: RunRecord, scene: LookScene, out: str, title: str | None =
     handles.append(Patch(fc="#e8e8e8", ec="#b0b0b0", ls=":", label="not seen"))
     if scene.sight is not None:
         handles.append(Line2D([], [], ls="--", color="black", lw=0.8, label="sight"))
+    if scene.failed is not None:
+        handles.append(Patch(fill=False, ec=FAILED_COLOUR, lw=2.0, label="compute failed"))
     ax.legend(handles=handles, fontsize=7, loc="best")
-    _finish(fig, ax, (lo, hi), title or look_title(record, scene), out)
-    plt.close(fig)
+    _finish(fig, ax, (lo, hi), title or look_title(record, scene))
+    return fig
 
 
-def _look_discs(ax: Any, scene: LookScene, palette: tuple[str, ...]) -> None:
-    """Every robot at the Look, numbered: the looker ringed, the unseen pale and dotted."""
-    from matplotlib.patches import Circle
-
-    for i, (x, y) in enumerate(scene.positions):
+def _look_discs(ax: Any, scene: LookScene, palette: tuple[str, ...], radius: float) -> None:
+    """Every robot at the Look, numbered: the looker ringed (red if its compute failed), the
+    unseen pale and dotted."""
+    for i, centre in enumerate(scene.positions):
         name = scene.lights[i] if scene.lights is not None else None
         fc = light_hex(palette, name) or NO_LIGHT
         if i != scene.robot and i not in scene.seen:
-            ax.add_patch(Circle((x, y), 1.0, fc="#e8e8e8", ec="#b0b0b0", lw=0.5, ls=":"))
+            _robot(ax, centre, radius, fc="#e8e8e8", ec="#b0b0b0", lw=0.5, ls=":")
+        elif i == scene.robot:
+            ec = "black" if scene.failed is None else FAILED_COLOUR
+            _robot(ax, centre, radius, fc=fc, ec=ec, lw=2.0)
         else:
-            lw = 2.0 if i == scene.robot else 0.5
-            ax.add_patch(Circle((x, y), 1.0, fc=fc, ec="black", lw=lw))
-        ax.annotate(str(i), (x, y), ha="center", va="center", fontsize=8)
+            _robot(ax, centre, radius, fc=fc, ec="black", lw=0.5)
+    _ids(ax, scene.positions, radius)
 
 
 def look_title(record: RunRecord, scene: LookScene) -> str:
-    """`robot 2's Look in round 5: saw 3 of 5 (--visibility opaque --sight 6)` and the run."""
+    """`robot 2's Look in round 5: saw 3 of 5 (--visibility opaque --sight 6)` ("cycle" under
+    async), why its compute failed if it did, and the run."""
     header = record.header
     model = model_notes(header.extra)[0] or "paper model"
+    failed = "" if scene.failed is None else f"\nits compute failed: {scene.failed}"
     return (
-        f"robot {scene.robot}'s Look in round {scene.round}: saw {len(scene.seen)} of "
-        f"{header.n - 1} ({model})\n{algorithm_text(header.algorithm, header.params)}, "
+        f"robot {scene.robot}'s Look in {scene.word} {scene.round}: saw {len(scene.seen)} of "
+        f"{header.n - 1} ({model}){failed}\n{algorithm_text(header.algorithm, header.params)}, "
         f"n={header.n}, {header.scheduler}, seed {header.seed}"
     )
 
@@ -258,9 +301,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         type=int,
         metavar="I",
         help="with --round K: draw robot I's Look in round K instead (what it saw, where all "
-        "robots were then, its move; needs a record made with --record-views)",
+        "robots were then, its move, whether its compute failed; needs a record made with "
+        "--record-views); in a video: ring robot I and, while it Looks, pale the robots it "
+        "did not see",
     )
-    p.add_argument("--round", type=int, metavar="K", help="the round of --robot's Look")
+    p.add_argument(
+        "--round", type=int, metavar="K",
+        help="the round of --robot's Look (async records: the cycle line)",
+    )  # fmt: skip
     add_animation_arguments(p)
 
 
@@ -315,8 +363,14 @@ def _refused(args: argparse.Namespace) -> str | None:
         return f"cannot write {args.out}: {folder} is not writable"
     given = animation_flags_given(args)
     if suffix not in ANIMATIONS and given:
-        return f"{', '.join(given)} go with a video: write OUT.gif or OUT.mp4"
+        applies = "applies" if len(given) == 1 else "apply"
+        return f"{_listed(given)} only {applies} to a video: write OUT.gif or OUT.mp4"
     return None
+
+
+def _listed(flags: list[str]) -> str:
+    """`--fps`, `--fps and --rounds`, `--fps, --speed and --rounds`."""
+    return flags[0] if len(flags) == 1 else f"{', '.join(flags[:-1])} and {flags[-1]}"
 
 
 def _look_of(args: argparse.Namespace, record: RunRecord) -> LookScene | str | None:
