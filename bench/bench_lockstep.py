@@ -83,30 +83,32 @@ class _Budget(Exception):
 
 
 class _Counter:
-    """`on_round` of one run: adds the Looks of every round after the first and the time since
-    the round before to `totals`; raises _Budget once `budget` seconds are spent."""
+    """`on_round` of one run: adds the Looks of every round after the first, and the wall and
+    CPU time since the round before, to `totals`; raises _Budget once `budget` seconds of wall
+    time are spent."""
 
     def __init__(self, totals: dict[str, float], budget: float) -> None:
         self.totals, self.budget = totals, budget
-        self.last: float | None = None
+        self.last: tuple[float, float] | None = None
 
     def __call__(self, report: Any) -> None:
-        now = time.perf_counter()
+        now = (time.perf_counter(), time.process_time())
         if self.last is not None:
             self.totals["looks"] += len(report.entry.active)
-            self.totals["secs"] += now - self.last
+            self.totals["secs"] += now[0] - self.last[0]
+            self.totals["cpu"] += now[1] - self.last[1]
         self.last = now
         if self.totals["secs"] >= self.budget:
             raise _Budget
 
 
 def measure(algorithm: str, n: int, budget: float) -> dict[str, float]:
-    """Looks and seconds of lock-step runs of `algorithm` at n robots (seeds 0, 1, ...), from
-    each run's first committed round to its last, until `budget` seconds are spent."""
+    """Looks, seconds and CPU seconds of lock-step runs of `algorithm` at n robots (seeds 0,
+    1, ...), from each run's first committed round to its last, until `budget` seconds pass."""
     import fatswarm  # function-local: a worker imports the fatswarm of its own checkout
 
     ref = _ref(algorithm)
-    totals = {"looks": 0.0, "secs": 0.0}
+    totals = {"looks": 0.0, "secs": 0.0, "cpu": 0.0}
     seed = 0
     while totals["secs"] < budget:
         with contextlib.suppress(_Budget):
@@ -129,74 +131,84 @@ def _ref(algorithm: str) -> str:
     return f"{os.path.abspath(__file__)}:{own}" if own else algorithm
 
 
-def _worker(budget: float) -> None:
-    """Every figure of this checkout as JSON on stdout."""
-    out: dict[str, dict[str, float]] = {}
-    for algorithm in ALGORITHMS:
-        for n in SIZES:
-            try:
-                out[f"{algorithm}:{n}"] = measure(algorithm, n, budget)
-            except Exception as exc:  # an older checkout without this algorithm: a blank cell
-                print(f"{algorithm}:{n}: {exc}", file=sys.stderr)
-                out[f"{algorithm}:{n}"] = {"looks": 0.0, "secs": 0.0}
-    import fatswarm  # function-local: the checkout it ran from
+def _worker() -> None:
+    """Where fatswarm is, as JSON on stdout; then a figure for every line `ALGORITHM N BUDGET`
+    on stdin (no Looks where this checkout cannot run it)."""
+    import fatswarm  # function-local: the checkout it runs from
 
-    print(json.dumps({"figures": out, "where": fatswarm.__file__}))
+    print(json.dumps({"where": fatswarm.__file__}), flush=True)
+    for line in sys.stdin:
+        algorithm, n, budget = line.split()
+        try:
+            got = measure(algorithm, int(n), float(budget))
+        except Exception as exc:  # an older checkout without this algorithm: a blank cell
+            print(f"{algorithm}:{n}: {exc}", file=sys.stderr)
+            got = {"looks": 0.0, "secs": 0.0, "cpu": 0.0}
+        print(json.dumps(got), flush=True)
 
 
-def side(python: str, checkout: str, budget: float) -> dict[str, dict[str, float]] | None:
-    """The figures of `checkout`, measured in a process of `python` run from there."""
+Figure = Mapping[str, float]  # looks, secs (wall), cpu (CPU seconds)
+
+
+class _Process:
+    """A measuring process that answers a line of JSON for every line it is sent."""
+
+    def __init__(self, name: str, command: Sequence[str] | str, **kw: Any) -> None:
+        self.name = name
+        self.proc = subprocess.Popen(
+            command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, **kw
+        )
+
+    def ask(self, line: str) -> dict[str, Any] | None:
+        assert self.proc.stdin is not None and self.proc.stdout is not None
+        try:
+            self.proc.stdin.write(line + "\n")
+            self.proc.stdin.flush()
+            answer = self.proc.stdout.readline()
+        except OSError:
+            answer = ""
+        if not answer.strip():
+            print(f"{self.name}: no answer to {line!r}", file=sys.stderr)
+            return None
+        got: dict[str, Any] = json.loads(answer)
+        return got
+
+    def close(self) -> None:
+        if self.proc.stdin is not None:
+            self.proc.stdin.close()
+        try:
+            self.proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+
+
+def side(python: str, checkout: str) -> _Process | None:
+    """A worker measuring `checkout`, run by `python` from there; None if it measures another."""
     env = {**os.environ, "PYTHONPATH": checkout}
-    done = subprocess.run(
-        [python, os.path.abspath(__file__), "--worker", "--budget", str(budget)],
-        cwd=checkout,
-        env=env,
-        capture_output=True,
-        text=True,
-        check=False,
+    worker = _Process(
+        checkout, [python, os.path.abspath(__file__), "--worker"], cwd=checkout, env=env
     )
-    if done.returncode != 0:
-        print(f"{checkout}: failed: {done.stderr.strip()[-800:]}", file=sys.stderr)
-        return None
-    got = json.loads(done.stdout.strip().splitlines()[-1])
-    where = os.path.realpath(got["where"])
+    assert worker.proc.stdout is not None
+    first = worker.proc.stdout.readline()
+    where = os.path.realpath(json.loads(first)["where"]) if first.strip() else "nowhere"
     if not where.startswith(os.path.realpath(checkout)):
-        print(f"{checkout}: measured {where}, not this checkout", file=sys.stderr)
+        print(f"{checkout}: measures {where}, not this checkout", file=sys.stderr)
+        worker.close()
         return None
-    figures: dict[str, dict[str, float]] = got["figures"]
-    return figures
+    return worker
 
 
-Figures = Mapping[str, Mapping[str, float]]
-
-
-def peer(command: str) -> dict[str, dict[str, float]] | None:
-    """The peer's figures by n ("peer:N"), from the JSON lines `command` prints."""
-    done = subprocess.run(command, shell=True, capture_output=True, text=True, check=False)
-    if done.returncode != 0:
-        print(f"peer: failed: {done.stderr.strip()[-800:]}", file=sys.stderr)
+def _rate(figure: Figure | None, clock: str) -> float | None:
+    """Looks per second of wall (`secs`) or CPU (`cpu`) time, or None if not measured."""
+    if figure is None or not figure.get("looks") or not figure.get(clock):
         return None
-    out: dict[str, dict[str, float]] = {}
-    for line in done.stdout.splitlines():
-        if line.strip().startswith("{"):
-            got = json.loads(line)
-            out[f"peer:{int(got['n'])}"] = {
-                "looks": float(got["looks"]),
-                "secs": float(got["secs"]),
-            }
-    return out
+    return figure["looks"] / figure[clock]
 
 
-def _rate(figures: Figures | None, key: str) -> float | None:
-    """Looks per second of `key`, or None if not measured."""
-    if figures is None or key not in figures or figures[key]["looks"] == 0:
-        return None
-    return figures[key]["looks"] / figures[key]["secs"]
-
-
-def _median(repeats: Sequence[Figures | None], key: str) -> float | None:
-    rates = [r for r in (_rate(f, key) for f in repeats) if r is not None]
-    return statistics.median(rates) if rates else None
+def _median(values: Sequence[float | None]) -> float | None:
+    known = [v for v in values if v is not None]
+    return statistics.median(known) if known else None
 
 
 def _cell(rate: float | None, per_look: bool) -> str:
@@ -205,43 +217,54 @@ def _cell(rate: float | None, per_look: bool) -> str:
     return f"{1e6 / rate:>11,.1f}" if per_look else f"{rate:>11,.0f}"
 
 
-def report(
-    now: Sequence[Figures | None], base: Sequence[Figures | None], peers: Sequence[Figures | None]
-) -> None:
-    """The table (medians of the repeats): µs per Look of no-compute, then Looks/s of every
-    algorithm, by n; with a peer, its Looks/s and whole µs per Look, and fatswarm's ratios."""
-    columns = [("this tree", now)] + ([("baseline", base)] if base else [])
-    print(f"{'figure':<30}{'n':>5}" + "".join(f"{name:>11}" for name, _ in columns))
+Results = Mapping[str, Mapping[str, Sequence[Figure | None]]]  # side -> figure key -> repeats
+
+
+def report(results: Results, sides: Sequence[str], clock: str) -> None:
+    """One table (medians of the repeats, on the `clock`): µs per Look of the no-compute
+    figures, then Looks/s of every algorithm, by n; with a peer, its Looks/s and whole µs per
+    Look, and fatswarm's ratios to it, each from a pair measured one after the other."""
+    print(f"{'figure':<30}{'n':>5}" + "".join(f"{name:>11}" for name in sides))
     rows = [(a, True) for a in ALGORITHMS if a.startswith("no-compute")]
     rows += [(a, False) for a in ALGORITHMS]
-    if peers:
+    peer = "peer" in results
+    if peer:
         rows += [("peer", True), ("peer", False)]
     for algorithm, per_look in rows:
         label = f"{algorithm} " + ("µs/Look" if per_look else "Looks/s")
         for n in SIZES:
-            cells = "".join(_cell(_median(f, f"{algorithm}:{n}"), per_look) for _, f in columns)
+            key = f"{algorithm}:{n}"
+            cells = ""
+            for name in sides:
+                figures = results.get(name, {}).get(key, ())
+                cells += _cell(_median([_rate(f, clock) for f in figures]), per_look)
             print(f"{label:<30}{n:>5}" + cells)
-    if not peers:
+    if not peer:
         return
-    print("ratios, this tree against the peer (medians): Looks/s over the peer's; µs over its")
+    print("this tree against the peer, median of the pairs: Looks/s over its; µs over its")
     for algorithm, per_look in rows:
         if algorithm == "peer":
             continue
         label = f"{algorithm} " + ("µs/peer's µs" if per_look else "x peer")
         for n in SIZES:
-            ours, theirs = _median(now, f"{algorithm}:{n}"), _median(peers, f"peer:{n}")
-            ratio = None if ours is None or theirs is None else ours / theirs
+            ours = results["this tree"].get(f"{algorithm}:{n}", ())
+            theirs = results["peer"].get(f"{algorithm}:{n}", ())
+            ratios: list[float | None] = []
+            for a, b in zip(ours, theirs, strict=False):
+                ra, rb = _rate(a, clock), _rate(b, clock)
+                ratios.append(None if ra is None or rb is None else ra / rb)
+            ratio = _median(ratios)
             if ratio is not None and per_look:
                 ratio = 1.0 / ratio
             print(f"{label:<30}{n:>5}" + (f"{ratio:>11.2f}" if ratio else f"{'-':>11}"))
 
 
-def _repeat(figures: Sequence[Figures | None], name: str) -> None:
-    """Each repeat's Looks/s of every figure, on one line each (the spread behind the medians)."""
-    for key in sorted({k for f in figures if f for k in f}):
-        rates = [_rate(f, key) for f in figures]
-        shown = " ".join(f"{r:,.0f}" if r else "-" for r in rates)
-        print(f"  {name} {key}: {shown}")
+def _spread(results: Results, clock: str) -> None:
+    """Each repeat's Looks/s of every figure (the spread behind the medians)."""
+    for name, figures in results.items():
+        for key, repeats in sorted(figures.items()):
+            rates = [_rate(f, clock) for f in repeats]
+            print(f"  {name} {key}: " + " ".join(f"{r:,.0f}" if r else "-" for r in rates))
 
 
 def profile(spec: str, rounds: int) -> None:
@@ -272,40 +295,54 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--baseline", metavar="DIR", help="also measure this checkout (a worktree)")
     p.add_argument("--baseline-python", metavar="PY", help="its python (default: see above)")
     p.add_argument("--budget", type=float, default=3.0, help="seconds per figure (default 3)")
-    p.add_argument("--peer", metavar="CMD", help="a shell command printing a peer's figures")
-    p.add_argument("--repeats", type=int, default=1, help="measure every side so often")
+    p.add_argument("--peer", metavar="CMD", help="a shell command measuring a peer (see above)")
+    p.add_argument("--repeats", type=int, default=1, help="measure every figure so often")
+    p.add_argument("--only", metavar="ALGORITHM", action="append", help="only these figures")
     p.add_argument("--profile", metavar="ALGORITHM:N", help="cProfile one run instead")
     p.add_argument("--rounds", type=int, default=150, help="rounds of the --profile run")
     p.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args(argv)
     if args.worker:
-        _worker(args.budget)
+        _worker()
         return 0
     if args.profile:
         profile(args.profile, args.rounds)
         return 0
     here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    now: list[Figures | None] = []
-    base: list[Figures | None] = []
-    peers: list[Figures | None] = []
-    for _ in range(args.repeats):  # in turn, so that each side meets the same load
-        now.append(side(sys.executable, here, args.budget))
-        if args.baseline:
-            default = os.path.join(os.path.dirname(os.path.abspath(args.baseline)), "basevenv")
-            python = args.baseline_python or os.path.join(default, "bin", "python")
-            python = python if os.path.exists(python) else sys.executable
-            base.append(side(python, args.baseline, args.budget))
-        if args.peer:
-            peers.append(peer(args.peer))
-    print(
-        f"lock step, fsync, spread start, in process, start-up excluded; {args.budget:g} s "
-        f"each, median of {args.repeats} repeat(s), sides in turn"
-    )
-    report(now, base, peers)
-    if args.repeats > 1:
-        _repeat(now, "this tree")
-        _repeat(base, "baseline")
-        _repeat(peers, "peer")
+    workers = {"this tree": side(sys.executable, here)}
+    if args.baseline:
+        default = os.path.join(os.path.dirname(os.path.abspath(args.baseline)), "basevenv")
+        python = args.baseline_python or os.path.join(default, "bin", "python")
+        python = python if os.path.exists(python) else sys.executable
+        workers["baseline"] = side(python, args.baseline)
+    peer = _Process("peer", args.peer, shell=True) if args.peer else None
+    results: dict[str, dict[str, list[Figure | None]]] = {}
+    algorithms = [a for a in ALGORITHMS if not args.only or a in args.only]
+    try:
+        for _ in range(args.repeats):  # each figure on every side in turn: the same load
+            for n in SIZES:
+                for algorithm in algorithms:
+                    key = f"{algorithm}:{n}"
+                    for name, worker in workers.items():
+                        got = worker.ask(f"{algorithm} {n} {args.budget}") if worker else None
+                        results.setdefault(name, {}).setdefault(key, []).append(got)
+                    if peer is not None:  # right after: the pair meets the same load
+                        got = peer.ask(f"{n} {args.budget}")
+                        results.setdefault("peer", {}).setdefault(key, []).append(got)
+                        results["peer"].setdefault(f"peer:{n}", []).append(got)
+    finally:
+        for worker in [*workers.values(), peer]:
+            if worker is not None:
+                worker.close()
+    sides = list(workers) + (["peer"] if peer else [])
+    for clock, what in (("secs", "wall clock"), ("cpu", "CPU time of the measuring process")):
+        print(
+            f"lock step, fsync, spread start, in process, start-up excluded; {what}; "
+            f"{args.budget:g} s each, median of {args.repeats} repeat(s), sides in turn"
+        )
+        report(results, sides, clock)
+        if args.repeats > 1:
+            _spread(results, clock)
     return 0
 
 

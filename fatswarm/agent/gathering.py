@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fatswarm.agent.params import check_count, check_tolerance
-from fatswarm.agent.row_sums import fsum_rows
+from fatswarm.agent.row_sums import fsum_rows, nearest_norms
 from fatswarm.domain.assumptions import Assumptions
 from fatswarm.domain.path import STAY, Line, Path, Points
 from fatswarm.domain.robot_model import Bodies, Visibility
@@ -135,12 +135,12 @@ class Gathering:
         k, m = views.shape[0], views.shape[1]
         if m == 0:
             return [STAY] * k
-        xs = np.ascontiguousarray(views[:, :, 0])
-        ys = np.ascontiguousarray(views[:, :, 1])
+        coords = np.ascontiguousarray(views.transpose(2, 0, 1)).reshape(2 * k, m)  # xs, then ys
+        xs, ys = coords[:k], coords[k:]
         n = m + 1
-        gxs = (fsum_rows(xs) / n).tolist()
-        gys = (fsum_rows(ys) / n).tolist()
-        gaps = ((np.hypot(xs, ys).min(axis=1) - CONTACT) / 2.0).tolist()
+        sums = fsum_rows(coords) / n
+        gxs, gys = sums[:k].tolist(), sums[k:].tolist()
+        gaps = ((nearest_norms(xs, ys) - CONTACT) / 2.0).tolist()
         tolerance, hypot = params.tolerance, math.hypot
         paths: list[Path] = []
         for gx, gy, gap in zip(gxs, gys, gaps, strict=True):

@@ -22,6 +22,9 @@ Sums = NDArray[np.float64]  # (k,)
 UNIT: Final = 2.0**-53  # the unit roundoff of float64
 TINY: Final = 2.0**-900  # rows whose largest value is below this go to math.fsum (no underflow)
 HUGE: Final = 2.0**900  # rows whose largest value is above this go to math.fsum (no overflow)
+NEAR_REL: Final = 2.0**-30  # `nearest_norms`' candidates: squares within this of the least
+SQUARE_TINY: Final = 2.0**-900  # squares below: underflow may have cost relative accuracy
+SQUARE_HUGE: Final = 2.0**900  # squares above: near overflow
 
 
 def fsum_rows(values: Rows) -> Sums:
@@ -33,15 +36,18 @@ def fsum_rows(values: Rows) -> Sums:
     out = np.zeros(x.shape[:1] + x.shape[2:], dtype=np.float64)
     if m == 0 or out.size == 0:
         return out
-    amax = np.maximum(x.max(axis=1), -x.min(axis=1))  # NaN propagates: not `ok` below
-    ok = (amax >= TINY) & (amax <= HUGE)
-    # sigma = 2^(M + e) with 2^e > amax and 2^M >= m + 2: (x + sigma) - sigma is exact, x less it
-    # is exact, and the parts are multiples of 2^-53 sigma below sigma / 2^M in size, so their
-    # sum is exact in any order (ExtractVector's lemma)
-    _, exps = np.frexp(np.where(ok, amax, 1.0))
-    sigma = np.ldexp(1.0, exps + math.ceil(math.log2(m + 2)))
-    high = x + sigma[:, None]
-    high -= sigma[:, None]
+    # one sigma for every row: a power of two 2^(M + e) with 2^e > max|x| and 2^M >= m + 2.
+    # (x + sigma) - sigma is then exact, x less it is exact, and the parts are multiples of
+    # 2^-53 sigma below sigma / 2^M in size, so each row's sum of them is exact in any order
+    # (Rump, Ogita and Oishi's ExtractVector)
+    amax = max(float(x.max()), -float(x.min()))  # NaN: not finite, every row to math.fsum
+    if amax == 0.0:  # every value a zero: every sum 0.0
+        return out
+    if not TINY <= amax <= HUGE:
+        return _fsum_each(x, out, np.ones(out.shape, dtype=np.bool_))
+    sigma = math.ldexp(1.0, math.frexp(amax)[1] + math.ceil(math.log2(m + 2)))
+    high = x + sigma
+    high -= sigma
     rest = x - high  # exact; |rest| <= 2^-53 sigma, so sum|rest| <= m 2^-53 sigma
     exact = high.sum(axis=1)
     approx = rest.sum(axis=1)
@@ -53,13 +59,37 @@ def fsum_rows(values: Rows) -> Sums:
     err = (exact - (total - back)) + (approx - back)
     gap = np.minimum(np.nextafter(total, np.inf) - total, total - np.nextafter(total, -np.inf))
     room = 0.5 * gap - np.abs(err)  # how far the exact sum may stray and still round to total
-    proved = ok & (total != 0.0) & (bound * 1.01 < room * 0.99)
+    proved = (total != 0.0) & (bound * 1.01 < room * 0.99)
     out[proved] = total[proved]
-    for at in zip(*np.nonzero(~proved), strict=True):
-        if ok[at] or amax[at] != 0.0:  # an all-zero row sums to 0.0 (NaN: fsum)
-            column = x[(at[0], slice(None), *at[1:])]
-            out[at] = math.fsum(column.tolist())
+    return _fsum_each(x, out, ~proved)
+
+
+def _fsum_each(x: Rows, out: Sums, rows: NDArray[np.bool_]) -> Sums:
+    """`out` with `math.fsum` of each of `rows` of `x` (along axis 1) filled in."""
+    for at in zip(*np.nonzero(rows), strict=True):
+        column = x[(at[0], slice(None), *at[1:])]
+        out[at] = math.fsum(column.tolist())
     return out
 
 
-__all__ = ["fsum_rows"]
+def nearest_norms(xs: Rows, ys: Rows) -> Sums:
+    """(k,) `np.hypot(xs[i], ys[i]).min()` of every row, bit for bit, for (k, m) coordinates
+    (m >= 1): `np.hypot` only on each row's candidates, the elements whose x^2 + y^2 is within
+    NEAR_REL of the row's least. Outside that margin an element's norm is larger by far more than
+    np.hypot's error (under 1 ulp), so it cannot be the least; rows where squares could underflow
+    or overflow, or hold NaN, take `np.hypot` whole."""
+    squares = xs * xs
+    squares += ys * ys
+    least = squares.min(axis=1)
+    out = np.empty(len(xs), dtype=np.float64)
+    plain = (least >= SQUARE_TINY) & (squares.max(axis=1) <= SQUARE_HUGE)  # NaN: not plain
+    rows, cols = np.nonzero(squares <= (least * (1.0 + NEAR_REL))[:, None])
+    norms = np.hypot(xs[rows, cols], ys[rows, cols])
+    out.fill(np.inf)
+    np.minimum.at(out, rows, norms)
+    for row in np.flatnonzero(~plain).tolist():
+        out[row] = np.hypot(xs[row], ys[row]).min()
+    return out
+
+
+__all__ = ["fsum_rows", "nearest_norms"]

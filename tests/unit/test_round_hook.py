@@ -18,7 +18,7 @@ from fatswarm.agent.gathering import ALGORITHM as GATHERING
 from fatswarm.agent.gathering import GatheringParams
 from fatswarm.agent.oblot_common import make_oblot_params
 from fatswarm.agent.oblot_go_to_cog import ALGORITHM as GO_TO_COG
-from fatswarm.agent.row_sums import fsum_rows
+from fatswarm.agent.row_sums import fsum_rows, nearest_norms
 from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy.engine.lockstep import run_lockstep
 from fatswarm.domain.path import Path, Points
@@ -63,6 +63,20 @@ def test_fsum_rows_sums_along_the_second_axis_of_a_view_array() -> None:
     views = np.random.default_rng(3).normal(size=(4, 7, 2)) * 30.0
     want = np.stack([fsums(views[:, :, 0]), fsums(views[:, :, 1])], axis=1)
     assert bits(fsum_rows(views)) == bits(want)
+
+
+def test_nearest_norms_gives_the_least_hypot_of_every_row_bit_for_bit() -> None:
+    rng = np.random.default_rng(11)
+    xs, ys = rng.normal(size=(40, 30)) * 50.0, rng.normal(size=(40, 30)) * 50.0
+    xs[:10, 1], ys[:10, 1] = ys[:10, 0], xs[:10, 0]  # the same norm twice, swapped
+    xs[10:20, 2] = np.nextafter(xs[10:20, 0], np.inf)  # near ties
+    ys[10:20, 2] = ys[10:20, 0]
+    xs[20, :], ys[20, :] = 1e-200, 3e-200  # squares underflow: np.hypot whole
+    xs[21, 3] = np.nan  # NaN, as np.hypot has it
+    xs[22, :] = 0.0
+    ys[22, :] = 0.0
+    want = np.hypot(xs, ys).min(axis=1)
+    assert bits(nearest_norms(xs, ys)) == bits(want)
 
 
 def views_of(positions: Points, rng: np.random.Generator) -> np.ndarray:
