@@ -7,7 +7,7 @@ its nearest neighbour; it stays once that step is within `tolerance`, and the ru
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Final
 
@@ -15,10 +15,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fatswarm.agent.params import check_count, check_tolerance
+from fatswarm.agent.row_sums import fsum_rows, nearest_norms
 from fatswarm.domain.assumptions import Assumptions
 from fatswarm.domain.path import STAY, Line, Path, Points
 from fatswarm.domain.robot_model import Bodies, Visibility
-from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue
+from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue, Views
 from fatswarm.domain.tolerance import CONTACT
 
 Values = NDArray[np.float64]  # (k,)
@@ -126,6 +127,33 @@ class Gathering:
             return Path((Line((gx, gy)),))
         f = step / to_g
         return Path((Line((gx * f, gy * f)),))
+
+    def compute_views(self, views: Views, params: GatheringParams) -> Sequence[Path]:
+        """`compute` of every view of `views` (k, m, 2) at once, the very bits (the round hook:
+        fatswarm/domain/seam.py): the sums by `fsum_rows` (`math.fsum`'s bits), the nearest
+        gap by the same `np.hypot` per element, the rest per robot as `compute` does it."""
+        k, m = views.shape[0], views.shape[1]
+        if m == 0:
+            return [STAY] * k
+        coords = np.ascontiguousarray(views.transpose(2, 0, 1)).reshape(2 * k, m)  # xs, then ys
+        xs, ys = coords[:k], coords[k:]
+        n = m + 1
+        sums = fsum_rows(coords) / n
+        gxs, gys = sums[:k].tolist(), sums[k:].tolist()
+        gaps = ((nearest_norms(xs, ys) - CONTACT) / 2.0).tolist()
+        tolerance, hypot = params.tolerance, math.hypot
+        paths: list[Path] = []
+        for gx, gy, gap in zip(gxs, gys, gaps, strict=True):
+            to_g = hypot(gx, gy)
+            step = min(to_g, gap)
+            if not step > tolerance:
+                paths.append(STAY)
+            elif step >= to_g:
+                paths.append(Path((Line((gx, gy)),)))
+            else:
+                f = step / to_g
+                paths.append(Path((Line((gx * f, gy * f)),)))
+        return paths
 
     def goal(self, positions: Points, params: GatheringParams) -> bool:
         """No robot would move: every robot's step, from world positions, is <= tolerance.

@@ -5,8 +5,10 @@ positions it sees, its own included (docs/ports.md, "oblot-go-to-cog").
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Final
+
+import numpy as np
 
 from fatswarm.agent.oblot_common import (
     TOLERANCE_SPEC,
@@ -17,9 +19,10 @@ from fatswarm.agent.oblot_common import (
     peer_assumptions,
     spread,
 )
+from fatswarm.agent.row_sums import fsum_rows
 from fatswarm.domain.assumptions import Assumptions
 from fatswarm.domain.path import Path, Points
-from fatswarm.domain.seam import ParamSpec, ParamValue
+from fatswarm.domain.seam import ParamSpec, ParamValue, Views
 
 # The peer's robots see every robot (`Simulator/Simulation.java:101`), one row per robot
 # (multiplicity), as points; the centre of gravity needs no agreement on axes (any frame).
@@ -49,6 +52,17 @@ class OblotGoToCoG:
         gx = math.fsum(view[:, 0].tolist()) / n if len(view) else 0.0
         gy = math.fsum(view[:, 1].tolist()) / n if len(view) else 0.0
         return go_to((gx, gy), params)
+
+    def compute_views(self, views: Views, params: OblotParams) -> Sequence[Path]:
+        """`compute` of every view of `views` (k, m, 2) at once, the very bits (the round hook:
+        fatswarm/domain/seam.py): the sums by `fsum_rows` (`math.fsum`'s bits)."""
+        k, m = views.shape[0], views.shape[1]
+        if m == 0:
+            return [go_to((0.0, 0.0), params)] * k
+        n = m + 1  # the robot itself, at the origin, adds nothing to the sums
+        gxs = (fsum_rows(np.ascontiguousarray(views[:, :, 0])) / n).tolist()
+        gys = (fsum_rows(np.ascontiguousarray(views[:, :, 1])) / n).tolist()
+        return [go_to(target, params) for target in zip(gxs, gys, strict=True)]
 
     def goal(self, positions: Points, params: OblotParams) -> bool:
         """Every robot at one point (within GOAL_REL of the largest coordinate)."""

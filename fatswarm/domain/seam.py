@@ -18,6 +18,9 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Final, Protocol, TypeVar, cast, runtime_checkable
 
+import numpy as np
+from numpy.typing import NDArray
+
 from fatswarm.domain.assumptions import Assumptions
 from fatswarm.domain.lights import Glance, LightsError, Lit, colour_index, palette
 from fatswarm.domain.path import Path, Points
@@ -28,6 +31,10 @@ MAX_PARAMS = 32  # parameters an algorithm may declare (bounds what a peer can m
 MAX_TEXT = 200  # characters of a text parameter or an algorithm name
 
 P = TypeVar("P")
+
+Views = NDArray[np.float64]
+"""(k, m, 2): k robots' views at once, row i robot i's own view (m, 2) in its own private frame,
+its rows in the order its Look gives them: what the round hook `compute_views` is given."""
 
 
 class AlgorithmError(ValueError):
@@ -157,7 +164,12 @@ class Algorithm(Protocol[P]):
     algorithm does not support (raise AlgorithmParamsError or a ValueError subclass);
     `figures(positions, params) -> Mapping[str, float]` for the dashboard;
     `round_planner(params)`, an object whose `paths(positions, robots, flips)` gives the very
-    paths `compute` would give each of `robots` in its own frame, made at once (a fast lock step).
+    paths `compute` would give each of `robots` in its own frame, made at once (a fast lock step);
+    `compute_views(views, params)`, the round hook: the paths of k robots of a round in one call,
+    each from its own view only (`Views`, (k, m, 2), row i robot i's view in its own frame),
+    a sequence of k Paths, each bit for bit the one `compute(views[i], params)` returns (the
+    lock step uses it where every view is alike: docs/algorithms.md, "The round hook"). Pure, as
+    `compute`: no state survives a call, and path i may depend on row i alone.
     """
 
     name: str
@@ -342,6 +354,15 @@ class Configured:
         if hook is not None:
             hook(positions, self.params)
 
+    def views_compute(self) -> Callable[[Views], Sequence[Path]] | None:
+        """The algorithm's round hook for these parameters (`compute_views`), if it has one and
+        is not luminous (a luminous algorithm's Compute goes per robot)."""
+        hook = getattr(self.algorithm, "compute_views", None)
+        if hook is None or self.colours:
+            return None
+        params = self.params
+        return lambda views: cast(Sequence[Path], hook(views, params))
+
     def round_planner(self) -> RoundPlanner | None:
         """The algorithm's round planner for these parameters, if it has the hook."""
         hook = getattr(self.algorithm, "round_planner", None)
@@ -379,6 +400,7 @@ __all__ = [
     "ParamValue",
     "Points",
     "RoundPlanner",
+    "Views",
     "assumed_frames",
     "assumptions_of",
     "checked",

@@ -278,6 +278,14 @@ class WorldCore:
         if self.open_round:
             self.looks.prepare(self.positions, self.open_round, robots)
 
+    def views_of(self, robots: Sequence[int]) -> Points | None:
+        """(k, n-1, 2): the open round's views of `robots` (their Looks admitted: `admit_look`),
+        row i robot robots[i]'s, each the very view `view_of` gives it; None where the model's
+        views are not all alike (then `view_of` each): a lock step's round hook."""
+        if not self.open_round:
+            return None
+        return self.looks.views_at_once(self.positions, self.open_round, robots)
+
     def admit_look(self, robot: int) -> bool:
         """Count robot `robot`'s Look without building its view (a lock step that plans the round
         at once); False (refused, counted) if it is not active now."""

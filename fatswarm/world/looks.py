@@ -8,6 +8,7 @@ core holds one of these.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Collection, Iterable, Mapping, Sequence
 from typing import Any
 
@@ -99,31 +100,47 @@ class Looks:
 
     def prepare(self, positions: Points, look_round: int, robots: Sequence[int]) -> None:
         """Build the views of `robots` for their Looks of round `look_round` at `positions` in one
-        pass, for `view` to hand out: each the very array `view` would build alone (the same
-        differences, `view_orders` gives each row `view_order`'s order, the same frame)."""
+        pass (`views`), for `view` to hand out."""
         self._ahead = None
+        views = self.views_at_once(positions, look_round, robots)
+        if views is not None:
+            self._ahead = (look_round, positions, dict(zip(robots, views, strict=True)))
+
+    def views_at_once(
+        self, positions: Points, look_round: int, robots: Sequence[int]
+    ) -> Points | None:
+        """(k, n-1, 2): the views of `robots`' Looks of round `look_round` at `positions`, row i
+        robot robots[i]'s, each the very array `view` would build alone (the same differences,
+        `view_orders` gives each row `view_order`'s order, the same frame, the same operations);
+        None unless the model's views are all alike (`plain`) and fit AHEAD_LIMIT."""
         k = self.n - 1
         if not self.plain or not robots or len(robots) * k > AHEAD_LIMIT:
-            return
+            return None
         rows = np.asarray(robots, dtype=np.intp)
         order = view_orders(self.seed, look_round, robots, k)
         order += order >= rows[:, None]  # an index among the others is one among all robots
-        frames: Mapping[int, Frame] | Sequence[Frame]
+        frames: Sequence[Frame]
         if self._fixed is not None and self._fixed_sign is not None:  # drawn once
-            frames, sign = self._fixed, self._fixed_sign[rows]
+            frames, sign = [self._fixed[robot] for robot in robots], self._fixed_sign[rows]
         else:
-            drawn = {robot: self.frame(robot, look_round) for robot in robots}
-            frames, sign = drawn, _mirror_signs(list(drawn.values()))
+            frames = [self.frame(robot, look_round) for robot in robots]
+            sign = _mirror_signs(frames)
         rel = np.empty((len(rows), k, 2), dtype=np.float64)
         for axis in (0, 1):  # per coordinate: the same differences, faster than in (m, k, 2)
             coord = np.ascontiguousarray(positions[:, axis])
             np.subtract(coord[order], coord[rows][:, None], out=rel[:, :, axis])
         rel[:, :, 0] *= sign[:, None]  # x * 1.0 is x, bit for bit: the mirror of to_local alone
-        views = dict(zip(robots, rel, strict=True))  # each row a view of its own
-        for robot in robots:
-            if frames[robot].rotation:
-                views[robot] = frames[robot].to_local(views[robot])
-        self._ahead = (look_round, positions, views)
+        turned = [i for i, frame in enumerate(frames) if frame.rotation]
+        if turned:  # Frame.to_local's operations, on every turned row at once
+            at = np.asarray(turned, dtype=np.intp)
+            mirror = np.array([-1.0 if frames[i].mirror else 1.0 for i in turned])[:, None]
+            c = np.array([math.cos(frames[i].rotation) for i in turned])[:, None]
+            s = np.array([math.sin(frames[i].rotation) for i in turned])[:, None]
+            x = rel[at, :, 0] * mirror  # -x where mirrored, as to_local's `*= -1.0`
+            y = rel[at, :, 1]
+            rel[at, :, 0] = c * x - s * y
+            rel[at, :, 1] = s * x + c * y
+        return rel
 
     def seen_by(self, positions: Points, robot: int) -> np.ndarray:
         """The ids of the robots `robot` sees now, ascending."""

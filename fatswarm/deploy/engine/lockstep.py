@@ -305,6 +305,9 @@ class _Bus:
         setup = self.readout.setup
         plain = setup.robot_model.is_paper and not setting.luminous and not setup.record_views
         self.planner = setting.round_planner() if compute is None and plain else None
+        # the round hook: every active robot's path in one call, each from its own view (used
+        # where the world builds the round's views at once, `WorldCore.views_of`)
+        self.batch = setting.views_compute() if compute is None and self.planner is None else None
         self.flips = [self.readout.frame(robot, 0).mirror for robot in range(setup.n)]
 
     def run(self, scheduler: Scheduler) -> Finished:
@@ -373,6 +376,8 @@ class _Bus:
         lookers = [robot for robot in active if world.may_look(robot)]
         if self.planner is not None:
             planned = self.planner.paths(self.readout.positions, active, self.flips)
+        elif self.batch is not None and self._act_at_once(round_no, lookers):
+            return
         else:
             world.prepare_looks(lookers)
         for robot in lookers:
@@ -393,6 +398,38 @@ class _Bus:
                 world.hold(robot, round_no, Path(), None, move)
             elif move is not None:  # else as a move the world refuses: it times out
                 world.hold(robot, round_no, *move)
+
+    def _act_at_once(self, round_no: int, lookers: Sequence[int]) -> bool:
+        """`_act` through the round hook: the lookers' views as one array, their paths in one
+        call, each delivered and held as `_act` does one robot's; False (nothing done) where the
+        world cannot build the views at once. A hook that raises, or gives something that is
+        not a Path for a robot, has that robot's own compute say why (its failure, as alone)."""
+        assert self.batch is not None
+        world = self.world
+        views = world.views_of(lookers)
+        if views is None:
+            return False
+        admitted = [world.admit_look(robot) for robot in lookers]
+        try:
+            paths: Sequence[object] = self.batch(views)
+            if len(paths) != len(lookers):
+                raise TypeError(f"compute_views gave {len(paths)} paths for {len(lookers)} views")
+        except Exception:  # each robot's own compute then says what it says alone
+            paths = [None] * len(lookers)
+        hold, deliver = world.hold, self._delivered
+        for robot, ok, view, path in zip(lookers, admitted, views, paths, strict=True):
+            if not ok:
+                continue
+            decided: tuple[Path, int | None] | str = (
+                (path, None) if type(path) is Path else self._computed((view, None, None))
+            )
+            self.looks += 1
+            move = decided if isinstance(decided, str) else deliver(robot, round_no, *decided)
+            if isinstance(move, str):  # its compute raised: it stays and says why, as an agent
+                hold(robot, round_no, Path(), None, move)
+            elif move is not None:  # else as a move the world refuses: it times out
+                hold(robot, round_no, *move)
+        return True
 
     def _computed(self, seen: Seen) -> tuple[Path, int | None] | str:
         """The robot's path in its frame and next colour, or why its compute failed (raised, or

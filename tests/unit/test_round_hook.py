@@ -1,0 +1,236 @@
+"""The round hook (`compute_views`): every robot of a round from its own view in one call, the
+very bits of `compute`; the lock step's records are the same with it and without it."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path as FsPath
+from typing import Any
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+import fatswarm
+from fatswarm.agent.gathering import ALGORITHM as GATHERING
+from fatswarm.agent.gathering import GatheringParams
+from fatswarm.agent.oblot_common import make_oblot_params
+from fatswarm.agent.oblot_go_to_cog import ALGORITHM as GO_TO_COG
+from fatswarm.agent.row_sums import fsum_rows, nearest_norms
+from fatswarm.coordinator.schedule import make_scheduler
+from fatswarm.deploy.engine.lockstep import run_lockstep
+from fatswarm.domain.path import Path, Points
+from fatswarm.domain.robot_model import RobotModel
+from fatswarm.domain.seam import Configured
+from fatswarm.world.looks import Looks
+from fatswarm.world.record import RecordWriter
+
+SETTINGS = settings(max_examples=80, deadline=None)
+FLOATS = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False, allow_subnormal=False)
+
+
+def bits(values: np.ndarray) -> list[int]:
+    return np.ascontiguousarray(values, dtype=np.float64).view(np.int64).ravel().tolist()
+
+
+def fsums(rows: np.ndarray) -> np.ndarray:
+    return np.array([math.fsum(row.tolist()) for row in rows], dtype=np.float64)
+
+
+@SETTINGS
+@given(st.integers(1, 6).flatmap(lambda k: arrays(np.float64, (k, 9), elements=FLOATS)))
+def test_fsum_rows_gives_math_fsum_bits_for_any_rows(rows: np.ndarray) -> None:
+    assert bits(fsum_rows(rows)) == bits(fsums(rows))
+
+
+def test_fsum_rows_gives_math_fsum_bits_on_ties_cancellations_and_wide_exponents() -> None:
+    rng = np.random.default_rng(7)
+    ties = np.zeros((6, 4))
+    ties[:, 0] = 1.0
+    ties[:, 1] = 2.0**-53 * np.array([1, 3, -1, 1, 1, -3])  # exactly half an ulp of 1.0
+    ties[:, 2] = [0.0, 0.0, 0.0, 2.0**-300, -(2.0**-300), 2.0**-600]  # what breaks the tie
+    cancel = rng.normal(size=(5, 50))
+    cancel[:, -1] = -cancel[:, :-1].sum(axis=1)
+    wide = rng.normal(size=(5, 40)) * 2.0 ** rng.integers(-80, 80, size=(5, 40))
+    grid = rng.integers(-1000, 1000, size=(5, 30)) / 1024.0
+    for rows in (ties, cancel, wide, grid, np.zeros((3, 5)), -np.zeros((2, 3)), np.ones((2, 0))):
+        assert bits(fsum_rows(rows)) == bits(fsums(rows) if rows.shape[1] else np.zeros(2))
+
+
+def test_fsum_rows_sums_along_the_second_axis_of_a_view_array() -> None:
+    views = np.random.default_rng(3).normal(size=(4, 7, 2)) * 30.0
+    want = np.stack([fsums(views[:, :, 0]), fsums(views[:, :, 1])], axis=1)
+    assert bits(fsum_rows(views)) == bits(want)
+
+
+def test_nearest_norms_gives_the_least_hypot_of_every_row_bit_for_bit() -> None:
+    rng = np.random.default_rng(11)
+    xs, ys = rng.normal(size=(40, 30)) * 50.0, rng.normal(size=(40, 30)) * 50.0
+    xs[:10, 1], ys[:10, 1] = ys[:10, 0], xs[:10, 0]  # the same norm twice, swapped
+    xs[10:20, 2] = np.nextafter(xs[10:20, 0], np.inf)  # near ties
+    ys[10:20, 2] = ys[10:20, 0]
+    xs[20, :], ys[20, :] = 1e-200, 3e-200  # squares underflow: np.hypot whole
+    xs[21, 3] = np.nan  # NaN, as np.hypot has it
+    xs[22, :] = 0.0
+    ys[22, :] = 0.0
+    want = np.hypot(xs, ys).min(axis=1)
+    assert bits(nearest_norms(xs, ys)) == bits(want)
+
+
+def views_of(positions: Points, rng: np.random.Generator) -> np.ndarray:
+    """Every robot's view of `positions`, each turned, mirrored and shuffled its own way."""
+    n = len(positions)
+    out = np.empty((n, n - 1, 2))
+    for robot in range(n):
+        others = np.delete(positions, robot, axis=0) - positions[robot]
+        angle = rng.uniform(-math.pi, math.pi)
+        c, s = math.cos(angle), math.sin(angle)
+        x = others[:, 0] * (-1.0 if rng.random() < 0.5 else 1.0)
+        view = np.column_stack([c * x - s * others[:, 1], s * x + c * others[:, 1]])
+        out[robot] = view[rng.permutation(n - 1)]
+    return out
+
+
+@SETTINGS
+@given(st.integers(2, 40), st.integers(0, 2**32 - 1), st.sampled_from([1e-3, 0.5, 5.0]))
+def test_gathering_hook_gives_every_robot_the_path_of_its_own_compute(
+    n: int, seed: int, tolerance: float
+) -> None:
+    rng = np.random.default_rng(seed)
+    positions = rng.uniform(-3.0 * n, 3.0 * n, size=(n, 2))
+    views = views_of(positions, rng)
+    params = GatheringParams(n, tolerance)
+    assert list(GATHERING.compute_views(views, params)) == [
+        GATHERING.compute(view, params) for view in views
+    ]
+
+
+@SETTINGS
+@given(st.integers(2, 40), st.integers(0, 2**32 - 1), st.booleans())
+def test_go_to_cog_hook_gives_every_robot_the_path_of_its_own_compute(
+    n: int, seed: int, together: bool
+) -> None:
+    rng = np.random.default_rng(seed)
+    positions = rng.uniform(-3.0 * n, 3.0 * n, size=(n, 2))
+    if together:  # point robots gathered at one point, as the run ends
+        positions[:] = positions[0]
+    views = views_of(positions, rng)
+    params = make_oblot_params(n, {"tolerance": 0.0})
+    assert list(GO_TO_COG.compute_views(views, params)) == [
+        GO_TO_COG.compute(view, params) for view in views
+    ]
+
+
+def test_hooks_answer_a_round_of_empty_views_as_compute_does() -> None:
+    views = np.zeros((1, 0, 2))
+    params = GatheringParams(1, 1e-3)
+    assert list(GATHERING.compute_views(views, params)) == [GATHERING.compute(views[0], params)]
+    oblot = make_oblot_params(1, {"tolerance": 0.0})
+    assert list(GO_TO_COG.compute_views(views, oblot)) == [GO_TO_COG.compute(views[0], oblot)]
+
+
+@pytest.mark.parametrize(
+    "frames, frame_change",
+    [("y-axis", "fixed"), ("disoriented", "fixed"), ("chirality", "every-look")],
+)
+def test_the_views_built_at_once_are_the_views_built_one_by_one(
+    frames: str, frame_change: str
+) -> None:
+    n = 9
+    model = RobotModel.of(frames=frames, frame_change=frame_change)
+    setting = Configured.of(GATHERING, n)
+    positions = np.random.default_rng(5).uniform(-20.0, 20.0, size=(n, 2))
+    robots = [0, 2, 3, 7, 8]
+    at_once = Looks(model, setting, n, 11, False).views_at_once(positions, 4, robots)
+    alone = Looks(model, setting, n, 11, False)
+    assert at_once is not None
+    for row, robot in enumerate(robots):
+        assert bits(at_once[row]) == bits(alone.view(positions, robot, 4)[0])
+
+
+def test_no_views_at_once_where_views_differ_in_kind() -> None:
+    setting = Configured.of(GATHERING, 5)
+    positions = np.random.default_rng(5).uniform(-20.0, 20.0, size=(5, 2))
+    for model, record_views in ((RobotModel.of(sight=3.0), False), (RobotModel(), True)):
+        looks = Looks(model, setting, 5, 1, record_views)
+        assert looks.views_at_once(positions, 1, [0, 1]) is None
+
+
+RUNS: list[tuple[str, dict[str, Any]]] = [
+    ("gathering", {"scheduler": "fsync"}),
+    ("gathering", {"scheduler": "ssync", "non_rigid": 0.3, "frames": "disoriented"}),
+    ("gathering", {"scheduler": "centralized", "max_rounds": 60}),
+    ("gathering", {"scheduler": "fsync", "crash": 2, "frame_change": "every-look"}),
+    ("gathering", {"scheduler": "async", "max_rounds": 60}),
+    ("oblot-go-to-cog", {"scheduler": "ssync", "bodies": "points"}),
+    ("oblot-go-to-cog", {"scheduler": "fsync", "non_rigid": 0.2, "bodies": "points"}),
+]
+
+
+def record_of(tmp_path: FsPath, name: str, algorithm: str, seed: int, kw: dict[str, Any]) -> bytes:
+    target = tmp_path / f"{name}.jsonl"
+    fatswarm.run(9 + seed, algorithm=algorithm, seed=seed, record=target, **kw)
+    return target.read_bytes()
+
+
+@pytest.mark.parametrize("algorithm, kw", RUNS)
+@pytest.mark.parametrize("seed", [0, 3])
+def test_a_record_is_the_same_with_the_round_hook_and_without(
+    tmp_path: FsPath, monkeypatch: pytest.MonkeyPatch, algorithm: str, kw: dict[str, Any], seed: int
+) -> None:
+    with_hook = record_of(tmp_path, "hook", algorithm, seed, kw)
+    monkeypatch.setattr(Configured, "views_compute", lambda self: None)
+    assert record_of(tmp_path, "alone", algorithm, seed, kw) == with_hook
+
+
+class Faulty:
+    """Gathering whose round hook fails: raises in even rounds' calls, else gives one robot
+    something that is not a Path, and computes 'boom' robots' paths by raising."""
+
+    def __init__(self) -> None:
+        self.calls = 0
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(GATHERING, name)
+
+    name = "faulty-gathering"
+
+    def compute(self, view: Points, params: GatheringParams) -> Path:
+        if len(view) and float(view[0, 0]) < -10.0:
+            raise ArithmeticError("boom")
+        return GATHERING.compute(view, params)
+
+    def compute_views(self, views: np.ndarray, params: GatheringParams) -> list[Any]:
+        self.calls += 1
+        if self.calls % 2 == 0:
+            raise ArithmeticError("the hook failed")
+        paths: list[Any] = [self.compute(view, params) for view in views]
+        paths[0] = "not a path"
+        return paths
+
+
+def test_a_failing_hook_leaves_each_robot_what_its_own_compute_gives(
+    tmp_path: FsPath, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def run(hook: bool) -> bytes:
+        faulty = Faulty()
+        if not hook:
+            monkeypatch.setattr(Configured, "views_compute", lambda self: None)
+        target = tmp_path / f"faulty-{hook}.jsonl"
+        start = np.random.default_rng(2).uniform(-30.0, 30.0, size=(10, 2))
+        start = np.round(start / 4.0) * 4.0 + np.arange(10)[:, None] * 0.01
+        with RecordWriter(target) as journal:
+            run_lockstep(
+                start,
+                Configured.of(faulty, 10),
+                make_scheduler("fsync", 10, 0),
+                seed=1,
+                max_rounds=12,
+                record=journal,
+            )
+        monkeypatch.undo()
+        return target.read_bytes()
+
+    assert run(True) == run(False)
