@@ -75,14 +75,14 @@ def check_algorithm(
     """Hold `algorithm` (the object, or a reference as `--algorithm` takes it) to the model's
     contract; raise AlgorithmContractError at the first property it breaks.
 
-    In order (RULES says each): `seam` (it is an algorithm; always checked), `path`, `palette` (luminous only),
-    `oblivious`, `order`, the frames it declares (`mirror` for y-axis, `rotation` for chirality,
-    `rotation-mirror` for disoriented), `params` and `hunt`. The views are every robot's of two
-    starts of each of `fatswarm hunt`'s start families (n from `sizes`, drawn from `seed`), with
-    `params` (defaults for the rest); a broken property is shown on the smallest view found (robots
-    dropped while it still breaks, then coordinates rounded). The hunt runs lock-step runs drawn
-    from `seed` over the start families, `sizes` and `schedulers` for `budget` seconds, and shrinks
-    a failure as `fatswarm hunt` does. `checks`: only these (names of CHECKS).
+    In order (RULES says each): `seam` (it is an algorithm; always checked), `path`, `palette`
+    (luminous only), `oblivious`, `order`, the frames it declares (`mirror` for y-axis, `rotation`
+    for chirality, `rotation-mirror` for disoriented), `params` and `hunt`. The views are every
+    robot's of two starts of each of `fatswarm hunt`'s start families (n from `sizes`, drawn from
+    `seed`), with `params` (defaults for the rest); a broken property is shown on the smallest view
+    found (robots dropped while it still breaks, then coordinates rounded). The hunt runs lock-step
+    runs drawn from `seed` over the start families, `sizes` and `schedulers` for `budget` seconds,
+    and shrinks a failure as `fatswarm hunt` does. `checks`: only these (names of CHECKS).
 
     Raises ValueError for arguments it cannot use (TypeError for a class given in place of an
     instance; AlgorithmError for a reference that cannot be loaded; AlgorithmParamsError when the
