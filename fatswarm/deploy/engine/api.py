@@ -197,17 +197,18 @@ _PHRASES: Final = (  # whole phrases first, then every flag left (below) by its 
 _FLAG: Final = re.compile(r"(?<![\w-])(--[a-z][a-z-]*[a-z]|-n)\b")
 
 
-def api_words(message: str) -> str:
-    """A refusal worded for `fatswarm run`'s flags, worded for `fatswarm.run`'s keywords:
-    `-n 5 disagrees with the 6 robots of s.json; drop -n` is `n=5 disagrees with the 6 robots of
-    init s.json; leave n out`, `--max-rounds` is `max_rounds`."""
+def api_words(message: str, keywords: frozenset[str] = KEYWORDS) -> str:
+    """A refusal worded for `fatswarm run`'s flags, worded for `fatswarm.run`'s keywords (or
+    those of another function of the API, `keywords`): `-n 5 disagrees with the 6 robots of
+    s.json; drop -n` is `n=5 disagrees with the 6 robots of init s.json; leave n out`,
+    `--max-rounds` is `max_rounds`."""
     for pattern, words in _PHRASES:
         message = pattern.sub(words, message)
 
     def keyword(match: re.Match[str]) -> str:
         name = match[1].lstrip("-").replace("-", "_")
         name = "params" if name == "param" else name
-        return name if name in KEYWORDS else match[1]
+        return name if name in keywords else match[1]
 
     return _FLAG.sub(keyword, message)
 
