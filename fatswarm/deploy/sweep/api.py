@@ -150,7 +150,7 @@ def _parsed(
     if unknown:
         raise SweepArgumentError(f"sweep() got an unexpected keyword argument {unknown[0]!r}")
     for axis in AXES:
-        if axis.name in model:
+        if model.get(axis.name) is not None:  # None: the flag's default (sight's: unlimited)
             values = _values(model[axis.name])
             argv += [axis.flag, ",".join(_axis_text(axis.name, v) for v in values)]
     parser = argparse.ArgumentParser(prog="fatswarm.sweep", exit_on_error=False)
@@ -215,7 +215,19 @@ def _keyword_words(message: str) -> str:
     return api_words(message, KEYWORDS)
 
 
-# `sweep`'s keywords: its parameters and the robot model's axes (`**model`)
-KEYWORDS: Final = frozenset(inspect.signature(sweep).parameters) - {"model"} | set(AXIS_NAMES)
+def _signature() -> inspect.Signature:
+    """`sweep`'s signature with one keyword per axis of the robot model (`AXES`) in place of
+    `**model` (default None: the flag's default), as `help(fatswarm.sweep)` and editors show."""
+    shown = inspect.signature(sweep)
+    kept = [p for p in shown.parameters.values() if p.kind is not p.VAR_KEYWORD]
+    axes = [
+        inspect.Parameter(a.name, inspect.Parameter.KEYWORD_ONLY, default=None, annotation="object")
+        for a in AXES
+    ]
+    return shown.replace(parameters=[*kept, *axes])
+
+
+sweep.__signature__ = _signature()  # type: ignore[attr-defined]
+KEYWORDS: Final = frozenset(inspect.signature(sweep).parameters)  # the flags' words here
 
 __all__ = ["KEYWORDS", "ClusterError", "SweepArgumentError", "sweep"]
