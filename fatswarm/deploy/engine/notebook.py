@@ -35,7 +35,7 @@ if TYPE_CHECKING:
 
 EXTRA: Final = "notebook"  # pip install 'fatswarm[notebook]': pandas (and matplotlib, to animate)
 # One row per robot and round: these, then each round's figures of fatswarm.domain.figures shown
-# in a DataFrame (`columns()`; min_gap...), the same on each row of the round, then MODEL_COLUMNS.
+# in a DataFrame (`columns()`; min_gap...), the same on each row of the round, then these:
 COLUMNS: Final = ("round", "robot", "x", "y", "active", "moved", "distance", "collided")
 # What the robot model adds to a row: why the robot's compute failed (the round line's `failed`;
 # every record), its light (a luminous run's `lights`), what it saw (`--record-views`: `views`).
@@ -92,10 +92,9 @@ class RunResult(LockstepResult):
             outcome_text(str(self.status), self.rounds, self.collisions, cycles=cycles),
             run_text(self.n, self.scheduler, self.seed),
             model_text(self.robot_model),
-            *lights_text(self.palette),
         )
         fills = light_fills(self.palette, self.lights) if self.lights else None
-        return frame_svg(self.initial, self.positions, caption, fills)
+        return frame_svg(self.initial, self.positions, caption, fills, self.palette)
 
 
 @dataclass(frozen=True, slots=True, repr=False, eq=False, kw_only=True)
@@ -149,10 +148,9 @@ class RunRecord(RecordLines):
             outcome_text(self.status, len(self.rounds), collisions, cycles=is_async(self)),
             run_text(self.header.n, self.header.scheduler, self.header.seed),
             model_text(settings_of(self).robot_model),
-            *lights_text(names),
         )
         fills = None if last is None else light_fills(names, last)
-        return frame_svg(self.header.initial, self.final, caption, fills)
+        return frame_svg(self.header.initial, self.final, caption, fills, names)
 
     def to_dataframe(self) -> pd.DataFrame:
         """One row per robot per round (record line; an async run's ended cycle): `round` (1,
@@ -368,21 +366,17 @@ def model_text(robot_model: RobotModel) -> str:
     return "robot model: " + ("paper's" if robot_model.is_paper else robot_model.describe())
 
 
-def lights_text(names: Sequence[str]) -> tuple[str, ...]:
-    """The caption's line of a luminous run's colours, `lights: moving, still` (no line for a run
-    without lights); `_document` draws each name in its colour."""
-    return (f"lights: {', '.join(names)}",) if names else ()
-
-
 def frame_svg(
     initial: Points,
     final: Points,
     caption: Sequence[str],
     fills: Sequence[str] | None = None,
+    palette: Sequence[str] = (),
 ) -> str:
     """An SVG picture, to scale (+Y up), of the start (grey rings) and the end (discs numbered
     when there is room: robot i filled `fills[i]`, its light's colour, else green) of a run, the
-    end's smallest enclosing circle, and `caption`'s lines under it."""
+    end's smallest enclosing circle, and `caption`'s lines under it, then a luminous run's
+    colours (`palette`, the names sorted: `lights: ● moving, ● still`, each dot in its colour)."""
     start = np.asarray(initial, dtype=np.float64).reshape(-1, 2)
     end = np.asarray(final, dtype=np.float64).reshape(-1, 2)
     (cx, cy), rc = _enclosing_circle(end)
@@ -419,17 +413,29 @@ def frame_svg(
             f'dominant-baseline="central" fill="white">{i}</text>'
             for i, (x, y) in enumerate(at(end))
         ]
-    return _document(parts, side, caption)
+    shown = [html.escape(text) for text in caption] + _legend(palette)
+    return _document(parts, side, shown)
+
+
+def _legend(palette: Sequence[str]) -> list[str]:
+    """The caption's line of a luminous run's colours, each name after a dot in its colour (SVG
+    text); none for a run without lights."""
+    if not palette:
+        return []
+    dots = (
+        f'<tspan fill="{fill}">\u25cf</tspan> {html.escape(name)}'
+        for name, fill in zip(palette, light_fills(palette, palette), strict=True)
+    )
+    return ["lights: " + ", ".join(dots)]
 
 
 def _document(parts: list[str], side: float, caption: Sequence[str]) -> str:
-    """The SVG document: the drawing in a square of `side` world units, the caption below (a
-    `lights: a, b` line with each name in its colour)."""
+    """The SVG document: the drawing in a square of `side` world units, the caption's lines
+    (SVG text) below."""
     height = PICTURE_PX + 6 + LINE_PX * len(caption)
     lines = "".join(
         f'<text x="{PICTURE_PX / 2:g}" y="{PICTURE_PX + 16 + LINE_PX * k}" '
-        f'font-family="sans-serif" font-size="13" text-anchor="middle">{_caption_line(text)}'
-        "</text>"
+        f'font-family="sans-serif" font-size="13" text-anchor="middle">{text}</text>'
         for k, text in enumerate(caption)
     )
     return (
@@ -440,19 +446,6 @@ def _document(parts: list[str], side: float, caption: Sequence[str]) -> str:
         + "".join(parts)
         + f"</svg>{lines}</svg>"
     )
-
-
-def _caption_line(text: str) -> str:
-    """A caption line's SVG text: escaped; the names of a `lights:` line each in its colour."""
-    head, _, names = text.partition("lights: ")
-    if head or not names:
-        return html.escape(text)
-    listed = names.split(", ")
-    shown = ", ".join(
-        f'<tspan fill="{fill}">\u25cf</tspan> {html.escape(name)}'
-        for name, fill in zip(listed, light_fills(listed, listed), strict=True)
-    )
-    return f"lights: {shown}"
 
 
 def _enclosing_circle(points: Points) -> tuple[tuple[float, float], float]:
