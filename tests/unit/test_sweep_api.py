@@ -1,7 +1,7 @@
 """`fatswarm.sweep(...)` without a worker: its keywords are the CLI's flags (refusals in the
 keywords' words), a grid already in `out` is read back, not run; the runs travel with an
 algorithm file's absolute path and come back as typed; a grid whose every run failed exits 1.
-Sweeps on worker processes: tests/integration/test_sweep_api.py."""
+Sweeps on worker processes: tests/integration/test_sweep_api_workers.py."""
 
 from __future__ import annotations
 
