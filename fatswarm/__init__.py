@@ -27,6 +27,7 @@ if _typing.TYPE_CHECKING:  # the API's types for type checkers and editors; load
         summary,
         trajectory,
     )
+    from fatswarm.deploy.sweep.api import sweep
 
 __all__ = [
     "RunRecord",
@@ -37,15 +38,18 @@ __all__ = [
     "read_record",
     "run",
     "summary",
+    "sweep",
     "trajectory",
 ]
-_API = frozenset(__all__) - {"__version__"}  # names of fatswarm.deploy.engine.api
+_API = frozenset(__all__) - {"__version__"}  # names of fatswarm.deploy.engine.api, but:
+_ELSEWHERE = {"sweep": "fatswarm.deploy.sweep.api"}  # the API's names in another module
 
 
 def __getattr__(name: str) -> _typing.Any:
     """The API's functions, imported when first asked for."""
     if name in _API:
-        return getattr(_importlib.import_module("fatswarm.deploy.engine.api"), name)
+        module = _ELSEWHERE.get(name, "fatswarm.deploy.engine.api")
+        return getattr(_importlib.import_module(module), name)
     raise AttributeError(f"module 'fatswarm' has no attribute {name!r}")
 
 

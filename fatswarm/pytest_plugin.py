@@ -17,7 +17,13 @@ from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Final
 
-import pytest
+try:
+    import pytest
+except ImportError:  # the plugin is for pytest; fatswarm does not install it
+    raise ImportError(
+        "fatswarm's pytest plugin (the fatswarm_swarm fixture) needs pytest: "
+        "pip install 'fatswarm[testing]'"
+    ) from None
 
 if TYPE_CHECKING:
     from fatswarm.world.record import RunRecord

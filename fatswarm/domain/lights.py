@@ -17,6 +17,28 @@ from typing import Any, Final
 from fatswarm.domain.path import Path
 
 MAX_COLOURS: Final = 16  # the palettes of the literature have 2 to 7
+# The colours every picture draws lights in (replay, plot, the notebook's): a record's colour names,
+# sorted, get these in order (deploy/view/lights.py says why). Okabe and Ito's colours (told apart
+# under the common colour blindnesses) first, then Paul Tol's "muted" scheme for palettes of more
+# than seven (MAX_COLOURS of them).
+LIGHT_HEX: Final = (
+    "#E69F00",  # orange
+    "#56B4E9",  # sky blue
+    "#009E73",  # bluish green
+    "#F0E442",  # yellow
+    "#0072B2",  # blue
+    "#D55E00",  # vermillion
+    "#CC79A7",  # reddish purple
+    "#88CCEE",  # cyan
+    "#44AA99",  # teal
+    "#117733",  # green
+    "#999933",  # olive
+    "#DDCC77",  # sand
+    "#CC6677",  # rose
+    "#882255",  # wine
+    "#AA4499",  # purple
+    "#332288",  # indigo
+)
 _NAME = re.compile(r"[A-Za-z0-9_.-]{1,32}")
 
 
@@ -80,4 +102,13 @@ def glance_of(
     )
 
 
-__all__ = ["MAX_COLOURS", "Glance", "LightsError", "Lit", "colour_index", "glance_of", "palette"]
+__all__ = [
+    "LIGHT_HEX",
+    "MAX_COLOURS",
+    "Glance",
+    "LightsError",
+    "Lit",
+    "colour_index",
+    "glance_of",
+    "palette",
+]

@@ -9,6 +9,7 @@ from typing import Final
 
 from fatswarm.deploy.hunt.search import hunt_models
 from fatswarm.domain.robot_model import Frames
+from fatswarm.domain.seam import AlgorithmParamsError, Configured
 from fatswarm.testing.hunt import run_hunt
 from fatswarm.testing.params import check_params
 from fatswarm.testing.properties import LOOK_PROPERTIES, check_looks
@@ -74,21 +75,25 @@ def check_algorithm(
     """Hold `algorithm` (the object, or a reference as `--algorithm` takes it) to the model's
     contract; raise AlgorithmContractError at the first property it breaks.
 
-    In order (RULES says each): `seam` (it is an algorithm), `path`, `palette` (luminous only),
-    `oblivious`, `order`, the frames it declares (`mirror` for y-axis, `rotation` for chirality,
-    `rotation-mirror` for disoriented), `params` and `hunt`. The views are every robot's of two
-    starts of each of `fatswarm hunt`'s start families (n from `sizes`, drawn from `seed`), with
-    `params` (defaults for the rest); a broken property is shown on the smallest view found (robots
-    dropped while it still breaks, then coordinates rounded). The hunt runs lock-step runs drawn
-    from `seed` over the start families, `sizes` and `schedulers` for `budget` seconds, and shrinks
-    a failure as `fatswarm hunt` does. `checks`: only these (names of CHECKS).
+    In order (RULES says each): `seam` (it is an algorithm; always checked), `path`, `palette`
+    (luminous only), `oblivious`, `order`, the frames it declares (`mirror` for y-axis, `rotation`
+    for chirality, `rotation-mirror` for disoriented), `params` and `hunt`. The views are every
+    robot's of two starts of each of `fatswarm hunt`'s start families (n from `sizes`, drawn from
+    `seed`), with `params` (defaults for the rest); a broken property is shown on the smallest view
+    found (robots dropped while it still breaks, then coordinates rounded). The hunt runs lock-step
+    runs drawn from `seed` over the start families, `sizes` and `schedulers` for `budget` seconds,
+    and shrinks a failure as `fatswarm hunt` does. `checks`: only these (names of CHECKS).
 
-    Raises ValueError for arguments it cannot use, or when the algorithm refuses every start drawn.
+    Raises ValueError for arguments it cannot use (TypeError for a class given in place of an
+    instance; AlgorithmError for a reference that cannot be loaded; AlgorithmParamsError when the
+    algorithm refuses `params` for every n of `sizes`), or when the algorithm refuses every start
+    drawn. `Checked.checks` names every property checked, `seam` first.
     """
     started = time.monotonic()
     sizes, schedulers = tuple(sizes), tuple(schedulers)
     _check_arguments(seed, budget, sizes, schedulers)
-    subject = Subject.of(algorithm, params)
+    subject = Subject.of(algorithm, params)  # checks `seam`
+    _check_given_params(subject, sizes)
     names = _chosen(subject, checks)
     looks = draw_looks(subject, seed, sizes) if set(names) & set(LOOK_PROPERTIES) else []
     runs = refused = 0
@@ -99,4 +104,21 @@ def check_algorithm(
             check_params(subject, sizes)
         else:
             runs, refused = run_hunt(subject, seed, float(budget), sizes, schedulers)
-    return Checked(subject.name, names, len(looks), runs, refused, time.monotonic() - started)
+    seconds = time.monotonic() - started
+    return Checked(subject.name, ("seam", *names), len(looks), runs, refused, seconds)
+
+
+def _check_given_params(subject: Subject, sizes: Sequence[int]) -> None:
+    """Blame `params` (AlgorithmParamsError, one line) when the algorithm refuses every n of
+    `sizes` with them but takes some n with its defaults: the sizes are not at fault."""
+    if not subject.given or any(subject.setting(n) is not None for n in sizes):
+        return
+    for n in sizes:
+        try:
+            Configured.of(subject.algorithm, n, {})
+        except AlgorithmParamsError:
+            continue
+        given = ", ".join(f"{k!r}: {v!r}" for k, v in subject.given.items())
+        raise AlgorithmParamsError(
+            f"params={{{given}}}: algorithm {subject.name} refuses them ({subject.refusals[n]})"
+        )

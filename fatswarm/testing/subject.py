@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import itertools
+import re
 import sys
 import types
 from collections.abc import Callable, Iterator, Mapping
@@ -53,14 +54,23 @@ class Subject:
     def of(algorithm: object, params: Mapping[str, object] | None) -> Subject:
         """The subject; raises AlgorithmError for a reference that cannot be loaded and
         AlgorithmContractError ('seam') for an object that is not an algorithm."""
+        if isinstance(algorithm, type):  # the seam's methods are an instance's (make_params)
+            raise TypeError(
+                f"check_algorithm takes an algorithm object, got the class {algorithm.__name__}; "
+                f"pass an instance ({algorithm.__name__}(), or the module's ALGORITHM)"
+            )
         ref = algorithm if isinstance(algorithm, str) else None
-        loaded = load_algorithm(algorithm) if isinstance(algorithm, str) else algorithm
+        try:
+            loaded = load_algorithm(algorithm) if isinstance(algorithm, str) else algorithm
+        except AlgorithmError as exc:  # worded for the CLI's --algorithm: here, the argument
+            raise AlgorithmError(argument_words(str(exc))) from None
         label = str(getattr(loaded, "name", type(loaded).__name__))
         try:
             checked = check_seam(loaded, ref or label)
             subject = Subject(checked, ref, params or {})
         except (AlgorithmError, LightsError) as exc:
-            raise AlgorithmContractError(label, "seam", f"  {exc}") from None
+            detail = argument_words(str(exc))
+            raise AlgorithmContractError(label, "seam", f"  {detail}") from None
         resolve_values(checked, subject.given)  # an unknown parameter, a bad value: ValueError
         return subject
 
@@ -135,6 +145,12 @@ class Subject:
             yield f"{module_name}:ALGORITHM"
         finally:
             sys.modules.pop(module_name, None)
+
+
+def argument_words(message: str) -> str:
+    """A message of the algorithm's loader, worded for `fatswarm run --algorithm`, worded for
+    `check_algorithm`'s argument: `--algorithm: no file x.py` is `algorithm: no file x.py`."""
+    return re.sub(r"(?<![\w-])--algorithm\b", "algorithm", message)
 
 
 Broken = Callable[[Subject, Look], str | None]  # how a look breaks a property, or None

@@ -16,6 +16,7 @@ import numpy as np
 from fatswarm.domain import figures, record_lines
 from fatswarm.domain.outcome import ENDED, Status
 from fatswarm.domain.path import PathFormatError, Points, from_record
+from fatswarm.domain.robot_model import ModelError, RobotModel
 from fatswarm.world.physics import Collision
 from fatswarm.world.record import (
     DEFAULT_ALGORITHM,
@@ -83,6 +84,7 @@ def _header(entry: Mapping[str, Any]) -> Header:
     if not isinstance(scheduler, str):
         raise _LineError(f"'scheduler' must be a string, got {scheduler!r}")
     initial = _points(entry.get("initial"), n, "initial")
+    _model(entry)
     known = {
         "type",
         "version",
@@ -96,6 +98,18 @@ def _header(entry: Mapping[str, Any]) -> Header:
         "params",
     }
     return Header(n, seed, scheduler, initial, algorithm, dict(params), ref, _extra(entry, known))
+
+
+def _model(entry: Mapping[str, Any]) -> None:
+    """Refuse a header whose `model` this fatswarm cannot read (an axis value not among its
+    choices, a key it does not know): its run cannot be drawn, replayed or resumed as the run it
+    was, as a record of another version cannot."""
+    if "model" not in entry:
+        return
+    try:
+        RobotModel.from_header(entry["model"])
+    except ModelError as exc:
+        raise _LineError(f"unreadable robot 'model' ({exc})") from None
 
 
 def _algorithm(entry: Mapping[str, Any]) -> tuple[str, str, dict[str, Any]]:

@@ -113,6 +113,38 @@ def test_a_resumed_sweep_on_a_cluster_runs_only_what_the_table_lacks(
     assert len(rows) == 4
 
 
+def test_a_relative_algorithm_path_runs_on_workers_started_in_another_directory(
+    scheduler: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    here = tmp_path / "here"  # not the workers' directory, which has no halfway.py
+    here.mkdir()
+    (here / "halfway.py").write_text((ROOT / "tests" / "data" / "always_right.py").read_text())
+    monkeypatch.chdir(here)
+    argv = ["-n", "3,4", "--scheduler", "fsync", "--seeds", "2", "-q", "--out", "runs.csv"]
+    code = cli.main(["sweep", "--algorithm", "halfway.py:ALGORITHM", *argv, "--cluster", scheduler])
+    with (here / "runs.csv").open(newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 4 and code == 0
+    assert {row["status"] for row in rows} != {"error"}, rows[0]["error"]
+    assert {row["algorithm"] for row in rows} == {"halfway.py:ALGORITHM"}  # as typed
+
+
+def test_a_python_sweep_on_a_client_gives_the_rows_of_the_cli_and_leaves_it_open(
+    scheduler: str, tmp_path: Path
+) -> None:
+    pd = pytest.importorskip("pandas")
+    import fatswarm
+
+    out = tmp_path / "runs.csv"
+    assert cli.main(["sweep", *SWEEP, "--jobs", "1", "--out", str(out)]) == 0
+    with distributed.Client(scheduler, set_as_default=False) as client:
+        frame = fatswarm.sweep(n=[4, 5, 6], scheduler=["fsync", "ssync"], seeds=2, cluster=client)
+        assert client.status == "running"
+    pd.testing.assert_frame_equal(
+        frame.drop(columns=list(VOLATILE)), pd.read_csv(out).drop(columns=list(VOLATILE))
+    )
+
+
 def test_an_unreachable_cluster_is_one_line_and_exit_2(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:

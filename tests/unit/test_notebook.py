@@ -105,7 +105,11 @@ def test_jupyter_draws_the_final_frame_of_a_result_and_of_its_record(
         assert len(discs) == 6
         texts = [t.text for t in root.iter(f"{SVG}text")]
         assert texts[:6] == [str(i) for i in range(6)]  # the robots, numbered
-        assert texts[6:] == ["formed in 17 rounds, collision-free", "n=6 ssync seed 1"]
+        assert texts[6:] == [
+            "formed in 17 rounds, collision-free",
+            "n=6 ssync seed 1",
+            "robot model: paper's",
+        ]
     assert result._repr_svg_() == record._repr_svg_()
 
 
@@ -143,8 +147,8 @@ def test_the_caption_says_how_a_run_ended() -> None:
 
 
 def test_positions_at_is_the_timelines_and_places_robots_within_a_round() -> None:
-    assert fatswarm.positions_at is timeline.positions_at
     record = small_record()
+    assert np.array_equal(fatswarm.positions_at(record, 1.5), timeline.positions_at(record, 1.5))
     assert np.array_equal(fatswarm.positions_at(record, 1.0), record.rounds[0].positions)
     half = fatswarm.positions_at(record, 0.5)  # robot 0 half-way through its move of 2
     assert half[0] == pytest.approx([1.0, 0.0]) and half[2] == pytest.approx([0.0, 5.0])
@@ -171,6 +175,7 @@ def test_the_dataframe_has_one_row_per_robot_per_round() -> None:
             "collided",
             "min_gap",  # the round's, derived from the positions (fatswarm.domain.figures)
             "failures",  # the round's failed computes, from its line's `failed`
+            "failed",  # why the robot's compute failed in the round (None: it did not)
         ]
     )
     assert df[["round", "robot"]].values.tolist() == [
@@ -192,6 +197,7 @@ def test_the_dataframe_has_one_row_per_robot_per_round() -> None:
         "bool",
         "float64",
         "int64",
+        "object",
     ]
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import pathlib
 import sys
@@ -76,6 +77,20 @@ def test_unreadable_record_exits_2(
 ) -> None:
     assert run_plot(tmp_path / "none.jsonl", tmp_path / "x.svg") == 2
     assert "none.jsonl" in capsys.readouterr().err
+
+
+def test_a_header_with_an_unreadable_model_is_not_drawn(
+    tmp_path: pathlib.Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    lines = pathlib.Path(RECORD).read_text().splitlines()
+    header = json.loads(lines[0])
+    header["model"] = {"visibility": "foggy"}
+    bad = tmp_path / "foggy.jsonl"
+    bad.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
+    assert run_plot(bad, tmp_path / "x.svg") == 2
+    err = capsys.readouterr().err
+    assert "foggy.jsonl:1: unreadable robot 'model'" in err and err.count("\n") == 1
+    assert not (tmp_path / "x.svg").exists()
 
 
 def test_title_names_the_algorithm_and_its_parameters() -> None:

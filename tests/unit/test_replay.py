@@ -101,6 +101,19 @@ def test_unreadable_record_exits_2(
     assert "missing.jsonl" in err and "bad.jsonl:1" in err
 
 
+def test_a_header_with_an_unreadable_model_is_refused_in_one_line(
+    tmp_path: pathlib.Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    lines = pathlib.Path(RECORD).read_text().splitlines()
+    header = json.loads(lines[0])
+    header["model"] = {"visibility": "foggy"}
+    bad = tmp_path / "foggy.jsonl"
+    bad.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
+    assert run_replay(bad, "--no-play") == 2
+    err = capsys.readouterr().err
+    assert "foggy.jsonl:1: unreadable robot 'model'" in err and err.count("\n") == 1
+
+
 def test_player_steps_pauses_and_clamps_to_the_record() -> None:
     p = Player(count=4)
     p.key("right")

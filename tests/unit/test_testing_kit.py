@@ -253,6 +253,7 @@ def broken(algorithm: object, **kwargs: Any) -> AlgorithmContractError:
 def test_gathering_keeps_the_contract() -> None:
     checked = check_algorithm("gathering", budget=1.0)
     assert checked.checks == (
+        "seam",
         "path",
         "oblivious",
         "order",
@@ -274,7 +275,7 @@ def test_the_object_itself_is_checked_as_its_reference_is() -> None:
 
 def test_the_example_keeps_the_contract() -> None:
     checked = check_algorithm(str(ROOT / "examples" / "spread_out.py") + ":ALGORITHM", budget=1.0)
-    assert checked.checks == ("path", "oblivious", "order", "mirror", "params", "hunt")
+    assert checked.checks == ("seam", "path", "oblivious", "order", "mirror", "params", "hunt")
     assert checked.hunt_runs >= 1  # budgeted in seconds: the count depends on the load
 
 
@@ -457,6 +458,33 @@ def test_an_algorithm_refusing_every_size_asked_for_says_so() -> None:
 
     with pytest.raises(ValueError, match=r"refuses every start .*needs n >= 20.*sizes="):
         check_algorithm(Big(), sizes=[3, 4], checks=["order"])
+
+
+def test_a_class_given_for_an_instance_is_refused_in_one_line_saying_to_pass_one() -> None:
+    with pytest.raises(TypeError) as info:
+        check_algorithm(Gathering)
+    message = str(info.value)
+    assert "got the class Gathering; pass an instance (Gathering()" in message
+    assert "\n" not in message and "make_params" not in message
+
+
+def test_params_refused_for_every_size_are_blamed_not_the_sizes() -> None:
+    with pytest.raises(AlgorithmParamsError) as info:
+        check_algorithm("gathering", params={"tolerance": -1})
+    message = str(info.value)
+    assert message.startswith("params={'tolerance': -1}: algorithm gathering refuses them (")
+    assert "tolerance must be" in message and "sizes" not in message and "\n" not in message
+
+
+def test_a_missing_file_is_said_without_a_flag_of_the_cli() -> None:
+    with pytest.raises(ValueError) as info:
+        check_algorithm("nothere.py:X")
+    assert str(info.value) == "algorithm: no file nothere.py"
+
+
+def test_the_seam_is_listed_among_the_checks_even_when_others_are_asked_for() -> None:
+    checked = check_algorithm("gathering", checks=["order"])
+    assert checked.checks == ("seam", "order")
 
 
 # -- the pytest plugin, without a run ----------------------------------------------------------

@@ -43,7 +43,7 @@ from fatswarm.domain.robot_model import AXES, AXIS_NAMES, Axis, RobotModel
 from fatswarm.world import record_read
 from fatswarm.world.record import RecordWriter
 from fatswarm.world.record import RunRecord as RecordLines
-from fatswarm.world.timeline import positions_at
+from fatswarm.world.timeline import Timeline
 
 
 class RunArgumentError(RunInputError, TypeError):
@@ -122,6 +122,14 @@ def _run_config(
     """Resolve `config` and run it in lock step, writing its record to `record` (if not None)."""
     setup = config.resolve()
     writer = None if record is None else RecordWriter(record)
+    names: set[str] = set()  # the colours the lines show: the picture's palette
+
+    def committed(report: RoundReport) -> None:
+        lights = report.entry.extra.get("lights")
+        names.update(lights if isinstance(lights, list) else ())
+        if on_round is not None:
+            on_round(report)
+
     try:
         result = run_lockstep(
             setup.initial,
@@ -130,7 +138,7 @@ def _run_config(
             seed=setup.seed,
             max_rounds=setup.max_rounds,
             record=writer,
-            on_round=on_round,
+            on_round=committed,
             settings=setup.settings,
         )
     finally:
@@ -145,6 +153,8 @@ def _run_config(
         params=dict(setup.params.values),
         record=record,
         outside=setup.outside,
+        robot_model=setup.robot_model,
+        palette=tuple(sorted(names)),
     )
 
 
@@ -187,17 +197,18 @@ _PHRASES: Final = (  # whole phrases first, then every flag left (below) by its 
 _FLAG: Final = re.compile(r"(?<![\w-])(--[a-z][a-z-]*[a-z]|-n)\b")
 
 
-def api_words(message: str) -> str:
-    """A refusal worded for `fatswarm run`'s flags, worded for `fatswarm.run`'s keywords:
-    `-n 5 disagrees with the 6 robots of s.json; drop -n` is `n=5 disagrees with the 6 robots of
-    init s.json; leave n out`, `--max-rounds` is `max_rounds`."""
+def api_words(message: str, keywords: frozenset[str] = KEYWORDS) -> str:
+    """A refusal worded for `fatswarm run`'s flags, worded for `fatswarm.run`'s keywords (or
+    those of another function of the API, `keywords`): `-n 5 disagrees with the 6 robots of
+    s.json; drop -n` is `n=5 disagrees with the 6 robots of init s.json; leave n out`,
+    `--max-rounds` is `max_rounds`."""
     for pattern, words in _PHRASES:
         message = pattern.sub(words, message)
 
     def keyword(match: re.Match[str]) -> str:
         name = match[1].lstrip("-").replace("-", "_")
         name = "params" if name == "param" else name
-        return name if name in KEYWORDS else match[1]
+        return name if name in keywords else match[1]
 
     return _FLAG.sub(keyword, message)
 
@@ -313,14 +324,66 @@ def read_record(path: str | os.PathLike[str], *, allow_torn_end: bool = True) ->
     return RunRecord.of(lines, name)
 
 
-def trajectory(record: RecordLines) -> NDArray[np.float64]:
-    """Every robot's centre at the start and after each committed round: (rounds + 1, n, 2)."""
+Recorded = RecordLines | LockstepResult | str | os.PathLike[str]  # what the record readers take
+PRINTED_DECIMALS: Final = 3  # the end time as the summary and the result's repr print it
+
+
+def as_record(of: object, caller: str) -> RecordLines:
+    """The record `of` names: a record as it is, a path (str or os.PathLike) read whole
+    (`read_record`), or a `fatswarm.run` result's record (written with `record=`);
+    RunArgumentError for anything else, or a result run without a record."""
+    if isinstance(of, RecordLines):
+        return of
+    if isinstance(of, (str, os.PathLike)):
+        return read_record(of)
+    if isinstance(of, RunResult) and of.record is not None:
+        return read_record(of.record)
+    if isinstance(of, LockstepResult):
+        raise RunArgumentError(
+            f"{caller} needs the run's rounds, which a result does not keep: run it with "
+            "record='run.jsonl' and pass the result (or the record, or its path)"
+        )
+    raise RunArgumentError(
+        f"{caller} takes a record, its path (str or os.PathLike) or a fatswarm.run result, "
+        f"got {type(of).__name__}"
+    )
+
+
+def positions_at(of: Recorded, t: float) -> Points:
+    """Every robot's centre (n, 2) at time `t` of the run `of` (a record, its path, or a
+    `fatswarm.run` result with its `record`): t in rounds for round-based records (t = k: round
+    k's recorded positions, t = 2.5 half-way through round 3), virtual time for async ones
+    (fatswarm.world.timeline). `t` runs from 0 to the run's end; the end as the summary prints
+    it (3 decimals: 58.077 for 58.0771...) is the end. Raises ValueError naming the valid
+    range for a `t` outside it. Builds a `Timeline` each call: to ask for many times, keep one
+    `fatswarm.world.timeline.Timeline(record)`."""
+    timeline = Timeline(as_record(of, "positions_at"))
+    if isinstance(t, bool) or not isinstance(t, numbers.Real):
+        raise RunArgumentError(f"t must be a number, got {_shown(t)}")
+    slack = 0.5 * 10.0**-PRINTED_DECIMALS  # what rounding to the printed decimals may add
+    if timeline.end < float(t) <= timeline.end + slack:
+        t = timeline.end
+    if not 0.0 <= float(t) <= timeline.end:
+        unit = "virtual time" if timeline.is_async else "rounds"
+        raise ValueError(
+            f"t must be between 0 and the run's end, {timeline.end!r} ({unit}; as printed, "
+            f"{timeline.end:.{PRINTED_DECIMALS}f}), got {t!r}"
+        )
+    return timeline.at(t)
+
+
+def trajectory(of: Recorded) -> NDArray[np.float64]:
+    """Every robot's centre at the start and after each committed round: (rounds + 1, n, 2), of
+    a record, its path, or a `fatswarm.run` result with its `record`."""
+    record = as_record(of, "trajectory")
     frames = [record.header.initial, *(entry.positions for entry in record.rounds)]
     return np.stack([np.asarray(f, dtype=np.float64) for f in frames])
 
 
-def moved_by_round(record: RecordLines) -> NDArray[np.bool_]:
-    """(rounds, n): whether each robot asked for a move (a non-empty path) in each round."""
+def moved_by_round(of: Recorded) -> NDArray[np.bool_]:
+    """(rounds, n): whether each robot asked for a move (a non-empty path) in each round (of
+    a record, its path, or a `fatswarm.run` result with its `record`)."""
+    record = as_record(of, "moved_by_round")
     out = np.zeros((len(record.rounds), record.header.n), dtype=bool)
     for k, entry in enumerate(record.rounds):
         out[k, [m.robot for m in entry.moves]] = True

@@ -1,5 +1,7 @@
 """What the Python API hands back, made for notebooks: a run's result and a run record that show
-as one line of text and, in Jupyter, as a picture of their final frame; a record as a DataFrame.
+as one line of text and, in Jupyter, as a picture of their final frame (each robot in its light's
+colour for a luminous run, the robot model named); a record as a DataFrame, the run's settings
+in its `attrs`.
 
 The picture is drawn here, in plain SVG: the dashboard's drawing (deploy/view) sits above the
 engine in the import contracts, and a notebook cell wants the discs themselves, not a terminal.
@@ -9,7 +11,7 @@ from __future__ import annotations
 
 import html
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any, Final
 
@@ -18,10 +20,15 @@ import numpy as np
 from fatswarm.agent import geometry
 from fatswarm.deploy.engine.lockstep import RunResult as LockstepResult
 from fatswarm.domain import figures
+from fatswarm.domain.adversary import ASYNC_NAMES
+from fatswarm.domain.lights import LIGHT_HEX
 from fatswarm.domain.path import Points
+from fatswarm.domain.robot_model import AXES, PAPER_MODEL, RobotModel
 from fatswarm.domain.seam import ParamValue
 from fatswarm.world.record import RoundEntry
 from fatswarm.world.record import RunRecord as RecordLines
+from fatswarm.world.setup import WorldSetup
+from fatswarm.world.timeline import is_async
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -34,10 +41,15 @@ if TYPE_CHECKING:
 # the view (pyproject.toml's contract names it).
 EXTRA: Final = "notebook"  # pip install 'fatswarm[notebook]': pandas (and matplotlib, to animate)
 # One row per robot and round: these, then each round's figures of fatswarm.domain.figures shown
-# in a DataFrame (`columns()`; min_gap...), the same on each row of the round.
+# in a DataFrame (`columns()`; min_gap...), the same on each row of the round, then these:
 COLUMNS: Final = ("round", "robot", "x", "y", "active", "moved", "distance", "collided")
+# What the robot model adds to a row: why the robot's compute failed (the round line's `failed`;
+# every record), its light (a luminous run's `lights`), what it saw (`--record-views`: `views`).
+FAILED: Final = "failed"
+LIGHT: Final = "light"
+VIEW: Final = "view"
 PICTURE_PX: Final = 360  # the picture's width and height in pixels, the caption below it
-CAPTION_PX: Final = 40  # two lines: how the run ended, which run it was
+LINE_PX: Final = 17  # a caption line: how the run ended, which run it was, its model, its lights
 MIN_DISC_PX: Final = 2.0  # a unit disc drawn smaller than this is enlarged (a huge circle)
 IDS_UP_TO: Final = 32  # robots numbered in their discs up to this many, if the discs are large
 END_FILL: Final = "#009E73"  # Okabe and Ito's bluish green (the dashboard draws robots green)
@@ -59,6 +71,8 @@ class RunResult(LockstepResult):
     record: str | None = None  # where its record was written, None if it was not
     # how the run is outside its algorithm's assumptions (the header's `assumption`), '' if within
     outside: str = ""
+    robot_model: RobotModel = PAPER_MODEL  # the model's axes (docs/model.md)
+    palette: tuple[str, ...] = ()  # the colour names the run's lines showed, sorted (`lights`)
 
     @classmethod
     def of(cls, result: LockstepResult, **run: Any) -> RunResult:
@@ -85,12 +99,16 @@ class RunResult(LockstepResult):
         return inline.animate(self, **settings)
 
     def _repr_svg_(self) -> str:
-        """Jupyter's picture: start and end discs and the end's smallest enclosing circle."""
+        """Jupyter's picture: start and end discs (each in its light's colour, a luminous run's)
+        and the end's smallest enclosing circle; the caption names the model."""
+        cycles = self.time is not None or self.scheduler in ASYNC_NAMES
         caption = (
-            outcome_text(str(self.status), self.rounds, self.collisions),
+            outcome_text(str(self.status), self.rounds, self.collisions, cycles=cycles),
             run_text(self.n, self.scheduler, self.seed),
+            model_text(self.robot_model),
         )
-        return frame_svg(self.initial, self.positions, caption)
+        fills = light_fills(self.palette, self.lights) if self.lights else None
+        return frame_svg(self.initial, self.positions, caption, fills, self.palette)
 
 
 @dataclass(frozen=True, slots=True, repr=False, eq=False, kw_only=True)
@@ -135,13 +153,18 @@ class RunRecord(RecordLines):
         )
 
     def _repr_svg_(self) -> str:
-        """Jupyter's picture: start and end discs and the end's smallest enclosing circle."""
+        """Jupyter's picture: start and end discs (each in its light's colour, a luminous run's)
+        and the end's smallest enclosing circle; the caption names the model."""
         collisions = sum(len(entry.collisions) for entry in self.rounds)
+        names = record_palette(self)
+        last = _lights(self.rounds[-1], self.header.n) if self.rounds else None
         caption = (
-            outcome_text(self.status, len(self.rounds), collisions),
+            outcome_text(self.status, len(self.rounds), collisions, cycles=is_async(self)),
             run_text(self.header.n, self.header.scheduler, self.header.seed),
+            model_text(settings_of(self).robot_model),
         )
-        return frame_svg(self.header.initial, self.final, caption)
+        fills = None if last is None else light_fills(names, last)
+        return frame_svg(self.header.initial, self.final, caption, fills, names)
 
     def animate(self, **settings: Any) -> InlineVideo:
         """The record as a video Jupyter shows inline: the frames of `fatswarm plot RECORD
@@ -171,9 +194,16 @@ class RunRecord(RecordLines):
         """One row per robot per round (record line; an async run's ended cycle): `round` (1,
         2, ...), `robot`, `x`, `y` (its centre after the round, world frame), `active`, `moved`
         (it asked for a non-empty path), `distance` (the arc length it covered), `collided` (it
-        was stopped at contact), then the round's figures that follow from the positions
-        (fatswarm.domain.figures: `min_gap`, the smallest rim-to-rim distance after the round,
-        NaN for one robot). The start is `header.initial`. Needs pandas (`fatswarm[notebook]`).
+        was stopped at contact), then the round's figures (fatswarm.domain.figures: `min_gap`,
+        the smallest rim-to-rim distance after the round, NaN for one robot; `failures`, the
+        round's failed computes), then `failed`: why the robot's compute failed in the round
+        (`Type: message`), None where it did not. A luminous run adds `light`, the robot's colour
+        name at the line (`lights`); a run recorded with `--record-views` adds `view`, the robots
+        it was shown when it Looked in the round, a tuple of robot numbers (increasing, maybe
+        empty), None where it did not Look (`df.explode("view")`: one row per robot seen).
+        `df.attrs` holds the run's settings (`run_attrs`): algorithm, params, scheduler, seed,
+        the robot model's axes (`model`) and the rest of the header's settings. The start is
+        `header.initial`. Needs pandas (`fatswarm[notebook]`).
         """
         try:
             import pandas as pd  # optional (fatswarm[notebook]): only this method needs it
@@ -181,12 +211,57 @@ class RunRecord(RecordLines):
             raise ImportError(
                 f"RunRecord.to_dataframe needs pandas: pip install 'fatswarm[{EXTRA}]'"
             ) from None
-        return pd.DataFrame(record_columns(self), columns=list(columns()))
+        data = record_columns(self)
+        frame = pd.DataFrame(data, columns=list(data))
+        frame.attrs.update(run_attrs(self))
+        return frame
 
 
-def columns() -> tuple[str, ...]:
-    """`to_dataframe`'s columns: COLUMNS, then the declared figures of a round it shows."""
-    return COLUMNS + tuple(f.name for f in round_figures())
+def settings_of(record: RecordLines) -> WorldSetup:
+    """The run's settings as its header says them (`WorldSetup.from_header`)."""
+    swarm = record.header.extra.get("swarm")
+    return WorldSetup.from_header(record.header, swarm if isinstance(swarm, str) else "", None)
+
+
+def run_attrs(record: RecordLines) -> dict[str, Any]:
+    """`to_dataframe`'s `attrs`: the run's settings (`WorldSetup`'s fields, read from the header,
+    plain values) with `algorithm` the algorithm's name (`algorithm_ref`: how to load it),
+    `params` every parameter's value, and `model` every axis of the robot model (`AXES`) by
+    name; `initial` and the open header fields (`extra`) are left out."""
+    setup = settings_of(record)
+    header = record.header
+    settings = {
+        f.name: _plain(getattr(setup, f.name))
+        for f in fields(WorldSetup)
+        if f.name not in {"initial", "extra", "robot_model", "algorithm", "params"}
+    }
+    return {
+        "algorithm": header.algorithm,
+        "algorithm_ref": header.algorithm_ref,
+        "params": dict(header.params),
+        **settings,
+        "seed": header.seed,  # None where the header says none (WorldSetup reads it as 0)
+        "model": {a.name: _plain(setup.robot_model.value(a.name)) for a in AXES},
+    }
+
+
+def _plain(value: object) -> object:
+    """A setting as JSON would hold it: a word for an enum member, a list for a tuple."""
+    if isinstance(value, str):
+        return str(value)
+    return list(value) if isinstance(value, tuple) else value
+
+
+def columns(*, lights: bool = False, views: bool = False) -> tuple[str, ...]:
+    """`to_dataframe`'s columns: COLUMNS, the declared figures of a round it shows, FAILED, then
+    LIGHT for a luminous run and VIEW for one recorded with its views."""
+    return (
+        COLUMNS
+        + tuple(f.name for f in round_figures())
+        + (FAILED,)
+        + ((LIGHT,) if lights else ())
+        + ((VIEW,) if views else ())
+    )
 
 
 def round_figures() -> tuple[figures.Figure, ...]:
@@ -194,7 +269,8 @@ def round_figures() -> tuple[figures.Figure, ...]:
 
 
 def record_columns(record: RecordLines) -> dict[str, np.ndarray[Any, Any]]:
-    """`to_dataframe`'s columns as flat arrays, round by round and robot by robot within it."""
+    """`to_dataframe`'s columns (`columns()`) as flat arrays, round by round and robot by robot
+    within it."""
     rounds, n = len(record.rounds), record.header.n
     active = np.zeros((rounds, n), dtype=bool)
     moved = np.zeros((rounds, n), dtype=bool)
@@ -221,7 +297,76 @@ def record_columns(record: RecordLines) -> dict[str, np.ndarray[Any, Any]]:
             f.name: np.repeat(np.array([_nan(f, e) for e in record.rounds], dtype=_dtype(f)), n)
             for f in round_figures()
         },
+        FAILED: _cells(record, _failed),
+        **({LIGHT: _cells(record, _light)} if has_lights(record) else {}),
+        **({VIEW: _cells(record, _view)} if has_views(record) else {}),
     }
+
+
+def has_lights(record: RecordLines) -> bool:
+    """Whether the record's lines name the robots' colours (a luminous run's)."""
+    return any("lights" in entry.extra for entry in record.rounds)
+
+
+def has_views(record: RecordLines) -> bool:
+    """Whether the record says what each robot saw (`--record-views`)."""
+    if record.header.extra.get("record_views") is True:
+        return True
+    return any("views" in entry.extra for entry in record.rounds)
+
+
+def _cells(
+    record: RecordLines, cell: Callable[[Mapping[str, Any], int], object]
+) -> np.ndarray[Any, Any]:
+    """An object column: `cell(line's fields, robot)` for each round and robot, in row order."""
+    n = record.header.n
+    out = np.empty(len(record.rounds) * n, dtype=object)
+    out[:] = [cell(entry.extra, robot) for entry in record.rounds for robot in range(n)]
+    return out
+
+
+def _failed(line: Mapping[str, Any], robot: int) -> str | None:
+    failed = line.get("failed")
+    text: object = failed.get(str(robot)) if isinstance(failed, Mapping) else None
+    return text if isinstance(text, str) else None
+
+
+def _light(line: Mapping[str, Any], robot: int) -> str | None:
+    lights = line.get("lights")
+    name: object = lights[robot] if isinstance(lights, list) and robot < len(lights) else None
+    return name if isinstance(name, str) else None
+
+
+def _view(line: Mapping[str, Any], robot: int) -> tuple[int, ...] | None:
+    views = line.get("views")
+    seen = views.get(str(robot)) if isinstance(views, Mapping) else None
+    return tuple(int(r) for r in seen) if isinstance(seen, list) else None
+
+
+def _lights(entry: RoundEntry, n: int) -> tuple[str, ...] | None:
+    """Every robot's colour name at this line, None if it names none (or not n names)."""
+    lights = entry.extra.get("lights")
+    if not isinstance(lights, list) or len(lights) != n:
+        return None
+    return tuple(lights) if all(isinstance(name, str) for name in lights) else None
+
+
+def record_palette(record: RecordLines) -> tuple[str, ...]:
+    """The colour names the record's lines show, sorted: colour k of every picture is name k
+    (replay's and plot's, deploy/view/lights.py, so one record looks the same in each)."""
+    names: set[str] = set()
+    for entry in record.rounds:
+        names.update(_lights(entry, record.header.n) or ())
+    return tuple(sorted(names))
+
+
+def light_fills(names: Sequence[str], lights: Sequence[str]) -> list[str]:
+    """Each robot's fill: its colour name's, name k of the sorted `names` drawn in LIGHT_HEX[k]
+    (END_FILL for a name not among them)."""
+    return [
+        LIGHT_HEX[list(names).index(name) % len(LIGHT_HEX)] if name in names else END_FILL
+        for name in lights
+    ]
 
 
 def _dtype(figure: figures.Figure) -> type:
@@ -235,12 +380,14 @@ def _nan(figure: figures.Figure, entry: RoundEntry) -> float:
     return math.nan if value is None else float(value)
 
 
-def outcome_text(status: str, rounds: int, collisions: int) -> str:
-    """`formed in 17 rounds, collision-free`, `stalled after 3 rounds, with 2 collisions`."""
-    counted = f"{rounds} round{'' if rounds == 1 else 's'}"
+def outcome_text(status: str, rounds: int, collisions: int, *, cycles: bool = False) -> str:
+    """`formed in 17 rounds, collision-free`, `stalled after 3 rounds, with 2 collisions`; an
+    async run counts `cycles` (`formed in 58 cycles`)."""
+    word = "cycle" if cycles else "round"
+    counted = f"{rounds} {word}{'' if rounds == 1 else 's'}"
     said = {
         "formed": f"formed in {counted}",
-        "max_rounds": f"stopped at the round cap ({counted})",
+        "max_rounds": f"stopped at the {word} cap ({counted})",
     }.get(status, f"{status} after {counted}")
     if collisions == 0:
         return f"{said}, collision-free" if status == "formed" else said
@@ -252,10 +399,22 @@ def run_text(n: int, scheduler: str, seed: int | None) -> str:
     return f"n={n} {scheduler} seed {'?' if seed is None else seed}"
 
 
-def frame_svg(initial: Points, final: Points, caption: tuple[str, str]) -> str:
-    """An SVG picture, to scale (+Y up), of the start (grey rings) and the end (green discs,
-    numbered when there is room) of a run, the end's smallest enclosing circle, and `caption`'s
-    two lines under it."""
+def model_text(robot_model: RobotModel) -> str:
+    """`robot model: paper's` or `robot model: --visibility opaque --sight 5.0` (its flags)."""
+    return "robot model: " + ("paper's" if robot_model.is_paper else robot_model.describe())
+
+
+def frame_svg(
+    initial: Points,
+    final: Points,
+    caption: Sequence[str],
+    fills: Sequence[str] | None = None,
+    palette: Sequence[str] = (),
+) -> str:
+    """An SVG picture, to scale (+Y up), of the start (grey rings) and the end (discs numbered
+    when there is room: robot i filled `fills[i]`, its light's colour, else green) of a run, the
+    end's smallest enclosing circle, and `caption`'s lines under it, then a luminous run's
+    colours (`palette`, the names sorted: `lights: ● moving, ● still`, each dot in its colour)."""
     start = np.asarray(initial, dtype=np.float64).reshape(-1, 2)
     end = np.asarray(final, dtype=np.float64).reshape(-1, 2)
     (cx, cy), rc = _enclosing_circle(end)
@@ -280,10 +439,11 @@ def frame_svg(initial: Points, final: Points, caption: tuple[str, str]) -> str:
         f'stroke="{START_STROKE}" {line}/>'
         for x, y in at(start)
     ]
+    colours = list(fills) if fills is not None and len(fills) == len(end) else None
     parts += [
-        f'<circle cx="{x:.6g}" cy="{y:.6g}" r="{radius:.6g}" fill="{END_FILL}" '
-        f'stroke="black" {line}/>'
-        for x, y in at(end)
+        f'<circle cx="{x:.6g}" cy="{y:.6g}" r="{radius:.6g}" '
+        f'fill="{END_FILL if colours is None else colours[i]}" stroke="black" {line}/>'
+        for i, (x, y) in enumerate(at(end))
     ]
     if len(end) <= IDS_UP_TO and radius / px >= 6.0:
         parts += [
@@ -291,15 +451,29 @@ def frame_svg(initial: Points, final: Points, caption: tuple[str, str]) -> str:
             f'dominant-baseline="central" fill="white">{i}</text>'
             for i, (x, y) in enumerate(at(end))
         ]
-    return _document(parts, side, caption)
+    shown = [html.escape(text) for text in caption] + _legend(palette)
+    return _document(parts, side, shown)
 
 
-def _document(parts: list[str], side: float, caption: tuple[str, str]) -> str:
-    """The SVG document: the drawing in a square of `side` world units, the caption below."""
-    height = PICTURE_PX + CAPTION_PX
+def _legend(palette: Sequence[str]) -> list[str]:
+    """The caption's line of a luminous run's colours, each name after a dot in its colour (SVG
+    text); none for a run without lights."""
+    if not palette:
+        return []
+    dots = (
+        f'<tspan fill="{fill}">\u25cf</tspan> {html.escape(name)}'
+        for name, fill in zip(palette, light_fills(palette, palette), strict=True)
+    )
+    return ["lights: " + ", ".join(dots)]
+
+
+def _document(parts: list[str], side: float, caption: Sequence[str]) -> str:
+    """The SVG document: the drawing in a square of `side` world units, the caption's lines
+    (SVG text) below."""
+    height = PICTURE_PX + 6 + LINE_PX * len(caption)
     lines = "".join(
-        f'<text x="{PICTURE_PX / 2:g}" y="{PICTURE_PX + 16 + 17 * k}" font-family="sans-serif" '
-        f'font-size="13" text-anchor="middle">{html.escape(text)}</text>'
+        f'<text x="{PICTURE_PX / 2:g}" y="{PICTURE_PX + 16 + LINE_PX * k}" '
+        f'font-family="sans-serif" font-size="13" text-anchor="middle">{text}</text>'
         for k, text in enumerate(caption)
     )
     return (
@@ -324,4 +498,17 @@ def _enclosing_circle(points: Points) -> tuple[tuple[float, float], float]:
     return (float(cx + origin[0]), float(cy + origin[1])), radius if math.isfinite(radius) else 0.0
 
 
-__all__ = ["COLUMNS", "EXTRA", "RunRecord", "RunResult", "frame_svg", "record_columns"]
+__all__ = [
+    "COLUMNS",
+    "EXTRA",
+    "FAILED",
+    "LIGHT",
+    "VIEW",
+    "RunRecord",
+    "RunResult",
+    "frame_svg",
+    "light_fills",
+    "record_columns",
+    "record_palette",
+    "run_attrs",
+]

@@ -11,6 +11,7 @@ from typing import Any
 
 from fatswarm.deploy.hunt.search import KINDS, Candidate, Case, Failure, Hunt, configure
 from fatswarm.deploy.hunt.shrink import Shrunk, case_decimals
+from fatswarm.deploy.sweep.executor import absolute_ref
 from fatswarm.deploy.sweep.grid import model_argv
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.version import __version__
@@ -62,14 +63,6 @@ def replay_argv(
     if hunt.record_views:
         argv.append("--record-views")
     return [*argv, "--no-dashboard", "--record", inside(record), "--force"]
-
-
-def absolute_ref(ref: str) -> str:
-    """`path/file.py:attribute` with an absolute path (the command runs from any directory)."""
-    path, sep, attr = ref.rpartition(":")
-    if sep and path.endswith(".py"):
-        return f"{os.path.abspath(path)}:{attr}"
-    return ref
 
 
 def replay_command(hunt: Hunt, case: Case) -> str:

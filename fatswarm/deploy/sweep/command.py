@@ -14,6 +14,7 @@ import signal
 import sys
 from collections.abc import Sequence
 from contextlib import suppress
+from dataclasses import replace
 from typing import TYPE_CHECKING, Final
 
 from fatswarm.coordinator.schedule import NAMES
@@ -31,7 +32,7 @@ from fatswarm.deploy.sweep.batch_flags import (
     jobs_of,
     stop_on_signals,
 )
-from fatswarm.deploy.sweep.executor import ClusterError, Workers, open_workers
+from fatswarm.deploy.sweep.executor import ClusterError, Workers, absolute_ref, open_workers
 from fatswarm.deploy.sweep.figures import draw_figures
 from fatswarm.deploy.sweep.grid import (
     Grid,
@@ -83,7 +84,8 @@ DESCRIPTION: Final = (
 EPILOG: Final = (
     "Lists: a flag takes a comma list and can be repeated; numbers also take inclusive ranges "
     "LOW..HIGH[:STEP] (-n 4..16:4 is 4,8,12,16). exit codes: 0 every run of the grid is in the "
-    "CSV (whatever its outcome); 1 a worker process died; 2 bad input (one line on stderr says "
+    "CSV (whatever its outcome); 1 a worker process died, or every run of the grid failed "
+    "(status error); 2 bad input (one line on stderr says "
     "what to fix); 4 the CSV could not be written; 130 interrupted (the rows written stay: run "
     "the same command again to go on); 143 terminated."
 )
@@ -271,10 +273,16 @@ def _run(
         table.append(make_row(spec, figures, __version__))
         progress.advance(figures)
 
+    shipped = Shipped(todo)
     progress = make_progress(len(todo), quiet=args.quiet or not todo)
     try:
         with stop_on_signals() as stopped, progress:
-            complete = run_all(todo, workers, record, lambda: stopped[0] is not None)
+            complete = run_all(
+                shipped.runs,
+                workers,
+                lambda spec, figures: record(shipped.given(spec), figures),
+                lambda: stopped[0] is not None,
+            )
     except TableWriteError as exc:
         _say(
             f"fatswarm sweep: {exc}; the rows written stay, run the same command again once "
@@ -287,6 +295,22 @@ def _run(
     if not complete:
         return _stopped(args.out, table, keys, len(runs), stopped[0])
     return _finish(args, grid, [row for row in table.rows if row_key(row) in keys])
+
+
+class Shipped:
+    """The runs as they travel to the workers: an algorithm file's path made absolute (a Dask
+    worker started in another directory would look for a relative one there, and every run would
+    fail), each mapped back to the run as given, whose row keeps the reference as typed."""
+
+    def __init__(self, todo: Sequence[RunSpec]) -> None:
+        self.runs = [replace(spec, algorithm=absolute_ref(spec.algorithm)) for spec in todo]
+        self._given: dict[RunSpec, list[RunSpec]] = {}
+        for spec, sent in zip(todo, self.runs, strict=True):
+            self._given.setdefault(sent, []).append(spec)
+
+    def given(self, sent: RunSpec) -> RunSpec:
+        """The run as given of a run as sent (each once: `a.py` and `/abs/a.py` are two rows)."""
+        return self._given[sent].pop(0)
 
 
 def _todo(table: RunTable, runs: Sequence[RunSpec]) -> list[RunSpec]:
@@ -329,9 +353,12 @@ def _stopped(out: str, table: RunTable, keys: set[Key], total: int, signum: int 
 
 def _finish(args: argparse.Namespace, grid: Grid, rows: Sequence[dict[str, str]]) -> int:
     """The end of a complete sweep, from the grid's `rows`: the summary, the runs to look at, the
-    Markdown table and the figures asked for; the exit code."""
+    Markdown table and the figures asked for; the exit code (1 when every run raised)."""
     cells = summarize(rows, grid)
     print_summary(cells, sys.stdout)
+    if rows and all(row["status"] == ERROR for row in rows):  # nothing to sum up or to draw
+        _say(all_failed_text(rows, args.out))
+        return ExitCode.NOT_FORMED
     _show_failures(rows, args.out)
     if args.summary_md:
         try:
@@ -342,6 +369,16 @@ def _finish(args: argparse.Namespace, grid: Grid, rows: Sequence[dict[str, str]]
     if args.plot:
         return _plot(cells, args.plot)
     return ExitCode.OK
+
+
+def all_failed_text(rows: Sequence[dict[str, str]], out: str) -> str:
+    """The one line of a sweep in which every run raised (exit 1): how many, and the first
+    error (`AlgorithmError: --algorithm: no file halfway.py`, say)."""
+    every = "the run" if len(rows) == 1 else f"every one of the {len(rows)} runs"
+    return (
+        f"fatswarm sweep: {every} of the grid failed, none ran to an end (status error in "
+        f"{out}); the first: {rows[0]['error'] or 'no error said'}"
+    )
 
 
 def _plan_text(out: str, total: int, present: int, other: int, where: str) -> str:

@@ -12,6 +12,7 @@ import importlib
 import logging
 import math
 import multiprocessing
+import os
 import signal
 from collections.abc import Iterator, Mapping
 from concurrent.futures.process import BrokenProcessPool
@@ -53,6 +54,16 @@ def quiet_logs() -> None:
     logging.getLogger("fatswarm").propagate = False
 
 
+def absolute_ref(ref: str) -> str:
+    """`path/file.py:attribute` with an absolute path, as runs travel to workers (a Dask worker
+    started in another directory resolves a relative one against its own) and as a command
+    written for another directory names it; any other reference as it is."""
+    path, sep, attr = ref.rpartition(":")
+    if sep and path.endswith(".py"):
+        return f"{os.path.abspath(path)}:{attr}"
+    return ref
+
+
 @dataclass(slots=True)
 class Workers:
     """An open executor and how many runs it runs at once (`slots`). `died` are the exceptions
@@ -63,6 +74,7 @@ class Workers:
     where: str  # for the plan line: "2 worker processes", "the Dask cluster at ..."
     died: tuple[type[BaseException], ...]
     client: Any = None  # the Dask client, when on a cluster
+    owns_client: bool = True  # False: the caller's Client (the API's `cluster=`), left open
 
     def kill(self) -> None:
         """Drop every run: local workers are terminated; on a cluster, the tasks are cancelled
@@ -77,13 +89,15 @@ class Workers:
             self.executor.shutdown(wait=True, cancel_futures=True)
         else:
             self.executor.shutdown(wait=False)
-            self.client.close(timeout=CONNECT_S)
+            if self.owns_client:
+                self.client.close(timeout=CONNECT_S)
 
 
 @contextlib.contextmanager
-def open_workers(jobs: int, cluster: str | None) -> Iterator[Workers]:
+def open_workers(jobs: int, cluster: object | None) -> Iterator[Workers]:
     """The executor runs go to: `jobs` local worker processes, or the Dask scheduler at
-    `cluster`; raises ClusterError (one line) when that cannot be used. Closed on the way out."""
+    `cluster` (its address, or a `distributed.Client` of the caller's, which stays open); raises
+    ClusterError (one line) when that cannot be used. Closed on the way out."""
     workers = _dask_workers(cluster) if cluster is not None else _local_workers(jobs)
     try:
         yield workers
@@ -101,13 +115,24 @@ def _local_workers(jobs: int) -> Workers:
     return Workers(pool, jobs, where, (BrokenProcessPool,))
 
 
-def _dask_workers(address: str) -> Workers:
+def _dask_workers(cluster: Any) -> Workers:
     try:  # the optional extra fatswarm[cluster], imported only when asked for (its API untyped)
         distributed: Any = importlib.import_module("distributed")
     except ImportError:
         raise ClusterError(MISSING_DASK) from None
+    owned = not isinstance(cluster, distributed.Client)
+    if owned and not isinstance(cluster, str):
+        raise ClusterError(
+            f"cluster must be a Dask scheduler's address or a distributed.Client, got "
+            f"{type(cluster).__name__}"
+        )
+    address = cluster if isinstance(cluster, str) else cluster.scheduler.address
     try:
-        client = distributed.Client(address, timeout=CONNECT_S, set_as_default=False)
+        client = (
+            distributed.Client(address, timeout=CONNECT_S, set_as_default=False)
+            if owned
+            else cluster
+        )
     except (OSError, TimeoutError, ValueError) as exc:
         raise ClusterError(
             f"--cluster {address}: no Dask scheduler answered within {CONNECT_S:g} s "
@@ -117,7 +142,7 @@ def _dask_workers(address: str) -> Workers:
     slots = max(1, threads)
     where = f"the Dask cluster at {address} ({threads} worker threads now)"
     executor = client.get_executor(pure=False)
-    return Workers(executor, slots, where, (distributed.KilledWorker,), client)
+    return Workers(executor, slots, where, (distributed.KilledWorker,), client, owned)
 
 
 def _kill_pool(pool: cf.Executor) -> None:
@@ -167,6 +192,7 @@ __all__ = [
     "Batcher",
     "ClusterError",
     "Workers",
+    "absolute_ref",
     "add_cluster_argument",
     "init_worker",
     "open_workers",

@@ -20,31 +20,12 @@ from typing import Any, Final
 import numpy as np
 from rich.text import Text
 
+from fatswarm.domain.lights import LIGHT_HEX as LIGHT_HEX  # the pictures import it from here
 from fatswarm.domain.path import Path, Points, point_at
 from fatswarm.domain.robot_model import Bodies, ModelError, RobotModel
 from fatswarm.world.record import Header, RoundEntry, RunRecord, move_origin
 from fatswarm.world.timeline import is_async
 
-# Okabe and Ito's colours (told apart under the common colour blindnesses) first, then Paul Tol's
-# "muted" scheme for palettes of more than seven (fatswarm allows 16 colours: MAX_COLOURS).
-LIGHT_HEX: Final = (
-    "#E69F00",  # orange
-    "#56B4E9",  # sky blue
-    "#009E73",  # bluish green
-    "#F0E442",  # yellow
-    "#0072B2",  # blue
-    "#D55E00",  # vermillion
-    "#CC79A7",  # reddish purple
-    "#88CCEE",  # cyan
-    "#44AA99",  # teal
-    "#117733",  # green
-    "#999933",  # olive
-    "#DDCC77",  # sand
-    "#CC6677",  # rose
-    "#882255",  # wine
-    "#AA4499",  # purple
-    "#332288",  # indigo
-)
 UNSEEN_STYLE: Final = "grey39"  # robots the chosen robot did not see, in its Look's round
 FOCUS_STYLE: Final = "bold bright_white"  # the ring around the chosen robot
 SIGHT_STYLE: Final = "white"  # the circle of its sight, about where it Looked from
