@@ -7,8 +7,9 @@ shadow them. In the checkout, fatswarm/ links to those folders.
 
 The Python API (fatswarm.deploy.engine.api) is here too: `fatswarm.run(...)`,
 `fatswarm.read_record(path)`, `fatswarm.positions_at(record, t)`, `fatswarm.summary(...)`,
-`fatswarm.trajectory(record)`, loaded on first use so that `import fatswarm` stays light
-(`dir(fatswarm)` lists them all the same). docs/notebook.md shows them in a notebook.
+`fatswarm.trajectory(record)`, `fatswarm.Swarm(...)` (a run to step through), loaded on first
+use so that `import fatswarm` stays light (`dir(fatswarm)` lists them all the same).
+docs/notebook.md shows them in a notebook.
 """
 
 import importlib as _importlib
@@ -27,10 +28,12 @@ if _typing.TYPE_CHECKING:  # the API's types for type checkers and editors; load
         summary,
         trajectory,
     )
+    from fatswarm.deploy.engine.swarm import Swarm
 
 __all__ = [
     "RunRecord",
     "RunResult",
+    "Swarm",
     "__version__",
     "moved_by_round",
     "positions_at",
@@ -39,16 +42,19 @@ __all__ = [
     "summary",
     "trajectory",
 ]
-_API = frozenset(__all__) - {"__version__"}  # names of fatswarm.deploy.engine.api
+_API = frozenset(__all__) - {"__version__", "Swarm"}  # names of fatswarm.deploy.engine.api
+_ELSEWHERE = {"Swarm": "fatswarm.deploy.engine.swarm"}  # the API's names in modules of their own
 
 
 def __getattr__(name: str) -> _typing.Any:
     """The API's functions, imported when first asked for."""
     if name in _API:
         return getattr(_importlib.import_module("fatswarm.deploy.engine.api"), name)
+    if name in _ELSEWHERE:
+        return getattr(_importlib.import_module(_ELSEWHERE[name]), name)
     raise AttributeError(f"module 'fatswarm' has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
     """The module's names and the API's, which load on first use (for completion in notebooks)."""
-    return sorted({*globals(), *_API})  # private imports and helpers start with "_"
+    return sorted({*globals(), *_API, *_ELSEWHERE})  # private imports and helpers start with "_"
