@@ -16,7 +16,7 @@ import numbers
 import reprlib
 from collections import deque
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, fields
 from typing import Any, Final
 
 import numpy as np
@@ -118,18 +118,16 @@ class View:
 
 @dataclass(slots=True)
 class _Lines:
-    """The record's lines as the world emits them (the run's journal), kept in memory."""
+    """The run's journal: the header and the result line as the world emits them (its round
+    lines reach the swarm with the figures after them, through the round callback)."""
 
     header: Header | None = None
-    rounds: list[RoundEntry] = field(default_factory=list)
     result: Result | None = None
 
     def append(self, line: Header | RoundEntry | Result) -> None:
         if isinstance(line, Header):
             self.header = line
-        elif isinstance(line, RoundEntry):
-            self.rounds.append(line)
-        else:
+        elif isinstance(line, Result):
             self.result = line
 
     def close(self) -> None:
@@ -161,9 +159,12 @@ class Swarm:
     models, the next ended Look-Compute-Move cycle (the record's next line; the world may end
     several at one instant of virtual time, and each is a step of its own). The swarm is as of
     the last line stepped to: `positions`, `lights`, `figures` and `time` are the line's, and
-    `view(i)` is what robot i would see if it Looked then. Stepped to the end, or run through,
-    its record (in memory, and at `record=` if given) is byte for byte `fatswarm.run`'s and
-    `fatswarm run --lockstep`'s with the same settings (`command` aside: the API has none).
+    `view(i)` is what robot i would see if it Looked then (the lock step may have served the
+    next round's Looks already, a Commit opening the next round at once, so an algorithm's
+    compute may run a round ahead of `step`: `view` shows what those Looks were shown). Stepped
+    to the end, or run through, its record (in memory, and at `record=` if given) is byte for
+    byte `fatswarm.run`'s and `fatswarm run --lockstep`'s with the same settings (`command`
+    aside: the API has none).
     """
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
