@@ -7,8 +7,9 @@ shadow them. In the checkout, fatswarm/ links to those folders.
 
 The Python API (fatswarm.deploy.engine.api) is here too: `fatswarm.run(...)`,
 `fatswarm.read_record(path)`, `fatswarm.positions_at(record, t)`, `fatswarm.summary(...)`,
-`fatswarm.trajectory(record)`, loaded on first use so that `import fatswarm` stays light
-(`dir(fatswarm)` lists them all the same). docs/notebook.md shows them in a notebook.
+`fatswarm.trajectory(record)`, `fatswarm.Swarm(...)` (a run to step through), loaded on first
+use so that `import fatswarm` stays light (`dir(fatswarm)` lists them all the same).
+docs/notebook.md shows them in a notebook.
 """
 
 import importlib as _importlib
@@ -27,11 +28,13 @@ if _typing.TYPE_CHECKING:  # the API's types for type checkers and editors; load
         summary,
         trajectory,
     )
+    from fatswarm.deploy.engine.swarm import Swarm
     from fatswarm.deploy.sweep.api import sweep
 
 __all__ = [
     "RunRecord",
     "RunResult",
+    "Swarm",
     "__version__",
     "moved_by_round",
     "positions_at",
@@ -42,7 +45,10 @@ __all__ = [
     "trajectory",
 ]
 _API = frozenset(__all__) - {"__version__"}  # names of fatswarm.deploy.engine.api, but:
-_ELSEWHERE = {"sweep": "fatswarm.deploy.sweep.api"}  # the API's names in another module
+_ELSEWHERE = {  # the API's names in modules of their own
+    "Swarm": "fatswarm.deploy.engine.swarm",
+    "sweep": "fatswarm.deploy.sweep.api",
+}
 
 
 def __getattr__(name: str) -> _typing.Any:
@@ -55,4 +61,4 @@ def __getattr__(name: str) -> _typing.Any:
 
 def __dir__() -> list[str]:
     """The module's names and the API's, which load on first use (for completion in notebooks)."""
-    return sorted({*globals(), *_API})  # private imports and helpers start with "_"
+    return sorted({*globals(), *_API, *_ELSEWHERE})  # private imports and helpers start with "_"

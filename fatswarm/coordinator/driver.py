@@ -9,9 +9,9 @@ I/O here: the link does it all.
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Generator, Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Protocol, TypeVar
 
 from fatswarm.coordinator.rounds import Action, CoordinatorCore, Finished, Note
 from fatswarm.world.protocol import ControlReply, ControlRequest, MovesHeld
@@ -62,6 +62,13 @@ class Link(Protocol):
 
 def drive(core: CoordinatorCore, link: Link) -> Finished:
     """Run `core` on `link` until it finishes (or the link stops: the core is stopped then)."""
+    return run_out(driving(core, link))
+
+
+def driving(core: CoordinatorCore, link: Link) -> Generator[None, None, Finished]:
+    """`drive`'s loop, one exchange at a time: it yields after each request the world answered
+    (all a world changes on) and returns how the core finished. A lock step advances it round by
+    round (deploy/engine/lockstep.py); `drive` runs it out."""
     todo: deque[Action] = deque(core.start(link.now()))
     while not link.stopped():
         link.note(core.pop_notes())
@@ -78,9 +85,22 @@ def drive(core: CoordinatorCore, link: Link) -> Finished:
             link.note(core.pop_notes())
             return action
         todo.extend(core.on_reply(link.ask(action.request), link.now()))
+        yield
     finished = core.stop()
     link.note(core.pop_notes())
     return finished
+
+
+T = TypeVar("T")
+
+
+def run_out(steps: Generator[None, None, T]) -> T:
+    """Advance `steps` to its end; what it returns."""
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value  # type: ignore[no-any-return]
 
 
 def feed(core: CoordinatorCore, event: Event, now: float) -> list[Action]:
@@ -92,4 +112,4 @@ def feed(core: CoordinatorCore, event: Event, now: float) -> list[Action]:
     return core.on_held(event, now)
 
 
-__all__ = ["AgentSeen", "Event", "Link", "WorldSeen", "drive", "feed"]
+__all__ = ["AgentSeen", "Event", "Link", "WorldSeen", "drive", "driving", "feed", "run_out"]

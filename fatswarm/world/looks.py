@@ -82,10 +82,7 @@ class Looks:
             others -= positions[robot]
             order = view_order(self.seed, look_round, robot, len(others))
             return self.frame(robot, look_round).to_local(others[order]), None, None
-        ids = self.seen_by(positions, robot)
-        ids = ids[view_order(self.seed, look_round, robot, len(ids))]
-        if self.once:
-            ids = _each_point_once(positions, robot, ids)
+        ids = self.shown(positions, robot, look_round)
         if self.record_views:
             self.views[robot] = sorted(int(i) for i in ids)
         view = self.frame(robot, look_round).to_local(positions[ids] - positions[robot])
@@ -141,6 +138,15 @@ class Looks:
             rel[at, :, 0] = c * x - s * y
             rel[at, :, 1] = s * x + c * y
         return rel
+
+    def shown(self, positions: Points, robot: int, look_round: int) -> np.ndarray:
+        """The ids of the robots robot `robot`'s Look of round `look_round` shows at `positions`,
+        in the order of its view's rows (`view`; the fast path's too: every other robot)."""
+        ids = self.seen_by(positions, robot)
+        ids = ids[view_order(self.seed, look_round, robot, len(ids))]
+        if self.once:
+            ids = _each_point_once(positions, robot, ids)
+        return ids
 
     def seen_by(self, positions: Points, robot: int) -> np.ndarray:
         """The ids of the robots `robot` sees now, ascending."""

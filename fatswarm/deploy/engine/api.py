@@ -22,7 +22,8 @@ import re
 import reprlib
 import warnings
 from collections.abc import Callable, Mapping
-from typing import Final
+from dataclasses import dataclass
+from typing import Any, Final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,15 +33,17 @@ from fatswarm.deploy.engine.config import (
     DEFAULT_START,
     RunConfig,
     RunInputError,
+    RunSetup,
     input_errors,
 )
-from fatswarm.deploy.engine.lockstep import RoundReport, run_lockstep
+from fatswarm.deploy.engine.lockstep import Lockstep, RoundReport, start_lockstep
 from fatswarm.deploy.engine.lockstep import RunResult as LockstepResult
 from fatswarm.deploy.engine.notebook import RunRecord, RunResult
 from fatswarm.domain.figures import run_derived, summary_values
 from fatswarm.domain.path import Points
 from fatswarm.domain.robot_model import AXES, AXIS_NAMES, Axis, RobotModel
 from fatswarm.world import record_read
+from fatswarm.world.journal import Journal
 from fatswarm.world.record import RecordWriter
 from fatswarm.world.record import RunRecord as RecordLines
 from fatswarm.world.timeline import Timeline
@@ -90,71 +93,119 @@ def run(
     Raises a ValueError in these keywords' words for what it refuses: one of `input_errors()`
     (fatswarm.deploy.engine.config), or `RunArgumentError` for a keyword of the wrong type.
     """
+    asked = run_asked(locals())  # every keyword by name: this signature is their one list
     try:
-        config = RunConfig(
-            n=_whole("n", n),
-            algorithm=_text("algorithm", algorithm),
-            params=_params(params),
-            seed=_seed(seed),
-            start=_text("start", start),
-            init=_path("init", init),
-            positions=_positions(positions),
-            scheduler=_text("scheduler", scheduler),
-            schedule=_path("schedule", schedule),
-            fairness=_whole("fairness", fairness),
-            max_rounds=_whole("max_rounds", max_rounds),
-            non_rigid=_number("non_rigid", non_rigid),
-            crash=_whole("crash", crash),
-            model=_model(model),
-            record_views=_flag("record_views", record_views),
+        setup = asked.config.resolve()
+        writer = None if asked.record is None else RecordWriter(asked.record)
+        palette = Palette(asked.on_round)
+        try:
+            result = started(setup, writer, palette.committed).finish()
+        finally:
+            if writer is not None:
+                writer.close()
+        return api_result(result, asked, setup, palette.names)
+    except input_errors() as exc:
+        raise refusal(exc) from None
+
+
+@dataclass(frozen=True, slots=True)
+class RunAsked:
+    """What `run`'s keywords ask for, checked: the configuration, where its record goes (None:
+    nowhere) and the round callback."""
+
+    config: RunConfig
+    record: str | None
+    on_round: Callable[[RoundReport], None] | None
+
+
+def run_asked(keywords: Mapping[str, Any]) -> RunAsked:
+    """`run`'s keywords (each of its parameters by name, `model` the axes given) checked; raises
+    as `run` does, in its words. `fatswarm.Swarm` takes the same keywords."""
+    try:
+        model = keywords["model"]
+        return RunAsked(
+            RunConfig(
+                n=_whole("n", keywords["n"]),
+                algorithm=_text("algorithm", keywords["algorithm"]),
+                params=_params(keywords["params"]),
+                seed=_seed(keywords["seed"]),
+                start=_text("start", keywords["start"]),
+                init=_path("init", keywords["init"]),
+                positions=_positions(keywords["positions"]),
+                scheduler=_text("scheduler", keywords["scheduler"]),
+                schedule=_path("schedule", keywords["schedule"]),
+                fairness=_whole("fairness", keywords["fairness"]),
+                max_rounds=_whole("max_rounds", keywords["max_rounds"]),
+                non_rigid=_number("non_rigid", keywords["non_rigid"]),
+                crash=_whole("crash", keywords["crash"]),
+                model=_model(model),
+                record_views=_flag("record_views", keywords["record_views"]),
+            ),
+            _path("record", keywords["record"]),
+            _callback(keywords["on_round"]),
         )
-        return _run_config(config, _path("record", record), _callback(on_round))
-    except input_errors() as exc:  # the CLI's words (flags) become the API's (keywords)
-        exc.args = (api_words(str(exc)), *exc.args[1:])
-        raise exc.with_traceback(None) from None
+    except input_errors() as exc:
+        raise refusal(exc) from None
 
 
-def _run_config(
-    config: RunConfig,
-    record: str | None,
-    on_round: Callable[[RoundReport], None] | None,
-) -> RunResult:
-    """Resolve `config` and run it in lock step, writing its record to `record` (if not None)."""
-    setup = config.resolve()
-    writer = None if record is None else RecordWriter(record)
-    names: set[str] = set()  # the colours the lines show: the picture's palette
+def refusal(exc: Exception) -> Exception:
+    """A refusal worded for the CLI's flags (one of `input_errors()`), worded for the API's
+    keywords (`api_words`), to raise alone (no traceback into the checks)."""
+    exc.args = (api_words(str(exc)), *exc.args[1:])
+    return exc.with_traceback(None)
 
-    def committed(report: RoundReport) -> None:
+
+def started(
+    setup: RunSetup, record: Journal | None, on_round: Callable[[RoundReport], None] | None
+) -> Lockstep:
+    """The lock step of the resolved run `setup`, started (its header to `record`, if not None)."""
+    return start_lockstep(
+        setup.initial,
+        setup.params,
+        setup.scheduler,
+        seed=setup.seed,
+        max_rounds=setup.max_rounds,
+        record=record,
+        on_round=on_round,
+        settings=setup.settings,
+    )
+
+
+class Palette:
+    """The colours a run's lines show (the picture's palette), gathered as its rounds commit;
+    the user's round callback, if any, is called after."""
+
+    def __init__(self, on_round: Callable[[RoundReport], None] | None) -> None:
+        self.on_round = on_round
+        self.seen: set[str] = set()
+
+    def committed(self, report: RoundReport) -> None:
         lights = report.entry.extra.get("lights")
-        names.update(lights if isinstance(lights, list) else ())
-        if on_round is not None:
-            on_round(report)
+        self.seen.update(lights if isinstance(lights, list) else ())
+        if self.on_round is not None:
+            self.on_round(report)
 
-    try:
-        result = run_lockstep(
-            setup.initial,
-            setup.params,
-            setup.scheduler,
-            seed=setup.seed,
-            max_rounds=setup.max_rounds,
-            record=writer,
-            on_round=committed,
-            settings=setup.settings,
-        )
-    finally:
-        if writer is not None:
-            writer.close()
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(sorted(self.seen))
+
+
+def api_result(
+    result: LockstepResult, asked: RunAsked, setup: RunSetup, palette: tuple[str, ...] = ()
+) -> RunResult:
+    """The lock step's `result` of the run `asked` for, as the API hands it back (`palette`: the
+    colours its lines showed, `Palette.names`)."""
     return RunResult.of(
         result,
         n=setup.params.n,
         seed=setup.seed,
-        scheduler=config.scheduler,
+        scheduler=asked.config.scheduler,
         algorithm=setup.params.name,
         params=dict(setup.params.values),
-        record=record,
+        record=asked.record,
         outside=setup.outside,
         robot_model=setup.robot_model,
-        palette=tuple(sorted(names)),
+        palette=palette,
     )
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Generator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Final
 
@@ -23,7 +23,7 @@ from fatswarm.agent.params import Params
 from fatswarm.agent.service import act_on
 from fatswarm.agent.uniform_circle import ALGORITHM as UNIFORM_CIRCLE
 from fatswarm.coordinator.async_rounds import coordinator_core
-from fatswarm.coordinator.driver import Event, drive
+from fatswarm.coordinator.driver import Event, driving, run_out
 from fatswarm.coordinator.rounds import Finished, Note, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
 from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel
@@ -71,6 +71,10 @@ ComputeFn = Callable[[Points, Any], Path]
 
 class HistoryMismatchError(ValueError):
     """Committed rounds to resume from that this run would not have produced."""
+
+
+class LockstepStoppedError(RuntimeError):
+    """A lock-step run asked to go on after it raised half-way."""
 
 
 def default_max_rounds(
@@ -170,7 +174,49 @@ def run_lockstep(
     record_views: bool = False,
     settings: WorldSetup | None = None,
 ) -> RunResult:
-    """Run until formed, stalled or `max_rounds` (default `default_max_rounds`).
+    """Run until formed, stalled or `max_rounds` (default `default_max_rounds`): the run
+    `start_lockstep` starts (the same arguments), to its end."""
+    return start_lockstep(
+        initial,
+        params,
+        scheduler,
+        seed=seed,
+        max_rounds=max_rounds,
+        record=record,
+        on_round=on_round,
+        compute=compute,
+        history=history,
+        algorithm_ref=algorithm_ref,
+        header_extra=header_extra,
+        non_rigid=non_rigid,
+        crash=crash,
+        robot_model=robot_model,
+        record_views=record_views,
+        settings=settings,
+    ).finish()
+
+
+def start_lockstep(
+    initial: Points,
+    params: Params | Configured,
+    scheduler: Scheduler,
+    *,
+    seed: int,
+    max_rounds: int | None = None,
+    record: Journal | None = None,
+    on_round: Callable[[RoundReport], None] | None = None,
+    compute: ComputeFn | None = None,
+    history: Sequence[RoundEntry] | None = None,
+    algorithm_ref: str | None = None,
+    header_extra: dict[str, Any] | None = None,
+    non_rigid: float | None = None,
+    crash: int | None = None,
+    robot_model: RobotModel = PAPER_MODEL,
+    record_views: bool = False,
+    settings: WorldSetup | None = None,
+) -> Lockstep:
+    """A run that goes until formed, stalled or `max_rounds` (default `default_max_rounds`),
+    started: its header recorded, its rounds to come as it is advanced (`Lockstep`).
 
     `params`: the paper's `Params`, or any algorithm `Configured` for n robots.
     `seed` fixes the robots' private frames and view orders; the scheduler carries its own seed.
@@ -221,9 +267,72 @@ def run_lockstep(
         committed = world.readout.committed
         log.info("resumed %s after round %d", getattr(record, "path", "a run"), committed)
     bus = _Bus(world, setting, compute, record, on_round)
-    finished = bus.run(checked)
-    looks = bus.looks + sum(len(entry.active) for entry in history or ())
-    return _result(world, finished, looks, positions)
+    looks = sum(len(entry.active) for entry in history or ())
+    return Lockstep(world, bus, bus.steps(checked), positions, looks)
+
+
+class Lockstep:
+    """A lock-step run under way: the world core and the coordinator's one loop on the bus
+    (`coordinator.driver.driving`), advanced an exchange at a time (`advance`: a round opened or
+    committed, an async instant) or to the end (`finish`)."""
+
+    def __init__(
+        self,
+        world: WorldCore,
+        bus: _Bus,
+        steps: Generator[None, None, Finished],
+        initial: Points,
+        looks_before: int,
+    ) -> None:
+        self.world = world  # read through its readout (the result's figures)
+        self.readout = world.readout
+        self.setting = bus.setting  # the run's algorithm, configured
+        self.finished: Finished | None = None  # how the coordinator finished, once it has
+        self.raised: BaseException | None = None  # what stopped the run half-way, if anything
+        self._bus, self._steps = bus, steps
+        self._initial, self._looks_before = initial, looks_before
+
+    @property
+    def looks(self) -> int:
+        """Looks so far (those of the rounds resumed from, too)."""
+        return self._bus.looks + self._looks_before
+
+    def advance(self) -> bool:
+        """One exchange of the coordinator with the world (a control request answered); False
+        once the run has ended (then nothing is done). Raises what the run raises (the
+        algorithm's goal failing: `AlgorithmFailure`, an interrupt); after that, every call
+        raises `LockstepStoppedError`: the world may be half-way through a round."""
+        if self.finished is not None:
+            return False
+        self._check_going()
+        try:
+            next(self._steps)
+        except StopIteration as done:
+            self.finished = done.value
+            return False
+        except BaseException as exc:
+            self.raised = exc
+            raise
+        return True
+
+    def finish(self) -> RunResult:
+        """Run on to the end; how the run ended and what it cost (raises as `advance` does)."""
+        if self.finished is None:
+            self._check_going()
+            try:
+                self.finished = run_out(self._steps)
+            except BaseException as exc:
+                self.raised = exc
+                raise
+        return _result(self.world, self.finished, self.looks, self._initial)
+
+    def _check_going(self) -> None:
+        if self.raised is not None:
+            said = f": {self.raised}" if str(self.raised) else ""
+            raise LockstepStoppedError(
+                f"the run stopped after round {self.readout.committed} when it raised "
+                f"{type(self.raised).__name__}{said}"
+            )
 
 
 def _result(world: WorldCore, finished: Finished, looks: int, initial: Points) -> RunResult:
@@ -310,9 +419,10 @@ class _Bus:
         self.batch = setting.views_compute() if compute is None and self.planner is None else None
         self.flips = [self.readout.frame(robot, 0).mirror for robot in range(setup.n)]
 
-    def run(self, scheduler: Scheduler) -> Finished:
-        """Every robot's agent up for the whole run, the coordinator's core driven on this bus
-        until the run ends."""
+    def steps(self, scheduler: Scheduler) -> Generator[None, None, Finished]:
+        """Every robot's agent up for the whole run and the header recorded (at once), then the
+        coordinator's core driven on this bus (`driving`) as the steps are taken, until the run
+        ends."""
         n = self.readout.setup.n
         for robot in range(n):
             self.world.set_alive(robot, True)
@@ -322,10 +432,7 @@ class _Bus:
         )
         for robot in range(n):
             coordinator.on_alive(robot, True, 0.0)
-        finished = drive(coordinator, self)
-        if finished.status == Status.RUNNING:
-            raise RuntimeError("the coordinator stopped without finishing the run")  # a bug
-        return finished
+        return _finished(driving(coordinator, self))
 
     # -- the link `drive` runs on: a virtual clock, the world core in this process ------------
 
@@ -510,6 +617,14 @@ def plain_path(path: Path) -> bool:
     )
 
 
+def _finished(steps: Generator[None, None, Finished]) -> Generator[None, None, Finished]:
+    """The coordinator's `steps`, checked to finish the run."""
+    finished = yield from steps
+    if finished.status == Status.RUNNING:
+        raise RuntimeError("the coordinator stopped without finishing the run")  # a bug
+    return finished
+
+
 class _CheckedScheduler:
     """The run's scheduler, checked against the recorded active sets while the coordinator
     replays the committed rounds into it."""
@@ -556,10 +671,13 @@ def _check_history(history: Sequence[RoundEntry]) -> None:
 __all__ = [
     "ComputeFn",
     "HistoryMismatchError",
+    "Lockstep",
+    "LockstepStoppedError",
     "RoundReport",
     "RunResult",
     "configured",
     "default_max_rounds",
     "run_lockstep",
     "run_reach",
+    "start_lockstep",
 ]
