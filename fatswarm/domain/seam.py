@@ -279,6 +279,21 @@ class RoundPlanner(Protocol):
         ...
 
 
+def _hook_of_its_compute(algorithm: object, name: str) -> Any:
+    """The hook `name` of `algorithm` (a shortcut for many robots' Computes at once), or None if
+    it has none or the hook is inherited from above the class that defines its `compute`: a
+    subclass that changes `compute` and keeps its parent's hook would have the parent's moves."""
+    hook = getattr(algorithm, name, None)
+    if hook is None or name in getattr(algorithm, "__dict__", {}):  # none, or the object's own
+        return hook
+    mro = type(algorithm).__mro__
+    compute_owner = next((c for c in mro if "compute" in vars(c) or "compute_lit" in vars(c)), None)
+    hook_owner = next((c for c in mro if name in vars(c)), None)
+    if compute_owner is None or hook_owner is None:
+        return hook
+    return hook if issubclass(hook_owner, compute_owner) else None
+
+
 @dataclass(frozen=True, slots=True, eq=False)
 class Configured:
     """An algorithm with its parameters for a run of n robots: what the world and agents hold."""
@@ -357,7 +372,7 @@ class Configured:
     def views_compute(self) -> Callable[[Views], Sequence[Path]] | None:
         """The algorithm's round hook for these parameters (`compute_views`), if it has one and
         is not luminous (a luminous algorithm's Compute goes per robot)."""
-        hook = getattr(self.algorithm, "compute_views", None)
+        hook = _hook_of_its_compute(self.algorithm, "compute_views")
         if hook is None or self.colours:
             return None
         params = self.params
@@ -365,7 +380,7 @@ class Configured:
 
     def round_planner(self) -> RoundPlanner | None:
         """The algorithm's round planner for these parameters, if it has the hook."""
-        hook = getattr(self.algorithm, "round_planner", None)
+        hook = _hook_of_its_compute(self.algorithm, "round_planner")
         return None if hook is None else cast(RoundPlanner, hook(self.params))
 
     def figures(self, positions: Points) -> dict[str, float]:

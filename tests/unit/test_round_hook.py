@@ -234,3 +234,25 @@ def test_a_failing_hook_leaves_each_robot_what_its_own_compute_gives(
         return target.read_bytes()
 
     assert run(True) == run(False)
+
+
+def test_a_subclass_that_changes_compute_does_not_inherit_its_parents_round_hooks() -> None:
+    """A subclass of gathering (or of the paper's algorithm) with a compute of its own must not
+    have its rounds computed by the parent's hook or shared plan: its own compute runs."""
+    from fatswarm.agent.gathering import Gathering
+    from fatswarm.agent.uniform_circle import ALGORITHM as PAPER
+
+    class Still(Gathering):
+        def compute(self, view: Points, params: GatheringParams) -> Path:
+            return Gathering.compute(self, view, params)
+
+    class KeepsHook(Still):
+        def compute_views(self, views: Any, params: GatheringParams) -> Any:
+            return [self.compute(v, params) for v in views]
+
+    paper_child = type("PaperChild", (type(PAPER),), {"compute": type(PAPER).compute})
+    assert Configured.of(Still(), 4, None).views_compute() is None
+    assert Configured.of(GATHERING, 4, None).views_compute() is not None
+    assert Configured.of(KeepsHook(), 4, None).views_compute() is not None
+    assert Configured.of(paper_child(), 8, None).round_planner() is None
+    assert Configured.of(PAPER, 8, None).round_planner() is not None
