@@ -309,16 +309,20 @@ class CoordinatorCore:
         if reply.status != Status.RUNNING:
             return self._finish(Status(reply.status))  # nothing to wait for
         if reply.committed:
-            # A restarted coordinator advances a seeded scheduler past the rounds already run.
-            replay_live = sorted(self._resume_live or range(self._n))
-            for r in range(1, reply.committed + 1):
-                self._scheduler.active(r, replay_live)
-            self._note(f"resuming after round {reply.committed}")
+            self._catch_up(reply.committed)
         self._round = reply.committed + 1
         times = self.times
         self._gather_s = times.resume_grace_s if reply.committed else times.start_timeout_s
         self._phase, self._deadline = Phase.GATHER, now + self._gather_s
         return self._gathered(now)
+
+    def _catch_up(self, committed: int) -> None:
+        """A restarted coordinator advances a seeded scheduler past the rounds already run."""
+        assert self._scheduler is not None and self._n is not None
+        replay_live = sorted(self._resume_live or range(self._n))
+        for r in range(1, committed + 1):
+            self._scheduler.active(r, replay_live)
+        self._note(f"resuming after round {committed}")
 
     def _gathered(self, now: float) -> list[Action]:
         """GATHER: all n agents (or the deadline passed, then anyone) -> open the round."""
