@@ -21,7 +21,7 @@ from fatswarm.coordinator.driver import AgentSeen, Event, WorldSeen, drive
 from fatswarm.coordinator.protocol import alive_key
 from fatswarm.coordinator.rounds import Finished, Note, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
-from fatswarm.domain.outcome import Status, exit_code_for
+from fatswarm.domain.outcome import ExitCode, Status, exit_code_for
 from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.inbox import Inbox
 from fatswarm.world.protocol import (
@@ -57,6 +57,7 @@ class CoordinatorConfig:
     resume_grace_s: float = _TIMES.resume_grace_s  # a restarted coordinator waits this long
     retry_s: float = _TIMES.retry_s  # before asking a silent world again
     scheduler: str = ""  # its name: an async model gets the async core (coordinator/async_rounds)
+    give_up_s: float = _TIMES.give_up_s  # no usable answer from the world this long: exit 5
 
     @property
     def times(self) -> RoundTimes:
@@ -67,6 +68,7 @@ class CoordinatorConfig:
             resume_grace_s=self.resume_grace_s,
             pace_s=self.pace_s,
             retry_s=self.retry_s,
+            give_up_s=self.give_up_s,
         )
 
 
@@ -123,6 +125,9 @@ class Coordinator:
         return self._end(drive(self.core, self))
 
     def _end(self, finished: Finished) -> int:
+        if finished.gave_up:
+            log.error("%s", finished.gave_up)
+            return ExitCode.NO_PEER
         if finished.status != Status.RUNNING:
             log.info("run ended: %s after round %d", finished.status, self.core.round)
         return exit_code_for(finished.status, finished.collisions)
