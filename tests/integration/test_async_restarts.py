@@ -159,3 +159,53 @@ def test_async_restart_trials_of_every_role(
     assert not gaps and not left
     if role in ("world", "coordinator", "router"):  # what the docs promise for these
         assert equal, sw.logs()
+
+
+class ModelSwarm(Swarm):
+    """A swarm running the run of a lock-step record's header (another algorithm or robot model):
+    its state file starts as that header alone, which the world resumes (as `fatswarm run` lays a
+    run out), and its agents run the header's algorithm."""
+
+    def __init__(self, tmp: Path, lock: Path) -> None:
+        header = read_record(lock).header
+        super().__init__(tmp, header.n, int(header.seed or 0), header.scheduler)
+        self.algorithm = header.algorithm_ref
+        self.state_path.write_text(lock.read_text().splitlines(keepends=True)[0])
+
+    def start_agent(self, robot: int, name: str | None = None) -> None:
+        self._start(
+            name or f"agent {robot}",
+            "agent",
+            *self._net(),
+            *("--robot", str(robot), "--seed", str(self.seed), "--algorithm", self.algorithm),
+            *("--log-level", "info"),
+        )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("trial", range(8))
+@pytest.mark.parametrize("role", ["world", "coordinator", "router"])
+@pytest.mark.parametrize("model", ["lights", "opaque-views"])
+def test_async_restart_trials_of_the_luminous_and_opaque_models(
+    tmp_path: Path, model: str, role: str, trial: int
+) -> None:
+    lock = tmp_path / "lock.jsonl"
+    code, out = _fatswarm_run(["--lockstep", *RESUMED[model], "--record", str(lock), "-q"])
+    assert code in (0, 1), out
+    sw = ModelSwarm(tmp_path, lock)
+    try:
+        sw.start_all(pace=0.02)
+        at = 3 + 3 * trial
+        recovery = _restart(sw, role, at=at)
+        end = sw.wait_done()
+        net = read_record(sw.state_path)
+        equal = net.rounds and lock.read_text().splitlines()[1:] == [
+            line for line in sw.state_path.read_text().splitlines()[1:]
+        ]
+        print(
+            f"TRIAL {model} {role} kill at cycle {at}: {end.status}, equal {bool(equal)}, "
+            f"recovery {recovery:.2f} s"
+        )
+        assert equal, sw.logs()  # every line after the header, byte for byte
+    finally:
+        sw.close()

@@ -170,3 +170,37 @@ def test_an_async_record_names_each_crash_and_its_time_and_summaries_read_them(
     assert all(robot not in e.active for e in record.rounds if e.round > entry.round)
     plain = _run(tmp_path / "plain.jsonl", n=6, seed=2)
     assert not any("crash" in e.extra or "crash_at" in e.extra for e in plain.rounds)
+
+
+def test_cycles_the_record_says_timed_out_time_out_again_in_the_replay(tmp_path: FsPath) -> None:
+    # a networked run's slow agent, played here by a move the world refuses (a coordinate past
+    # the wire's bound) at the 9th Look: its cycle line says timed_out, which no compute redoes
+    from fatswarm.agent import algorithm
+    from fatswarm.domain.path import Line, Path, Points
+
+    calls = [0]
+
+    def once_refused(view: Points, params: object) -> Path:
+        calls[0] += 1
+        if calls[0] == 9:
+            return Path((Line((1e12, 0.0)),))
+        return algorithm.compute(view, params)  # type: ignore[arg-type]
+
+    whole = tmp_path / "whole.jsonl"
+    record = _run(whole, compute=once_refused)
+    timed_out = [e.round for e in record.rounds if e.extra.get("timed_out")]
+    assert len(timed_out) == 1
+    lines = whole.read_text().splitlines(keepends=True)
+    part = tmp_path / "part.jsonl"
+    part.write_text("".join(lines[: timed_out[0] + 3]))  # the time-out among the lines replayed
+    with RecordWriter(part, append=True) as journal:
+        run_lockstep(
+            random_start(5, 2),
+            Params(5),
+            make_scheduler("async", 5, 2),
+            seed=2,
+            record=journal,
+            history=read_record(part).rounds,
+            compute=algorithm.compute,  # every compute plain: only the record says time out
+        )
+    assert part.read_bytes() == whole.read_bytes()

@@ -530,7 +530,7 @@ def read_outcome(record: str) -> Outcome | None:
         algorithm=h.algorithm,
         params=dict(h.params),
         time=res.time,
-        crashes=crashes_in(rec.rounds),  # (an async record's cycles name none)
+        crashes=crashes_in(rec.rounds),  # (an async record's: the first cycle line after each)
         derived=run_derived(rec.rounds),
     ).noted(h.extra)
 
