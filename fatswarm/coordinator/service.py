@@ -88,6 +88,10 @@ class Coordinator:
         self.rejected = 0
         self._began = 0.0  # perf_counter mark of the round's opening (debug timings)
         self._session: Any = None  # the open Zenoh session, while it runs
+        # the control request out, cancelled when the world's token goes: a world killed while
+        # it held the request would otherwise cost the whole CONTROL_TIMEOUT_S (seen: 10 s)
+        self._asking: Any = None
+        self._asking_lock = threading.Lock()
 
     # -- event intake (callbacks only enqueue) --------------------------------------------------
 
@@ -96,7 +100,12 @@ class Coordinator:
         self.events.offer("alive", ("alive", (str(sample.key_expr), alive)))
 
     def _on_world(self, sample: Any) -> None:
-        self.events.offer("world", ("world", sample.kind == zenoh.SampleKind.PUT))
+        alive = sample.kind == zenoh.SampleKind.PUT
+        if not alive:
+            with self._asking_lock:
+                if self._asking is not None:
+                    self._asking.cancel()  # its answer will not come: ask again at once
+        self.events.offer("world", ("world", alive))
 
     def _on_held(self, sample: Any) -> None:
         size = len(sample.payload)
@@ -198,13 +207,24 @@ class Coordinator:
         return reply
 
     def _get(self, session: Any, payload: bytes) -> ControlReply | None:
+        token = zenoh.CancellationToken()
+        with self._asking_lock:
+            self._asking = token
         try:
             replies = list(
-                session.get(control_key(self.cfg.swarm), payload=payload, timeout=CONTROL_TIMEOUT_S)
+                session.get(
+                    control_key(self.cfg.swarm),
+                    payload=payload,
+                    timeout=CONTROL_TIMEOUT_S,
+                    cancellation_token=token,
+                )
             )
         except zenoh.ZError as exc:  # the session is reconnecting to its router
             log.warning("control request failed: %s", exc)
             return None
+        finally:
+            with self._asking_lock:
+                self._asking = None
         for reply in replies:
             if reply.ok is None:
                 continue

@@ -93,9 +93,11 @@ def _restart(sw: Swarm, role: str, at: int = 8) -> float:
         for robot in range(sw.n):
             sw.start_agent(robot, name=f"agent {robot} again")
     else:
-        sw.kill9(role)
+        sw.kill9("world" if role == "world-router" else role)
     if role == "world":
         sw.start_world(name="world again")
+    elif role == "world-router":  # the world hosting the router, as `fatswarm run` lays it out
+        sw.start_world_router(name="world again")
     elif role == "coordinator":
         sw.start_coordinator(pace=0.02, name="coordinator again")
     elif role == "router":
@@ -128,7 +130,9 @@ def test_an_async_run_outlives_a_restart_of_its_role_and_keeps_the_lockstep_reco
 
 @pytest.mark.slow
 @pytest.mark.parametrize("trial", range(8))
-@pytest.mark.parametrize("role", ["world", "coordinator", "router", "agent", "agents"])
+@pytest.mark.parametrize(
+    "role", ["world", "world-router", "coordinator", "router", "agent", "agents"]
+)
 def test_async_restart_trials_of_every_role(
     tmp_path: Path, make_swarm: Callable[..., Swarm], role: str, trial: int
 ) -> None:
@@ -137,7 +141,7 @@ def test_async_restart_trials_of_every_role(
     scheduler = ("async", "async-slowest")[trial % 2]
     seed = 1 + trial
     sw = make_swarm(6, seed, scheduler)
-    sw.start_all(pace=0.02)
+    sw.start_all(pace=0.02, in_world=role == "world-router")
     recovery = _restart(sw, role, at=3 + 3 * trial)
     end = sw.wait_done()
     rec = read_record(sw.state_path)
@@ -157,7 +161,7 @@ def test_async_restart_trials_of_every_role(
         f"left {len(left)}"
     )
     assert not gaps and not left
-    if role in ("world", "coordinator", "router"):  # what the docs promise for these
+    if role in ("world", "world-router", "coordinator", "router"):  # what the docs promise
         assert equal, sw.logs()
 
 
