@@ -213,3 +213,15 @@ def test_async_restart_trials_of_the_luminous_and_opaque_models(
         assert equal, sw.logs()  # every line after the header, byte for byte
     finally:
         sw.close()
+
+
+def test_a_coordinator_whose_world_never_answers_gives_up_after_its_bound_with_exit_5(
+    make_swarm: Callable[..., Swarm],
+) -> None:
+    sw = make_swarm(5, SEED, "async")
+    sw.start_router()
+    sw._start("coordinator", "coordinator", *sw.coordinator_flags(0.0), "--give-up", "1.5")
+    proc = sw.children.procs["coordinator"]
+    assert proc.wait(timeout=60) == 5, sw.logs()  # (the deadline of a shared machine)
+    said = [line for line in sw.log("coordinator").splitlines() if "giving up" in line]
+    assert len(said) == 1 and "no usable answer for 1.5 s" in said[0], sw.logs()

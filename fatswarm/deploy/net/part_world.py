@@ -218,6 +218,11 @@ def _open_async(args: argparse.Namespace, epoch: int) -> tuple[WorldCore, Record
     record = read_record(args.state)
     setup = setup_from_header(record.header, args.swarm, args.max_rounds)
     journal = RecordWriter(args.state, fsync=not args.no_fsync, append=True)
+    logging.getLogger("fatswarm.world").info(
+        "replaying the %d cycles of %s from its start (an async record)",
+        len(record.rounds),
+        args.state,
+    )
     try:
         core = replay_async(setup, load_configured(setup), record, journal, epoch)
     except HistoryMismatchError as exc:
