@@ -7,6 +7,11 @@ times (`Begin.looks`), and with the Commit hands the world the adversary's delay
 begun (`Commit.delays`). The world runs the moves in between and says, in each reply, who Looks
 next and when; a Begin it cannot open yet (a move ended first) is answered with the new plan and
 asked again at once. Hello, agents, timeouts and restarts are `CoordinatorCore`'s.
+
+The core keeps nothing the world does not: each instant is planned from the world's last reply,
+and each cycle's delays are drawn for the cycle the world says the robot began (`cycles` of the
+reply that opened it; the draws are pure functions of seed, robot and cycle). So a coordinator
+restarted mid-run asks the world where it stands and goes on as the one before it would have.
 """
 
 from __future__ import annotations
@@ -43,7 +48,7 @@ class AsyncCoordinatorCore(CoordinatorCore):
         self._last: ControlReply | None = None
         self._at: float | None = None
         self._first: tuple[tuple[int, float], ...] = ()
-        self._cycles: dict[int, int] = {}
+        self._cycles: dict[int, int] = {}  # the open instant's robots: the cycle each began
         self._replans = 0
 
     def on_reply(self, reply: ControlReply | None, now: float) -> list[Action]:
@@ -60,14 +65,9 @@ class AsyncCoordinatorCore(CoordinatorCore):
             return self._replan(now)  # not opened: the world got to another instant first
         return super().on_reply(reply, now)
 
-    def _first_hello(self, reply: ControlReply, now: float) -> list[Action]:
-        if reply.committed:
-            self._note(
-                "an async run's coordinator restarted: the adversary's cycle counts "
-                "start again (delays stay within the model's bounds)",
-                warning=True,
-            )
-        return super()._first_hello(reply, now)
+    def _catch_up(self, committed: int) -> None:
+        """Nothing to advance: the adversary's draws are keyed by the world's cycle counts."""
+        self._note(f"resuming after instant {committed}")
 
     @property
     def model(self) -> AsyncModel:
@@ -118,8 +118,7 @@ class AsyncCoordinatorCore(CoordinatorCore):
     def _on_begun(self, reply: ControlReply | None, now: float) -> list[Action]:
         if reply is not None and reply.ok and reply.open_round == self.round:
             self._replans = 0
-            for robot in self.active:
-                self._cycles[robot] = self._cycles.get(robot, 0) + 1
+            self._cycles = dict(reply.cycles)
         return super()._on_begun(reply, now)
 
     def _collected(self, now: float) -> list[Action]:
@@ -131,7 +130,7 @@ class AsyncCoordinatorCore(CoordinatorCore):
         self._chained = False  # the next instant depends on what this one commits
         delays = []
         for robot in self.active:
-            cycle = self.model.cycle(robot, self._cycles.get(robot, 1))
+            cycle = self.model.cycle(robot, self._cycles.get(robot, 1))  # (a crashed one's unused)
             delays.append((robot, cycle.compute, cycle.wait))
         commit = Commit(
             round=self.round, timed_out=actions[-1].request.timed_out, delays=tuple(delays)

@@ -31,6 +31,7 @@ class Finished:
 
     status: Status
     collisions: int  # robots stopped at contact so far, from the world's last reply (else 0)
+    gave_up: str = ""  # why the core gave up (the world gave no usable answer for give_up_s)
 
 
 Action = Ask | Finished
@@ -53,6 +54,8 @@ class RoundTimes:
     resume_grace_s: float = 2.0  # a restarted coordinator waits this long for all n agents
     pace_s: float = 0.0  # least time from one Begin to the next (0: full speed)
     retry_s: float = 0.25  # wait before asking the world again when it did not answer
+    give_up_s: float = 120.0  # no usable answer from the world for this long: give up (a world
+    # restarted on a long async record replays it before it answers: minutes for the longest)
 
 
 class Phase(enum.Enum):
@@ -121,6 +124,7 @@ class CoordinatorCore:
         self._epoch = 0  # the world process that answered last (MovesHeld.epoch)
         self._finished: Finished | None = None
         self._notes: deque[Note] = deque(maxlen=MAX_NOTES)
+        self._unanswered_since: float | None = None  # the first retry since a usable answer
 
     # -- read-only views ------------------------------------------------------------------------
 
@@ -199,6 +203,8 @@ class CoordinatorCore:
         if reply is not None:
             self._collisions = reply.collisions
             self._epoch = reply.epoch
+            if reply.ok:
+                self._unanswered_since = None
         if self._phase is Phase.HELLO:
             return self._on_hello(reply, now)
         if self._phase is Phase.BEGIN:
@@ -276,6 +282,19 @@ class CoordinatorCore:
         return [Ask(Hello())]
 
     def _retry(self, now: float) -> list[Action]:
+        """Ask the world again after retry_s; give up once it has given no usable answer for
+        give_up_s (a world gone for good: never retried forever)."""
+        if self._unanswered_since is None:
+            self._unanswered_since = now
+        elif now - self._unanswered_since >= self.times.give_up_s:
+            self._phase, self._deadline = Phase.DONE, None
+            self._finished = Finished(
+                Status.RUNNING,
+                self._collisions,
+                gave_up=f"the world gave no usable answer for {self.times.give_up_s:g} s "
+                f"(round {self._round}); giving up",
+            )
+            return [self._finished]
         self._phase, self._deadline = Phase.RETRY, now + self.times.retry_s
         return []
 
@@ -309,16 +328,20 @@ class CoordinatorCore:
         if reply.status != Status.RUNNING:
             return self._finish(Status(reply.status))  # nothing to wait for
         if reply.committed:
-            # A restarted coordinator advances a seeded scheduler past the rounds already run.
-            replay_live = sorted(self._resume_live or range(self._n))
-            for r in range(1, reply.committed + 1):
-                self._scheduler.active(r, replay_live)
-            self._note(f"resuming after round {reply.committed}")
+            self._catch_up(reply.committed)
         self._round = reply.committed + 1
         times = self.times
         self._gather_s = times.resume_grace_s if reply.committed else times.start_timeout_s
         self._phase, self._deadline = Phase.GATHER, now + self._gather_s
         return self._gathered(now)
+
+    def _catch_up(self, committed: int) -> None:
+        """A restarted coordinator advances a seeded scheduler past the rounds already run."""
+        assert self._scheduler is not None and self._n is not None
+        replay_live = sorted(self._resume_live or range(self._n))
+        for r in range(1, committed + 1):
+            self._scheduler.active(r, replay_live)
+        self._note(f"resuming after round {committed}")
 
     def _gathered(self, now: float) -> list[Action]:
         """GATHER: all n agents (or the deadline passed, then anyone) -> open the round."""

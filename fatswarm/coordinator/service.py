@@ -21,7 +21,7 @@ from fatswarm.coordinator.driver import AgentSeen, Event, WorldSeen, drive
 from fatswarm.coordinator.protocol import alive_key
 from fatswarm.coordinator.rounds import Finished, Note, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
-from fatswarm.domain.outcome import Status, exit_code_for
+from fatswarm.domain.outcome import ExitCode, Status, exit_code_for
 from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.inbox import Inbox
 from fatswarm.world.protocol import (
@@ -57,6 +57,7 @@ class CoordinatorConfig:
     resume_grace_s: float = _TIMES.resume_grace_s  # a restarted coordinator waits this long
     retry_s: float = _TIMES.retry_s  # before asking a silent world again
     scheduler: str = ""  # its name: an async model gets the async core (coordinator/async_rounds)
+    give_up_s: float = _TIMES.give_up_s  # no usable answer from the world this long: exit 5
 
     @property
     def times(self) -> RoundTimes:
@@ -67,6 +68,7 @@ class CoordinatorConfig:
             resume_grace_s=self.resume_grace_s,
             pace_s=self.pace_s,
             retry_s=self.retry_s,
+            give_up_s=self.give_up_s,
         )
 
 
@@ -86,6 +88,10 @@ class Coordinator:
         self.rejected = 0
         self._began = 0.0  # perf_counter mark of the round's opening (debug timings)
         self._session: Any = None  # the open Zenoh session, while it runs
+        # the control request out, cancelled when the world's token goes: a world killed while
+        # it held the request would otherwise cost the whole CONTROL_TIMEOUT_S (seen: 10 s)
+        self._asking: Any = None
+        self._asking_lock = threading.Lock()
 
     # -- event intake (callbacks only enqueue) --------------------------------------------------
 
@@ -94,7 +100,12 @@ class Coordinator:
         self.events.offer("alive", ("alive", (str(sample.key_expr), alive)))
 
     def _on_world(self, sample: Any) -> None:
-        self.events.offer("world", ("world", sample.kind == zenoh.SampleKind.PUT))
+        alive = sample.kind == zenoh.SampleKind.PUT
+        if not alive:
+            with self._asking_lock:
+                if self._asking is not None:
+                    self._asking.cancel()  # its answer will not come: ask again at once
+        self.events.offer("world", ("world", alive))
 
     def _on_held(self, sample: Any) -> None:
         size = len(sample.payload)
@@ -123,6 +134,9 @@ class Coordinator:
         return self._end(drive(self.core, self))
 
     def _end(self, finished: Finished) -> int:
+        if finished.gave_up:
+            log.error("%s", finished.gave_up)
+            return ExitCode.NO_PEER
         if finished.status != Status.RUNNING:
             log.info("run ended: %s after round %d", finished.status, self.core.round)
         return exit_code_for(finished.status, finished.collisions)
@@ -193,13 +207,24 @@ class Coordinator:
         return reply
 
     def _get(self, session: Any, payload: bytes) -> ControlReply | None:
+        token = zenoh.CancellationToken()
+        with self._asking_lock:
+            self._asking = token
         try:
             replies = list(
-                session.get(control_key(self.cfg.swarm), payload=payload, timeout=CONTROL_TIMEOUT_S)
+                session.get(
+                    control_key(self.cfg.swarm),
+                    payload=payload,
+                    timeout=CONTROL_TIMEOUT_S,
+                    cancellation_token=token,
+                )
             )
         except zenoh.ZError as exc:  # the session is reconnecting to its router
             log.warning("control request failed: %s", exc)
             return None
+        finally:
+            with self._asking_lock:
+                self._asking = None
         for reply in replies:
             if reply.ok is None:
                 continue

@@ -80,7 +80,8 @@ EXIT_CODES: Final = {
     "file could not be written",
     "coordinator": "0 formed with no collision; 1 not formed (stalled, out of rounds, or stopped "
     "by Ctrl-C or SIGTERM before the run ended); 2 bad input, or a second coordinator of the "
-    "swarm (one line on stderr says what to fix); 3 formed, but with collisions",
+    "swarm (one line on stderr says what to fix); 3 formed, but with collisions; 5 the world "
+    "gave no usable answer for --give-up seconds (one line says so)",
     "agent": "0 stopped (Ctrl-C or SIGTERM: a robot runs until then); 2 bad input (one line on "
     "stderr says what to fix)",
     "agents": "0 stopped (Ctrl-C or SIGTERM: the agents run until then); 1 every agent process "

@@ -26,6 +26,7 @@ class ExitCode(enum.IntEnum):
     BAD_INPUT = 2  # one line on stderr says what to fix
     FORMED_WITH_COLLISIONS = 3  # formed, but not the collision-free formation
     RECORD_FAILED = 4  # the run record could not be written (disk full...): resume once fixed
+    NO_PEER = 5  # a coordinator whose world gave no usable answer for its --give-up bound
     INTERRUPTED = 130  # 128 + SIGINT (Ctrl-C)
     BROKEN_PIPE = 141  # 128 + SIGPIPE: standard output closed early (`| head -1`)
     TERMINATED = 143  # 128 + SIGTERM

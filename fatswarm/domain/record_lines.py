@@ -68,7 +68,10 @@ ROUND_FIELDS: tuple[LineField, ...] = (
     LineField("recovered", "Crashed robots whose agent came back.", _SOME),
     LineField("cut", "--non-rigid: robots whose move the adversary stopped short.", _SOME),
     LineField(
-        "crash", "--crash: robots the crash adversary crashes in this round, for good.", _SOME
+        "crash",
+        "--crash: robots the crash adversary crashes in this round, for good (async models: "
+        "since the line before; `crash_at` says when).",
+        _SOME,
     ),
     LineField("look", "Async models: the virtual time of the Look this cycle began with.", _TIME),
     LineField(
@@ -87,6 +90,17 @@ ROUND_FIELDS: tuple[LineField, ...] = (
         "origin",
         "Async models: where the move starts (the robot's position at its Look).",
         {"$ref": "#/$defs/point"},
+    ),
+    LineField(
+        "crash_at",
+        "Async models with --crash: the virtual time at which each robot of `crash` crashed (at "
+        "its Look, which it never made), keyed by robot number as a string.",
+        {
+            "type": "object",
+            "propertyNames": {"pattern": "^(0|[1-9][0-9]*)$"},
+            "additionalProperties": _TIME,
+            "minProperties": 1,
+        },
     ),
     LineField(
         "lights",

@@ -30,7 +30,10 @@ from fatswarm.world.setup import WorldSetup
 
 
 class AsyncResumeError(ValueError):
-    """An async run's record to resume: not supported (its moves in flight are not recorded)."""
+    """An async run's record handed to the world core to book line by line: its lines are ended
+    cycles, and the moves in flight between them are in no line, so the core cannot rebuild its
+    clock from them. A record is resumed by running the run again from its start and checking
+    each line against the record's (`deploy.engine.lockstep.replay_async`)."""
 
 
 def is_async(setup: WorldSetup) -> bool:
@@ -40,10 +43,11 @@ def is_async(setup: WorldSetup) -> bool:
 
 def async_setup(setup: WorldSetup, history: RunRecord | None) -> WorldSetup:
     """`setup` with the async model's fairness bound among its header fields; raises
-    AsyncResumeError for a history with rounds (an async run cannot be resumed yet)."""
+    AsyncResumeError for a history with lines (replayed from the start instead: the class)."""
     if history is not None and (history.rounds or history.result is not None):
         raise AsyncResumeError(
-            f"a {setup.scheduler} run cannot be resumed (yet): run it again with its seed"
+            f"a {setup.scheduler} record is resumed by replaying its run from the start, "
+            "not line by line"
         )
     model = make_async(setup.scheduler, setup.n, setup.seed)
     return dataclasses.replace(setup, extra={"fairness_time": model.bound(), **setup.extra})
@@ -63,13 +67,22 @@ class Instants:
         self._showing: dict[int, tuple[float, int]] = {}
         self._relit = False  # a colour changed since the last cycle line
         self._failing: dict[int, str] = {}  # robot -> why its compute raised, until its cycle ends
+        # robot -> the time the crash adversary crashed it, until the next cycle line says so
+        self._crashes: dict[int, float] = {}
         # the end of the last cycle line that changed the configuration: a cycle whose Look came
         # before it planned on the old one (its line is booked when its move ends, after it)
         self._changed_at = -math.inf
 
     def reply_fields(self) -> dict[str, Any]:
         known, unset = self.clock.looks()
-        return {"now": self.clock.now, "looks": tuple(known), "unset": tuple(unset)}
+        w = self.books
+        cycles = tuple((r, self.clock.cycle_of(r)) for r in w.active) if w.open_round else ()
+        return {
+            "now": self.clock.now,
+            "looks": tuple(known),
+            "unset": tuple(unset),
+            "cycles": cycles,
+        }
 
     def result_fields(self) -> dict[str, Any]:
         return {"time": self.clock.now}
@@ -116,6 +129,7 @@ class Instants:
         for robot in sorted(crashing):
             self.clock.crash(robot)
             w.tracker.crash([robot])
+            self._crashes[robot] = self.clock.now
         w.stuck = w.stuck | frozenset(crashing)
         for robot in due:
             if robot not in crashing:
@@ -224,6 +238,7 @@ class Instants:
         paths = {done.robot: done.path} if done.path else {}
         traveled = {done.robot: done.traveled} if done.path else {}
         failed = self._failing.pop(done.robot, None)
+        crashes, self._crashes = self._crashes, {}
         entry = round_entry(
             k,
             (done.robot,),
@@ -236,10 +251,13 @@ class Instants:
                 "start": done.start,
                 "end": done.end,
                 "origin": [done.origin[0], done.origin[1]],
+                # only when some crashed since the line before: records without stay as they were
+                **({"crash_at": {str(r): crashes[r] for r in sorted(crashes)}} if crashes else {}),
             },
             robots=(
                 ("cut", [done.robot] if done.cut else []),
                 ("timed_out", [done.robot] if timed_out else []),
+                ("crash", sorted(crashes)),
             ),
             model=w.looks.round_fields([done.robot]),
             failed=None if failed is None else {done.robot: failed},

@@ -398,6 +398,9 @@ class ControlReply:
     timed_out: tuple[int, ...] = ()  # the reply to a Commit: the robots of the round it committed
     # that sent no move in time, as the world records them (the coordinator hears of moves only
     # through the round's one notice, so it cannot tell them itself at a deadline)
+    cycles: tuple[tuple[int, int], ...] = ()  # async, an instant open: each of its robots and the
+    # cycle it began there (the adversary's delays are drawn for that cycle: a coordinator that
+    # restarted counts on from the world's, not from its own)
 
     def encode(self) -> bytes:
         """msgpack bytes."""
@@ -423,6 +426,7 @@ class ControlReply:
                     }
                 ),
                 **({"timed_out": robot_list(self.timed_out)} if self.timed_out else {}),
+                **({"cycles": _times(self.cycles)} if self.cycles else {}),
             },
         )
 
@@ -447,6 +451,7 @@ class ControlReply:
             unset=get_robots(obj, "unset") if "unset" in obj else (),
             epoch=get_int(obj, "epoch", 0, 2**63 - 1) if "epoch" in obj else 0,
             timed_out=get_robots(obj, "timed_out") if "timed_out" in obj else (),
+            cycles=tuple((int(r), int(c)) for r, c in get_times(obj, "cycles")),
         )
 
 

@@ -225,6 +225,10 @@ KINDS: dict[str, tuple[Callable[[Path], None], Callable[[list[RecordLine]], bool
             rounds_with("look")(lines) and rounds_with("cut")(lines) and "time" in lines[-1]
         ),
     ),
+    "async-crash": (  # the crash adversary's crash, on the first cycle line after it
+        lockstep("-n", "6", "--seed", "2", "--scheduler", "async", "--crash", "1"),
+        lambda lines: rounds_with("crash")(lines) and rounds_with("crash_at")(lines),
+    ),
     "async-slowest": (
         lockstep("-n", "4", "--seed", "2", "--scheduler", "async-slowest"),
         lambda lines: "fairness_time" in lines[0] and status("formed")(lines),

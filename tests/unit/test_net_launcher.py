@@ -120,7 +120,7 @@ def test_a_signalled_run_says_after_which_round_and_how_to_go_on() -> None:
         "interrupted after round 7 (no --record: nothing to resume)"
     )
     assert said("interrupted", 40, "a.jsonl", "async") == (
-        "interrupted after cycle 40; an async run cannot be resumed: run it again with --seed 5"
+        "interrupted after cycle 40; go on with `fatswarm run --record a.jsonl --resume`"
     )
 
 

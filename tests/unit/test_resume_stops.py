@@ -85,15 +85,23 @@ def test_a_stopped_run_without_a_record_says_there_is_nothing_to_resume(
     assert capsys.readouterr().err == "interrupted after round 4 (no --record: nothing to resume)\n"
 
 
-def test_a_stopped_async_run_says_to_run_it_again_with_its_seed(
+def test_a_stopped_async_run_says_how_to_go_on_and_its_resume_ends_as_the_whole_run(
     tmp_path: Path, stop_after: list[BaseException | int | None], capsys: pytest.CaptureFixture[str]
 ) -> None:
-    stop_after[0] = KeyboardInterrupt()
     argv = ["--lockstep", "-n", "5", "--seed", "3", "--scheduler", "async", "-q"]
-    assert fatswarm(*argv, "--record", str(tmp_path / "a.jsonl")) == ExitCode.INTERRUPTED
+    target = tmp_path / "a.jsonl"
+    assert fatswarm(*argv, "--record", str(target)) == 0
+    whole = target.read_bytes()
+    target.unlink()  # the same command again: the same header
+    stop_after[0] = KeyboardInterrupt()
+    assert fatswarm(*argv, "--record", str(target)) == ExitCode.INTERRUPTED
     assert capsys.readouterr().err == (
-        "interrupted after cycle 4; an async run cannot be resumed: run it again with --seed 3\n"
+        f"interrupted after cycle 4; go on with `fatswarm run --lockstep --record {target} "
+        "--resume`\n"
     )
+    stop_after[0] = None
+    assert fatswarm("--lockstep", "--record", str(target), "--resume", "-q") == 0
+    assert target.read_bytes() == whole
 
 
 def test_a_record_that_cannot_be_written_says_after_which_round_and_how_to_go_on(

@@ -20,7 +20,6 @@ from fatswarm.deploy.engine.config import (
 from fatswarm.deploy.flags import given_flags
 from fatswarm.deploy.scenarios.starts import load_init, random_start
 from fatswarm.deploy.view.summary import counted, unit
-from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.robot_model import AXES, AXIS_NAMES, Bodies, axis_named
@@ -156,9 +155,7 @@ def stopped_line(
     `fix`: something must be fixed first (a full disk). Shared by the lock step and the
     networked launcher, so that both say it alike."""
     after = f"{word} after {unit(scheduler)} {done}"
-    if scheduler in ASYNC_NAMES:
-        again = "" if seed is None else f" with --seed {seed}"
-        return f"{after}; an async run cannot be resumed: run it again{again}"
+    del seed  # (every run resumes now, async ones too: by a replay, `lockstep.ReplayedRecord`)
     if not record:
         return f"{after} (no --record: nothing to resume)"
     mode = " --lockstep" if lockstep else ""

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any, Final, TextIO
 
 from fatswarm.deploy.commands.resume import drop_torn_end, stopped_line
 from fatswarm.deploy.commands.run_input import check_lockstep_flags, resolve_run
-from fatswarm.deploy.engine.config import RunInputError, RunSetup, input_errors
+from fatswarm.deploy.engine.config import RunSetup, input_errors
 from fatswarm.deploy.engine.estimate import (
     ESTIMATE_FROM_N,
     ESTIMATE_FROM_S,
@@ -170,11 +170,6 @@ def _lockstep_setup(args: argparse.Namespace, seed: int) -> tuple[RunSetup, Reco
     check_lockstep_flags(args)
     setup = resolve_run(args, seed)
     resumed = setup.resumed
-    if resumed is not None and setup.scheduler.name in ASYNC_NAMES:
-        raise RunInputError(
-            f"--resume: a {setup.scheduler.name} run cannot be resumed yet; "
-            "run it again with its --seed: a lock-step run repeats exactly"
-        )
     if resumed is not None:
         note = drop_torn_end(args.record, resumed)
         if note is not None:

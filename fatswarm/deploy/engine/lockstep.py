@@ -11,6 +11,7 @@ the very paths each robot's own `compute` returns; a `compute` passed in is call
 
 from __future__ import annotations
 
+import json
 import logging
 import math
 from collections.abc import Callable, Generator, Mapping, Sequence
@@ -26,7 +27,7 @@ from fatswarm.coordinator.async_rounds import coordinator_core
 from fatswarm.coordinator.driver import Event, driving, run_out
 from fatswarm.coordinator.rounds import Finished, Note, RoundTimes
 from fatswarm.coordinator.schedule import Scheduler
-from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel
+from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel, make_async
 from fatswarm.domain.figures import FigureValue
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import MAX_SEGMENTS, Arc, Line, Path, Points, vertices
@@ -40,7 +41,7 @@ from fatswarm.world.journal import Journal, perform
 from fatswarm.world.looks import Seen
 from fatswarm.world.physics import validate_configuration
 from fatswarm.world.protocol import ControlReply, ControlRequest, MoveSubmitted
-from fatswarm.world.record import Header, RoundEntry, RunRecord
+from fatswarm.world.record import Header, RecordWriter, Result, RoundEntry, RunRecord
 from fatswarm.world.setup import WorldSetup
 
 # Default round cap = ROUNDS_PER_STEP[scheduler] * (n + STEP_SLACK). The algorithm needs about
@@ -263,6 +264,11 @@ def start_lockstep(
         )
     )
     world, checked = _open(setup, setting, scheduler, history)
+    if history is not None and isinstance(scheduler, AsyncModel):  # replayed from its start
+        log.info("resuming %s after cycle %d", getattr(record, "path", "a run"), len(history))
+        replayed = ReplayedRecord(record, history)
+        bus: _Bus = _ReplayBus(world, setting, compute, replayed, replayed.fresh(on_round))
+        return Lockstep(world, bus, bus.steps(checked), positions, 0)  # its Looks come again
     if history is not None:
         committed = world.readout.committed
         log.info("resumed %s after round %d", getattr(record, "path", "a run"), committed)
@@ -365,12 +371,11 @@ def _open(
 ) -> tuple[WorldCore, Scheduler]:
     """The world core of a new run, or of a run resumed after `history` (replayed, and the
     scheduler checked against it); raises HistoryMismatchError for a history this run would
-    not have produced."""
-    if history is None:
+    not have produced. An async run's history is replayed by the bus from the start instead
+    (`ReplayedRecord`): its world core is a new run's."""
+    if history is None or isinstance(scheduler, AsyncModel):
         setting.check_start(setup.initial)
         return WorldCore(setup, setting), scheduler
-    if isinstance(scheduler, AsyncModel):
-        raise HistoryMismatchError(f"a {scheduler.name} run cannot be resumed (yet)")
     _check_history(history)
     header = Header(setup.n, setup.seed, scheduler.name, setup.initial)
     try:
@@ -423,6 +428,11 @@ class _Bus:
         """Every robot's agent up for the whole run and the header recorded (at once), then the
         coordinator's core driven on this bus (`driving`) as the steps are taken, until the run
         ends."""
+        return _finished(self.driven(scheduler))
+
+    def driven(self, scheduler: Scheduler) -> Generator[None, None, Finished]:
+        """`steps` until the run ends or this bus is `stopped` (then as the coordinator's core
+        stopped: RUNNING)."""
         n = self.readout.setup.n
         for robot in range(n):
             self.world.set_alive(robot, True)
@@ -432,7 +442,7 @@ class _Bus:
         )
         for robot in range(n):
             coordinator.on_alive(robot, True, 0.0)
-        return _finished(driving(coordinator, self))
+        return driving(coordinator, self)
 
     # -- the link `drive` runs on: a virtual clock, the world core in this process ------------
 
@@ -449,7 +459,8 @@ class _Bus:
             reply, _ = self.world.control(request)
         finally:  # what was committed is recorded, even when the algorithm's goal raised
             self.perform()
-        if reply.ok and readout.open_round and readout.open_round != opened:
+        opens = reply.ok and readout.open_round and readout.open_round != opened
+        if opens and not self.stopped():  # (stopped: a replay's agents take the round over)
             self._act(readout.open_round, readout.active)
             self.perform()
             notice = self.world.moves_notice()
@@ -646,6 +657,151 @@ class _CheckedScheduler:
         return active
 
 
+class ReplayedRecord:
+    """The journal of an async run resumed by replaying it: the lines its record holds already
+    (`lines`) come again, each checked to be that very line (as written: the same bytes) and
+    not written again, nor the header; the lines after them go to `journal`.
+
+    Why a replay: an async record's lines are ended cycles, and what was in flight between them
+    (Looks made, moves computed or under way, the adversary's clock) is in no line. The run is a
+    pure function of its settings (the adversary's draws are keyed by seed, robot and cycle), so
+    running it again from its start, unrecorded, puts the world exactly where it was after the
+    last line: the lock step goes on from there, a restarted networked world serves from there
+    (`replay_async`). No side file; the cost is the run so far, computed again.
+    """
+
+    def __init__(self, journal: Journal | None, lines: Sequence[RoundEntry | Result]) -> None:
+        self.journal = journal
+        self.path = getattr(journal, "path", None)
+        self.lines = tuple(lines)
+        self.checked = 0  # lines of `lines` replayed so far
+        # (robot, cycle) of the cycles the record says timed out (a networked run's slow agents):
+        # the replay holds no move for them either (a robot's n-th line is its n-th cycle)
+        self.timed_out: set[tuple[int, int]] = set()
+        cycles: dict[int, int] = {}
+        for line in self.lines:
+            if isinstance(line, RoundEntry):
+                for robot in line.active:
+                    cycles[robot] = cycles.get(robot, 0) + 1
+                    if robot in line.extra.get("timed_out", ()):
+                        self.timed_out.add((robot, cycles[robot]))
+
+    @property
+    def done(self) -> bool:
+        """Whether every line of the record has come again."""
+        return self.checked >= len(self.lines)
+
+    def fresh(
+        self, on_round: Callable[[RoundReport], None] | None
+    ) -> Callable[[RoundReport], None] | None:
+        """`on_round` for the lines after the record's (those replayed were reported before)."""
+        if on_round is None:
+            return None
+        known = len(self.lines)
+        return lambda report: None if report.entry.round <= known else on_round(report)
+
+    def append(self, line: Header | RoundEntry | Result) -> None:
+        if isinstance(line, Header):
+            return  # the record's own, written when it began
+        if not self.done:
+            expected = self.lines[self.checked]
+            if line_text(line) != line_text(expected):
+                raise HistoryMismatchError(_difference(self.checked + 1, expected, line))
+            self.checked += 1
+            return
+        if self.journal is not None:
+            self.journal.append(line)
+
+    def close(self) -> None:
+        if self.journal is not None:
+            self.journal.close()
+
+
+class _LineText(RecordWriter):
+    """The text RecordWriter writes a line as, kept instead of written (no file)."""
+
+    def __init__(self) -> None:  # (RecordWriter's opens the file: not called)
+        self.text = ""
+
+    def write(self, entry: Mapping[str, Any]) -> None:
+        self.text = json.dumps(entry, separators=(",", ":"), allow_nan=False)
+
+
+def line_text(line: Header | RoundEntry | Result) -> str:
+    """A record line as the record holds it (without its newline)."""
+    out = _LineText()
+    out.append(line)
+    return out.text
+
+
+def _difference(k: int, recorded: RoundEntry | Result, made: RoundEntry | Result) -> str:
+    """What differs between the record's line `k` and the replay's (one line)."""
+    if isinstance(recorded, Result) or isinstance(made, Result):
+        if isinstance(made, Result):
+            return f"the run ends ({made.status}) after cycle {made.rounds}; the record goes on"
+        return f"the record ends after cycle {k - 1}; this run goes on"
+    theirs, mine = json.loads(line_text(recorded)), json.loads(line_text(made))
+    keys = [key for key in dict.fromkeys([*theirs, *mine]) if theirs.get(key) != mine.get(key)]
+    return (
+        f"cycle {k} is not the one this run makes (it differs in {', '.join(keys) or 'order'}): "
+        "the record was made with other settings or another version"
+    )
+
+
+class _ReplayBus(_Bus):
+    """The bus of a replayed async run (`ReplayedRecord`): the cycles the record says timed out
+    time out again; `stop_replayed`: the bus stops once the record's lines have all come again
+    (a networked world's replay: its agents go on from there)."""
+
+    def __init__(
+        self,
+        world: WorldCore,
+        setting: Configured,
+        compute: ComputeFn | None,
+        replayed: ReplayedRecord,
+        on_round: Callable[[RoundReport], None] | None,
+        *,
+        stop_replayed: bool = False,
+    ) -> None:
+        super().__init__(world, setting, compute, replayed, on_round)
+        self.replayed = replayed
+        self.stop_replayed = stop_replayed
+
+    def stopped(self) -> bool:
+        return self.stop_replayed and self.replayed.done
+
+    def _act(self, round_no: int, active: Sequence[int]) -> None:
+        if self.replayed.timed_out and not self.replayed.done:
+            began = dict(self.world.reply(True).cycles)
+            active = [r for r in active if (r, began.get(r, 0)) not in self.replayed.timed_out]
+        super()._act(round_no, active)
+
+
+def replay_async(
+    setup: WorldSetup, setting: Configured, record: RunRecord, journal: Journal, epoch: int = 0
+) -> WorldCore:
+    """The world core of a networked async run resumed from `record` (a restarted world, or
+    `fatswarm run --resume`): the run replayed in process from its start (`ReplayedRecord`)
+    until every line of the record has come again, then no agent seen yet. Lines the replay
+    makes past the record's in the same step (a world killed while writing them) go to
+    `journal`. Raises HistoryMismatchError for a record this run does not make."""
+    world = WorldCore(setup, setting, epoch=epoch)
+    lines: list[RoundEntry | Result] = [*record.rounds]
+    if record.result is not None:
+        lines.append(record.result)
+    replayed = ReplayedRecord(journal, lines)
+    bus = _ReplayBus(world, setting, None, replayed, None, stop_replayed=True)
+    run_out(bus.driven(make_async(setup.scheduler, setup.n, setup.seed)))
+    if not replayed.done:
+        raise HistoryMismatchError(
+            f"the run ends after cycle {replayed.checked}; the record goes on to cycle "
+            f"{len(record.rounds)}"
+        )
+    for robot in range(setup.n):  # the agents of the run say themselves that they are there
+        world.set_alive(robot, False)
+    return world
+
+
 def _check_history(history: Sequence[RoundEntry]) -> None:
     """Refuse rounds out of order, or with robots timed out (a networked run's slow agents cannot
     be redone in lock step; a compute that failed is no time-out: the line's `failed` says it,
@@ -673,10 +829,13 @@ __all__ = [
     "HistoryMismatchError",
     "Lockstep",
     "LockstepStoppedError",
+    "ReplayedRecord",
     "RoundReport",
     "RunResult",
     "configured",
     "default_max_rounds",
+    "line_text",
+    "replay_async",
     "run_lockstep",
     "run_reach",
     "start_lockstep",

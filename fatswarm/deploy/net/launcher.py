@@ -46,7 +46,6 @@ from fatswarm.deploy.view.summary import (
     summary,
     unit,
 )
-from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.figures import run_derived
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.wire import check_swarm
@@ -123,11 +122,6 @@ def check_inputs(
             check_seconds("--pace", args.pace, zero_ok=True)
         setup = resolve_run(args, seed)
         seed = setup.seed
-        if setup.resumed is not None and setup.scheduler.name in ASYNC_NAMES:
-            raise RunInputError(
-                f"--resume: a {setup.scheduler.name} run cannot be resumed yet; "
-                "run it again with its --seed"
-            )
         if args.swarm is not None:
             check_swarm(args.swarm)
         too_big = capacity.problem(
@@ -229,8 +223,7 @@ def stopped_line(word: str, done: int, *, record: str | None, scheduler: str, se
     model) and how to go on. Word for word the lock step's (`deploy.commands.resume.stopped_line`,
     which this layer may not import), less its `--lockstep`."""
     after = f"{word} after {unit(scheduler)} {done}"
-    if scheduler in ASYNC_NAMES:
-        return f"{after}; an async run cannot be resumed: run it again with --seed {seed}"
+    del seed  # (every run resumes now, async ones too)
     if not record:
         return f"{after} (no --record: nothing to resume)"
     return f"{after}; go on with `fatswarm run --record {shlex.quote(record)} --resume`"
@@ -537,7 +530,7 @@ def read_outcome(record: str) -> Outcome | None:
         algorithm=h.algorithm,
         params=dict(h.params),
         time=res.time,
-        crashes=crashes_in(rec.rounds),  # (an async record's cycles name none)
+        crashes=crashes_in(rec.rounds),  # (an async record's: the first cycle line after each)
         derived=run_derived(rec.rounds),
     ).noted(h.extra)
 

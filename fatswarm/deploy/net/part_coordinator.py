@@ -47,6 +47,15 @@ def add_coordinator_arguments(p: argparse.ArgumentParser) -> None:
         help="wait this long for all n agents before round 1 (default 120)",
     )
     p.add_argument(
+        "--give-up",
+        type=float,
+        default=120.0,
+        metavar="SECONDS",
+        help="when the world has given no usable answer for this long (gone for good), say so "
+        "in one line and exit with 5 (default 120; a world restarted on a long async record "
+        "replays it before it answers)",
+    )
+    p.add_argument(
         "--pace",
         type=float,
         default=0.0,
@@ -56,7 +65,8 @@ def add_coordinator_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def main_coordinator(args: argparse.Namespace) -> int:
-    """Run rounds until the run ends; exit 0 formed, 1 not formed, 3 formed with collisions."""
+    """Run rounds until the run ends; exit 0 formed, 1 not formed, 3 formed with collisions,
+    5 the world gave no usable answer for --give-up seconds."""
     # here, not at the top: the coordinator's shell (and zenoh) load only when it runs
     from fatswarm.coordinator.service import Coordinator, CoordinatorConfig
 
@@ -70,8 +80,15 @@ def main_coordinator(args: argparse.Namespace) -> int:
         conf = client_config(args)
         if args.move_timeout <= 0 or args.start_timeout < 0 or args.pace < 0:
             raise ValueError("--move-timeout must be > 0, --start-timeout and --pace >= 0")
+        if not args.give_up > 0:
+            raise ValueError(f"--give-up must be > 0 seconds, got {args.give_up}")
         cfg = CoordinatorConfig(
-            args.swarm, args.move_timeout, args.start_timeout, args.pace, scheduler=args.scheduler
+            args.swarm,
+            args.move_timeout,
+            args.start_timeout,
+            args.pace,
+            scheduler=args.scheduler,
+            give_up_s=args.give_up,
         )
         token = alive_key(args.swarm)  # a bad --swarm is said before any wait
         session = open_client(conf, stop)

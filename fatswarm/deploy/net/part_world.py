@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import os
 import secrets
 import sys
@@ -26,6 +27,7 @@ from fatswarm.deploy.net.part_common import (
 from fatswarm.deploy.net.router import open_router
 from fatswarm.deploy.net.zconf import open_client
 from fatswarm.deploy.scenarios.starts import KINDS
+from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.seam import AlgorithmFailure
 from fatswarm.world.protocol import alive_key
@@ -187,14 +189,53 @@ def _open_core(
     # here, not at the top: the world's cores load only when it runs (not for `fatswarm --help`)
     from fatswarm.world.journal import open_world
 
+    epoch = secrets.randbelow(2**62) + 1  # this world process's, never 0
+    if fresh is None:
+        held = read_record(args.state, allow_torn_end=True)
+        if held.header.scheduler in ASYNC_NAMES and (held.rounds or held.result is not None):
+            return _open_async(args, epoch)
     return open_world(
         args.state,
         (lambda: _make_setup(args)) if fresh is None else (lambda: fresh),
         args.swarm,
         args.max_rounds,
         fsync=not args.no_fsync,
-        epoch=secrets.randbelow(2**62) + 1,
-    )  # this world process's, never 0
+        epoch=epoch,
+    )
+
+
+def _open_async(args: argparse.Namespace, epoch: int) -> tuple[WorldCore, RecordWriter]:
+    """The world core of the async run the state file holds, replayed from its start until it
+    has made every line of the file again (`lockstep.replay_async`: its lines are ended cycles,
+    and what was in flight between them is in none), and the record it appends to. A torn last
+    line is cut first, as for a round run. Raises ValueError for a file this run does not make."""
+    # here, not at the top: the lock step's bus replays it (only a resumed async world needs it)
+    from fatswarm.deploy.engine.lockstep import HistoryMismatchError, replay_async
+    from fatswarm.world.journal import cut_torn_line, load_configured
+    from fatswarm.world.setup import setup_from_header
+
+    cut_torn_line(args.state)
+    record = read_record(args.state)
+    setup = setup_from_header(record.header, args.swarm, args.max_rounds)
+    journal = RecordWriter(args.state, fsync=not args.no_fsync, append=True)
+    logging.getLogger("fatswarm.world").info(
+        "replaying the %d cycles of %s from its start (an async record)",
+        len(record.rounds),
+        args.state,
+    )
+    try:
+        core = replay_async(setup, load_configured(setup), record, journal, epoch)
+    except HistoryMismatchError as exc:
+        journal.close()
+        raise ValueError(f"state file {args.state} cannot be resumed: {exc}") from None
+    readout = core.readout
+    logging.getLogger("fatswarm.world").info(
+        "resumed %s after cycle %d (%s): replayed from its start",
+        args.state,
+        readout.progress().rounds,
+        readout.status,
+    )
+    return core, journal
 
 
 def _header_fields(text: str | None) -> dict[str, Any]:

@@ -196,7 +196,8 @@ def crashes_text(crashes: Iterable[tuple[int, int]], scheduler: str) -> str:
 
 def crashes_in(rounds: Iterable[RoundEntry]) -> tuple[tuple[int, int], ...]:
     """(robot, round) of every robot a record's round lines say the crash adversary crashed
-    (their `crash` key; an async record has none: see `Progress.crashed`)."""
+    (their `crash` key; an async record's: the first cycle line after the crash, `crash_at`
+    saying when)."""
     found: list[tuple[int, int]] = []
     for entry in rounds:
         robots = entry.extra.get("crash")
