@@ -294,6 +294,14 @@ class RobotModel:
                 raise ModelError(f"a record's model {a.name} must be a name, got {obj[a.name]!r}")
         return RobotModel.of(**obj)
 
+    @property
+    def short(self) -> str:
+        """The model in one word, as a sweep's label ends (`fsync+opaque+sight5`): the axes that
+        are not the paper's, each `TAGVALUE`, joined by `+` (`opaque+sight5+chirality`); `paper`
+        for the paper's model. What the dashboard, the summary and a result's repr name."""
+        changed = (f"{a.tag}{a.label(self.value(a.name))}" for a in self.changed())
+        return "+".join(changed) or PAPER_WORD
+
     def describe(self) -> str:
         """The axes that differ from the paper's, as flags (`paper model` if none do)."""
         differ = [f"{a.flag} {_plain(self.value(a.name))}" for a in self.changed()]
@@ -307,6 +315,7 @@ MODEL_KEYS: Final = AXIS_NAMES  # the header's `model` keys (the sweep's model c
 
 
 PAPER_MODEL: Final = RobotModel()
+PAPER_WORD: Final = "paper"  # `RobotModel.short` of the paper's model
 
 
 E = TypeVar("E", bound=enum.StrEnum)
@@ -336,6 +345,7 @@ __all__ = [
     "AXIS_NAMES",
     "MODEL_KEYS",
     "PAPER_MODEL",
+    "PAPER_WORD",
     "Axis",
     "Bodies",
     "FrameChange",

@@ -38,12 +38,11 @@ from fatswarm.deploy.view.panels import (
     MIN_SIZE,
     SIDE_WIDTH,
     TARGET_RADIUS,
-    AgentsView,
     Derived,
     Frame,
+    SideView,
     agent_rows,
     algorithm_text,
-    counters_table,
     derive,
     enclosing_circle,
     figure_text,
@@ -54,6 +53,7 @@ from fatswarm.deploy.view.panels import (
     too_small,
 )
 from fatswarm.domain.outcome import ENDED, Status
+from fatswarm.domain.words import unit, units
 
 if TYPE_CHECKING:
     from fatswarm.world.observers import WorldState
@@ -193,29 +193,65 @@ def render_frame(
         Layout(name="body"),
         Layout(Panel(Text("\n").join(bottom), style=style), name="footer", size=len(bottom) + 2),
     )
-    counters = counters_table(frame, derived)
     layout["body"].split_row(
-        Layout(canvas_panel(frame, derived, mode), name="canvas"),
-        Layout(name="side", size=SIDE_WIDTH),
-    )
-    layout["side"].split_column(
-        Layout(Panel(counters, title="run"), name="counters", size=counters.row_count + 2),
-        Layout(Panel(AgentsView(frame), title="agents"), name="agents"),
+        Layout(canvas_panel(frame, derived, mode, cols - SIDE_WIDTH), name="canvas"),
+        Layout(SideView(frame, derived), name="side", size=SIDE_WIDTH),
     )
     return layout
 
 
-def canvas_panel(frame: Frame, derived: Derived, mode: Mode) -> Panel:
-    """The canvas in its panel, with a legend of what its colours mean."""
+def canvas_panel(frame: Frame, derived: Derived, mode: Mode, width: int | None = None) -> Panel:
+    """The canvas in its panel, with a legend of what its colours mean: on the bottom border
+    where it fits in the panel's `width` (columns, None: it does), else whole on lines of its
+    own under the canvas (a border would cut it mid-word)."""
+    legend = canvas_legend(frame, derived)
+    if width is None or legend.cell_len <= width - 4:  # the corners and a space each side
+        return Panel(
+            CanvasView(frame, derived, mode), title="swarm, to scale", subtitle=legend, padding=0
+        )
+    return Panel(CanvasLegend(CanvasView(frame, derived, mode), legend), title="swarm, to scale")
+
+
+def canvas_legend(frame: Frame, derived: Derived) -> Text:
+    """What the canvas's colours mean, in one line of words."""
     legend = Text.from_markup(LEGEND)
     if frame.lights:  # the colours instead of idle, active and stopped
         legend = palette_legend(frame.palette) + Text.from_markup(LEGEND[len(LEGEND_ROBOTS) :])
     legend += focus_legend(frame.focus)
     if len(derived.targets):
         legend += Text.from_markup(LEGEND_TARGETS)
-    return Panel(
-        CanvasView(frame, derived, mode), title="swarm, to scale", subtitle=legend, padding=0
-    )
+    return legend
+
+
+class CanvasLegend:
+    """The canvas above its legend, the legend's words on as many whole lines as it takes."""
+
+    def __init__(self, canvas: CanvasView, legend: Text) -> None:
+        self.canvas, self.legend = canvas, legend
+
+    def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
+        width = max(1, options.max_width)
+        lines = legend_lines(self.legend, width)
+        height = options.height or options.size.height or 20
+        rows = max(1, height - len(lines))
+        yield from console.render(self.canvas, options.update(height=rows))
+        for line in lines[: max(0, height - rows)]:
+            line.align("center", width)
+            yield from console.render(line, options.update(height=1, no_wrap=True))
+
+
+def legend_lines(legend: Text, width: int) -> list[Text]:
+    """The legend's words (each keeps its style) packed on lines of at most `width` columns."""
+    lines: list[Text] = []
+    for word in legend.split(" "):
+        if not word.plain:
+            continue
+        if lines and lines[-1].cell_len + 1 + word.cell_len <= width:
+            lines[-1].append(" ")
+            lines[-1].append_text(word)
+        else:
+            lines.append(word.copy())
+    return lines
 
 
 def progress_line(frame: Frame) -> str:
@@ -228,9 +264,9 @@ def progress_line(frame: Frame) -> str:
         parts = [f"targets {derived.filled}/{frame.n}", f"r_c {rc:.3f} / r {r:.3f}"]
     parts += [f"{k} {figure_text(v)}" for k, v in frame.figures.items() if k != TARGET_RADIUS]
     return (
-        f"round {frame.round} {frame.status}: {', '.join(parts)}, "
+        f"{unit(frame.scheduler)} {frame.round} {frame.status}: {', '.join(parts)}, "
         f"active {len(frame.active)}, collisions {frame.collisions_total}, "
-        f"{fmt_rate(frame.rounds_per_second)} rounds/s"
+        f"{fmt_rate(frame.rounds_per_second)} {units(frame.scheduler)}/s"
     )
 
 
@@ -287,6 +323,7 @@ def frame_from_state(
         palette=tuple(sorted(state.palette)),  # names sorted, as replay and plot colour them
         derived=dict(state.derived),
         outside=state.outside,
+        model=state.model,
     )
 
 
