@@ -27,6 +27,7 @@ from fatswarm.deploy.view.lights import light_hex, lights_of, record_palette
 from fatswarm.deploy.view.summary import model_notes
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.path import Points, sample, truncate
+from fatswarm.domain.words import counted, plural
 from fatswarm.world.record import RunRecord, move_origin
 from fatswarm.world.timeline import Timeline
 
@@ -123,7 +124,9 @@ def plan_clip(
 
 def clip_line(clip: Clip, is_async: bool, out: str) -> str:
     """`writing 171 frames (8.6 s of video at 20 fps, 2 rounds per second) to run.gif`."""
-    unit = "units of virtual time" if is_async else "rounds"
+    unit = (
+        f"{plural('unit', clip.speed)} of virtual time" if is_async else plural("round", clip.speed)
+    )
     shown = f"{'cycle lines' if is_async else 'rounds'} {clip.first}..{clip.last}"
     return (
         f"writing {clip.frames:,} frames of {shown} ({clip.seconds:.1f} s of video at "
@@ -275,7 +278,7 @@ class Scene:
 
     def clock_text(self, t: float, contacts: int) -> str:
         """`round 5 of 17 (3 collisions)`, or async `t = 12.30, 45 of 80 cycles ended`."""
-        touched = f" ({contacts} collision{'' if contacts == 1 else 's'})" if contacts else ""
+        touched = f" ({counted(contacts, 'collision')})" if contacts else ""
         count = len(self.timeline.ends)
         if self.timeline.is_async:
             done = self.timeline.lines_done(t)
