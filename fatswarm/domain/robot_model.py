@@ -144,7 +144,9 @@ class Axis:
         return repr(value) if isinstance(value, float) else str(value)
 
     def label(self, value: Value) -> str:
-        """The value in a model label, after `tag` (`5` for sight 5.0, `opaque`)."""
+        """The value in a model label, after `tag` (`5` for sight 5.0, `opaque`; None: `unset`)."""
+        if value is None:
+            return self.unset or "none"
         return f"{value:g}" if isinstance(value, float) else str(value)
 
 
