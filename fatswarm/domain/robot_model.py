@@ -328,6 +328,15 @@ def _plain(value: Value) -> Any:
     return str(value) if isinstance(value, enum.StrEnum) else value
 
 
+def short_of_header(obj: object) -> str:
+    """`RobotModel.short` of a record header's `model` object (None: `paper`), `unreadable` for
+    one that no run writes: the one word a summary names a record's model by."""
+    try:
+        return RobotModel.from_header(obj).short
+    except ModelError:
+        return "unreadable"
+
+
 def axis_named(name: str) -> Axis:
     """The axis `name` (`frame_change`); KeyError for none."""
     return AXES[AXIS_NAMES.index(name)]
@@ -358,4 +367,5 @@ __all__ = [
     "Value",
     "Visibility",
     "axis_named",
+    "short_of_header",
 ]

@@ -114,3 +114,14 @@ def test_a_video_of_one_round_a_second_says_one_round(is_async: bool, one: str, 
     assert f"20 fps, {one} per second) to run.gif" in line
     twice = clip_line(Clip(0, 9, 0.0, 9.0, 91, 20.0, 2.0), is_async, "run.gif")
     assert f"20 fps, {two} per second) to run.gif" in twice
+
+
+def test_a_results_repr_and_summary_name_the_robot_model(tmp_path: Any) -> None:
+    import fatswarm
+
+    path = tmp_path / "run.jsonl"
+    result = fatswarm.run(n=4, seed=1, visibility="opaque", sight=9.0, record=path)
+    assert "model='opaque+sight9'" in repr(result)
+    assert fatswarm.summary(result)["model"] == "opaque+sight9"
+    assert fatswarm.summary(fatswarm.read_record(path))["model"] == "opaque+sight9"
+    assert fatswarm.summary(fatswarm.run(n=4, seed=1))["model"] == "paper"

@@ -19,6 +19,7 @@ from fatswarm.agent import geometry
 from fatswarm.deploy.engine.lockstep import RunResult as LockstepResult
 from fatswarm.domain import figures
 from fatswarm.domain.path import Points
+from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
 from fatswarm.domain.seam import ParamValue
 from fatswarm.world.record import RoundEntry
 from fatswarm.world.record import RunRecord as RecordLines
@@ -53,6 +54,7 @@ class RunResult(LockstepResult):
     record: str | None = None  # where its record was written, None if it was not
     # how the run is outside its algorithm's assumptions (the header's `assumption`), '' if within
     outside: str = ""
+    robot_model: RobotModel = PAPER_MODEL  # the model it enforced (its repr: `RobotModel.short`)
 
     @classmethod
     def of(cls, result: LockstepResult, **run: Any) -> RunResult:
@@ -66,7 +68,7 @@ class RunResult(LockstepResult):
         return (
             f"RunResult(status={str(self.status)!r}, rounds={self.rounds}, n={self.n}, "
             f"seed={self.seed}, scheduler={self.scheduler!r}, algorithm={self.algorithm!r}, "
-            f"collisions={self.collisions}, moves={self.moves}, "
+            f"model={self.robot_model.short!r}, collisions={self.collisions}, moves={self.moves}, "
             f"total_distance={self.total_distance:.3f}{time}{record})"
         )
 

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any, Final, TextIO
 
 from fatswarm.domain import figures
 from fatswarm.domain.outcome import ExitCode, Status, exit_code_for
-from fatswarm.domain.robot_model import PAPER_WORD, ModelError, RobotModel
+from fatswarm.domain.robot_model import PAPER_WORD, ModelError, RobotModel, short_of_header
 from fatswarm.domain.words import counted as counted  # the one plural (re-exported)
 from fatswarm.domain.words import unit as unit  # the one word for what a run counts
 
@@ -78,10 +78,7 @@ class Outcome:
 def model_label(header: Mapping[str, Any]) -> str:
     """The robot model of a record header's fields in one word (`RobotModel.short`: `paper`,
     `opaque+sight5`), `unreadable` for a `model` no run writes."""
-    try:
-        return RobotModel.from_header(header.get("model")).short
-    except ModelError:
-        return "unreadable"
+    return short_of_header(header.get("model"))
 
 
 def model_notes(header: Mapping[str, Any]) -> tuple[str | None, str | None]:
