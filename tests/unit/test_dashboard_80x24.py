@@ -6,14 +6,17 @@ from __future__ import annotations
 
 import io
 import re
+from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from rich.console import Console
 
 import fatswarm
 from fatswarm.deploy.view.dashboard import Frame, canvas_legend, derive, render_frame
 from fatswarm.deploy.view.panels import SIDE_WIDTH
+from fatswarm.domain.outcome import Status
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.robot_model import RobotModel
 from fatswarm.domain.seam import Configured
@@ -39,7 +42,7 @@ def finished_frame(scheduler: str, algorithm: str, model: dict[str, Any]) -> Fra
         timeouts=(0,) * 8, rounds_per_second=41.0, max_rounds=400, swarm="lab",
         lights=result.lights, palette=tuple(sorted(setting.colours)),
         derived={k: float(v) for k, v in result.derived.items() if isinstance(v, (int, float))},
-        outside=result.outside, model=RobotModel.of(**model),
+        outside=result.outside, model=RobotModel.of(**model).short,
     )  # fmt: skip
 
 
@@ -91,3 +94,24 @@ def test_the_dashboard_names_the_robot_model(final: tuple[str, Frame]) -> None:
     text = "\n".join(screen(frame))
     expected = "opaque+sight9" if name == "opaque" else "paper"
     assert re.search(rf"model\s+{re.escape(expected)}\s", text), text
+
+
+def test_live_replayed_and_lockstep_frames_carry_the_model_word(tmp_path: Path) -> None:
+    from fatswarm.deploy.view.dashboard import frame_from_state
+    from fatswarm.deploy.view.replay import build_frames
+    from fatswarm.world.observers import AgentInfo, WorldState
+    from fatswarm.world.record_read import read_record
+
+    model = RobotModel.of(visibility="opaque", sight=9.0)
+    state = WorldState(
+        round=3, n=2, algorithm="gathering", params={}, figures={}, scheduler="ssync", swarm="s",
+        positions=np.array([[0.0, 0.0], [3.0, 0.0]]), active=(), open_round=0, moved=(),
+        stopped=(), collisions_total=0, status=Status.RUNNING,
+        agents=(AgentInfo(True, 3, 0.0, 0),) * 2, model=model,
+    )  # fmt: skip
+    assert frame_from_state(state).model == "opaque+sight9"
+    path = tmp_path / "run.jsonl"
+    fatswarm.run(n=4, seed=1, algorithm="gathering", visibility="opaque", sight=9.0, record=path)
+    frames = build_frames(read_record(str(path)))
+    assert {f.model for f in frames} == {"opaque+sight9"}
+    assert re.search(r"model\s+opaque\+sight9", "\n".join(screen(frames[-1], 120, 40)))

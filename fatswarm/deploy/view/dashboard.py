@@ -323,7 +323,7 @@ def frame_from_state(
         palette=tuple(sorted(state.palette)),  # names sorted, as replay and plot colour them
         derived=dict(state.derived),
         outside=state.outside,
-        model=state.model,
+        model=state.model.short,
     )
 
 

@@ -25,7 +25,6 @@ from fatswarm.domain import tolerance
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
-from fatswarm.domain.robot_model import PAPER_MODEL, RobotModel
 from fatswarm.domain.seam import ParamValue
 from fatswarm.domain.words import counted, unit, units
 
@@ -77,7 +76,7 @@ class Frame:
     # the run's figures derived from the positions, so far (fatswarm.domain.figures), by name
     derived: dict[str, float] = field(default_factory=dict)
     outside: str = ""  # how the run is outside its algorithm's assumptions ('' if within)
-    model: RobotModel = PAPER_MODEL  # the robot model the run enforces (its `short` is shown)
+    model: str = ""  # the robot model in one word (`RobotModel.short`: paper); '' if unknown
 
     def __post_init__(self) -> None:
         side = self.params.get("a")
@@ -238,8 +237,9 @@ def counters_table(frame: Frame, derived: Derived, most: int | None = None) -> T
     ranked: list[tuple[int, Row]] = [
         (KEEP, (word, round_text(frame))),
         (KEEP, ("scheduler", frame.scheduler + seed)),
-        (KEEP, ("model", Text(frame.model.short))),
     ]
+    if frame.model:
+        ranked.append((KEEP, ("model", Text(frame.model))))
     for i, line in enumerate(run_lines(frame, SIDE_WIDTH - 4 - keys - 1)):  # borders, padding
         ranked.append((3 if i else KEEP, ("" if i else "robots", Text(line))))  # Text: no markup
     ranked += [(RANKS.get(str(k), 4), (k, v)) for k, v in radius_rows(frame, derived)]
