@@ -115,3 +115,32 @@ def test_live_replayed_and_lockstep_frames_carry_the_model_word(tmp_path: Path) 
     frames = build_frames(read_record(str(path)))
     assert {f.model for f in frames} == {"opaque+sight9"}
     assert re.search(r"model\s+opaque\+sight9", "\n".join(screen(frames[-1], 120, 40)))
+
+
+def test_the_final_frame_left_above_the_summary_at_80x24_keeps_every_agent(
+    final: tuple[str, Frame],
+) -> None:
+    """On an 80x24 terminal the live view leaves its last frame in the rows the summary does not
+    need (`LiveView.close`): the agents, the legend and the verdict stay whole, the essential
+    counters move to the header line."""
+    from fatswarm.deploy.view.dashboard import LiveView
+
+    name, frame = final
+    out = io.StringIO()
+    console = Console(file=out, force_terminal=True, width=80, height=24, color_system=None)
+    view = LiveView(console)
+    view.close(frame)
+    raw = out.getvalue()
+    lines = raw[raw.rfind("\x1b[?1049l") + len("\x1b[?1049l") :].strip("\n").split("\n")
+    shown = "\n".join(lines)
+    assert len(lines) <= 24 - 6 and all(len(line) <= 80 for line in lines), shown
+    rows = [int(m[1]) for line in lines for m in re.finditer(r"│\s+(\d+)\s+yes\s", line)]
+    assert rows == list(range(8)), shown
+    word = "cycle" if RUNS[name][0] == "async" else "round"
+    said = f"{word} {frame.round} (limit 400) · {RUNS[name][0]} seed 1 · {frame.model} · "
+    assert lines[0].startswith(said), shown
+    canvas = "\n".join(line[: 80 - SIDE_WIDTH] for line in lines)
+    legend = canvas_legend(frame, derive(frame)).plain
+    assert legend in re.sub(r"[\s│╭╮╰╯─]+", " ", canvas), shown
+    footer = re.sub(r"[\s│╭╮╰╯─]+", " ", shown[shown.rindex("╭") :])
+    assert f"goal reached by 8 robots after {frame.round} {word}s" in footer, shown

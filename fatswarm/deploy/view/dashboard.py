@@ -42,9 +42,12 @@ from fatswarm.deploy.view.panels import (
     Frame,
     SideView,
     agent_rows,
+    agents_height,
     algorithm_text,
     derive,
     enclosing_circle,
+    essentials,
+    essentials_line,
     figure_text,
     fmt_rate,
     footer_lines,
@@ -171,10 +174,13 @@ def render_frame(
     footer: str | None = None,
     mode: Mode = "braille",
     screen: tuple[int, int] | None = None,
+    height: int | None = None,
 ) -> RenderableType:
     """The whole dashboard for one frame: header, canvas, counters, agents, then the outcome and
     the key help (`footer`), wrapped to the terminal's width. `screen`: the terminal's (columns,
-    rows); below MIN_SIZE the frame is a few lines saying so (`panels.too_small`)."""
+    rows); below MIN_SIZE the frame is a few lines saying so (`panels.too_small`). `height`: the
+    rows it is printed in, if fewer than the screen's (the final frame left above the summary):
+    too few for the essential counters beside the agents, the header line says them first."""
     title = f"fatswarm · {frame.source}"
     if frame.swarm:
         title += f" · swarm {frame.swarm}"
@@ -187,6 +193,10 @@ def render_frame(
     else:
         style = "bold" if frame.status in ENDED else ""
     bottom = footer_lines(frame, footer, cols)
+    body = (height or rows) - 1 - (len(bottom) + 2)
+    counters = body - agents_height(frame.n) - 2 >= essentials(frame)
+    if not counters:  # the essential counters first: the title is what may be cut
+        title = f"{essentials_line(frame)} · {title}"
     layout = Layout(name="root")
     layout.split_column(
         Layout(Text(title, style="bold", no_wrap=True, overflow="ellipsis"), name="header", size=1),
@@ -195,7 +205,7 @@ def render_frame(
     )
     layout["body"].split_row(
         Layout(canvas_panel(frame, derived, mode, cols - SIDE_WIDTH), name="canvas"),
-        Layout(SideView(frame, derived), name="side", size=SIDE_WIDTH),
+        Layout(SideView(frame, derived, counters), name="side", size=SIDE_WIDTH),
     )
     return layout
 
@@ -277,7 +287,7 @@ def print_frame(
     laid out for the console's width and, when it is a terminal, its size."""
     h = height or min(console.size.height, 40)
     screen = (console.width, console.size.height if console.is_terminal else h)
-    console.print(render_frame(frame, footer=footer, screen=screen), height=h)
+    console.print(render_frame(frame, footer=footer, screen=screen, height=h), height=h)
 
 
 def save_svg(

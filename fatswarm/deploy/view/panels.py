@@ -396,27 +396,50 @@ def more_robots(frame: Frame, hidden: list[int]) -> str:
     return f"… {counted(len(hidden), 'more robot')}" + (f" ({', '.join(notes)})" if notes else "")
 
 
+def agents_height(n: int) -> int:
+    """The agents panel's rows that show every robot, or AGENT_ROWS of them and a "more" line:
+    what the counters make room for (`SideView`)."""
+    return min(n, AGENT_ROWS) + (n > AGENT_ROWS) + 1 + 2  # the header, the borders
+
+
+def essentials(frame: Frame) -> int:
+    """How many counters are never left out (KEEP: the round, scheduler, model, robots)."""
+    return 3 + bool(frame.model)
+
+
+def essentials_line(frame: Frame) -> str:
+    """The counters never left out, in one line (`round 10 (limit 400) · fsync seed 1 · paper`),
+    for a frame too short for them beside the agents (`SideView(counters=False)`)."""
+    seed = f" seed {frame.seed}" if frame.seed is not None else ""
+    words = [f"{unit(frame.scheduler)} {round_text(frame)}", frame.scheduler + seed, frame.model]
+    return " · ".join(word for word in words if word)
+
+
 class SideView:
     """The counters above the agents, laid out for the height rich gives them: when fewer than
     AGENT_ROWS agents (or fewer than all, if there are no more) would fit below every counter,
     the counters that matter least make room (`counters_table(most=)`), so that at 80x24 the
-    agents of 8 robots stay whole; many robots take what is left below every counter."""
+    agents of 8 robots stay whole; many robots take what is left below every counter. Without
+    `counters` (a frame too short even for the essentials, whose header then says them:
+    `essentials_line`), the agents alone."""
 
-    def __init__(self, frame: Frame, derived: Derived) -> None:
-        self.frame, self.derived = frame, derived
+    def __init__(self, frame: Frame, derived: Derived, counters: bool = True) -> None:
+        self.frame, self.derived, self.counters = frame, derived, counters
 
     def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
+        agents = Panel(AgentsView(self.frame), title="agents")
+        if not self.counters:
+            yield from console.render(agents, options)
+            return
         height = options.height or options.size.height
         counters = counters_table(self.frame, self.derived)
-        n = self.frame.n  # the rows kept for the agents: every one, or AGENT_ROWS and a "more"
-        agents = min(n, AGENT_ROWS) + (n > AGENT_ROWS) + 1 + 2  # header, borders
-        room = height - agents - 2  # the counters' rows that leave the agents those
+        room = height - agents_height(self.frame.n) - 2  # the counters' rows that leave it
         if counters.row_count > room:
             counters = counters_table(self.frame, self.derived, most=max(room, 0))
         layout = Layout(name="side")
         layout.split_column(
             Layout(Panel(counters, title="run"), name="counters", size=counters.row_count + 2),
-            Layout(Panel(AgentsView(self.frame), title="agents"), name="agents"),
+            Layout(agents, name="agents"),
         )
         yield from layout.__rich_console__(console, options)
 
@@ -471,11 +494,14 @@ __all__ = [
     "Frame",
     "SideView",
     "agent_rows",
+    "agents_height",
     "algorithm_text",
     "counters_table",
     "derive",
     "derived_rows",
     "enclosing_circle",
+    "essentials",
+    "essentials_line",
     "figure_text",
     "fmt_rate",
     "footer_lines",
