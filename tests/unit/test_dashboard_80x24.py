@@ -144,3 +144,20 @@ def test_the_final_frame_left_above_the_summary_at_80x24_keeps_every_agent(
     assert legend in re.sub(r"[\s│╭╮╰╯─]+", " ", canvas), shown
     footer = re.sub(r"[\s│╭╮╰╯─]+", " ", shown[shown.rindex("╭") :])
     assert f"goal reached by 8 robots after {frame.round} {word}s" in footer, shown
+
+
+def test_replay_robot_keeps_the_chosen_robots_look_and_every_agent_at_80x24(
+    tmp_path: Path,
+) -> None:
+    from fatswarm.deploy.view.replay import build_frames, focus_on
+    from fatswarm.world.record_read import read_record
+
+    path = tmp_path / "run.jsonl"
+    fatswarm.run(n=8, seed=1, scheduler="fsync", record=path, record_views=True, sight=9.0)
+    record = read_record(str(path))
+    frames = focus_on(build_frames(record), record, 3)
+    lines = screen(frames[2])
+    shown = "\n".join(lines)
+    assert re.search(r"│ robot 3\s+\S", shown), shown  # the Look's counter
+    rows = [int(m[1]) for line in lines for m in re.finditer(r"│\s+(\d+)\s+-\s", line)]
+    assert rows == list(range(8)), shown

@@ -219,7 +219,8 @@ RANKS: Final = {
     "alive": 3,
     "timeouts": 5,
     "failures": 6,
-}  # the rest: a figure of the algorithm's 4, a derived figure 2, this round 1, the rate 0
+}  # the rest: a figure of the algorithm's 4, a derived figure 2, this round 1, the rate 0 (the
+# chosen robot's Look of replay --robot: KEEP - 1)
 
 
 def counters_table(frame: Frame, derived: Derived, most: int | None = None) -> Table:
@@ -248,6 +249,8 @@ def counters_table(frame: Frame, derived: Derived, most: int | None = None) -> T
         rank = RANKS.get(str(key), 0 if str(key).endswith("/s") else 1)
         if key == "alive" and frame.alive is not None and not all(frame.alive):
             rank = RANKS["collisions"]  # a robot gone matters
+        elif frame.focus is not None and key == f"robot {frame.focus.robot}":
+            rank = KEEP - 1  # what replay --robot is for: the chosen robot's Look
         ranked.append((rank, (key, value)))
     for _, (key, value) in fewest(ranked, most):
         grid.add_row(key, value)
@@ -441,7 +444,7 @@ class SideView:
             Layout(Panel(counters, title="run"), name="counters", size=counters.row_count + 2),
             Layout(agents, name="agents"),
         )
-        yield from layout.__rich_console__(console, options)
+        yield from console.render(layout, options)
 
 
 # --- the bottom lines, and a terminal too small for the rest ------------------------------------
