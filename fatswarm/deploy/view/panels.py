@@ -216,7 +216,6 @@ RANKS: Final = {
     "r_c / r": 5,
     "targets": 5,
     "collisions": 6,
-    "alive": 3,
     "timeouts": 5,
     "failures": 6,
 }  # the rest: a figure of the algorithm's 4, a derived figure 2, this round 1, the rate 0 (the
@@ -225,7 +224,7 @@ RANKS: Final = {
 
 def counters_table(frame: Frame, derived: Derived, most: int | None = None) -> Table:
     """Round, scheduler, robot model, algorithm, r_c (versus r, targets filled, with bars),
-    figures, this round, collisions, rate, alive: one row each, so that the agents keep room at
+    figures, this round, collisions, rate: one row each, so that the agents keep room at
     80x24; `most`: at most this many rows, the ones that matter least left out (`RANKS`; never
     round, scheduler, model and the algorithm's name)."""
     figures = [(k, v) for k, v in frame.figures.items() if k != TARGET_RADIUS or r_absent(derived)]
@@ -247,9 +246,7 @@ def counters_table(frame: Frame, derived: Derived, most: int | None = None) -> T
     ranked += [(4, row) for row in figure_rows(figures)] + [(2, r) for r in derived_rows(frame)]
     for key, value in tail_rows(frame):
         rank = RANKS.get(str(key), 0 if str(key).endswith("/s") else 1)
-        if key == "alive" and frame.alive is not None and not all(frame.alive):
-            rank = RANKS["collisions"]  # a robot gone matters
-        elif frame.focus is not None and key == f"robot {frame.focus.robot}":
+        if frame.focus is not None and key == f"robot {frame.focus.robot}":
             rank = KEEP - 1  # what replay --robot is for: the chosen robot's Look
         ranked.append((rank, (key, value)))
     for _, (key, value) in fewest(ranked, most):
@@ -313,8 +310,8 @@ def derived_rows(frame: Frame) -> list[Row]:
 
 
 def tail_rows(frame: Frame) -> list[Row]:
-    """This round (cycle), collisions, the chosen robot's Look, the rate (live), alive, timeouts and
-    failed computes."""
+    """This round (cycle), collisions, the chosen robot's Look, the rate (live), timeouts and
+    failed computes (how many agents are alive: the agents panel's title, `agents_title`)."""
     stopped = f"  {len(frame.stopped)} stopped" if frame.stopped else ""
     word = unit(frame.scheduler)
     rows: list[Row] = [
@@ -325,8 +322,6 @@ def tail_rows(frame: Frame) -> list[Row]:
         rows.append((f"robot {frame.focus.robot}", frame.focus.line()))
     if frame.last_round is None:  # a replay has no rate
         rows.append((f"{units(frame.scheduler)}/s", fmt_rate(frame.rounds_per_second)))
-    if frame.alive is not None:
-        rows.append(("alive", f"{sum(frame.alive)} / {frame.n}"))
     if sum(frame.timeouts):
         rows.append(("timeouts", str(sum(frame.timeouts))))
     failed = int(frame.derived.get("failures") or 0)  # computes that raised, over the run
@@ -399,6 +394,13 @@ def more_robots(frame: Frame, hidden: list[int]) -> str:
     return f"… {counted(len(hidden), 'more robot')}" + (f" ({', '.join(notes)})" if notes else "")
 
 
+def agents_title(frame: Frame) -> str:
+    """`agents · alive 7 / 8`: the agents panel's title, with how many are alive when known."""
+    if frame.alive is None:
+        return "agents"
+    return f"agents · alive {sum(frame.alive)} / {frame.n}"
+
+
 def agents_height(n: int) -> int:
     """The agents panel's rows that show every robot, or AGENT_ROWS of them and a "more" line:
     what the counters make room for (`SideView`)."""
@@ -430,7 +432,7 @@ class SideView:
         self.frame, self.derived, self.counters = frame, derived, counters
 
     def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
-        agents = Panel(AgentsView(self.frame), title="agents")
+        agents = Panel(AgentsView(self.frame), title=agents_title(self.frame))
         if not self.counters:
             yield from console.render(agents, options)
             return
@@ -498,6 +500,7 @@ __all__ = [
     "SideView",
     "agent_rows",
     "agents_height",
+    "agents_title",
     "algorithm_text",
     "counters_table",
     "derive",
