@@ -20,7 +20,7 @@ from collections.abc import Callable, Sequence
 from types import FrameType
 from typing import TYPE_CHECKING, Any, Final, NoReturn
 
-from fatswarm.deploy.flags import Terminated
+from fatswarm.deploy.flags import Terminated, refuse_repeats
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.version import __version__
 
@@ -180,6 +180,7 @@ def _build() -> tuple[argparse.ArgumentParser, dict[str, argparse.ArgumentParser
         module = importlib.import_module(module_name)
         adder = getattr(module, f"add_{name}_arguments", None) or module.add_arguments
         adder(p)
+        refuse_repeats(p)  # a flag of one value given twice, with two values: one line
         if p.epilog is None:
             p.epilog = exit_codes_epilog(name)
         p.set_defaults(_module=module_name, _name=name)

@@ -144,7 +144,9 @@ class Axis:
         return repr(value) if isinstance(value, float) else str(value)
 
     def label(self, value: Value) -> str:
-        """The value in a model label, after `tag` (`5` for sight 5.0, `opaque`)."""
+        """The value in a model label, after `tag` (`5` for sight 5.0, `opaque`; None: `unset`)."""
+        if value is None:
+            return self.unset or "none"
         return f"{value:g}" if isinstance(value, float) else str(value)
 
 
@@ -294,6 +296,14 @@ class RobotModel:
                 raise ModelError(f"a record's model {a.name} must be a name, got {obj[a.name]!r}")
         return RobotModel.of(**obj)
 
+    @property
+    def short(self) -> str:
+        """The model in one word, as a sweep's label ends (`fsync+opaque+sight5`): the axes that
+        are not the paper's, each `TAGVALUE`, joined by `+` (`opaque+sight5+chirality`); `paper`
+        for the paper's model. What the dashboard, the summary and a result's repr name."""
+        changed = (f"{a.tag}{a.label(self.value(a.name))}" for a in self.changed())
+        return "+".join(changed) or PAPER_WORD
+
     def describe(self) -> str:
         """The axes that differ from the paper's, as flags (`paper model` if none do)."""
         differ = [f"{a.flag} {_plain(self.value(a.name))}" for a in self.changed()]
@@ -307,6 +317,7 @@ MODEL_KEYS: Final = AXIS_NAMES  # the header's `model` keys (the sweep's model c
 
 
 PAPER_MODEL: Final = RobotModel()
+PAPER_WORD: Final = "paper"  # `RobotModel.short` of the paper's model
 
 
 E = TypeVar("E", bound=enum.StrEnum)
@@ -315,6 +326,15 @@ E = TypeVar("E", bound=enum.StrEnum)
 def _plain(value: Value) -> Any:
     """An axis's value as JSON holds it (a member by its name)."""
     return str(value) if isinstance(value, enum.StrEnum) else value
+
+
+def short_of_header(obj: object) -> str:
+    """`RobotModel.short` of a record header's `model` object (None: `paper`), `unreadable` for
+    one that no run writes: the one word a summary names a record's model by."""
+    try:
+        return RobotModel.from_header(obj).short
+    except ModelError:
+        return "unreadable"
 
 
 def axis_named(name: str) -> Axis:
@@ -336,6 +356,7 @@ __all__ = [
     "AXIS_NAMES",
     "MODEL_KEYS",
     "PAPER_MODEL",
+    "PAPER_WORD",
     "Axis",
     "Bodies",
     "FrameChange",
@@ -346,4 +367,5 @@ __all__ = [
     "Value",
     "Visibility",
     "axis_named",
+    "short_of_header",
 ]

@@ -471,6 +471,7 @@ class WorldCore:
             palette=self.algorithm.colours,
             derived=known_numbers(self.tracker.snapshot().derived),
             outside=self._outside,
+            model=self.setup.robot_model,
         )
 
     def _algorithm_figures(self) -> dict[str, float]:

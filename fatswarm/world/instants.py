@@ -187,7 +187,6 @@ class Instants:
                 w.timeouts[robot] += 1
             if robot in w.failed:  # its cycle line says why it stayed
                 self._failing[robot] = w.failed[robot]
-            w.last_active[robot] = round_no
             done = self.clock.submit(robot, world, compute, wait, cut=cut)
             if done is not None and self._cycle(done, timed_out=robot not in w.held):
                 break
@@ -235,6 +234,7 @@ class Instants:
         w = self.books
         self._show_due()
         k = w.tracker.snapshot().rounds + 1
+        w.last_active[done.robot] = k  # observers count cycles, as the record (not instants)
         paths = {done.robot: done.path} if done.path else {}
         traveled = {done.robot: done.traveled} if done.path else {}
         failed = self._failing.pop(done.robot, None)

@@ -10,6 +10,7 @@ from typing import Any
 from fatswarm.domain.figures import derived_figures
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Points
+from fatswarm.domain.robot_model import PAPER_MODEL, ModelError, RobotModel
 from fatswarm.domain.seam import ParamValue
 from fatswarm.domain.wire import (
     MAX_COORD,
@@ -69,6 +70,7 @@ class WorldState:
     # least over the rounds), by name; only those known (a figure without a value yet is left out)
     derived: dict[str, float] = field(default_factory=dict)
     outside: str = ""  # how the run is outside its algorithm's assumptions ('' if within)
+    model: RobotModel = PAPER_MODEL  # the robot model the run enforces (sent when not the paper's)
 
     @property
     def a(self) -> float:
@@ -106,6 +108,7 @@ class WorldState:
                 ),
                 **({"derived": derived_wire(self.derived)} if self.derived else {}),
                 **({"outside": self.outside} if self.outside else {}),
+                **({} if self.model.is_paper else {"model": self.model.to_header()}),
             },
         )
 
@@ -155,7 +158,17 @@ class WorldState:
             **get_lights(obj, n),
             derived=get_derived(obj),
             outside=get_str(obj, "outside", MAX_OUTSIDE) if "outside" in obj else "",
+            model=get_model(obj),
         )
+
+
+def get_model(obj: dict[str, Any]) -> RobotModel:
+    """A state's robot model (the paper's for a world that sends none); ProtocolError for one
+    that is not a record header's `model` object."""
+    try:
+        return RobotModel.from_header(obj.get("model"))
+    except ModelError as exc:
+        raise ProtocolError(f"'model': {exc}") from None
 
 
 def derived_wire(values: dict[str, float]) -> dict[str, float]:

@@ -15,7 +15,7 @@ LIT = str(Path(__file__).resolve().parents[1] / "data" / "lit_spread.py") + ":AL
 @pytest.mark.parametrize(
     ("flags", "says"),
     [
-        (["--sight", "0"], "--sight must be a finite distance > 0"),
+        (["--sight", "0"], "--sight: takes distances > 0 (robot radii) or unlimited, got '0'"),
         (["--lights", "internal"], "--lights internal needs an algorithm with lights"),
         (["--visibility", "foggy"], "invalid choice: 'foggy'"),
     ],

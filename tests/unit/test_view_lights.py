@@ -192,6 +192,7 @@ def test_a_record_without_lights_draws_as_before() -> None:
         last_active=f2.last_active, last_path_length=f2.last_path_length,
         last_round=f2.last_round, trails=f2.trails, source=f2.source,
         derived=f2.derived,  # the run's min_gap so far: the live view's state carries it too
+        model=f2.model,  # the robot model in one word: the live view's state carries it too
     )  # fmt: skip
     assert render(f2, colours=True) == render(plain, colours=True)
     legend = re.sub(r"\[/?[^\]]*\]", "", LEGEND)
@@ -367,7 +368,7 @@ def outcome(**fields: Any) -> Outcome:
 def test_summary_names_a_model_that_is_not_the_papers_and_the_assumption_once() -> None:
     plain = summary(outcome())
     noted = summary(outcome().noted({"model": MODEL, "assumption": ASSUMES}))
-    assert noted.startswith(plain + "\n")
+    assert noted.startswith(plain.replace("model=paper", "model=opaque+sight5") + "\n")
     assert noted[len(plain) :].splitlines()[1:] == [
         "model: --visibility opaque --sight 5.0",
         ASSUMES,

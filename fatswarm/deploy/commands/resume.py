@@ -231,6 +231,9 @@ def contradictions(args: argparse.Namespace, recorded: WorldSetup) -> list[Contr
         if dest in given and known and _value(dest, given[dest]) != theirs:
             mine = given[dest]
             shown = "" if mine is True else f" {_number(mine) if isinstance(mine, float) else mine}"
+            if dest in AXIS_NAMES:  # as its flag takes it (`--sight unlimited` for None)
+                axis = axis_named(dest)
+                shown = f" {axis.text(axis.check(mine))}"
             found.append(Contradiction(flag, f"{flag}{shown}", says))
     if "init" in given:
         _check_init(given["init"], h, found)

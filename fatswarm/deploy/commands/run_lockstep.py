@@ -300,6 +300,7 @@ def _save_final_frame(result: RunResult, setup: RunSetup, svg: str) -> bool:
         source="lockstep",
         lights=result.lights,
         palette=tuple(sorted(params.colours)),  # names sorted, as replay and plot colour them
+        model=setup.settings.robot_model.short,
     )
     try:
         save_svg(final, svg)

@@ -41,7 +41,7 @@ from fatswarm.deploy.engine.lockstep import RunResult as LockstepResult
 from fatswarm.deploy.engine.notebook import RunRecord, RunResult
 from fatswarm.domain.figures import run_derived, summary_values
 from fatswarm.domain.path import Points
-from fatswarm.domain.robot_model import AXES, AXIS_NAMES, Axis, RobotModel
+from fatswarm.domain.robot_model import AXES, AXIS_NAMES, Axis, RobotModel, short_of_header
 from fatswarm.world import record_read
 from fatswarm.world.journal import Journal
 from fatswarm.world.record import RecordWriter
@@ -445,7 +445,8 @@ def summary(of: LockstepResult | RecordLines) -> dict[str, str | int | float | N
     """A run's figures as plain values (a row of a table or a DataFrame), from its result or its
     record: status ("formed", "stalled", "max_rounds"; "unfinished" for a record without a
     result line), rounds, epochs, moves, total_distance, collisions, looks, time (the virtual
-    time of an async run, else None), n, seed, scheduler and algorithm (None where unknown),
+    time of an async run, else None), n, seed, scheduler, algorithm and model (the robot model in
+    one word, `RobotModel.short`: "paper", "opaque+sight5"; None where unknown),
     then the figures that follow from the positions (fatswarm.domain.figures: min_gap...), and
     `outside`, the line saying how the run is outside its algorithm's assumptions, if it is."""
     if isinstance(of, RecordLines):
@@ -466,6 +467,7 @@ def summary(of: LockstepResult | RecordLines) -> dict[str, str | int | float | N
         "seed": None if known is None else known.seed,
         "scheduler": None if known is None else known.scheduler,
         "algorithm": None if known is None else known.algorithm,
+        "model": None if known is None else known.robot_model.short,
         **summary_values(of.derived),
         **({"outside": known.outside} if known is not None and known.outside else {}),
     }
@@ -488,6 +490,7 @@ def _record_summary(record: RecordLines) -> dict[str, str | int | float | None]:
         "seed": record.header.seed,
         "scheduler": record.header.scheduler,
         "algorithm": record.header.algorithm,
+        "model": short_of_header(record.header.extra.get("model")),
         **summary_values(run_derived(record.rounds)),
         **({"outside": outside} if isinstance(outside, str) and outside else {}),
     }

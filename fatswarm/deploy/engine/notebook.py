@@ -71,7 +71,7 @@ class RunResult(LockstepResult):
     record: str | None = None  # where its record was written, None if it was not
     # how the run is outside its algorithm's assumptions (the header's `assumption`), '' if within
     outside: str = ""
-    robot_model: RobotModel = PAPER_MODEL  # the model's axes (docs/model.md)
+    robot_model: RobotModel = PAPER_MODEL  # the model it enforced (its repr: `RobotModel.short`)
     palette: tuple[str, ...] = ()  # the colour names the run's lines showed, sorted (`lights`)
 
     @classmethod
@@ -86,7 +86,7 @@ class RunResult(LockstepResult):
         return (
             f"RunResult(status={str(self.status)!r}, rounds={self.rounds}, n={self.n}, "
             f"seed={self.seed}, scheduler={self.scheduler!r}, algorithm={self.algorithm!r}, "
-            f"collisions={self.collisions}, moves={self.moves}, "
+            f"model={self.robot_model.short!r}, collisions={self.collisions}, moves={self.moves}, "
             f"total_distance={self.total_distance:.3f}{time}{record})"
         )
 

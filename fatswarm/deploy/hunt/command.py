@@ -44,7 +44,6 @@ from fatswarm.deploy.sweep.batch_flags import (
 from fatswarm.deploy.sweep.executor import ClusterError, open_workers
 from fatswarm.deploy.sweep.grid import (
     SweepInputError,
-    model_suffix,
     params_text,
     parse_crash,
     parse_ints,
@@ -56,6 +55,7 @@ from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.seam import Configured, assumptions_of
+from fatswarm.domain.words import counted, plural
 
 if TYPE_CHECKING:
     from fatswarm.deploy.hunt.pool import Budget, Tally
@@ -354,7 +354,8 @@ def _hunt(args: argparse.Namespace, hunt: Hunt, budget: Budget, jobs: int) -> in
     if not complete:
         word = "interrupted" if stopped[0] == signal.SIGINT else "terminated"
         _say(
-            f"{word}: {tally.runs} runs, {len(tally.saved)} failures saved in {args.out}; "
+            f"{word}: {counted(tally.runs, 'run')}, {counted(len(tally.saved), 'failure')} "
+            f"saved in {args.out}; "
             f"rerun with --seed {seed} to hunt again"
         )
         return ExitCode.INTERRUPTED if stopped[0] == signal.SIGINT else ExitCode.TERMINATED
@@ -374,7 +375,7 @@ def _outside(hunt: Hunt) -> str:
 def _plan_text(hunt: Hunt, budget: Budget, seed: int, where: str, out: str) -> str:
     limits = []
     if budget.runs is not None:
-        limits.append(f"{budget.runs} runs")
+        limits.append(counted(budget.runs, "run"))
     if budget.seconds is not None:
         limits.append(f"{budget.seconds:g} s")
     extra = "".join(
@@ -384,20 +385,21 @@ def _plan_text(hunt: Hunt, budget: Budget, seed: int, where: str, out: str) -> s
             _robot_models_text(hunt),
         ]
     )
+    families = counted(len(hunt.families), "start family", "start families")
     return (
         f"hunt: seed {seed}, {hunt.algorithm}, n {_sizes(hunt.sizes)}, "
-        f"{', '.join(hunt.models)}{extra}; {len(hunt.families)} start families; budget "
-        f"{' or '.join(limits)}, at most {budget.failures} failures into {out}/; "
+        f"{', '.join(hunt.models)}{extra}; {families}; budget "
+        f"{' or '.join(limits)}, at most {counted(budget.failures, 'failure')} into {out}/; "
         f"on {where}"
     )
 
 
 def _robot_models_text(hunt: Hunt) -> str:
-    """The robot models of the plan line (`model_suffix`'s words), "" for the paper's alone."""
+    """The robot models of the plan line (`RobotModel.short`), "" for the paper's alone."""
     if all(m.is_paper for m in hunt.robot_models):
         return ""
-    words = [model_suffix(m).lstrip("+") or "paper" for m in hunt.robot_models]
-    return f"; robot model{'s' if len(words) > 1 else ''} {', '.join(words)}"
+    words = [m.short for m in hunt.robot_models]
+    return f"; {plural('robot model', len(words))} {', '.join(words)}"
 
 
 def _sizes(sizes: Sequence[int]) -> str:
@@ -409,13 +411,13 @@ def _sizes(sizes: Sequence[int]) -> str:
 def _end_text(tally: Tally, seed: int, out: str) -> str:
     if not tally.saved:
         return (
-            f"nothing found in {tally.runs} run{'' if tally.runs == 1 else 's'} "
-            f"({tally.refused} start{'' if tally.refused == 1 else 's'} refused as unsupported); "
-            f"hunt seed {seed}"
+            f"nothing found in {counted(tally.runs, 'run')} "
+            f"({counted(tally.refused, 'start')} refused as unsupported); hunt seed {seed}"
         )
     first = tally.saved[0]
     return (
-        f"{len(tally.saved)} failures saved in {out}/ (hunt seed {seed}); replay one with\n"
+        f"{counted(len(tally.saved), 'failure')} saved in {out}/ (hunt seed {seed}); "
+        "replay one with\n"
         f"  cd {first.folder} && {first.summary['command']}\n"
         f"  fatswarm replay {os.path.join(first.folder, 'record.jsonl')}"
     )

@@ -17,6 +17,7 @@ from fatswarm.deploy.hunt.files import kind_counts
 from fatswarm.deploy.sweep.grid import model_label
 from fatswarm.domain.assumptions import Assumptions, Outside
 from fatswarm.domain.robot_model import RobotModel
+from fatswarm.domain.words import counted, unit
 
 if TYPE_CHECKING:
     from fatswarm.deploy.hunt.pool import Budget, Saved, Tally
@@ -125,13 +126,14 @@ def make_progress(budget: Budget, *, quiet: bool) -> _Progress:
 
 def summary_table(saved: Sequence[Saved]) -> Table:
     """One line per saved failure: its folder (index and kind), where the hunt found it (family,
-    scheduler and robot model as a sweep labels them, n) and what shrinking left (n, script
-    rounds, decimals), the runs shrinking took, and whether the saved files replay to the same
-    kind."""
+    scheduler and robot model as a sweep labels them, n), where the saved run fails (`round 7`,
+    `cycle 40` under an async model: `words.unit`) and what shrinking left (n, script rounds,
+    decimals), the runs shrinking took, and whether the saved files replay to the same kind."""
     table = Table(box=box.SIMPLE_HEAD, pad_edge=False, show_edge=False)
     table.add_column("failure (folder)", no_wrap=True)
     table.add_column("found in")  # the one column that wraps on a narrow terminal
-    for name in ("n", "rounds", "decimals", "shrink\nruns"):
+    table.add_column("fails in", no_wrap=True)
+    for name in ("n", "script\nrounds", "decimals", "shrink\nruns"):
         table.add_column(name, justify="right", no_wrap=True)
     table.add_column("replays", no_wrap=True)
     for item in saved:
@@ -145,6 +147,7 @@ def summary_table(saved: Sequence[Saved]) -> Table:
         table.add_row(
             os.path.basename(item.folder),
             f"{found['family']} {label}",
+            f"{unit(found['scheduler'])} {s['round']}",
             f"{found['n']}->{small['n']}",
             rounds,
             f"{found['decimals']}->{small['decimals']}",
@@ -179,7 +182,8 @@ def print_summary(tally: Tally, out: TextIO, outside: str = "") -> None:
     tty = out.isatty()
     console = Console(file=out, width=None if tty else 200, no_color=not tty, highlight=False)
     found = kind_counts(tally.kinds) or "none"
-    console.print(f"{tally.runs} runs, {tally.refused} starts refused; failures found: {found}")
+    runs, refused = counted(tally.runs, "run"), counted(tally.refused, "start")
+    console.print(f"{runs}, {refused} refused; failures found: {found}")
     if outside:
         console.print(outside)
     if tally.saved:

@@ -35,6 +35,7 @@ from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.robot_model import PAPER_MODEL, Bodies, RobotModel
 from fatswarm.domain.seam import Configured
+from fatswarm.domain.words import counted, unit
 from fatswarm.world.physics import (
     InvalidConfigurationError,
     PhysicsInvariantError,
@@ -357,7 +358,7 @@ def run_case(
     except input_errors() as exc:
         return Outcome(None, refused=f"{type(exc).__name__}: {exc}")
     watch = _RoundWatch(
-        invariants(hunt, setting, model, robot_model), positions, stop_early, points
+        invariants(hunt, setting, model, robot_model), positions, stop_early, points, unit(model)
     )
     try:
         result = run_lockstep(
@@ -378,7 +379,7 @@ def run_case(
     except _Found as stop:
         return Outcome(stop.failure, tuple(watch.active), rounds=len(watch.active))
     except (InvalidConfigurationError, PhysicsInvariantError) as exc:  # physics saw an overlap
-        return watch.raised(INVARIANT, f"round {len(watch.active) + 1}: {exc}")
+        return watch.raised(INVARIANT, f"{watch.word} {len(watch.active) + 1}: {exc}")
     except Exception as exc:  # a finding: the algorithm raised where the run cannot go on
         return watch.raised(ERROR, f"{type(exc).__name__}: {exc}")
     return watch.ended(result.status, result.rounds)
@@ -394,8 +395,10 @@ class _RoundWatch:
         positions: Points,
         stop_early: bool,
         points: bool = False,
+        word: str = "round",
     ) -> None:
         self.checks = checks
+        self.word = word  # what the run counts: "cycle" under an async model (`words.unit`)
         self.points = points  # point robots: sharing a point is no overlap
         self.stop_early = stop_early
         self.active: list[tuple[int, ...]] = []
@@ -419,7 +422,7 @@ class _RoundWatch:
                 COLLISION,
                 report.entry.round,
                 f"robot {hit.robot} stopped at contact with robot {hit.other} "
-                f"in round {report.entry.round}",
+                f"in {self.word} {report.entry.round}",
             )
         broken = None if self.points else overlap(after)
         for check in self.checks if broken is None else ():
@@ -427,7 +430,8 @@ class _RoundWatch:
             if broken is not None:
                 break
         if broken is not None:
-            return Failure(INVARIANT, report.entry.round, f"round {report.entry.round}: {broken}")
+            at = f"{self.word} {report.entry.round}"
+            return Failure(INVARIANT, report.entry.round, f"{at}: {broken}")
         first = first_failure(report.entry.round, report.entry.extra)
         if first is not None:
             return Failure(COMPUTE, report.entry.round, f"the algorithm failed: {first}")
@@ -436,7 +440,7 @@ class _RoundWatch:
     def ended(self, status: str, rounds: int) -> Outcome:
         """The outcome of a run that ended with `status` after `rounds`: its first failure seen,
         else a stall or the cap."""
-        failure = self.found[0] if self.found else _ended_failure(status, rounds)
+        failure = self.found[0] if self.found else _ended_failure(status, rounds, self.word)
         return Outcome(failure, tuple(self.active), status=status, rounds=rounds)
 
     def raised(self, kind: str, detail: str) -> Outcome:
@@ -445,16 +449,16 @@ class _RoundWatch:
         return Outcome(Failure(kind, rounds + 1, detail), tuple(self.active), rounds=rounds)
 
 
-def _ended_failure(status: str, rounds: int) -> Failure | None:
-    """The failure of a run that ended with `status` after `rounds` (None: it formed)."""
+def _ended_failure(status: str, rounds: int, word: str = "round") -> Failure | None:
+    """The failure of a run that ended with `status` after `rounds` (None: it formed), in the
+    unit the run counts (`word`: "cycle" under an async model)."""
+    done = counted(rounds, word)
     if status == Status.STALLED:
         return Failure(
-            STALLED,
-            rounds,
-            f"stalled after {rounds} rounds: every robot stays, the goal does not hold",
+            STALLED, rounds, f"stalled after {done}: every robot stays, the goal does not hold"
         )
     if status == Status.MAX_ROUNDS:
-        return Failure(MAX_ROUNDS, rounds, f"still running at the round cap ({rounds} rounds)")
+        return Failure(MAX_ROUNDS, rounds, f"still running at the {word} cap ({done})")
     return None
 
 

@@ -509,7 +509,8 @@ def read_outcome(record: str) -> Outcome | None:
         return None
     h, res = rec.header, rec.result
     if res is None:
-        print(f"unfinished: n={h.n} after {len(rec.rounds)} rounds", file=sys.stderr)
+        done = counted(len(rec.rounds), unit(h.scheduler))  # cycles under an async model
+        print(f"unfinished: n={h.n} after {done}", file=sys.stderr)
         return None
     return Outcome(
         status=res.status,

@@ -23,11 +23,8 @@ from fatswarm.deploy.view.dashboard import (
     ProgressLog,
     RateMeter,
     frame_from_state,
-    outcome_text,
-    progress_line,
     save_svg,
 )
-from fatswarm.deploy.view.summary import counted, unit
 from fatswarm.domain.outcome import ENDED, ExitCode, exit_code_for
 from fatswarm.domain.wire import ProtocolError, check_swarm
 from fatswarm.world.observers import WorldState
@@ -168,44 +165,6 @@ class StateWatcher:
             save_svg(frame, self.svg)
 
 
-class ProgressLines(ProgressLog):
-    """The progress log of a networked run, in the words its summary uses: an async run's lines
-    count ended cycles ("cycle 164 running: ..., 12.0 cycles/s"), as its record and summary do."""
-
-    def show(self, frame: Frame) -> None:
-        self.last = frame
-        if frame.status in ENDED:
-            return
-        if frame.round >= self.next_round:
-            self.out(in_units(progress_line(frame), frame))
-            self.next_round = (frame.round // self.every + 1) * self.every
-
-    def close(self, final: Frame | None) -> None:
-        frame = final or self.last
-        if frame is not None:
-            self.out(in_units(progress_line(frame), frame))
-            if frame.status in ENDED:
-                self.out(in_units(outcome_text(frame), frame))
-
-
-def in_units(line: str, frame: Frame) -> str:
-    """A dashboard line about `frame` (`progress_line`, `outcome_text`) in the unit its run counts
-    (`summary.unit`): unchanged for a round model; "cycle" for an async one."""
-    word = unit(frame.scheduler)
-    if word == "round":
-        return line
-    k = frame.round
-    for said, meant in (
-        (f"round {k} ", f"{word} {k} "),  # the progress line's head
-        (" rounds/s", f" {word}s/s"),
-        (f"after {k} rounds", f"after {counted(k, word)}"),  # the outcome line's
-        (f"round limit ({k} rounds)", f"{word} limit ({counted(k, word)})"),
-        (f"running: round {k}", f"running: {word} {k}"),
-    ):
-        line = line.replace(said, meant, 1)
-    return line
-
-
 def watch(
     swarm: str,
     *,
@@ -230,7 +189,7 @@ def watch(
     if dashboard:
         sink = LiveView(console)
     else:
-        sink = ProgressLines(out=(lambda line: None) if quiet else progress, every=every)
+        sink = ProgressLog(out=(lambda line: None) if quiet else progress, every=every)
     try:
         watcher = StateWatcher(
             swarm, sink, session=session, connect=connect, max_rounds=max_rounds, svg=svg
@@ -309,7 +268,7 @@ def main(args: argparse.Namespace) -> int:
         print("fatswarm dashboard: --every must be at least 1", file=sys.stderr)
         return ExitCode.BAD_INPUT
     dashboard = not args.no_dashboard and sys.stdout.isatty()
-    sink: FrameSink = LiveView() if dashboard else ProgressLines(every=args.every)
+    sink: FrameSink = LiveView() if dashboard else ProgressLog(every=args.every)
     watcher = StateWatcher(
         args.swarm,
         sink,

@@ -1,7 +1,8 @@
 """The flags and helpers `fatswarm sweep` and `fatswarm hunt` share (each a grid or a search of
 lock-step runs on worker processes): the algorithm's parameters, the sizes, the schedulers, the
 adversary's lists, the round cap, the workers and quiet, the worker count, and the signal guard of
-the pool loop. Each command adds its own words to a flag's help where they differ."""
+the pool loop. Each command adds its own words to a flag's help where they differ; a list flag
+refuses an empty item (`flags.comma_list`)."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from types import FrameType
 
+from fatswarm.deploy.flags import comma_list
 from fatswarm.deploy.sweep.executor import add_cluster_argument
 from fatswarm.deploy.sweep.grid import SweepInputError
 
@@ -34,6 +36,7 @@ def add_sizes_argument(p: argparse.ArgumentParser, what: str, default: str) -> N
         "-n",
         "--n",
         action="append",
+        type=comma_list("-n"),
         default=[],
         metavar="SIZES",
         dest="n",
@@ -46,6 +49,7 @@ def add_scheduler_argument(p: argparse.ArgumentParser, what: str, usable: str) -
     p.add_argument(
         "--scheduler",
         action="append",
+        type=comma_list("--scheduler"),
         default=[],
         metavar="NAMES",
         help=f"schedulers (models) {what}: {usable} (default: all of them)",
@@ -58,6 +62,7 @@ def add_adversary_arguments(p: argparse.ArgumentParser, *, lists: bool) -> None:
     p.add_argument(
         "--non-rigid",
         action="append",
+        type=comma_list("--non-rigid"),
         default=[],
         metavar="DELTAS" if lists else "DELTA",
         help="non-rigid adversaries' deltas (> 0, robot radii) and/or 'rigid', e.g. "
@@ -69,6 +74,7 @@ def add_adversary_arguments(p: argparse.ArgumentParser, *, lists: bool) -> None:
     p.add_argument(
         "--crash",
         action="append",
+        type=comma_list("--crash"),
         default=[],
         metavar="COUNTS" if lists else "F",
         help="crash counts F (F robots crash for good, 0 < F < n; a cell with F >= n "

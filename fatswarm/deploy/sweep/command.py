@@ -56,6 +56,7 @@ from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.seam import Configured
 from fatswarm.domain.version import __version__
+from fatswarm.domain.words import counted, unit
 
 if TYPE_CHECKING:
     from fatswarm.deploy.sweep.pool import RunTable
@@ -335,7 +336,8 @@ def _plan(
     if not args.quiet:
         _say(_plan_text(args.out, len(runs), len(runs) - todo, other, where))
         if grid.left_out:
-            _say(f"sweep: {grid.left_out} runs left out, whose --crash F is >= their n (0 < F < n)")
+            left = counted(grid.left_out, "run")
+            _say(f"sweep: {left} left out, whose --crash F is >= their n (0 < F < n)")
     if todo and importlib.util.find_spec("scipy") is None:
         _say(MISSING_SCIPY)
 
@@ -345,7 +347,7 @@ def _stopped(out: str, table: RunTable, keys: set[Key], total: int, signum: int 
     done = sum(1 for row in table.rows if row_key(row) in keys)
     word = "interrupted" if signum == signal.SIGINT else "terminated"
     _say(
-        f"{word}: {done} of {total} runs of the grid are in {out}; run the same "
+        f"{word}: {done} of {counted(total, 'run')} of the grid are in {out}; run the same "
         "command again to go on"
     )
     return ExitCode.INTERRUPTED if signum == signal.SIGINT else ExitCode.TERMINATED
@@ -383,9 +385,9 @@ def all_failed_text(rows: Sequence[dict[str, str]], out: str) -> str:
 
 def _plan_text(out: str, total: int, present: int, other: int, where: str) -> str:
     there = f"{present} already in {out}" if present else f"none in {out} yet"
-    others = f" (and {other} rows of other grids, left as they are)" if other else ""
+    others = f" (and {counted(other, 'row')} of other grids, left as they are)" if other else ""
     todo = total - present
-    return f"sweep: {total} run{'' if total == 1 else 's'}, {there}{others}; " + (
+    return f"sweep: {counted(total, 'run')}, {there}{others}; " + (
         f"{todo} to run on {where}" if todo else "nothing to run"
     )
 
@@ -436,7 +438,8 @@ def _show_failures(rows: Sequence[dict[str, str]], out_path: str) -> None:
     if not failed:
         return
     _say(
-        f"{len(failed)} of {len(rows)} runs did not form collision-free (see the status, "
+        f"{len(failed)} of {counted(len(rows), 'run')} did not form collision-free (see the "
+        "status, "
         f"collisions and command columns of {out_path}); repeat one with, e.g.:"
     )
     for row in failed[:SHOWN_FAILURES]:
@@ -446,7 +449,12 @@ def _show_failures(rows: Sequence[dict[str, str]], out_path: str) -> None:
 def _outcome(row: dict[str, str]) -> str:
     if row["status"] == ERROR:
         return f"error: {row['error']}"
-    return f"{row['status']} after {row['rounds']} rounds, {row['collisions']} collisions"
+    word = unit(row["scheduler"])  # cycles under an async model
+    rounds, collisions = (
+        counted(int(k), w) if k.isdigit() else f"{k} {w}s"
+        for k, w in ((row["rounds"], word), (row["collisions"], "collision"))
+    )
+    return f"{row['status']} after {rounds}, {collisions}"
 
 
 def _say(message: str) -> None:

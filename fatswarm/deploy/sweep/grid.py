@@ -203,7 +203,7 @@ def model_suffix(robot_model: RobotModel) -> str:
     """The robot model's axes that are not the paper's, each as `+TAGVALUE`: the visibility
     (`+opaque`, `+opaque-centres`), `+sightV`, `+lights-internal` / `+lights-external`, the
     frames (`+chirality`, `+disoriented`), `+every-look`...; "" for the paper's model."""
-    return "".join(f"+{a.tag}{a.label(robot_model.value(a.name))}" for a in robot_model.changed())
+    return "" if robot_model.is_paper else "+" + robot_model.short
 
 
 def model_label(

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 from fatswarm.deploy.view.lights import NO_VIEWS, has_views
 from fatswarm.deploy.view.scene import DPI, Clip, Scene, lights_at, routes_between
 from fatswarm.domain.outcome import ExitCode
+from fatswarm.domain.words import plural
 from fatswarm.world.record import RunRecord
 from fatswarm.world.timeline import Timeline
 
@@ -109,8 +110,9 @@ def plan_clip(
 
 def clip_line(clip: Clip, is_async: bool, out: str) -> str:
     """`writing 171 frames (8.6 s of video at 20 fps, 2 rounds per second) to run.gif`."""
-    plural = "" if f"{clip.speed:g}" == "1" else "s"
-    unit = f"unit{plural} of virtual time" if is_async else f"round{plural}"
+    unit = (
+        f"{plural('unit', clip.speed)} of virtual time" if is_async else plural("round", clip.speed)
+    )
     shown = f"{'cycle lines' if is_async else 'rounds'} {clip.first}..{clip.last}"
     return (
         f"writing {clip.frames:,} frames of {shown} ({clip.seconds:.1f} s of video at "

@@ -38,14 +38,16 @@ from fatswarm.deploy.view.panels import (
     MIN_SIZE,
     SIDE_WIDTH,
     TARGET_RADIUS,
-    AgentsView,
     Derived,
     Frame,
+    SideView,
     agent_rows,
+    agents_height,
     algorithm_text,
-    counters_table,
     derive,
     enclosing_circle,
+    essentials,
+    essentials_line,
     figure_text,
     fmt_rate,
     footer_lines,
@@ -54,6 +56,7 @@ from fatswarm.deploy.view.panels import (
     too_small,
 )
 from fatswarm.domain.outcome import ENDED, Status
+from fatswarm.domain.words import unit, units
 
 if TYPE_CHECKING:
     from fatswarm.world.observers import WorldState
@@ -171,10 +174,13 @@ def render_frame(
     footer: str | None = None,
     mode: Mode = "braille",
     screen: tuple[int, int] | None = None,
+    height: int | None = None,
 ) -> RenderableType:
     """The whole dashboard for one frame: header, canvas, counters, agents, then the outcome and
     the key help (`footer`), wrapped to the terminal's width. `screen`: the terminal's (columns,
-    rows); below MIN_SIZE the frame is a few lines saying so (`panels.too_small`)."""
+    rows); below MIN_SIZE the frame is a few lines saying so (`panels.too_small`). `height`: the
+    rows it is printed in, if fewer than the screen's (the final frame left above the summary):
+    too few for the essential counters beside the agents, the header line says them first."""
     title = f"fatswarm · {frame.source}"
     if frame.swarm:
         title += f" · swarm {frame.swarm}"
@@ -187,35 +193,75 @@ def render_frame(
     else:
         style = "bold" if frame.status in ENDED else ""
     bottom = footer_lines(frame, footer, cols)
+    body = (height or rows) - 1 - (len(bottom) + 2)
+    counters = body - agents_height(frame.n) - 2 >= essentials(frame)
+    if not counters:  # the essential counters first: the title is what may be cut
+        title = f"{essentials_line(frame)} · {title}"
     layout = Layout(name="root")
     layout.split_column(
         Layout(Text(title, style="bold", no_wrap=True, overflow="ellipsis"), name="header", size=1),
         Layout(name="body"),
         Layout(Panel(Text("\n").join(bottom), style=style), name="footer", size=len(bottom) + 2),
     )
-    counters = counters_table(frame, derived)
     layout["body"].split_row(
-        Layout(canvas_panel(frame, derived, mode), name="canvas"),
-        Layout(name="side", size=SIDE_WIDTH),
-    )
-    layout["side"].split_column(
-        Layout(Panel(counters, title="run"), name="counters", size=counters.row_count + 2),
-        Layout(Panel(AgentsView(frame), title="agents"), name="agents"),
+        Layout(canvas_panel(frame, derived, mode, cols - SIDE_WIDTH), name="canvas"),
+        Layout(SideView(frame, derived, counters), name="side", size=SIDE_WIDTH),
     )
     return layout
 
 
-def canvas_panel(frame: Frame, derived: Derived, mode: Mode) -> Panel:
-    """The canvas in its panel, with a legend of what its colours mean."""
+def canvas_panel(frame: Frame, derived: Derived, mode: Mode, width: int | None = None) -> Panel:
+    """The canvas in its panel, with a legend of what its colours mean: on the bottom border
+    where it fits in the panel's `width` (columns, None: it does), else whole on lines of its
+    own under the canvas (a border would cut it mid-word)."""
+    legend = canvas_legend(frame, derived)
+    if width is None or legend.cell_len <= width - 4:  # the corners and a space each side
+        return Panel(
+            CanvasView(frame, derived, mode), title="swarm, to scale", subtitle=legend, padding=0
+        )
+    return Panel(CanvasLegend(CanvasView(frame, derived, mode), legend), title="swarm, to scale")
+
+
+def canvas_legend(frame: Frame, derived: Derived) -> Text:
+    """What the canvas's colours mean, in one line of words."""
     legend = Text.from_markup(LEGEND)
     if frame.lights:  # the colours instead of idle, active and stopped
         legend = palette_legend(frame.palette) + Text.from_markup(LEGEND[len(LEGEND_ROBOTS) :])
     legend += focus_legend(frame.focus)
     if len(derived.targets):
         legend += Text.from_markup(LEGEND_TARGETS)
-    return Panel(
-        CanvasView(frame, derived, mode), title="swarm, to scale", subtitle=legend, padding=0
-    )
+    return legend
+
+
+class CanvasLegend:
+    """The canvas above its legend, the legend's words on as many whole lines as it takes."""
+
+    def __init__(self, canvas: CanvasView, legend: Text) -> None:
+        self.canvas, self.legend = canvas, legend
+
+    def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
+        width = max(1, options.max_width)
+        lines = legend_lines(self.legend, width)
+        height = options.height or options.size.height or 20
+        rows = max(1, height - len(lines))
+        yield from console.render(self.canvas, options.update(height=rows))
+        for line in lines[: max(0, height - rows)]:
+            line.align("center", width)
+            yield from console.render(line, options.update(height=1, no_wrap=True))
+
+
+def legend_lines(legend: Text, width: int) -> list[Text]:
+    """The legend's words (each keeps its style) packed on lines of at most `width` columns."""
+    lines: list[Text] = []
+    for word in legend.split(" "):
+        if not word.plain:
+            continue
+        if lines and lines[-1].cell_len + 1 + word.cell_len <= width:
+            lines[-1].append(" ")
+            lines[-1].append_text(word)
+        else:
+            lines.append(word.copy())
+    return lines
 
 
 def progress_line(frame: Frame) -> str:
@@ -228,9 +274,9 @@ def progress_line(frame: Frame) -> str:
         parts = [f"targets {derived.filled}/{frame.n}", f"r_c {rc:.3f} / r {r:.3f}"]
     parts += [f"{k} {figure_text(v)}" for k, v in frame.figures.items() if k != TARGET_RADIUS]
     return (
-        f"round {frame.round} {frame.status}: {', '.join(parts)}, "
+        f"{unit(frame.scheduler)} {frame.round} {frame.status}: {', '.join(parts)}, "
         f"active {len(frame.active)}, collisions {frame.collisions_total}, "
-        f"{fmt_rate(frame.rounds_per_second)} rounds/s"
+        f"{fmt_rate(frame.rounds_per_second)} {units(frame.scheduler)}/s"
     )
 
 
@@ -241,7 +287,7 @@ def print_frame(
     laid out for the console's width and, when it is a terminal, its size."""
     h = height or min(console.size.height, 40)
     screen = (console.width, console.size.height if console.is_terminal else h)
-    console.print(render_frame(frame, footer=footer, screen=screen), height=h)
+    console.print(render_frame(frame, footer=footer, screen=screen, height=h), height=h)
 
 
 def save_svg(
@@ -287,6 +333,7 @@ def frame_from_state(
         palette=tuple(sorted(state.palette)),  # names sorted, as replay and plot colour them
         derived=dict(state.derived),
         outside=state.outside,
+        model=state.model.short,
     )
 
 

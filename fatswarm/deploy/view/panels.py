@@ -13,6 +13,8 @@ from typing import Final
 
 import numpy as np
 from rich.console import Console, ConsoleOptions, Group, RenderResult
+from rich.layout import Layout
+from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
@@ -24,6 +26,7 @@ from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Points
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.seam import ParamValue
+from fatswarm.domain.words import counted, unit, units
 
 TARGET_RADIUS: Final = "target radius"  # the figure that draws the paper's target points
 SIDE_WIDTH: Final = 46  # columns of the counters and agents column
@@ -31,6 +34,7 @@ KEY_WIDTH: Final = (
     14  # at most, of the counters' labels (an algorithm's figure may have a long one)
 )
 MAX_FIGURE_ROWS: Final = 8  # figures shown as rows; a line says how many more there are
+AGENT_ROWS: Final = 8  # the agents' rows the counters make room for (`SideView`)
 MIN_SIZE: Final = (80, 24)  # the smallest terminal the whole dashboard is laid out for
 BAR_WIDTH: Final = 10  # columns of the bars beside r_c / r and the targets filled
 BAR_DONE, BAR_LEFT = "magenta", "grey35"
@@ -72,6 +76,7 @@ class Frame:
     # the run's figures derived from the positions, so far (fatswarm.domain.figures), by name
     derived: dict[str, float] = field(default_factory=dict)
     outside: str = ""  # how the run is outside its algorithm's assumptions ('' if within)
+    model: str = ""  # the robot model in one word (`RobotModel.short`: paper); '' if unknown
 
     def __post_init__(self) -> None:
         side = self.params.get("a")
@@ -158,26 +163,27 @@ def fmt_rate(rate: float | None) -> str:
 
 def outcome_text(frame: Frame) -> str:
     """One line saying how the run ended, that it still runs, or that its record stops there."""
-    k = frame.collisions_total
-    reached = f"{frame.algorithm} goal reached by {frame.n} robots after {frame.round} rounds"
+    k, word = frame.collisions_total, unit(frame.scheduler)  # cycles under an async model
+    rounds = counted(frame.round, word)
+    reached = f"{frame.algorithm} goal reached by {frame.n} robots after {rounds}"
     if frame.status == Status.FORMED and k:
-        return f"FORMED WITH {k} COLLISION{'' if k == 1 else 'S'}: {reached}, not collision-free"
+        return f"FORMED WITH {counted(k, 'collision').upper()}: {reached}, not collision-free"
     if frame.status == Status.FORMED:
         head = f"FORMED: {reached}"
     elif frame.status == Status.STALLED:
-        head = f"STALLED after {frame.round} rounds: no robot can make progress"
+        head = f"STALLED after {rounds}: no robot can make progress"
     elif frame.status == Status.MAX_ROUNDS:
-        head = f"NOT FORMED: stopped at the round limit ({frame.round} rounds)"
+        head = f"NOT FORMED: stopped at the {word} limit ({rounds})"
     elif frame.unfinished:
         return (
-            f"UNFINISHED: the record stops after round {frame.round} without a result line "
+            f"UNFINISHED: the record stops after {word} {frame.round} without a result line "
             "(interrupted, killed, or still being written)"
         )
     else:
-        return f"running: round {frame.round}"
+        return f"running: {word} {frame.round}"
     failed = int(frame.derived.get("failures") or 0)  # computes that raised (docs/record.md)
-    said = f", the algorithm failed {failed} time{'' if failed == 1 else 's'}" if failed else ""
-    return f"{head}, {frame.collisions_total} collisions{said}"
+    said = f", the algorithm failed {counted(failed, 'time')}" if failed else ""
+    return f"{head}, {counted(k, 'collision')}{said}"
 
 
 def run_lines(frame: Frame, width: int) -> list[str]:
@@ -202,23 +208,60 @@ def bar(done: float, total: float, width: int = BAR_WIDTH) -> Text:
 Row = tuple[str | Text, str | Text]  # a counter: its label and its value
 
 
-def counters_table(frame: Frame, derived: Derived) -> Table:
-    """Round, scheduler, algorithm, r_c (versus r, targets filled, with bars), figures, this
-    round, collisions, rate, alive: one row each, so that the agents keep room at 80x24."""
+# How much a counter matters when the terminal is short (`counters_table(..., most=)`): the
+# lowest go first, so that the agents keep their rows; KEEP ones always stay.
+KEEP: Final = 9
+RANKS: Final = {
+    "r_c": 5,
+    "r_c / r": 5,
+    "targets": 5,
+    "collisions": 6,
+    "timeouts": 5,
+    "failures": 6,
+}  # the rest: a figure of the algorithm's 4, a derived figure 2, this round 1, the rate 0 (the
+# chosen robot's Look of replay --robot: KEEP - 1)
+
+
+def counters_table(frame: Frame, derived: Derived, most: int | None = None) -> Table:
+    """Round, scheduler, robot model, algorithm, r_c (versus r, targets filled, with bars),
+    figures, this round, collisions, rate: one row each, so that the agents keep room at
+    80x24; `most`: at most this many rows, the ones that matter least left out (`RANKS`; never
+    round, scheduler, model and the algorithm's name)."""
     figures = [(k, v) for k, v in frame.figures.items() if k != TARGET_RADIUS or r_absent(derived)]
-    keys = min(KEY_WIDTH, max([len("this round"), *(len(k) for k, _ in figures)]))
+    word = unit(frame.scheduler)  # "this cycle" under an async model
+    keys = min(KEY_WIDTH, max([len(f"this {word}"), *(len(k) for k, _ in figures)]))
     grid = Table.grid(padding=(0, 1))
     grid.add_column("key", style="bold", no_wrap=True, width=keys, overflow="ellipsis")
     grid.add_column("value", no_wrap=True, overflow="ellipsis")
     seed = f"  seed {frame.seed}" if frame.seed is not None else ""
-    rows: list[Row] = [("round", round_text(frame)), ("scheduler", frame.scheduler + seed)]
+    ranked: list[tuple[int, Row]] = [
+        (KEEP, (word, round_text(frame))),
+        (KEEP, ("scheduler", frame.scheduler + seed)),
+    ]
+    if frame.model:
+        ranked.append((KEEP, ("model", Text(frame.model))))
     for i, line in enumerate(run_lines(frame, SIDE_WIDTH - 4 - keys - 1)):  # borders, padding
-        rows.append(("" if i else "robots", Text(line)))  # Text: a user's name is no markup
-    rows += radius_rows(frame, derived) + figure_rows(figures) + derived_rows(frame)
-    rows += tail_rows(frame)
-    for key, value in rows:
+        ranked.append((3 if i else KEEP, ("" if i else "robots", Text(line))))  # Text: no markup
+    ranked += [(RANKS.get(str(k), 4), (k, v)) for k, v in radius_rows(frame, derived)]
+    ranked += [(4, row) for row in figure_rows(figures)] + [(2, r) for r in derived_rows(frame)]
+    for key, value in tail_rows(frame):
+        rank = RANKS.get(str(key), 0 if str(key).endswith("/s") else 1)
+        if frame.focus is not None and key == f"robot {frame.focus.robot}":
+            rank = KEEP - 1  # what replay --robot is for: the chosen robot's Look
+        ranked.append((rank, (key, value)))
+    for _, (key, value) in fewest(ranked, most):
         grid.add_row(key, value)
     return grid
+
+
+def fewest(ranked: list[tuple[int, Row]], most: int | None) -> list[tuple[int, Row]]:
+    """`ranked` cut to `most` rows (None: all), leaving out the lowest ranks first (the latest of
+    equal ranks first), never a KEEP one; the order kept."""
+    if most is None or len(ranked) <= most:
+        return ranked
+    order = sorted(range(len(ranked)), key=lambda i: (ranked[i][0], -i))
+    dropped = {i for i in order[: len(ranked) - most] if ranked[i][0] < KEEP}
+    return [row for i, row in enumerate(ranked) if i not in dropped]
 
 
 def radius_rows(frame: Frame, derived: Derived) -> list[Row]:
@@ -267,19 +310,18 @@ def derived_rows(frame: Frame) -> list[Row]:
 
 
 def tail_rows(frame: Frame) -> list[Row]:
-    """This round, collisions, the chosen robot's Look, the rate (live), alive, timeouts and
-    failed computes."""
+    """This round (cycle), collisions, the chosen robot's Look, the rate (live), timeouts and
+    failed computes (how many agents are alive: the agents panel's title, `agents_title`)."""
     stopped = f"  {len(frame.stopped)} stopped" if frame.stopped else ""
+    word = unit(frame.scheduler)
     rows: list[Row] = [
-        ("this round", f"{len(frame.active)} active  {len(frame.moved)} moved{stopped}"),
+        (f"this {word}", f"{len(frame.active)} active  {len(frame.moved)} moved{stopped}"),
         ("collisions", str(frame.collisions_total)),
     ]
     if frame.focus is not None:
         rows.append((f"robot {frame.focus.robot}", frame.focus.line()))
     if frame.last_round is None:  # a replay has no rate
-        rows.append(("rounds/s", fmt_rate(frame.rounds_per_second)))
-    if frame.alive is not None:
-        rows.append(("alive", f"{sum(frame.alive)} / {frame.n}"))
+        rows.append((f"{units(frame.scheduler)}/s", fmt_rate(frame.rounds_per_second)))
     if sum(frame.timeouts):
         rows.append(("timeouts", str(sum(frame.timeouts))))
     failed = int(frame.derived.get("failures") or 0)  # computes that raised, over the run
@@ -349,7 +391,62 @@ def more_robots(frame: Frame, hidden: list[int]) -> str:
     gone = sum(1 for i in hidden if frame.alive is not None and not frame.alive[i])
     notes = [f"{active} active"] if active else []
     notes += [f"{gone} gone"] if gone else []
-    return f"… {len(hidden)} more robots" + (f" ({', '.join(notes)})" if notes else "")
+    return f"… {counted(len(hidden), 'more robot')}" + (f" ({', '.join(notes)})" if notes else "")
+
+
+def agents_title(frame: Frame) -> str:
+    """`agents · alive 7 / 8`: the agents panel's title, with how many are alive when known."""
+    if frame.alive is None:
+        return "agents"
+    return f"agents · alive {sum(frame.alive)} / {frame.n}"
+
+
+def agents_height(n: int) -> int:
+    """The agents panel's rows that show every robot, or AGENT_ROWS of them and a "more" line:
+    what the counters make room for (`SideView`)."""
+    return min(n, AGENT_ROWS) + (n > AGENT_ROWS) + 1 + 2  # the header, the borders
+
+
+def essentials(frame: Frame) -> int:
+    """How many counters are never left out (KEEP: the round, scheduler, model, robots)."""
+    return 3 + bool(frame.model)
+
+
+def essentials_line(frame: Frame) -> str:
+    """The counters never left out, in one line (`round 10 (limit 400) · fsync seed 1 · paper`),
+    for a frame too short for them beside the agents (`SideView(counters=False)`)."""
+    seed = f" seed {frame.seed}" if frame.seed is not None else ""
+    words = [f"{unit(frame.scheduler)} {round_text(frame)}", frame.scheduler + seed, frame.model]
+    return " · ".join(word for word in words if word)
+
+
+class SideView:
+    """The counters above the agents, laid out for the height rich gives them: when fewer than
+    AGENT_ROWS agents (or fewer than all, if there are no more) would fit below every counter,
+    the counters that matter least make room (`counters_table(most=)`), so that at 80x24 the
+    agents of 8 robots stay whole; many robots take what is left below every counter. Without
+    `counters` (a frame too short even for the essentials, whose header then says them:
+    `essentials_line`), the agents alone."""
+
+    def __init__(self, frame: Frame, derived: Derived, counters: bool = True) -> None:
+        self.frame, self.derived, self.counters = frame, derived, counters
+
+    def __rich_console__(self, console: Console, options: ConsoleOptions) -> RenderResult:
+        agents = Panel(AgentsView(self.frame), title=agents_title(self.frame))
+        if not self.counters:
+            yield from console.render(agents, options)
+            return
+        height = options.height or options.size.height
+        counters = counters_table(self.frame, self.derived)
+        room = height - agents_height(self.frame.n) - 2  # the counters' rows that leave it
+        if counters.row_count > room:
+            counters = counters_table(self.frame, self.derived, most=max(room, 0))
+        layout = Layout(name="side")
+        layout.split_column(
+            Layout(Panel(counters, title="run"), name="counters", size=counters.row_count + 2),
+            Layout(agents, name="agents"),
+        )
+        yield from console.render(layout, options)
 
 
 # --- the bottom lines, and a terminal too small for the rest ------------------------------------
@@ -377,13 +474,15 @@ def too_small(frame: Frame, title: str, keys: str | None, size: tuple[int, int])
     that the dashboard needs more room."""
     cols, rows = size
     alive = f", {sum(frame.alive)} / {frame.n} alive" if frame.alive is not None else ""
-    counts = f"{frame.collisions_total} collisions"
+    counts = counted(frame.collisions_total, "collision")
     lines = [
         title,
         *wrapped(
             f"too small ({cols}x{rows}): the dashboard needs {MIN_SIZE[0]}x{MIN_SIZE[1]}", cols
         ),
-        *wrapped(f"round {round_text(frame)}, {frame.n} robots, {counts}{alive}", cols),
+        *wrapped(
+            f"{unit(frame.scheduler)} {round_text(frame)}, {frame.n} robots, {counts}{alive}", cols
+        ),
         *wrapped(outcome_text(frame), cols),
         *(wrapped(keys, cols) if keys else []),
     ]
@@ -398,12 +497,17 @@ __all__ = [
     "AgentsView",
     "Derived",
     "Frame",
+    "SideView",
     "agent_rows",
+    "agents_height",
+    "agents_title",
     "algorithm_text",
     "counters_table",
     "derive",
     "derived_rows",
     "enclosing_circle",
+    "essentials",
+    "essentials_line",
     "figure_text",
     "fmt_rate",
     "footer_lines",

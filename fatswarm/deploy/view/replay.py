@@ -33,6 +33,7 @@ from fatswarm.domain.figures import RunFolder, known_numbers
 from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.path import Points, sample, truncate
 from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.robot_model import short_of_header
 from fatswarm.domain.seam import AlgorithmError, AlgorithmFailure, AlgorithmParamsError, Configured
 from fatswarm.world.record import Header, RecordFormatError, RunRecord, move_origin
 from fatswarm.world.record_read import read_record, torn_end_note
@@ -53,13 +54,14 @@ def build_frames(record: RunRecord, source: str = "replay") -> list[Frame]:
     positions = run.initial
     last_round = record.rounds[-1].round if record.rounds else 0
     palette = record_palette(record)
+    model = short_of_header(run.extra.get("model"))  # the robot model in one word
 
     def frame(**fields: Any) -> Frame:
         return Frame(
             n=n, algorithm=run.algorithm, params=dict(run.params), scheduler=run.scheduler,
             seed=run.seed, source=source,
             last_active=tuple(last_active), last_path_length=tuple(last_length),
-            last_round=last_round, palette=palette, **fields,
+            last_round=last_round, palette=palette, model=model, **fields,
         )  # fmt: skip
 
     frames = [frame(round=0, positions=positions)]

@@ -28,6 +28,7 @@ from fatswarm.deploy.view.lights import (
 )
 from fatswarm.deploy.view.summary import model_notes
 from fatswarm.domain.path import Points, sample, truncate
+from fatswarm.domain.words import counted
 from fatswarm.world.record import RunRecord, move_origin
 from fatswarm.world.timeline import Timeline
 
@@ -339,7 +340,7 @@ class Scene:
     def clock_text(self, t: float, contacts: int) -> str:
         """`round 5 of 17 (3 collisions)`, or async `t = 12.30, 45 of 80 cycles ended`; with a
         chosen robot, what it saw then."""
-        touched = f" ({contacts} collision{'' if contacts == 1 else 's'})" if contacts else ""
+        touched = f" ({counted(contacts, 'collision')})" if contacts else ""
         count = len(self.timeline.ends)
         focus = None if self._focus is None else self._focus(t)
         saw = "" if focus is None or self.robot is None else f"\nrobot {self.robot}: {focus.line()}"

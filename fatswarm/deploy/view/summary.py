@@ -6,12 +6,15 @@ import dataclasses
 import json
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, TextIO
+from typing import TYPE_CHECKING, Any, Final, TextIO
 
 from fatswarm.domain import figures
-from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.outcome import ExitCode, Status, exit_code_for
-from fatswarm.domain.robot_model import ModelError, RobotModel
+from fatswarm.domain.robot_model import PAPER_WORD, ModelError, RobotModel, short_of_header
+from fatswarm.domain.words import counted as counted  # the one plural (re-exported)
+from fatswarm.domain.words import unit as unit  # the one word for what a run counts
+
+WIDTH: Final = 80  # columns of a summary line, where it can be broken (the smallest terminal)
 
 if TYPE_CHECKING:
     from fatswarm.world.record import RoundEntry
@@ -57,6 +60,7 @@ class Outcome:
     params: dict[str, Any] = dataclasses.field(default_factory=dict)
     time: float | None = None  # async models: the virtual time the run ended at
     model: str | None = None  # the robot model as flags, when it is not the paper's
+    model_label: str = PAPER_WORD  # the robot model in one word (`RobotModel.short`)
     assumption: str | None = None  # the record header's line: frames outside the algorithm's
     crashes: tuple[tuple[int, int], ...] = ()  # --crash: (robot, round or cycle it crashed in)
     # the run's figures that follow from the positions (fatswarm.domain.figures), by name
@@ -67,7 +71,14 @@ class Outcome:
         `Header.extra`, or the JSON header line): the model as its flags when it is not the
         paper's, and the header's `assumption` line."""
         model, assumption = model_notes(header)
-        return dataclasses.replace(self, model=model, assumption=assumption)
+        label = model_label(header)
+        return dataclasses.replace(self, model=model, assumption=assumption, model_label=label)
+
+
+def model_label(header: Mapping[str, Any]) -> str:
+    """The robot model of a record header's fields in one word (`RobotModel.short`: `paper`,
+    `opaque+sight5`), `unreadable` for a `model` no run writes."""
+    return short_of_header(header.get("model"))
 
 
 def model_notes(header: Mapping[str, Any]) -> tuple[str | None, str | None]:
@@ -93,18 +104,6 @@ def side_of(values: Any) -> float | None:
 def exit_code(outcome: Outcome) -> ExitCode:
     """The exit code of `fatswarm run` for this outcome (see EXIT_CODES_HELP)."""
     return exit_code_for(outcome.status, outcome.collisions)
-
-
-def unit(scheduler: str) -> str:
-    """What a run counts, in the words every summary and progress line uses: "round" under a
-    round model; "cycle" under an async model, an ended Look-Compute-Move cycle (one record line
-    each), whose run also says its virtual "time" (networked, a protocol round is an "instant")."""
-    return "cycle" if scheduler in ASYNC_NAMES else "round"
-
-
-def counted(k: int, word: str) -> str:
-    """`k word`, plural unless k is 1: "1 round", "31 rounds"."""
-    return f"{k} {word}{'' if k == 1 else 's'}"
 
 
 def verdict(outcome: Outcome) -> str:
@@ -146,8 +145,9 @@ def ended(outcome: Outcome) -> str:
 
 
 def summary(outcome: Outcome) -> str:
-    """The summary both kinds of run print at the end: the verdict, the run, its figures (and the
-    robots the crash adversary crashed, when it did)."""
+    """The summary both kinds of run print at the end: the verdict, the run (its robot model in
+    one word), its figures on lines of at most WIDTH columns (and the robots the crash adversary
+    crashed, when it did)."""
     o = outcome
     epochs = "?" if o.epochs is None else str(o.epochs)
     values = o.params or ({"a": o.a} if o.algorithm == "uniform-circle" else {})
@@ -158,29 +158,47 @@ def summary(outcome: Outcome) -> str:
     return (
         f"{verdict(o)}\n"
         f"n={o.n}{named}{shown} seed={'?' if o.seed is None else o.seed} "
-        f"scheduler={o.scheduler}\n"
-        f"{unit(o.scheduler)}s {o.rounds}  epochs {epochs}  moves {o.moves} "
-        f"({o.moves / o.n:.2f} per robot)  total distance {o.total_distance:.3f}  "
-        f"collisions {o.collisions}"
-        + derived_text(o.derived)
-        + ("" if o.time is None else f"  virtual time {o.time:.3f}")
+        f"scheduler={o.scheduler} model={o.model_label}\n"
+        + broken(
+            [
+                f"{unit(o.scheduler)}s {o.rounds}",
+                f"epochs {epochs}",
+                f"moves {o.moves} ({o.moves / o.n:.2f} per robot)",
+                f"total distance {o.total_distance:.3f}",
+                f"collisions {o.collisions}",
+                *derived_parts(o.derived),
+                *([] if o.time is None else [f"virtual time {o.time:.3f}"]),
+            ]
+        )
         + ("" if not o.crashes else f"\n{crashes_text(o.crashes, o.scheduler)}")
         + ("" if o.model is None else f"\nmodel: {o.model}")
         + ("" if o.assumption is None else f"\n{o.assumption}")
     )
 
 
-def derived_text(values: Mapping[str, figures.FigureValue]) -> str:
-    """`  min gap 0.412`: the run's derived figures shown in the summary, each with its words
+def broken(parts: Iterable[str], width: int = WIDTH) -> str:
+    """`parts` two spaces apart, on as many lines of at most `width` columns as they take (a
+    part longer than that alone on its line)."""
+    lines: list[str] = []
+    for part in parts:
+        if lines and len(lines[-1]) + 2 + len(part) <= width:
+            lines[-1] += "  " + part
+        else:
+            lines.append(part)
+    return "\n".join(lines)
+
+
+def derived_parts(values: Mapping[str, figures.FigureValue]) -> list[str]:
+    """`min gap 0.412`: the run's derived figures shown in the summary, each with its words
     (one it does not know, or that does not apply, is left out; a text, such as the first
     failure, is the verdict's to say)."""
-    return "".join(
-        f"  {f.words} {figures.shown(value)}"
+    return [
+        f"{f.words} {figures.shown(value)}"
         for f in figures.derived_figures()
         if figures.Place.SUMMARY in f.places
         and f.type is not str
         and (value := values.get(f.name)) is not None
-    )
+    ]
 
 
 def crashes_text(crashes: Iterable[tuple[int, int]], scheduler: str) -> str:
