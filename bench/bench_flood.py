@@ -4,8 +4,9 @@ world's memory before and after each batch, the lines its log grew by, and how l
     python bench/bench_flood.py                       # 100,000 messages in batches of 20,000
     python bench/bench_flood.py --count 20000 --batch 5000
 
-The messages are tests/integration/floods.py's (every rejection the world names, from a client
-that is no part of the swarm, without access control so that they reach the world).
+The messages are tests/integration/floods.py's, half `flood` (every rejection the world names)
+and half `burst` (Looks on one robot's key, fired without waiting), from a client that is no part
+of the swarm, without access control so that they reach the world.
 """
 
 from __future__ import annotations
@@ -18,10 +19,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "integration"))
 
-from floods import flood, rss_kb, wait_answered
+from floods import burst, flood, rss_kb, wait_answered
 from netharness import Swarm
 
 from fatswarm.deploy.net.zconf import make_config
+from fatswarm.world.rejections import SAY_EVERY_S
 
 
 def main() -> int:
@@ -48,7 +50,8 @@ def main() -> int:
                 sent, t0 = 0, time.monotonic()
                 while sent < args.count:
                     batch = min(args.batch, args.count - sent)
-                    flood(rogue, sw.swarm, args.n, batch)
+                    flood(rogue, sw.swarm, args.n, batch // 2)
+                    burst(rogue, sw.swarm, args.n - 1, batch - batch // 2)
                     sent += batch
                     now = rss_kb(world)
                     lines = sw.log("world").count("\n") - lines0
@@ -57,6 +60,9 @@ def main() -> int:
                         f"{time.monotonic() - t0:>6.1f}",
                         flush=True,
                     )
+                time.sleep(2 * SAY_EVERY_S)  # the world gives back what a flood took, then
+                now = rss_kb(world)
+                print(f"after {2 * SAY_EVERY_S:g} s: {now} kB ({100 * (now / before - 1):.1f}%)")
             print(f"world alive: {sw.children.procs['world'].poll() is None}")
             tail = sw.log("world").splitlines()[-8:]
             print("last log lines:", *tail, sep="\n  ")

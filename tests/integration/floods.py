@@ -1,9 +1,11 @@
-"""A flood of well-formed rogue messages the world must refuse: every kind of rejection it names,
-from a client that is no part of the swarm (on a swarm without access control, where they reach
-the world). Reused by tests/integration/test_flood.py and bench/bench_flood.py.
+"""Floods of rogue messages the world must refuse, from a client that is no part of the swarm (on
+a swarm without access control, where they reach the world). Reused by
+tests/integration/test_flood.py and bench/bench_flood.py.
 
-Nothing in it changes the run: moves for another robot, for a round that is not open, garbage,
-Looks for a robot the run does not have (carrying a move), garbage Looks and control requests.
+`flood`: one of every kind of rejection the world names, none of which changes the run (moves for
+another robot, for a round that is not open, garbage, Looks for a robot the run does not have
+carrying a move, garbage Looks and control requests). `burst`: Looks on one robot's key, fired
+without waiting.
 """
 
 from __future__ import annotations
@@ -70,6 +72,17 @@ def flood(session: Any, swarm: str, n: int, count: int) -> None:
         else:
             key, payload = puts[i % len(puts)]
             session.put(key, payload)
+    wait_answered(session, swarm)
+
+
+def burst(session: Any, swarm: str, robot: int, count: int) -> None:
+    """Fire `count` Looks on robot `robot`'s key without waiting for their answers, garbage and
+    valid ones in turn (what its stolen key could do), then wait until the world has taken them
+    in. The Looks the world queues cost it the most memory of any message."""
+    key = snapshot_key(swarm, robot)
+    payloads = (b"\x81garbage" * 3, LookRequest().encode())
+    for i in range(count):
+        session.get(key, payload=payloads[i % 2], timeout=1.0)
     wait_answered(session, swarm)
 
 
