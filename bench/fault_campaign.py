@@ -118,11 +118,15 @@ def lockstep(model: Model, seed: int, path: Path) -> RunRecord:
 
 
 def _wait(what: str, predicate: Callable[[], bool], sw: Swarm, deadline_s: float) -> None:
-    """Poll `predicate` until true; TrialFailed at the deadline or when a part exits with a code
-    other than 0 or 1 (a run that ended) or -9 (the victim)."""
+    """Poll `predicate` until true; TrialFailed at the deadline or when a part exits, but for the
+    victim (-9) and a coordinator ending the run (0 formed, 1 not, 3 formed with collisions)."""
     end = time.monotonic() + deadline_s
     while not predicate():
-        died = {k: v for k, v in sw.children.exited().items() if v not in (0, 1, -9)}
+        died = {
+            k: v
+            for k, v in sw.children.exited().items()
+            if v != -9 and not (k.startswith("coordinator") and v in (0, 1, 3))
+        }
         if died:
             raise TrialFailed(f"{_names(died)} exited while waiting for {what}")
         if time.monotonic() > end:
