@@ -117,3 +117,15 @@ def test_a_hundred_thousand_rogue_messages_leave_the_worlds_memory_within_a_fift
     assert after <= before * 1.2, f"100,000 messages grew the world from {before} to {after} kB"
     said = [line for line in sw.log("world").splitlines() if "rejected (" in line]
     assert len(said) < 1_000, f"{len(said)} log lines for 100,000 messages"
+
+
+def test_two_agents_acting_for_one_robot_are_said_once(
+    tmp_path: Path, make_swarm: Callable[..., Swarm]
+) -> None:
+    sw = make_swarm(4, 1)
+    sw.start_all(pace=0.1)
+    sw.start_agent(3, "agent 3 twin")  # the same key twice: the documented "key = identity" limit
+    end = sw.wait_done()
+    assert end.status == "formed", sw.logs()
+    said = [line for line in sw.log("world").splitlines() if "look-two-sessions" in line]
+    assert len(said) == 1 and "robot 3's Looks come from two sessions" in said[0], sw.log("world")
