@@ -37,6 +37,7 @@ from fatswarm.world.protocol import (
     robot_of_alive_key,
 )
 from fatswarm.world.protocol import alive_key as world_alive_key
+from fatswarm.world.rejections import Rejections
 
 log = logging.getLogger("fatswarm.coordinator")
 
@@ -85,7 +86,7 @@ class Coordinator:
         self.stop = stop
         self.core = coordinator_core(cfg.scheduler, make_scheduler, cfg.times, cfg.resume_live)
         self.events: Inbox[tuple[str, Any]] = Inbox()
-        self.rejected = 0
+        self.rejected = Rejections()  # garbage notices: counted, said at most every few s
         self._began = 0.0  # perf_counter mark of the round's opening (debug timings)
         self._session: Any = None  # the open Zenoh session, while it runs
         # the control request out, cancelled when the world's token goes: a world killed while
@@ -185,8 +186,9 @@ class Coordinator:
         try:
             return MovesHeld.decode(item)
         except ProtocolError as exc:
-            self.rejected += 1
-            log.warning("rejected move notice: %s [total %d]", exc, self.rejected)
+            line = self.rejected.count("notice-garbage", str(exc), time.monotonic())
+            if line is not None:
+                log.warning("%s", line)
             return None
 
     # -- actions --------------------------------------------------------------------------------

@@ -25,7 +25,7 @@ from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path, Points, path_length
 from fatswarm.domain.seam import AlgorithmFailure, Configured, failure_kind
 from fatswarm.domain.tolerance import snap
-from fatswarm.world.effects import Effect, Level, Note
+from fatswarm.world.effects import Effect, Level, Note, Rejected
 from fatswarm.world.faults import crash_after, stuck_in
 from fatswarm.world.instants import Instants, async_setup, is_async
 from fatswarm.world.looks import Looks, Seen
@@ -231,9 +231,9 @@ class WorldCore:
     # -- requests -------------------------------------------------------------------------------
 
     def reject(self, reason: str, detail: str) -> None:
-        """Count and log a refused input (never raised, never applied)."""
+        """Count a refused input and say so (never raised, never applied)."""
         self.rejected[reason] += 1
-        self._note(Level.WARNING, f"rejected ({reason}): {detail} [total {self.rejected[reason]}]")
+        self.emit(Rejected(reason, detail, self.rejected[reason]))
 
     def may_look(self, robot: int, request: LookRequest = FIRST_LOOK) -> bool:
         """Whether robot `robot`'s Look is answered now: it is active in the open round, has not

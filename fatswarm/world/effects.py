@@ -40,7 +40,22 @@ class Note:
     text: str
 
 
-Effect = Header | Committed | Result | Note
+@dataclass(frozen=True, slots=True)
+class Rejected:
+    """An input the core refused (counted, never applied): why, in a word, and what it was. A
+    shell that may be flooded counts these and says them at most every few seconds
+    (`world.rejections`); others log each (`text`)."""
+
+    reason: str  # "move-wrong-round", "look-garbage", ...
+    detail: str
+    total: int  # refused for this reason so far, this one included
+
+    @property
+    def text(self) -> str:
+        return f"rejected ({self.reason}): {self.detail} [total {self.total}]"
 
 
-__all__ = ["Committed", "Effect", "Level", "Note"]
+Effect = Header | Committed | Result | Note | Rejected
+
+
+__all__ = ["Committed", "Effect", "Level", "Note", "Rejected"]

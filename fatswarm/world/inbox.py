@@ -19,23 +19,36 @@ MAX_BYTES = 64 << 20  # 64 MiB of payloads waiting at most
 
 
 class Inbox(Generic[T]):
-    """Events in arrival order; `offer` drops (and counts by kind) what would exceed the bounds."""
+    """Events in arrival order; `offer` drops (and counts by kind) what would exceed the bounds:
+    `max_items` and `max_bytes` in all, and `caps` (kind -> at most this many queued) by kind."""
 
-    def __init__(self, max_items: int = MAX_ITEMS, max_bytes: int = MAX_BYTES) -> None:
+    def __init__(
+        self,
+        max_items: int = MAX_ITEMS,
+        max_bytes: int = MAX_BYTES,
+        caps: dict[str, int] | None = None,
+    ) -> None:
         self.max_items, self.max_bytes = max_items, max_bytes
-        self._items: deque[tuple[T, int]] = deque()
+        self.caps = dict(caps or {})
+        self._items: deque[tuple[T, int, str]] = deque()
         self._bytes = 0
+        self._queued: Counter[str] = Counter()  # kind -> events queued now
         self._ready = threading.Condition()
         self.dropped: Counter[str] = Counter()  # kind -> events dropped
 
     def offer(self, kind: str, item: T, size: int = 0) -> bool:
         """Queue `item` (`size` payload bytes) unless the inbox is full; False if dropped."""
         with self._ready:
-            if len(self._items) >= self.max_items or self._bytes + size > self.max_bytes:
+            if (
+                len(self._items) >= self.max_items
+                or self._bytes + size > self.max_bytes
+                or self._queued[kind] >= self.caps.get(kind, self.max_items)
+            ):
                 self.dropped[kind] += 1
                 return False
-            self._items.append((item, size))
+            self._items.append((item, size, kind))
             self._bytes += size
+            self._queued[kind] += 1
             self._ready.notify()
             return True
 
@@ -49,8 +62,9 @@ class Inbox(Generic[T]):
         with self._ready:
             if not self._items and not self._ready.wait_for(lambda: bool(self._items), timeout):
                 raise queue.Empty
-            item, size = self._items.popleft()
+            item, size, kind = self._items.popleft()
             self._bytes -= size
+            self._queued[kind] -= 1
             return item
 
     def get_nowait(self) -> T:

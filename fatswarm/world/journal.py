@@ -13,7 +13,7 @@ from typing import Protocol
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.seam import Configured
 from fatswarm.world.core import WorldCore
-from fatswarm.world.effects import Committed, Effect, Note
+from fatswarm.world.effects import Committed, Effect, Note, Rejected
 from fatswarm.world.record import Header, RecordWriter, Result, RoundEntry
 from fatswarm.world.record_read import read_record
 from fatswarm.world.setup import WorldSetup, setup_from_header
@@ -29,13 +29,24 @@ class Journal(Protocol):
     def close(self) -> None: ...
 
 
-def perform(effects: Iterable[Effect], journal: Journal | None) -> list[Committed]:
+def perform(
+    effects: Iterable[Effect],
+    journal: Journal | None,
+    refused: Callable[[Rejected], None] | None = None,
+) -> list[Committed]:
     """Do what the core asked, in order: record lines to `journal` (none kept if None), notes to
-    the log. Returns the rounds committed, for a caller's callbacks. Raises RecordWriteError."""
+    the log, refused inputs to `refused` (each logged if None). Returns the rounds committed, for
+    a caller's callbacks. Raises RecordWriteError."""
     committed = []
     for effect in effects:
         if isinstance(effect, Note):
             log.log(effect.level, "%s", effect.text)
+            continue
+        if isinstance(effect, Rejected):
+            if refused is None:
+                log.warning("%s", effect.text)
+            else:
+                refused(effect)
             continue
         if isinstance(effect, Committed):
             committed.append(effect)

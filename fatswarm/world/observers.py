@@ -33,6 +33,7 @@ from fatswarm.domain.wire import (
 from fatswarm.world.protocol import STATUSES
 
 MAX_OUTSIDE = 2000  # characters of the line saying a run is outside its assumptions
+MAX_REFUSED_KINDS = 64  # kinds of refused messages a state may count (world.rejections)
 
 
 @dataclass(frozen=True, slots=True)
@@ -71,6 +72,8 @@ class WorldState:
     derived: dict[str, float] = field(default_factory=dict)
     outside: str = ""  # how the run is outside its algorithm's assumptions ('' if within)
     model: RobotModel = PAPER_MODEL  # the robot model the run enforces (sent when not the paper's)
+    # messages the world refused or dropped so far, by kind (world.rejections); {} if none
+    refused: dict[str, int] = field(default_factory=dict)
 
     @property
     def a(self) -> float:
@@ -109,6 +112,11 @@ class WorldState:
                 **({"derived": derived_wire(self.derived)} if self.derived else {}),
                 **({"outside": self.outside} if self.outside else {}),
                 **({} if self.model.is_paper else {"model": self.model.to_header()}),
+                **(
+                    {"refused": {k: int(v) for k, v in self.refused.items()}}
+                    if self.refused
+                    else {}
+                ),
             },
         )
 
@@ -159,6 +167,7 @@ class WorldState:
             derived=get_derived(obj),
             outside=get_str(obj, "outside", MAX_OUTSIDE) if "outside" in obj else "",
             model=get_model(obj),
+            refused=get_refused(obj),
         )
 
 
@@ -169,6 +178,17 @@ def get_model(obj: dict[str, Any]) -> RobotModel:
         return RobotModel.from_header(obj.get("model"))
     except ModelError as exc:
         raise ProtocolError(f"'model': {exc}") from None
+
+
+def get_refused(obj: dict[str, Any]) -> dict[str, int]:
+    """A state's counts of refused messages by kind ({} for a world that sends none)."""
+    refused = obj.get("refused", {})
+    if not isinstance(refused, dict) or len(refused) > MAX_REFUSED_KINDS:
+        raise ProtocolError(f"'refused' must be a map of at most {MAX_REFUSED_KINDS} counts")
+    return {
+        get_str({"kind": k}, "kind", 80): get_int({"count": v}, "count", 0, 2**62)
+        for k, v in refused.items()
+    }
 
 
 def derived_wire(values: dict[str, float]) -> dict[str, float]:

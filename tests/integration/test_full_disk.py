@@ -1,8 +1,7 @@
 """A record that cannot be written (a full disk, simulated with a file size limit) stops a lock-step
 run with one line and exit 4; freed, --resume (which drops the torn line the run wrote as it
-stopped) ends it exactly as an uninterrupted run.
-
-(A networked run cannot be limited so: Zenoh's shared-memory segments are files too.)"""
+stopped) ends it exactly as an uninterrupted run. A networked run on a full file system (a small
+tmpfs) says the lock step's line, its world, coordinator and launcher naming the same rounds."""
 
 from __future__ import annotations
 
@@ -11,7 +10,7 @@ import resource
 import signal
 import subprocess
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -68,3 +67,59 @@ def test_a_full_disk_stops_the_run_with_one_line_and_resume_finishes_it_identica
     if kept.torn_line is not None:  # the lock step drops the line it tore itself, and says so
         assert done.stderr.count("dropped the torn last line") == 1, done.stderr
     assert_same_run(read_record(cut), read_record(whole))
+
+
+@pytest.fixture
+def small_disk(tmp_path: Path) -> Iterator[Path]:
+    """A 8 kB file system (tmpfs) to write a record on; skipped where it cannot be mounted (not
+    root). A networked run cannot be limited with RLIMIT_FSIZE: its agents' Zenoh shared memory
+    lives in files too."""
+    disk = tmp_path / "small"
+    disk.mkdir()
+    mounted = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", "size=8k", "tmpfs", str(disk)],
+        capture_output=True,
+        check=False,
+    )
+    if mounted.returncode != 0:
+        pytest.skip(f"cannot mount a small tmpfs here: {mounted.stderr.decode().strip()}")
+    try:
+        yield disk
+    finally:
+        subprocess.run(["umount", "-l", str(disk)], capture_output=True, check=False)
+
+
+def test_a_full_disk_stops_a_networked_run_with_the_lock_steps_line_and_one_round(
+    tmp_path: Path, small_disk: Path
+) -> None:
+    run = ["-n", "8", "--seed", "3", "--scheduler", "ssync"]
+    cut = small_disk / "cut.jsonl"
+    stopped = _fatswarm(*run, "--record", str(cut), "--no-dashboard")
+    assert stopped.returncode == 4, stopped.stdout + stopped.stderr
+    assert "Traceback" not in stopped.stderr
+    kept = read_record(cut, allow_torn_end=True)
+    assert kept.result is None and len(kept.rounds) > 0
+    done = len(kept.rounds)
+    last = stopped.stderr.rstrip("\n").splitlines()[-1]
+    assert last == (
+        f"fatswarm run: the run stopped after round {done}; once that is fixed, go on with "
+        f"`fatswarm run --record {cut} --resume`"
+    ), stopped.stderr
+    # the lock step's words (one definition of them), the networked run's command
+    from fatswarm.deploy.view.stopped import stopped_line
+
+    assert last.endswith(
+        stopped_line("stopped", done, record=str(cut), scheduler="ssync", fix=True)
+    )
+    world = [line for line in stopped.stderr.splitlines() if line.startswith("fatswarm world:")]
+    assert len(world) == 1 and "No space left on device" in world[0], stopped.stderr
+    assert f"the world stops after round {done}, the last its record holds" in world[0]
+    coordinator = [line for line in stopped.stderr.splitlines() if "coordinator" in line]
+    assert all(f"round {done + 1}" in line for line in coordinator), coordinator  # the one lost
+    moved = tmp_path / "cut.jsonl"  # freed: the record moves where there is room
+    moved.write_bytes(cut.read_bytes())
+    resumed = _fatswarm("--record", str(moved), "--resume", "--no-dashboard")
+    assert resumed.returncode == 0, resumed.stdout + resumed.stderr
+    whole = tmp_path / "whole.jsonl"
+    assert _fatswarm(*run, "--lockstep", "--record", str(whole)).returncode == 0
+    assert_same_run(read_record(moved), read_record(whole))

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import zenoh
 
-from fatswarm.domain.path import STAY
+from fatswarm.domain.path import STAY, Line, Path
 from fatswarm.world.core import WorldCore
 from fatswarm.world.journal import open_world
 from fatswarm.world.protocol import (
@@ -182,6 +182,46 @@ def test_a_look_that_carries_the_robots_move_delivers_it_and_is_held_for_the_nex
     )
     assert len(notices.sent) == 1  # every active robot moved: one notice
     assert world.control(Commit(1))[0].ok
-    # and a move of a round no longer open, sent again with a Look, is dropped quietly too
+    # and a move of a round no longer open, sent again with a Look, is dropped quietly too (these
+    # Looks come far quicker than an agent's, which the world takes for two sessions: not a move)
     _take_look(world, _look_with(0, LookRequest(world.epoch, 1, move)), looks, notices)
-    assert sum(world.rejected.values()) == 1
+    assert world.rejected == {"move-wrong-robot": 1, "look-two-sessions": 1}
+
+
+def test_a_late_move_and_another_move_for_a_round_already_moved_in_are_refused_and_counted(
+    world: WorldCore,
+) -> None:
+    from fatswarm.world.service import _take_look
+
+    looks, notices = HeldLooks(), FakePublisher()
+    _open(world, 0, 1)
+    for robot in (0, 1):
+        _take_look(world, _look_with(robot, FIRST), looks, notices)
+    move = MoveSubmitted(0, 1, STAY).encode()
+    _take_look(world, _look_with(0, LookRequest(world.epoch, 1, move)), looks, notices)
+    other = MoveSubmitted(0, 1, Path((Line((1.0, 0.0)),))).encode()  # a second session's
+    _take_look(world, _look_with(0, LookRequest(world.epoch, 1, other)), looks, notices)
+    assert world.held == {0: STAY} and world.rejected["move-already-moved"] == 1
+    # robot 1 sends nothing in time: the round is committed without it (its move timeout)
+    assert world.control(Commit(1))[0].ok
+    late = MoveSubmitted(1, 1, STAY).encode()
+    looks.taken[1] = (0, b"")  # (a move this world took from robot 1 before)
+    _take_look(world, _look_with(1, LookRequest(world.epoch, 1, late)), looks, notices)
+    assert world.rejected["move-round-closed"] == 1
+    # a move for a round not open yet is refused as before
+    ahead = MoveSubmitted(1, 9, STAY).encode()
+    _take_look(world, _look_with(1, LookRequest(world.epoch, 1, ahead)), looks, notices)
+    assert world.rejected["move-wrong-round"] == 1
+
+
+def test_looks_of_one_robot_from_two_sessions_are_said_once() -> None:
+    looks = HeldLooks()
+    # its own agent asks again after LOOK_WAIT_S: never two sessions
+    assert not any(looks.hold(0, FakeQuery(0), FIRST, 3.0 * k) for k in range(10))
+    # one quick Look (an agent whose Look failed asks again at once): still one session
+    assert not looks.hold(0, FakeQuery(0), FIRST, 30.05)
+    assert not looks.hold(0, FakeQuery(0), FIRST, 33.05)
+    # two sessions: each one's agent asks again as soon as the other takes its place
+    said = [looks.hold(0, FakeQuery(0), FIRST, 40.0 + 0.05 * k) for k in range(100)]
+    assert said.count(True) == 1 and looks.shared == {0}
+    assert not looks.hold(1, FakeQuery(1), FIRST, 50.0)  # the other robots are not

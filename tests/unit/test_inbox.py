@@ -25,6 +25,23 @@ def test_events_come_out_in_order_and_what_does_not_fit_is_dropped_and_counted()
     assert inbox.dropped == {"move": 3, "look": 1, "control": 1}
 
 
+def test_a_kind_with_a_cap_is_dropped_past_it_while_the_others_still_come_in() -> None:
+    inbox: Inbox[str] = Inbox(max_items=100, caps={"look": 2})
+    assert [inbox.offer("look", f"l{k}") for k in range(4)] == [True, True, False, False]
+    assert inbox.offer("alive", "a") and inbox.offer("alive", "b")  # not capped
+    assert inbox.get_nowait() == "l0" and inbox.offer("look", "l4")  # room again once taken
+    assert inbox.dropped == {"look": 2} and len(inbox) == 4
+
+
+def test_the_worlds_caps_hold_a_round_of_every_robot_and_little_more() -> None:
+    from fatswarm.world.service import inbox_caps
+
+    for n in (1, 8, 4096):
+        caps = inbox_caps(n)
+        assert caps["look"] >= 2 * n and caps["move"] >= n and caps["control"] >= 8
+    assert inbox_caps(4)["look"] < 100  # what a flood of Looks may queue (each costs memory)
+
+
 def test_get_waits_for_an_offer_and_times_out_on_none() -> None:
     inbox: Inbox[str] = Inbox()
     with pytest.raises(queue.Empty):

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import shlex
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -19,6 +18,7 @@ from fatswarm.deploy.engine.config import (
 )
 from fatswarm.deploy.flags import given_flags
 from fatswarm.deploy.scenarios.starts import load_init, random_start
+from fatswarm.deploy.view.stopped import stopped_line
 from fatswarm.deploy.view.summary import counted, unit
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.registry import load_algorithm
@@ -137,30 +137,6 @@ def ended(result: Result, scheduler: str = "") -> str:
     if result.status == Status.MAX_ROUNDS:
         return f"stopped at the {word} limit of {counted(result.rounds, word)}"
     return f"{result.status} after {counted(result.rounds, word)}"
-
-
-def stopped_line(
-    word: str,
-    done: int,
-    *,
-    record: str | None,
-    scheduler: str,
-    lockstep: bool,
-    seed: int | None = None,
-    fix: bool = False,
-) -> str:
-    """The line a run stopped by a signal (`word`: "interrupted", "terminated") or a failed write
-    prints: after which round, and how to go on (`fatswarm run --record R --resume`), or why it
-    cannot be. `done`: the rounds (ended cycles, under an async model) its record holds.
-    `fix`: something must be fixed first (a full disk). Shared by the lock step and the
-    networked launcher, so that both say it alike."""
-    after = f"{word} after {unit(scheduler)} {done}"
-    del seed  # (every run resumes now, async ones too: by a replay, `lockstep.ReplayedRecord`)
-    if not record:
-        return f"{after} (no --record: nothing to resume)"
-    mode = " --lockstep" if lockstep else ""
-    then = "once that is fixed, go on" if fix else "go on"
-    return f"{after}; {then} with `fatswarm run{mode} --record {shlex.quote(record)} --resume`"
 
 
 @dataclass(frozen=True, slots=True)

@@ -11,7 +11,6 @@ import dataclasses
 import logging
 import os
 import secrets
-import shlex
 import signal
 import sys
 import tempfile
@@ -36,6 +35,7 @@ from fatswarm.deploy.net.zconf import (
     open_client,
     token_held,
 )
+from fatswarm.deploy.view.stopped import stopped_line
 from fatswarm.deploy.view.summary import (
     Outcome,
     counted,
@@ -51,6 +51,7 @@ from fatswarm.domain.outcome import ExitCode
 from fatswarm.domain.wire import check_swarm
 from fatswarm.world.record import RecordFormatError, RecordWriteError, RecordWriter
 from fatswarm.world.record_read import read_record
+from fatswarm.world.rejections import tally
 
 Resolver = Callable[[argparse.Namespace, int], RunSetup]  # flags and seed -> the run
 
@@ -206,33 +207,42 @@ def _launch(args: argparse.Namespace, setup: RunSetup, record: str, pace: float,
                 f"--connect {endpoints[0]} --swarm {swarm})",
                 file=sys.stderr,
             )
-        code, followed = _run_parts(args, setup, record, pace, swarm, (endpoints, listen), stop)
+        code, followed, refused = _run_parts(
+            args, setup, record, pace, swarm, (endpoints, listen), stop
+        )
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     if code in (ExitCode.FORMED, ExitCode.NOT_FORMED):
         code = _report(args, record, code, followed)
-    elif code in (ExitCode.INTERRUPTED, ExitCode.TERMINATED):  # below the final frame, if shown
-        print(_stopped(code, record, args.record, setup), file=sys.stderr)
+    elif code in (ExitCode.INTERRUPTED, ExitCode.TERMINATED, ExitCode.RECORD_FAILED):
+        print(_stopped(code, record, args.record, setup), file=sys.stderr)  # below the last frame
+    if refused and not args.json:
+        print(refused_line(refused), file=sys.stdout if code in _ENDED else sys.stderr)
     return code
 
 
-def stopped_line(word: str, done: int, *, record: str | None, scheduler: str, seed: int) -> str:
-    """The line a networked run stopped by a signal (`word`: "interrupted", "terminated") prints
-    last: after which round its record stopped (`done`: its rounds; ended cycles under an async
-    model) and how to go on. Word for word the lock step's (`deploy.commands.resume.stopped_line`,
-    which this layer may not import), less its `--lockstep`."""
-    after = f"{word} after {unit(scheduler)} {done}"
-    del seed  # (every run resumes now, async ones too)
-    if not record:
-        return f"{after} (no --record: nothing to resume)"
-    return f"{after}; go on with `fatswarm run --record {shlex.quote(record)} --resume`"
+_ENDED = (
+    ExitCode.FORMED,
+    ExitCode.NOT_FORMED,
+    ExitCode.FORMED_WITH_COLLISIONS,
+)  # a summary was printed
+
+
+def refused_line(refused: dict[str, int]) -> str:
+    """The summary's line of what the world refused or dropped (rogue or late messages), by
+    kind; printed only when it refused something."""
+    return f"refused: {sum(refused.values()):,} messages ({tally(refused)})"
 
 
 def _stopped(code: int, record: str, given: str | None, setup: RunSetup) -> str:
     """`stopped_line` for the run of the record at `record` (`given`: as --record named it, else
-    None), read once every part has stopped."""
-    word = "terminated" if code == ExitCode.TERMINATED else "interrupted"
+    None), read once every part has stopped: after a signal, or a record the world could not
+    write (the lock step's words: "the run stopped after round N; once that is fixed, ...")."""
+    failed = code == ExitCode.RECORD_FAILED
+    word = {ExitCode.TERMINATED: "terminated", ExitCode.RECORD_FAILED: "stopped"}.get(
+        ExitCode(code), "interrupted"
+    )
     scheduler = setup.scheduler.name
     try:
         rec = read_record(record, allow_torn_end=True)
@@ -241,7 +251,10 @@ def _stopped(code: int, record: str, given: str | None, setup: RunSetup) -> str:
     if rec.result is not None:  # the signal came as the display waited for the final state
         rounds = counted(rec.result.rounds, unit(scheduler))
         return f"{word} after the run ended ({rec.result.status} after {rounds})"
-    return stopped_line(word, len(rec.rounds), record=given, scheduler=scheduler, seed=setup.seed)
+    line = stopped_line(
+        word, len(rec.rounds), record=given, scheduler=scheduler, seed=setup.seed, fix=failed
+    )
+    return f"fatswarm run: the run {line}" if failed else line
 
 
 def _run_parts(
@@ -252,13 +265,14 @@ def _run_parts(
     swarm: str,
     network: tuple[Sequence[str], Sequence[str]],
     stop: StopSignal,
-) -> tuple[int, bool]:
+) -> tuple[int, bool, dict[str, int]]:
     """Run every part until the run ends or a signal comes, the live display following it;
     `network`: (the endpoints the parts connect to, where the world hosts the router, if it does).
-    (The exit code, whether a display followed the run.)"""
+    (The exit code, whether a display followed the run, what the world refused by kind.)"""
     endpoints, listen = network
     watcher = session = None
     followed = False  # a display followed the run (it saves --svg)
+    refused: dict[str, int] = {}
     try:
         # the agents host needs its own grace first, to stop its agents one by one
         with Children(stop_grace_s(setup.params.n) + STOP_GRACE_S) as children:
@@ -279,13 +293,14 @@ def _run_parts(
                 _await_final_state(watcher, FINAL_STATE_WAIT_S)
             if watcher is not None:
                 watcher.stop()  # before the world (and with it the router) goes
+                refused = watcher.refused
                 watcher = None
     finally:
         if watcher is not None:
             watcher.stop()
         if session is not None:
             session.close()
-    return code, followed
+    return code, followed, refused
 
 
 def _report(args: argparse.Namespace, record: str, code: int, followed: bool) -> int:
@@ -481,7 +496,8 @@ def _part_died(children: Children) -> bool:
 def _world_gone(children: Children) -> ExitCode:
     """The run's exit code once the world process has exited (it says why on its own)."""
     code = children.exited()["world"]
-    print(f"fatswarm run: the world process exited with code {code}", file=sys.stderr)
+    if code != ExitCode.RECORD_FAILED:  # (that one: the run's last line says how to go on)
+        print(f"fatswarm run: the world process exited with code {code}", file=sys.stderr)
     said = (ExitCode.BAD_INPUT, ExitCode.RECORD_FAILED)  # its own line says why
     return ExitCode(code) if code in said else ExitCode.NOT_FORMED
 

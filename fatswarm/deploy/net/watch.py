@@ -73,6 +73,7 @@ class StateWatcher:
         self.svg = svg
         self.meter = RateMeter()
         self.latest: Frame | None = None
+        self.refused: dict[str, int] = {}  # what the world refused or dropped, by kind (so far)
         self.ended = threading.Event()  # the run reached a final status
         self.finished = threading.Event()  # the thread stopped following
         self._stop = threading.Event()
@@ -137,6 +138,7 @@ class StateWatcher:
             state = WorldState.decode(sample.payload.to_bytes())
         except ProtocolError:
             return None
+        self.refused = state.refused or self.refused
         rate = self.meter.add(time.monotonic(), state.round)
         if rate is None and self.latest is not None:
             rate = self.latest.rounds_per_second
