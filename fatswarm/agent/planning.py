@@ -77,10 +77,12 @@ def _top_unmatched(pts: Points, cx: float, tol_at: float, tol_eq: float) -> int 
     the largest y, then of the largest |x - c_x|, then the lowest index), on Python floats.
     """
     n = len(pts)
-    if n < 2 or not tol_at >= 0.0:
+    if n < 2 or not 0.0 <= tol_at < math.inf:
         return None
     y_list = pts[:, 1].tolist()
     if not all(map(operator.le, y_list, y_list[1:])):  # not sorted (or NaN: it compares False)
+        return None
+    if not math.isfinite(y_list[0]) or not math.isfinite(y_list[-1]):  # sorted: all finite then
         return None
     if n > MATCH_WINDOW:
         # mirror_matched compares all pairs when a window [y - tol, y + tol] holds more than
