@@ -62,7 +62,7 @@ def orientation_of(pts: Points, cx: float, tol_at: float, tol_eq: float) -> floa
     return 1.0 if float(pts[best, 0]) - cx > 0 else -1.0
 
 
-TOP_ROBOTS = 8
+TOP_ROBOTS = 16
 """`_top_unmatched` matches at most this many robots, from the top, before giving up."""
 
 
