@@ -5,6 +5,7 @@ configurations that real runs reach, to compare one checkout with another (issue
     python bench/plan_digest.py --compare /work/plans/pre.json       # 0 differences or exit 1
     python bench/plan_digest.py --quick --save /tmp/q.json           # a smaller collection
     python bench/plan_digest.py --speed                              # us per compute call
+    python bench/plan_digest.py --speed --against /work/pre          # the same, paired with pre
     python bench/plan_digest.py --show ID --compare /work/plans/pre.json   # one configuration
 
 Against another checkout, run the script by absolute path from that checkout with it on the path:
@@ -34,6 +35,8 @@ import argparse
 import hashlib
 import json
 import multiprocessing as mp
+import os
+import subprocess
 import sys
 import time
 from collections import Counter
@@ -409,12 +412,13 @@ def show(file: FsPath, name: str) -> None:
     print("\n".join(compute_texts(pts, a, made, k)))
 
 
-def speed(repeats: int = 7) -> None:
+def speed_figures(repeats: int = 7) -> dict[int, tuple[float, float, int]]:
     """Mean us per compute call at n = 16, 64, 256 on bench_core's views: the best of `repeats`
-    passes, in CPU time (steadier on a shared machine) and in wall time."""
+    passes, in CPU time (steadier on a shared machine) and in wall time, and the views' count."""
     sys.path.insert(0, str(FsPath(__file__).resolve().parent))
     from bench_core import _sample_views
 
+    out: dict[int, tuple[float, float, int]] = {}
     for n in SPEED_SIZES:
         views = _sample_views(n, 300)
         params = Params(n)
@@ -426,7 +430,46 @@ def speed(repeats: int = 7) -> None:
             cpu = min(cpu, time.process_time() - c0)
             wall = min(wall, time.perf_counter() - t0)
         per = 1e6 / len(views)
-        print(f"n={n:<4} {per * cpu:7.1f} us CPU  {per * wall:7.1f} us wall  ({len(views)} views)")
+        out[n] = (per * cpu, per * wall, len(views))
+    return out
+
+
+def speed() -> None:
+    for n, (cpu, wall, count) in speed_figures().items():
+        print(f"n={n:<4} {cpu:7.1f} us CPU  {wall:7.1f} us wall  ({count} views)")
+
+
+def _speed_of(tree: FsPath) -> dict[int, tuple[float, float, int]]:
+    """`speed_figures` of the checkout `tree`, in a fresh process with it first on the path."""
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    done = subprocess.run(
+        [sys.executable, str(FsPath(__file__).resolve()), "--speed-json"],
+        env=env,
+        cwd=tree,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return {int(n): (c, w, k) for n, (c, w, k) in json.loads(done.stdout).items()}
+
+
+def speed_against(other: FsPath, rounds: int) -> None:
+    """us per compute call here and in checkout `other`, measured alternately `rounds` times in
+    fresh processes (pairs on a loaded machine): the best of each, and the ratio here / there."""
+    here = FsPath(__file__).resolve().parent.parent
+    best: dict[str, dict[int, float]] = {"there": {}, "here": {}}
+    for k in range(rounds):
+        for side, tree in (("there", other), ("here", here)):
+            figures = _speed_of(tree)
+            row = "  ".join(f"n={n} {c:6.1f}" for n, (c, _, _) in figures.items())
+            print(f"round {k + 1} {side:5} us CPU a call: {row}", file=sys.stderr)
+            for n, (c, _, _) in figures.items():
+                best[side][n] = min(best[side].get(n, float("inf")), c)
+    print(f"us CPU per compute call, best of {rounds} alternated runs each")
+    print(f"{'n':>5} {str(other)[-28:]:>28} {'this checkout':>14} {'ratio':>6}")
+    for n in SPEED_SIZES:
+        there, now = best["there"][n], best["here"][n]
+        print(f"{n:>5} {there:>28.1f} {now:>14.1f} {now / there:>6.2f}")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -438,8 +481,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--show", metavar="ID", help="print one configuration of --compare FILE")
     p.add_argument("--quick", action="store_true", help="about 2,000 configurations")
     p.add_argument("--speed", action="store_true", help="us per compute call at n = 16, 64, 256")
+    p.add_argument(
+        "--against",
+        type=FsPath,
+        metavar="TREE",
+        help="with --speed: the same here and in checkout TREE, alternately, with the ratio",
+    )
+    p.add_argument("--rounds", type=int, default=3, help="alternations of --against (default 3)")
+    p.add_argument("--speed-json", action="store_true", help=argparse.SUPPRESS)
     p.add_argument("--jobs", type=int, default=2, help="worker processes (spawn; default 2)")
     args = p.parse_args(argv)
+    if args.speed_json:  # --against's child: the figures of the checkout on the path
+        print(json.dumps(speed_figures()))
+        return 0
+    if args.speed and args.against is not None:
+        speed_against(args.against.resolve(), args.rounds)
+        return 0
     if args.speed:
         speed()
         return 0

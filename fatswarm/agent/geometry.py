@@ -6,6 +6,7 @@ uses: every function here is equivariant under translation and under the mirror 
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -200,20 +201,27 @@ def targets_on(circle: Circle, n: int, robot_at_o: bool) -> Points:
     Target k sits at angle theta_k from north. The set is mirror symmetric about L, so a mirrored
     frame yields the same set (in another order: callers must not rely on the order).
     """
+    cx, cy = circle.center
+    rad = circle.radius
+    out = _unit_targets(n, robot_at_o) * rad
+    out[:, 0] += cx
+    out[:, 1] += cy
+    return out
+
+
+@functools.lru_cache(maxsize=64)
+def _unit_targets(n: int, robot_at_o: bool) -> Points:
+    """(sin theta_k, cos theta_k) of `targets_on`'s angles (n, 2), read-only: a function of n and
+    the case alone, so it is made once per (n, case), not once per plan."""
     theta = np.arange(n, dtype=np.float64)
     theta *= 2.0 * math.pi
     theta /= n
     if not robot_at_o:  # (for case i, adding 0.0 to these non-negative angles changes nothing)
         theta += math.pi / n
-    cx, cy = circle.center
-    rad = circle.radius
     out = np.empty((n, 2))
-    part = np.sin(theta)
-    part *= rad
-    np.add(part, cx, out=out[:, 0])
-    part = np.cos(theta, out=part)
-    part *= rad
-    np.add(part, cy, out=out[:, 1])
+    out[:, 0] = np.sin(theta)  # on the contiguous array, as before: the same loop, the same bits
+    out[:, 1] = np.cos(theta)
+    out.flags.writeable = False
     return out
 
 
@@ -370,7 +378,10 @@ def _to_segment(ox: np.ndarray, oy: np.ndarray, dx: float, dy: float) -> np.ndar
     t = ox * dx
     t += oy * dy
     t /= len2
-    t = t.clip(0.0, 1.0, out=t)
+    # clip to [0, 1] (np.clip's wrapper costs more than these two; a zero's sign, the only
+    # difference they could make, is lost in the hypot below)
+    np.maximum(t, 0.0, out=t)
+    np.minimum(t, 1.0, out=t)
     ox -= t * dx
     oy -= t * dy
     np.hypot(ox, oy, out=ox)

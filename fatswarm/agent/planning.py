@@ -4,12 +4,15 @@ without chirality (G12)."""
 
 from __future__ import annotations
 
+import bisect
+import math
+import operator
 from collections.abc import Callable, Iterator
 from typing import NamedTuple
 
 import numpy as np
 
-from fatswarm.agent.geometry import Circle, mirror_matched
+from fatswarm.agent.geometry import MATCH_WINDOW, Circle, mirror_matched
 from fatswarm.domain.path import Path, Points
 
 Step = tuple[str, dict[int, Path]]
@@ -46,13 +49,82 @@ def orientation_of(pts: Points, cx: float, tol_at: float, tol_eq: float) -> floa
 
     It flips with the frame, so `s * x` means the same side to every robot: an agreed left/right.
     """
-    unmatched = ~mirror_matched(pts, cx, tol_at)
-    if not unmatched[unmatched.argmax()]:
+    best = _top_unmatched(pts, cx, tol_at, tol_eq)
+    if best is None:  # not settled among the top few: match every robot
+        unmatched = ~mirror_matched(pts, cx, tol_at)
+        if not unmatched[unmatched.argmax()]:
+            return 0.0
+        idx = unmatched.nonzero()[0]
+        xs, ys = pts[:, 0], pts[:, 1]
+        best = int(idx[first_ranked(-ys[idx], tol_eq, lambda: (-np.abs(xs[idx] - cx),))])
+    elif best < 0:
         return 0.0
-    idx = unmatched.nonzero()[0]
-    xs, ys = pts[:, 0], pts[:, 1]
-    best = int(idx[first_ranked(-ys[idx], tol_eq, lambda: (-np.abs(xs[idx] - cx),))])
-    return 1.0 if float(xs[best]) - cx > 0 else -1.0
+    return 1.0 if float(pts[best, 0]) - cx > 0 else -1.0
+
+
+TOP_ROBOTS = 16
+"""`_top_unmatched` matches at most this many robots, from the top, before giving up."""
+
+
+def _top_unmatched(pts: Points, cx: float, tol_at: float, tol_eq: float) -> int | None:
+    """`orientation_of`'s robot, found by matching robots from the top down, as a canonical form
+    (sorted by y) allows: the answer is the top unmatched robot and its ties, and those are
+    usually among the first few. -1 if every robot matches (n <= TOP_ROBOTS); None if the rows
+    are not sorted by y or the answer is not settled within TOP_ROBOTS robots (or windows).
+
+    The very operations of `mirror_matched` (each robot against the robots whose y lies in
+    [y - tol, y + tol], as its searchsorted windows) and of `first_ranked` (ties within tol_eq of
+    the largest y, then of the largest |x - c_x|, then the lowest index), on Python floats.
+    """
+    n = len(pts)
+    if n < 2 or not 0.0 <= tol_at < math.inf:
+        return None
+    y_list = pts[:, 1].tolist()
+    if not all(map(operator.le, y_list, y_list[1:])):  # not sorted (or NaN: it compares False)
+        return None
+    if not math.isfinite(y_list[0]) or not math.isfinite(y_list[-1]):  # sorted: all finite then
+        return None
+    if n > MATCH_WINDOW:
+        # mirror_matched compares all pairs when a window [y - tol, y + tol] holds more than
+        # MATCH_WINDOW robots: these are MATCH_WINDOW rows apart, so no more than 2 tol apart in
+        # y (and a margin for the rounding of y +- tol, as mirror_matched's own)
+        reach = tol_at + 1e-9 * (max(abs(y_list[0]), abs(y_list[-1])) + tol_at)
+        apart = map(operator.sub, y_list[MATCH_WINDOW:], y_list[:-MATCH_WINDOW])
+        if not min(apart) > 2.0 * reach:
+            return None
+    x_list = pts[:, 0].tolist()
+    tol2 = tol_at * tol_at
+    mirror_x = 2.0 * cx
+    found: list[int] = []  # unmatched robots, from the top down
+    bound = math.inf  # the tied robots' -y reach at most this
+    for q in range(n - 1, max(-1, n - 1 - TOP_ROBOTS), -1):
+        y = y_list[q]
+        if -y > bound:
+            break
+        mx = mirror_x - x_list[q]
+        lo_q, hi_q = bisect.bisect_left(y_list, y - tol_at), bisect.bisect_right(y_list, y + tol_at)
+        for j in range(lo_q, hi_q):
+            dx, dy = x_list[j] - mx, y_list[j] - y
+            if dx * dx + dy * dy <= tol2:
+                break
+        else:
+            if not found:
+                bound = -y + tol_eq
+            found.append(q)
+    else:
+        if n > TOP_ROBOTS:
+            return None  # not settled: the top robots match, or the ties go on below them
+        if not found:
+            return -1
+    # first_ranked: the lowest index of the largest y (found[-1] has the largest y among the
+    # lowest indices), the ties within tol_eq of it, then the second key over them
+    low = -y_list[found[0]]
+    tied = sorted(q for q in found if -y_list[q] <= low + tol_eq)
+    if len(tied) == 1:
+        return tied[0]
+    values = [-abs(x_list[q] - cx) for q in tied]
+    least = min(values) + tol_eq
+    return next(q for q, v in zip(tied, values, strict=True) if v <= least)
 
 
 def ranked(first: np.ndarray, tol: float, tie_keys: TieKeys | None = None) -> Iterator[int]:
