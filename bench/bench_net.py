@@ -35,7 +35,7 @@ import numpy as np
 
 from fatswarm.agent.params import Params
 from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy.net.children import Children
+from fatswarm.deploy.net.children import Children, stop_grace_s
 from fatswarm.deploy.net.part_agents import agent_command, agents_command
 from fatswarm.deploy.net.zconf import loopback_endpoint, make_config
 from fatswarm.deploy.scenarios.starts import random_start
@@ -239,7 +239,7 @@ def networked(
     world_net = ["--router", "--listen", endpoint, *net[2:]] if router_in == "world" else net
     state = os.path.join(tmp, f"{swarm}.jsonl")
     own = None
-    with Children() as children:
+    with Children(stop_grace_s(n)) as children:  # the agents host stops its n agents first
         part = [sys.executable, "-m", "fatswarm.deploy.net.parts"]
         children.start(
             "world",
