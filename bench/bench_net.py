@@ -8,6 +8,7 @@ networked vs lockstep, resident memory per agent process, time to start N agents
         [--algorithm gathering]  # a cheap compute shows the emulator's own cost per Look
         [--router-in separate]  # a router process of its own, as across hosts (default: world)
         [--free-rounds 300]  # and the emulator alone: a steady load with no compute at all
+        [--threads]  # and each role's CPU and wake-ups per Look by thread name
 
 `--free-rounds R` adds, under each size, the same fsync swarm running an algorithm that computes
 nothing (`tests/data/always_right.py` with a 1e-4 step from a spread start: every robot moves, none
