@@ -8,6 +8,7 @@ networked vs lockstep, resident memory per agent process, time to start N agents
         [--algorithm gathering]  # a cheap compute shows the emulator's own cost per Look
         [--router-in separate]  # a router process of its own, as across hosts (default: world)
         [--free-rounds 300]  # and the emulator alone: a steady load with no compute at all
+        [--threads]  # and each role's CPU and wake-ups per Look by thread name
 
 `--free-rounds R` adds, under each size, the same fsync swarm running an algorithm that computes
 nothing (`tests/data/always_right.py` with a 1e-4 step from a spread start: every robot moves, none
@@ -35,7 +36,7 @@ import numpy as np
 
 from fatswarm.agent.params import Params
 from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy.net.children import Children
+from fatswarm.deploy.net.children import Children, stop_grace_s
 from fatswarm.deploy.net.part_agents import agent_command, agents_command
 from fatswarm.deploy.net.zconf import loopback_endpoint, make_config
 from fatswarm.deploy.scenarios.starts import random_start
@@ -104,6 +105,7 @@ class NetRun:
     intervals: list[float]  # time between consecutive committed rounds
     memory_mb: list[tuple[float, float, float]]  # per agent process: RSS, PSS, private
     cpu_s: dict[str, float]  # CPU seconds by role (router: this process, with the observer)
+    threads: dict[str, dict[str, tuple[float, int]]]  # by role, by thread name: CPU s, switches
 
 
 def _memory_mb(pid: int) -> tuple[float, float, float]:
@@ -153,6 +155,44 @@ def _cpu_s(pids: list[int]) -> float:
     return total / os.sysconf("SC_CLK_TCK")
 
 
+def _threads(pids: list[int]) -> dict[str, tuple[float, int]]:
+    """By thread name, over these processes: CPU seconds used so far and voluntary context
+    switches (each one a sleep, then a wake-up)."""
+    out: dict[str, tuple[float, int]] = {}
+    tick = os.sysconf("SC_CLK_TCK")
+    for pid in pids:
+        try:
+            tids = os.listdir(f"/proc/{pid}/task")
+        except OSError:
+            continue
+        for tid in tids:
+            try:
+                with open(f"/proc/{pid}/task/{tid}/stat", encoding="ascii") as f:
+                    text = f.read()
+                with open(f"/proc/{pid}/task/{tid}/status", encoding="ascii") as f:
+                    switches = next(
+                        int(line.split()[1]) for line in f if line.startswith("voluntary_ctxt")
+                    )
+            except (OSError, ValueError, StopIteration):
+                continue
+            name = text[text.index("(") + 1 : text.rindex(")")]
+            fields = text.rsplit(")", 1)[1].split()
+            cpu, was = (int(fields[11]) + int(fields[12])) / tick, out.get(name, (0.0, 0))
+            out[name] = (was[0] + cpu, was[1] + switches)
+    return out
+
+
+def _delta(
+    after: dict[str, tuple[float, int]], before: dict[str, tuple[float, int]]
+) -> dict[str, tuple[float, int]]:
+    """`_threads` over a window (threads born in it count from zero)."""
+    out = {}
+    for name, (cpu, switches) in after.items():
+        cpu0, switches0 = before.get(name, (0.0, 0))
+        out[name] = (cpu - cpu0, switches - switches0)
+    return out
+
+
 def networked(
     session: Any,
     endpoint: str,
@@ -200,7 +240,7 @@ def networked(
     world_net = ["--router", "--listen", endpoint, *net[2:]] if router_in == "world" else net
     state = os.path.join(tmp, f"{swarm}.jsonl")
     own = None
-    with Children() as children:
+    with Children(stop_grace_s(n)) as children:  # the agents host stops its n agents first
         part = [sys.executable, "-m", "fatswarm.deploy.net.parts"]
         children.start(
             "world",
@@ -263,6 +303,7 @@ def networked(
         t_alive = time.perf_counter()
         roles = _roles(children)
         cpu0 = {role: _cpu_s(pids) for role, pids in roles.items()}
+        threads0 = {role: _threads(pids) for role, pids in roles.items()}
         rss: list[tuple[float, float, float]] = []
         while not done.wait(0.25):
             if not rss and len(commits) > 2:  # measure memory once the agents have computed
@@ -271,6 +312,7 @@ def networked(
                 raise RuntimeError("run did not end in 30 minutes")
         t_end = time.perf_counter()
         cpu1 = {role: _cpu_s(pids) for role, pids in roles.items()}
+        threads1 = {role: _threads(pids) for role, pids in roles.items()}
         if not rss:
             rss = [_memory_mb(pid) for pid in _agent_pids(children)]
         for sub in subs:
@@ -287,6 +329,7 @@ def networked(
         intervals=[b - a for a, b in itertools.pairwise(times)],
         memory_mb=[m for m in rss if m[0] == m[0]],
         cpu_s={role: cpu1[role] - cpu0[role] for role in roles},
+        threads={role: _delta(threads1[role], threads0[role]) for role in roles},
     )
 
 
@@ -357,6 +400,12 @@ def main() -> int:
         help="also run each size R rounds with an algorithm that computes nothing: "
         "the emulator's own cost (default 0: not run)",
     )
+    p.add_argument(
+        "--threads",
+        action="store_true",
+        help="under each run, its CPU and wake-ups (voluntary context switches) per Look by "
+        "role and thread name",
+    )
     args = p.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
 
@@ -423,20 +472,23 @@ def main() -> int:
             )
             if l_status != run.status or l_rounds != run.rounds:
                 print(f"     (lockstep: {l_status} after {l_rounds} rounds)")
+            if args.threads:
+                _print_threads(run)
             if args.free_rounds > 0:
-                _print_free(
-                    networked(
-                        session,
-                        endpoint,
-                        n,
-                        args.seed,
-                        tmp,
-                        args.spawn,
-                        FREE_ALGORITHM,
-                        args.router_in,
-                        (*FREE_WORLD, "--max-rounds", str(args.free_rounds)),
-                    )
+                free = networked(
+                    session,
+                    endpoint,
+                    n,
+                    args.seed,
+                    tmp,
+                    args.spawn,
+                    FREE_ALGORITHM,
+                    args.router_in,
+                    (*FREE_WORLD, "--max-rounds", str(args.free_rounds)),
                 )
+                _print_free(free)
+                if args.threads:
+                    _print_threads(free)
     return 0
 
 
@@ -451,6 +503,22 @@ def _print_free(run: NetRun) -> None:
         + " ".join(f"{role} {1e3 * cpu / looks:.2f}" for role, cpu in run.cpu_s.items()),
         flush=True,
     )
+
+
+def _print_threads(run: NetRun) -> None:
+    """A run's CPU (µs) and wake-ups per Look by role and thread name, busiest first."""
+    looks = run.rounds * run.n
+    for role, threads in run.threads.items():
+        busiest = sorted(threads.items(), key=lambda kv: -kv[1][0])
+        print(
+            f"       {role}: "
+            + ", ".join(
+                f"{name} {1e6 * cpu / looks:.0f} µs {switches / looks:.2f} wake"
+                for name, (cpu, switches) in busiest
+                if cpu > 0 or switches > 0
+            ),
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import json
 import logging
-import os
 import signal
 import threading
 import time
@@ -148,15 +147,6 @@ def _endpoints(conf: Any) -> str:
     return ", ".join(map(str, endpoints)) if isinstance(endpoints, list) else str(endpoints)
 
 
-# An agent exchanges two small messages a round: one Zenoh worker thread for every runtime of the
-# process (4 threads instead of 8, a fifth less CPU per Look). Read when the process first opens
-# a session, so it is set before; a value the user set wins.
-ONE_WORKER_RUNTIME = (
-    "(app: (worker_threads: 1), rx: (handover: app), tx: (handover: app), "
-    "net: (handover: app), acc: (handover: app))"
-)
-
-
 class Stopped(Exception):
     """A stop signal came while the agent waited for its Look's answer."""
 
@@ -176,13 +166,14 @@ def serve(
     """Run one robot until `stop` is set; returns an exit code (`waiting`: see open_session).
 
     `algorithm`: loaded from `cfg.algorithm` if None (raises AlgorithmError if it cannot be).
-    Call it from the process's main thread: a stop signal interrupts a Look's wait there.
+    Call it from the process's main thread: a stop signal interrupts a Look's wait there, and
+    before the process's first session, with its Zenoh runtime settled
+    (`deploy.net.zconf.settle_runtime`: the callers in deploy do).
     """
     import zenoh  # the CLI imports this module for its flags: zenoh loads when a robot runs
 
     stop = stop or threading.Event()
     robot = Robot(algorithm or load_algorithm(cfg.algorithm))
-    os.environ.setdefault("ZENOH_RUNTIME", ONE_WORKER_RUNTIME)
     session = open_session(conf, stop, waiting)
     if session is None:
         return 0
@@ -355,7 +346,8 @@ def _move(cfg: AgentConfig, snapshot: Snapshot, robot: Robot) -> bytes:
     raises gives a move that stays and says why (`MoveSubmitted.failed`: the world books it at
     once, no move timeout); b"" for a snapshot it cannot act on (another algorithm, refused
     parameters): it stays out of this round, and says why on its log."""
-    t0, cpu0 = time.perf_counter(), time.thread_time()
+    debug = log.isEnabledFor(logging.DEBUG)
+    t0, cpu0 = (time.perf_counter(), time.thread_time()) if debug else (0.0, 0.0)
     round_no = snapshot.round
     try:
         path, colour = robot.look_compute(snapshot)
@@ -376,7 +368,7 @@ def _move(cfg: AgentConfig, snapshot: Snapshot, robot: Robot) -> bytes:
             )
         log.debug("round %d: compute failed", round_no, exc_info=True)
         return MoveSubmitted.failing(cfg.robot, round_no, failed).encode()
-    if log.isEnabledFor(logging.DEBUG):
+    if debug:
         log.debug(
             "round %d: compute %.2f ms (CPU %.2f ms)",
             round_no,

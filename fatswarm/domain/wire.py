@@ -185,7 +185,9 @@ def get_points(obj: dict[str, Any], key: str, rows: int) -> Points:
     if not isinstance(v, bytes) or len(v) != rows * 16:
         raise ProtocolError(f"{key!r} must be {rows * 16} bytes of (x, y) float64 pairs")
     arr = np.frombuffer(v, dtype="<f8").astype(np.float64).reshape(rows, 2)
-    if not np.all(np.isfinite(arr)) or (rows and float(np.abs(arr).max()) > MAX_COORD):
+    # one reduction checks both: a NaN's or an infinity's maximum is not <= MAX_COORD (the
+    # agent decodes a view every Look: two numpy calls fewer there)
+    if rows and not float(np.abs(arr).max()) <= MAX_COORD:
         raise ProtocolError(f"{key!r} holds a non-finite or out-of-range coordinate")
     return arr
 

@@ -407,3 +407,17 @@ def test_moves_held_decoder_refuses_garbage(change: dict[str, object], reason: s
         MovesHeld.decode(_raw(**fields))
     with pytest.raises(ProtocolError, match="not msgpack"):
         MovesHeld.decode(b"\xc1")
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf, 2e9, -2e9])
+def test_a_snapshot_view_with_one_non_finite_or_out_of_range_coordinate_is_refused(
+    bad: float,
+) -> None:
+    view = np.zeros((3, 2))
+    view[1, 1] = bad
+    data = Snapshot(round=1, n=4, algorithm="gathering", params={}, view=np.zeros((3, 2))).encode()
+    raw = msgpack.unpackb(data, raw=False)
+    with pytest.raises(ProtocolError, match="non-finite or out-of-range"):
+        Snapshot.decode(_raw(**{**raw, "view": view.tobytes()}))
+    edge = np.full((3, 2), -1e9)  # the bound itself is inside
+    assert np.array_equal(Snapshot.decode(_raw(**{**raw, "view": edge.tobytes()})).view, edge)

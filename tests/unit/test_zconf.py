@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import json
+import os
 import socket
 from pathlib import Path
 
@@ -11,12 +12,14 @@ import pytest
 import zenoh
 
 from fatswarm.deploy.net.zconf import (
+    ONE_WORKER_RUNTIME,
     ZenohSetupError,
     check_network,
     endpoint_problem,
     explain_zenoh_error,
     free_port,
     make_config,
+    settle_runtime,
     unreachable_message,
 )
 
@@ -150,3 +153,14 @@ def test_a_router_linked_to_no_other_opens_without_zenohs_scouting_wait(tmp_path
     own.write_text("{ scouting: { delay: 250 } }")
     assert (_delay(lone), _delay(linked), _delay(client)) == (0, None, None)
     assert _delay(make_config("router", listen=["tcp/127.0.0.1:7447"], config_file=str(own))) == 250
+
+
+def test_settle_runtime_gives_one_zenoh_worker_unless_the_user_chose(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.delenv("ZENOH_RUNTIME", raising=False)
+    settle_runtime()
+    assert os.environ["ZENOH_RUNTIME"] == ONE_WORKER_RUNTIME
+    monkeypatch.setenv("ZENOH_RUNTIME", "(app: (worker_threads: 3))")
+    settle_runtime()
+    assert os.environ["ZENOH_RUNTIME"] == "(app: (worker_threads: 3))"

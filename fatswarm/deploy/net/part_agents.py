@@ -25,7 +25,7 @@ from fatswarm.deploy.net.part_common import (
     part_command,
     setup_logging,
 )
-from fatswarm.deploy.net.zconf import AGENT_LEASE_MS, check_endpoints
+from fatswarm.deploy.net.zconf import AGENT_LEASE_MS, check_endpoints, settle_runtime
 from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
 from fatswarm.domain.registry import load_algorithm
 from fatswarm.domain.seam import AlgorithmError
@@ -63,6 +63,7 @@ def main_agent(args: argparse.Namespace) -> int:
     except AlgorithmError as exc:
         return fail("agent", str(exc))
     waiting = f"robot {args.robot}" if args.waiting_as is None else args.waiting_as
+    settle_runtime()
     return serve(
         AgentConfig(args.swarm, args.robot, args.algorithm),
         conf,
@@ -214,6 +215,8 @@ def _fork_agents(args: argparse.Namespace, robots: range) -> int:
     """
     # here, not at the top: only this host, before it forks, preloads zenoh for its agents
     import zenoh  # noqa: F401  (the module only: no session, no runtime thread in this process)
+
+    settle_runtime()  # inherited by every fork (each opens its own session and runtime)
 
     algorithm = load_algorithm(args.algorithm)  # loaded once, before the forks share it
     log = logging.getLogger("fatswarm.agents")

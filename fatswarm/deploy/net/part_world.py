@@ -25,7 +25,7 @@ from fatswarm.deploy.net.part_common import (
     setup_logging,
 )
 from fatswarm.deploy.net.router import open_router
-from fatswarm.deploy.net.zconf import open_client
+from fatswarm.deploy.net.zconf import open_client, settle_runtime
 from fatswarm.deploy.scenarios.starts import KINDS
 from fatswarm.domain.adversary import ASYNC_NAMES
 from fatswarm.domain.outcome import ExitCode
@@ -112,6 +112,7 @@ def main_world(args: argparse.Namespace) -> int:
         conf = None if args.router else client_config(args, shared_memory=False)
         token = alive_key(args.swarm)  # a bad --swarm is said before any wait
         fresh = _fresh_setup(args)
+        settle_runtime()
         if args.router:  # listening fails at once (port taken): nothing to wait for
             session = open_router(
                 args.listen, args.connect, None, [DEFAULT_ROUTER_LISTEN], shared_memory=False
