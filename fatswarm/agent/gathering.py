@@ -118,15 +118,8 @@ class Gathering:
         n = len(view) + 1  # the robot itself, at the origin, adds nothing to the sums
         gx = math.fsum(view[:, 0].tolist()) / n
         gy = math.fsum(view[:, 1].tolist()) / n
-        to_g = math.hypot(gx, gy)
         d_min = float(np.hypot(view[:, 0], view[:, 1]).min())
-        step = min(to_g, (d_min - CONTACT) / 2.0)
-        if not step > params.tolerance:  # also a touching or overlapping neighbour (step <= 0)
-            return STAY
-        if step >= to_g:
-            return Path((Line((gx, gy)),))
-        f = step / to_g
-        return Path((Line((gx * f, gy * f)),))
+        return _toward(gx, gy, (d_min - CONTACT) / 2.0, params.tolerance)
 
     def compute_views(self, views: Views, params: GatheringParams) -> Sequence[Path]:
         """`compute` of every view of `views` (k, m, 2) at once, the very bits (the round hook:
@@ -141,19 +134,8 @@ class Gathering:
         sums = fsum_rows(coords) / n
         gxs, gys = sums[:k].tolist(), sums[k:].tolist()
         gaps = ((nearest_norms(xs, ys) - CONTACT) / 2.0).tolist()
-        tolerance, hypot = params.tolerance, math.hypot
-        paths: list[Path] = []
-        for gx, gy, gap in zip(gxs, gys, gaps, strict=True):
-            to_g = hypot(gx, gy)
-            step = min(to_g, gap)
-            if not step > tolerance:
-                paths.append(STAY)
-            elif step >= to_g:
-                paths.append(Path((Line((gx, gy)),)))
-            else:
-                f = step / to_g
-                paths.append(Path((Line((gx * f, gy * f)),)))
-        return paths
+        tolerance = params.tolerance
+        return [_toward(gx, gy, gap, tolerance) for gx, gy, gap in zip(gxs, gys, gaps, strict=True)]
 
     def goal(self, positions: Points, params: GatheringParams) -> bool:
         """No robot would move: every robot's step, from world positions, is <= tolerance.
@@ -178,6 +160,19 @@ class Gathering:
             return {"spread": 0.0}
         gx, gy = centre_of_gravity(pts)
         return {"spread": float(np.hypot(pts[:, 0] - gx, pts[:, 1] - gy).max())}
+
+
+def _toward(gx: float, gy: float, gap: float, tolerance: float) -> Path:
+    """A Line toward G = (gx, gy) by at most `gap` (half the room to the nearest neighbour), or
+    STAY when that step is not above `tolerance` (also a touching or overlapping neighbour)."""
+    to_g = math.hypot(gx, gy)
+    step = min(to_g, gap)
+    if not step > tolerance:
+        return STAY
+    if step >= to_g:
+        return Path((Line((gx, gy)),))
+    f = step / to_g
+    return Path((Line((gx * f, gy * f)),))
 
 
 ALGORITHM: Final = Gathering()
