@@ -241,6 +241,7 @@ class _LookWait:
         self.cancel: Any = None  # the waiting Look's zenoh.CancellationToken (None: none waits)
         self.world_up = False  # a world came up while it waited
         self._lock = threading.Lock()  # the callback's view of (cancel, world_up)
+        self._raised = False  # Stopped was raised once: a second signal only sets `stop`
 
     @property
     def waiting(self) -> bool:
@@ -250,7 +251,10 @@ class _LookWait:
     def handle(self, signum: int, frame: object) -> None:
         del signum, frame
         self.stop.set()
-        if self.waiting:
+        # once: a second signal may come while the first Stopped unwinds (in `end`, or as the
+        # handlers are put back), where raising again would escape the loop as a traceback
+        if self.waiting and not self._raised:
+            self._raised = True
             raise Stopped
 
     def world_seen(self, sample: Any) -> None:

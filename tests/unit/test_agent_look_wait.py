@@ -89,3 +89,18 @@ def test_a_world_seen_while_no_look_waits_changes_nothing() -> None:
     wait.world_seen(WorldToken())
     wait.world_seen(WorldToken(kind=zenoh.SampleKind.DELETE))
     assert wait.cancel is None and not wait.world_up
+
+
+def test_a_second_stop_signal_while_the_first_unwinds_raises_nothing() -> None:
+    """SIGTERM then SIGINT (the launcher's stop and a Ctrl-C) may both reach an agent: the first
+    ends its Look's wait; the second, arriving while the first unwinds (the wait not yet marked
+    over, or the handlers being put back), only sets `stop` (it once escaped as a traceback)."""
+    from fatswarm.agent.service import Stopped
+
+    stop = threading.Event()
+    wait = _LookWait(stop)
+    wait.begin()  # a Look waits
+    with pytest.raises(Stopped):
+        wait.handle(15, None)
+    wait.handle(2, None)  # still marked waiting: the first Stopped is unwinding
+    assert stop.is_set()
