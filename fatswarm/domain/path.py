@@ -60,6 +60,26 @@ class Path:
 STAY = Path()
 
 
+@dataclass(frozen=True, slots=True, eq=False)
+class StraightMoves:
+    """k robots' paths of one round as arrays (what the round hook may answer, as well as k
+    Paths): robot i goes in a straight line to `ends[i]` (its own frame) where `goes[i]`, and
+    stays elsewhere; row i is exactly `Path((Line((float(x), float(y))),))` or STAY (`paths`)."""
+
+    ends: Points  # (k, 2) float64
+    goes: NDArray[np.bool_]  # (k,)
+
+    def __len__(self) -> int:
+        return len(self.goes)
+
+    def paths(self) -> list[Path]:
+        """The same moves as k Paths (Python floats): the per-robot form."""
+        return [
+            Path((Line((x, y)),)) if go else STAY
+            for (x, y), go in zip(self.ends.tolist(), self.goes.tolist(), strict=True)
+        ]
+
+
 def _arc_end(start: Point, arc: Arc) -> Point:
     cx, cy = arc.center
     dx, dy = start[0] - cx, start[1] - cy

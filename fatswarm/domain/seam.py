@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from fatswarm.domain.assumptions import Assumptions
 from fatswarm.domain.lights import Glance, LightsError, Lit, colour_index, palette
-from fatswarm.domain.path import Path, Points
+from fatswarm.domain.path import Path, Points, StraightMoves
 from fatswarm.domain.robot_model import Frames, ModelError
 
 ParamValue = bool | int | float | str  # what a parameter can hold: it travels on the wire
@@ -167,7 +167,8 @@ class Algorithm(Protocol[P]):
     paths `compute` would give each of `robots` in its own frame, made at once (a fast lock step);
     `compute_views(views, params)`, the round hook: the paths of k robots of a round in one call,
     each from its own view only (`Views`, (k, m, 2), row i robot i's view in its own frame),
-    a sequence of k Paths, each bit for bit the one `compute(views[i], params)` returns (the
+    k Paths, or a `StraightMoves` (fatswarm/domain/path.py: k straight lines or stays as arrays,
+    the fast form), each bit for bit the one `compute(views[i], params)` returns (the
     lock step uses it where every view is alike: docs/algorithms.md, "The round hook"). Pure, as
     `compute`: no state survives a call, and path i may depend on row i alone.
     """
@@ -369,14 +370,14 @@ class Configured:
         if hook is not None:
             hook(positions, self.params)
 
-    def views_compute(self) -> Callable[[Views], Sequence[Path]] | None:
+    def views_compute(self) -> Callable[[Views], Sequence[Path] | StraightMoves] | None:
         """The algorithm's round hook for these parameters (`compute_views`), if it has one and
         is not luminous (a luminous algorithm's Compute goes per robot)."""
         hook = _hook_of_its_compute(self.algorithm, "compute_views")
         if hook is None or self.colours:
             return None
         params = self.params
-        return lambda views: cast(Sequence[Path], hook(views, params))
+        return lambda views: cast(Sequence[Path] | StraightMoves, hook(views, params))
 
     def round_planner(self) -> RoundPlanner | None:
         """The algorithm's round planner for these parameters, if it has the hook."""

@@ -256,3 +256,63 @@ def test_a_subclass_that_changes_compute_does_not_inherit_its_parents_round_hook
     assert Configured.of(KeepsHook(), 4, None).views_compute() is not None
     assert Configured.of(paper_child(), 8, None).round_planner() is None
     assert Configured.of(PAPER, 8, None).round_planner() is not None
+
+
+def test_straight_moves_are_the_lines_and_stays_they_stand_for() -> None:
+    from fatswarm.domain.path import STAY, Line, StraightMoves
+
+    ends = np.array([[1.5, -2.0], [0.0, 0.0], [3.0, 4.0]], dtype=np.float64)
+    moves = StraightMoves(ends, np.array([True, False, True]))
+    got = moves.paths()
+    assert len(moves) == 3
+    assert got == [Path((Line((1.5, -2.0)),)), STAY, Path((Line((3.0, 4.0)),))]
+    assert all(type(c) is float for p in got for seg in p for c in seg.end)  # type: ignore[union-attr]
+
+
+class StraightGathering:
+    """Gathering whose round hook answers StraightMoves: the arrays form of its paths."""
+
+    name = "straight-gathering"
+    computed = 0  # calls of compute alone: none while the hook answers
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(GATHERING, name)
+
+    def compute(self, view: Points, params: GatheringParams) -> Path:
+        StraightGathering.computed += 1
+        return GATHERING.compute(view, params)
+
+    def compute_views(self, views: np.ndarray, params: GatheringParams) -> Any:
+        from fatswarm.domain.path import Line, StraightMoves
+
+        paths = GATHERING.compute_views(views, params)
+        ends = [p.segments[0].end if p else (0.0, 0.0) for p in paths]  # type: ignore[union-attr]
+        goes = [bool(p) and type(p.segments[0]) is Line for p in paths]
+        return StraightMoves(np.array(ends, dtype=np.float64).reshape(-1, 2), np.array(goes))
+
+
+def test_a_hook_answering_straight_moves_makes_the_record_of_compute_alone(
+    tmp_path: FsPath, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def run(hook: bool) -> bytes:
+        if not hook:
+            monkeypatch.setattr(Configured, "views_compute", lambda self: None)
+        target = tmp_path / f"straight-{hook}.jsonl"
+        start = np.random.default_rng(5).uniform(-30.0, 30.0, size=(10, 2))
+        start = np.round(start / 4.0) * 4.0 + np.arange(10)[:, None] * 0.01
+        with RecordWriter(target) as journal:
+            run_lockstep(
+                start,
+                Configured.of(StraightGathering(), 10),
+                make_scheduler("fsync", 10, 0),
+                seed=1,
+                max_rounds=12,
+                record=journal,
+            )
+        monkeypatch.undo()
+        return target.read_bytes()
+
+    with_hook = run(True)
+    assert StraightGathering.computed == 0  # every round went through the hook's arrays
+    assert run(False) == with_hook
+    assert StraightGathering.computed > 0

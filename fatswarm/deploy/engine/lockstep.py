@@ -30,7 +30,15 @@ from fatswarm.coordinator.schedule import Scheduler
 from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel, make_async
 from fatswarm.domain.figures import FigureValue
 from fatswarm.domain.outcome import Status
-from fatswarm.domain.path import MAX_SEGMENTS, Arc, Line, Path, Points, vertices
+from fatswarm.domain.path import (
+    MAX_SEGMENTS,
+    Arc,
+    Line,
+    Path,
+    Points,
+    StraightMoves,
+    vertices,
+)
 from fatswarm.domain.robot_model import PAPER_MODEL, Bodies, RobotModel
 from fatswarm.domain.seam import AlgorithmFailure, Configured, checked, failure_text
 from fatswarm.domain.tolerance import enclosing_circle
@@ -529,7 +537,10 @@ class _Bus:
             return False
         admitted = [world.admit_look(robot) for robot in lookers]
         try:
-            paths: Sequence[object] = self.batch(views)
+            answer = self.batch(views)
+            paths: Sequence[object] = (
+                answer.paths() if isinstance(answer, StraightMoves) else answer
+            )
             if len(paths) != len(lookers):
                 raise TypeError(f"compute_views gave {len(paths)} paths for {len(lookers)} views")
         except Exception:  # each robot's own compute then says what it says alone
