@@ -7,7 +7,7 @@ its nearest neighbour; it stays once that step is within `tolerance`, and the ru
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Final
 
@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from fatswarm.agent.params import check_count, check_tolerance
 from fatswarm.agent.row_sums import fsum_rows, nearest_norms
 from fatswarm.domain.assumptions import Assumptions
-from fatswarm.domain.path import STAY, Line, Path, Points
+from fatswarm.domain.path import STAY, Line, Path, Points, StraightMoves
 from fatswarm.domain.robot_model import Bodies, Visibility
 from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue, Views
 from fatswarm.domain.tolerance import CONTACT
@@ -121,21 +121,17 @@ class Gathering:
         d_min = float(np.hypot(view[:, 0], view[:, 1]).min())
         return _toward(gx, gy, (d_min - CONTACT) / 2.0, params.tolerance)
 
-    def compute_views(self, views: Views, params: GatheringParams) -> Sequence[Path]:
+    def compute_views(self, views: Views, params: GatheringParams) -> StraightMoves:
         """`compute` of every view of `views` (k, m, 2) at once, the very bits (the round hook:
-        fatswarm/domain/seam.py): the sums by `fsum_rows` (`math.fsum`'s bits), the nearest
-        gap by the same `np.hypot` per element, the rest per robot as `compute` does it."""
+        fatswarm/domain/seam.py), as arrays: the sums by `fsum_rows` (`math.fsum`'s bits), the
+        nearest gap by the same `np.hypot` per element, |G| by `math.hypot` per robot (CPython's,
+        as `_toward`: np.hypot's last bit differs), the rest `_toward`'s operations on arrays."""
         k, m = views.shape[0], views.shape[1]
         if m == 0:
-            return [STAY] * k
-        coords = np.ascontiguousarray(views.transpose(2, 0, 1)).reshape(2 * k, m)  # xs, then ys
-        xs, ys = coords[:k], coords[k:]
-        n = m + 1
-        sums = fsum_rows(coords) / n
-        gxs, gys = sums[:k].tolist(), sums[k:].tolist()
-        gaps = ((nearest_norms(xs, ys) - CONTACT) / 2.0).tolist()
-        tolerance = params.tolerance
-        return [_toward(gx, gy, gap, tolerance) for gx, gy, gap in zip(gxs, gys, gaps, strict=True)]
+            return StraightMoves(np.zeros((k, 2)), np.zeros(k, dtype=np.bool_))
+        centre = fsum_rows(views) / (m + 1)  # (k, 2); the robot itself, at the origin, adds 0
+        gaps = (nearest_norms(views[:, :, 0], views[:, :, 1]) - CONTACT) / 2.0
+        return _towards(centre, gaps, params.tolerance)
 
     def goal(self, positions: Points, params: GatheringParams) -> bool:
         """No robot would move: every robot's step, from world positions, is <= tolerance.
@@ -173,6 +169,21 @@ def _toward(gx: float, gy: float, gap: float, tolerance: float) -> Path:
         return Path((Line((gx, gy)),))
     f = step / to_g
     return Path((Line((gx * f, gy * f)),))
+
+
+def _towards(centre: Points, gaps: Values, tolerance: float) -> StraightMoves:
+    """`_toward` of every row of `centre` (k, 2) and `gaps` (k,), the very bits: Python's
+    min(a, b) is b only where b < a, and IEEE products and quotients are the same in numpy."""
+    gx, gy = centre[:, 0].tolist(), centre[:, 1].tolist()
+    to_g = np.fromiter(map(math.hypot, gx, gy), dtype=np.float64, count=len(gx))
+    step = np.where(gaps < to_g, gaps, to_g)
+    goes = step > tolerance
+    short = goes & ~(step >= to_g)  # a step short of G: scaled by step / |G| (|G| > 0 here)
+    ends = np.where(goes[:, None], centre, 0.0)
+    if short.any():
+        f = step[short] / to_g[short]
+        ends[short] = centre[short] * f[:, None]
+    return StraightMoves(ends, goes)
 
 
 ALGORITHM: Final = Gathering()

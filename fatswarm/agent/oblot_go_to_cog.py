@@ -5,7 +5,7 @@ positions it sees, its own included (docs/ports.md, "oblot-go-to-cog").
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Final
 
 import numpy as np
@@ -21,7 +21,7 @@ from fatswarm.agent.oblot_common import (
 )
 from fatswarm.agent.row_sums import fsum_rows
 from fatswarm.domain.assumptions import Assumptions
-from fatswarm.domain.path import Path, Points
+from fatswarm.domain.path import Path, Points, StraightMoves
 from fatswarm.domain.seam import ParamSpec, ParamValue, Views
 
 # The peer's robots see every robot (`Simulator/Simulation.java:101`), one row per robot
@@ -53,16 +53,22 @@ class OblotGoToCoG:
         gy = math.fsum(view[:, 1].tolist()) / n if len(view) else 0.0
         return go_to((gx, gy), params)
 
-    def compute_views(self, views: Views, params: OblotParams) -> Sequence[Path]:
+    def compute_views(self, views: Views, params: OblotParams) -> StraightMoves:
         """`compute` of every view of `views` (k, m, 2) at once, the very bits (the round hook:
-        fatswarm/domain/seam.py): the sums by `fsum_rows` (`math.fsum`'s bits)."""
+        fatswarm/domain/seam.py), as arrays: the sums by `fsum_rows` (`math.fsum`'s bits), the
+        distance to the target by `math.hypot` per robot, as `go_to`. A target that is not a
+        finite point raises `go_to`'s error (each robot's own compute then says it alone)."""
         k, m = views.shape[0], views.shape[1]
-        if m == 0:
-            return [go_to((0.0, 0.0), params)] * k
-        n = m + 1  # the robot itself, at the origin, adds nothing to the sums
-        gxs = (fsum_rows(np.ascontiguousarray(views[:, :, 0])) / n).tolist()
-        gys = (fsum_rows(np.ascontiguousarray(views[:, :, 1])) / n).tolist()
-        return [go_to(target, params) for target in zip(gxs, gys, strict=True)]
+        if m == 0:  # the target is the origin: within any tolerance (>= 0)
+            return StraightMoves(np.zeros((k, 2)), np.zeros(k, dtype=np.bool_))
+        centre = fsum_rows(views) / (m + 1)  # the robot itself, at the origin, adds nothing
+        if not np.isfinite(centre).all():
+            row = int(np.flatnonzero(~np.isfinite(centre).all(axis=1))[0])
+            go_to((float(centre[row, 0]), float(centre[row, 1])), params)  # raises
+        gx, gy = centre[:, 0].tolist(), centre[:, 1].tolist()
+        distance = np.fromiter(map(math.hypot, gx, gy), dtype=np.float64, count=k)
+        goes = ~(distance <= params.tolerance)
+        return StraightMoves(np.where(goes[:, None], centre, 0.0), goes)
 
     def goal(self, positions: Points, params: OblotParams) -> bool:
         """Every robot at one point (within GOAL_REL of the largest coordinate)."""

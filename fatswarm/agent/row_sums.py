@@ -16,6 +16,8 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
+from fatswarm.domain.scratch import scratch
+
 Rows = NDArray[np.float64]  # (k, m)
 Sums = NDArray[np.float64]  # (k,)
 
@@ -46,10 +48,13 @@ def fsum_rows(values: Rows) -> Sums:
     if not TINY <= amax <= HUGE:
         return _fsum_each(x, out, np.ones(out.shape, dtype=np.bool_))
     sigma = math.ldexp(1.0, math.frexp(amax)[1] + math.ceil(math.log2(m + 2)))
-    high = x + sigma
+    high = np.add(x, sigma, out=scratch("fsum_rows", x.shape))
     high -= sigma
-    rest = x - high  # exact; |rest| <= 2^-53 sigma, so sum|rest| <= m 2^-53 sigma
     exact = high.sum(axis=1)
+    rest = np.subtract(x, high, out=high)  # exact; |rest| <= 2^-53 sigma: sum <= m 2^-53 sigma
+    if not rest.any():  # every value a sum of high parts (all on a common grid): exact is exact
+        out += exact  # 0.0 + s is s, and a zero sum +0.0, as math.fsum has it
+        return out
     approx = rest.sum(axis=1)
     # |approx - sum(rest)| <= (m - 1) u / (1 - (m - 1) u) * sum|rest|: doubled for the rounding
     # of the bound's own computation
@@ -78,12 +83,14 @@ def nearest_norms(xs: Rows, ys: Rows) -> Sums:
     NEAR_REL of the row's least. Outside that margin an element's norm is larger by far more than
     np.hypot's error (under 1 ulp), so it cannot be the least; rows where squares could underflow
     or overflow, or hold NaN, take `np.hypot` whole."""
-    squares = xs * xs
-    squares += ys * ys
+    shape = np.broadcast_shapes(np.shape(xs), np.shape(ys))
+    squares = np.multiply(xs, xs, out=scratch("nearest_norms", shape))
+    squares += np.multiply(ys, ys, out=scratch("nearest_norms.y", shape))
     least = squares.min(axis=1)
     out = np.empty(len(xs), dtype=np.float64)
     plain = (least >= SQUARE_TINY) & (squares.max(axis=1) <= SQUARE_HUGE)  # NaN: not plain
-    rows, cols = np.nonzero(squares <= (least * (1.0 + NEAR_REL))[:, None])
+    near = scratch("nearest_norms", shape, np.bool_)
+    rows, cols = np.nonzero(np.less_equal(squares, (least * (1.0 + NEAR_REL))[:, None], out=near))
     norms = np.hypot(xs[rows, cols], ys[rows, cols])
     out.fill(np.inf)
     np.minimum.at(out, rows, norms)

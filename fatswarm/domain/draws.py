@@ -13,6 +13,8 @@ from typing import Final
 
 import numpy as np
 
+from fatswarm.domain.scratch import scratch
+
 START_STREAM: Final = 0x57A7  # random starts (deploy/scenarios/starts.py)
 FRAME_STREAM: Final = 0xF1A9  # each robot's private X mirroring
 SCHEDULE_STREAM: Final = 0x5CED  # the round schedulers' choices of active robots
@@ -25,6 +27,9 @@ CRASH_STREAM: Final = 0xC4A5  # which robots the crash adversary stops for good,
 ROTATION_STREAM: Final = 0x2074  # each private frame's rotation (--frames chirality, disoriented)
 FRAME_LOOK_STREAM: Final = 0xF1A5  # mirrors drawn by key (disoriented, --frame-change every-look)
 NOISE_STREAM: Final = 0x9015  # the sensors' error on each position a Look shows (--noise)
+
+SORT_VALUES: Final = 4096
+"""`view_orders` sorts hashes as values from this many in all; below, argsort costs less."""
 
 
 def view_order(seed: int, round_no: int, robot: int, k: int) -> np.ndarray:
@@ -40,23 +45,55 @@ def view_order(seed: int, round_no: int, robot: int, k: int) -> np.ndarray:
 
 
 def view_orders(seed: int, round_no: int, robots: Sequence[int], k: int) -> np.ndarray:
-    """`view_order` of every robot of `robots` at once: row i is robot robots[i]'s, (m, k).
+    """`view_order` of every robot of `robots` at once: row i is robot robots[i]'s, (m, k) int64.
 
     The same hashes; they are distinct within a row (splitmix64's finaliser is a bijection and the
-    keys differ), so any sort gives each row the very order `view_order` gives.
+    keys differ), so any sort gives each row the very order `view_order` gives. The hashes are
+    sorted as values, not argsorted (about three times faster): each with its low bits replaced by
+    its index, which then rides along; a row where two hashes could share their high bits (a
+    chance of about k^2 2^-65) is argsorted whole instead.
     """
+    z = _hashes(seed, round_no, robots, k)
+    if z.size < SORT_VALUES:
+        order: np.ndarray = z.argsort(axis=1)
+        return order
+    bits = (k - 1).bit_length()
+    low = np.uint64((1 << bits) - 1)
+    z &= ~low  # the hash's high bits, then the index in the low ones
+    z |= _indices(k)[None, :]
+    z.sort(axis=1)
+    m = len(z)
+    gaps = np.subtract(z[:, 1:], z[:, :-1], out=scratch("view_orders", (m, k - 1), np.uint64))
+    near = np.less_equal(gaps, low, out=scratch("view_orders", (m, k - 1), np.bool_))
+    doubtful = np.flatnonzero(near.any(axis=1))  # high bits maybe equal: which first unsure
+    z &= low
+    order = z.view(np.int64)
+    if len(doubtful):
+        picked = [robots[i] for i in doubtful.tolist()]
+        order[doubtful] = _hashes(seed, round_no, picked, k).argsort(axis=1)
+    return order
+
+
+def _hashes(seed: int, round_no: int, robots: Sequence[int], k: int) -> np.ndarray:
+    """(m, k) uint64: the keyed splitmix64 hash of index j (1-based) of robot robots[i]'s view
+    in round `round_no`: what `view_orders` sorts (a new array)."""
     base = _mix64(_mix64(LOOK_STREAM ^ (seed & _MASK64)) ^ round_no)
     x = np.asarray(robots, dtype=np.uint64) ^ np.uint64(base)  # uint64 arrays wrap silently:
     x += _C1  # that is the hash (`_mix64` of every robot's key at once, the same bits)
     x = (x ^ (x >> _S30)) * _C2
     x = (x ^ (x >> _S27)) * _C3
     keys = x ^ (x >> _S31)
-    z = _spread(k)[None, :] + keys[:, None]
-    z = (z ^ (z >> _S30)) * _C2
-    z = (z ^ (z >> _S27)) * _C3
-    z ^= z >> _S31
-    order: np.ndarray = z.argsort(axis=1)
-    return order
+    z: np.ndarray = np.add(_spread(k)[None, :], keys[:, None])
+    t = scratch("view_orders", z.shape, np.uint64)  # in place: fresh arrays cost page faults
+    np.right_shift(z, _S30, out=t)
+    z ^= t
+    z *= _C2
+    np.right_shift(z, _S27, out=t)
+    z ^= t
+    z *= _C3
+    np.right_shift(z, _S31, out=t)
+    z ^= t
+    return z
 
 
 def cut_fraction(seed: int, round_no: int, robot: int) -> float:
@@ -96,6 +133,14 @@ def crash_plan(seed: int, n: int, f: int) -> dict[int, int]:
 _MASK64: Final = (1 << 64) - 1
 _C1, _C2, _C3 = (np.uint64(c) for c in (0x9E3779B97F4A7C15, 0xBF58476D1CE4E5B9, 0x94D049BB133111EB))
 _S30, _S27, _S31 = np.uint64(30), np.uint64(27), np.uint64(31)
+
+
+@functools.lru_cache(maxsize=8)
+def _indices(k: int) -> np.ndarray:
+    """0..k-1 as uint64 (read-only): the low bits `view_orders` sorts its hashes with."""
+    out = np.arange(k, dtype=np.uint64)
+    out.flags.writeable = False
+    return out
 
 
 @functools.lru_cache(maxsize=8)

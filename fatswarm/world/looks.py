@@ -18,6 +18,7 @@ from fatswarm.domain.draws import look_noise, view_order, view_orders
 from fatswarm.domain.frames import Frame, draw_frame
 from fatswarm.domain.path import Path, Points
 from fatswarm.domain.robot_model import Bodies, FrameChange, Lights, RobotModel
+from fatswarm.domain.scratch import scratch
 from fatswarm.domain.seam import Configured
 from fatswarm.world.sight import seen
 
@@ -115,18 +116,18 @@ class Looks:
             return None
         rows = np.asarray(robots, dtype=np.intp)
         order = view_orders(self.seed, look_round, robots, k)
-        order += order >= rows[:, None]  # an index among the others is one among all robots
+        order += np.greater_equal(order, rows[:, None], out=scratch("views", order.shape, np.bool_))
+        # (an index among the others is one among all robots)
         frames: Sequence[Frame]
         if self._fixed is not None and self._fixed_sign is not None:  # drawn once
             frames, sign = [self._fixed[robot] for robot in robots], self._fixed_sign[rows]
         else:
             frames = [self.frame(robot, look_round) for robot in robots]
             sign = _mirror_signs(frames)
-        rel = np.empty((len(rows), k, 2), dtype=np.float64)
-        for axis in (0, 1):  # per coordinate: the same differences, faster than in (m, k, 2)
-            coord = np.ascontiguousarray(positions[:, axis])
-            np.subtract(coord[order], coord[rows][:, None], out=rel[:, :, axis])
-        rel[:, :, 0] *= sign[:, None]  # x * 1.0 is x, bit for bit: the mirror of to_local alone
+        rel: Points = np.take(positions, order, axis=0)  # (m, k, 2): one gather, then in place
+        rel -= positions[rows][:, None, :]  # the same differences
+        if (sign < 0.0).any():  # x * 1.0 is x, bit for bit: the mirror of to_local alone
+            rel[:, :, 0] *= sign[:, None]
         turned = [i for i, frame in enumerate(frames) if frame.rotation]
         if turned:  # Frame.to_local's operations, on every turned row at once
             at = np.asarray(turned, dtype=np.intp)

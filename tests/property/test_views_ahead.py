@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fatswarm.agent.uniform_circle import ALGORITHM
+from fatswarm.domain import draws
 from fatswarm.domain.draws import LOOK_STREAM, _mix64, view_order, view_orders
 from fatswarm.domain.robot_model import PAPER_MODEL, FrameChange, Frames, RobotModel
 from fatswarm.domain.seam import Configured
@@ -69,3 +71,35 @@ def test_prepared_views_are_the_views_built_alone(
         got = ahead.view(positions, robot, look_round)[0]
         assert got.dtype == want.dtype and got.shape == want.shape
         assert got.tobytes() == want.tobytes()
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**64 - 1), st.integers(1, 10**6), st.integers(70, 130), st.integers(60, 90))
+def test_view_orders_of_a_whole_round_are_view_order_of_each_robot(
+    seed: int, round_no: int, k: int, m: int
+) -> None:
+    """From SORT_VALUES hashes on, `view_orders` sorts them as values with the index in their low
+    bits: still each robot's own `view_order`, the argsort of its hashes."""
+    robots = list(range(3, 3 + m))
+    rows = view_orders(seed, round_no, robots, k)
+    assert rows.size >= draws.SORT_VALUES and rows.dtype == np.int64
+    want = draws._hashes(seed, round_no, robots, k).argsort(axis=1)
+    assert np.array_equal(rows, want)
+    for row, robot in list(zip(rows, robots, strict=True))[:: m // 5]:
+        assert np.array_equal(row, view_order(seed, round_no, robot, k))
+
+
+def test_hashes_alike_in_their_high_bits_are_argsorted_as_they_are(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Two hashes of a row that differ only in the bits the index replaces: that row is ordered
+    by its hashes whole, not by the indices."""
+    rng = np.random.default_rng(4)
+    hashes = rng.integers(0, 2**63, size=(70, 64), dtype=np.uint64) * np.uint64(2)
+    hashes[5, 40] = hashes[5, 3] + np.uint64(1)  # hash 40 after hash 3, index 40 after 3 too
+    hashes[9, 2] = hashes[9, 30] + np.uint64(1)  # hash 2 after hash 30: index 2 would go first
+    hashes[9, 7] = hashes[9, 7] | np.uint64(63)  # high bits alone apart
+    monkeypatch.setattr(draws, "_hashes", lambda *a: hashes[list(a[2])].copy())
+    got = view_orders(1, 2, list(range(70)), 64)
+    assert np.array_equal(got, hashes.argsort(axis=1))
+    assert got[9].tolist().index(30) < got[9].tolist().index(2)

@@ -16,14 +16,15 @@ from hypothesis.extra.numpy import arrays
 import fatswarm
 from fatswarm.agent.gathering import ALGORITHM as GATHERING
 from fatswarm.agent.gathering import GatheringParams
-from fatswarm.agent.oblot_common import make_oblot_params
+from fatswarm.agent.oblot_common import OblotRuleError, make_oblot_params
 from fatswarm.agent.oblot_go_to_cog import ALGORITHM as GO_TO_COG
 from fatswarm.agent.row_sums import fsum_rows, nearest_norms
 from fatswarm.coordinator.schedule import make_scheduler
 from fatswarm.deploy.engine.lockstep import run_lockstep
-from fatswarm.domain.path import Path, Points
+from fatswarm.domain.path import Line, Path, Points, StraightMoves
 from fatswarm.domain.robot_model import RobotModel
 from fatswarm.domain.seam import Configured
+from fatswarm.domain.tolerance import snap
 from fatswarm.world.looks import Looks
 from fatswarm.world.record import RecordWriter
 
@@ -55,7 +56,17 @@ def test_fsum_rows_gives_math_fsum_bits_on_ties_cancellations_and_wide_exponents
     cancel[:, -1] = -cancel[:, :-1].sum(axis=1)
     wide = rng.normal(size=(5, 40)) * 2.0 ** rng.integers(-80, 80, size=(5, 40))
     grid = rng.integers(-1000, 1000, size=(5, 30)) / 1024.0
-    for rows in (ties, cancel, wide, grid, np.zeros((3, 5)), -np.zeros((2, 3)), np.ones((2, 0))):
+    zero_sums = np.array([[0.5, -0.5, -0.0, 0.25, -0.25], [-0.0, 3.0, -0.0, -3.0, -0.0]])
+    for rows in (
+        ties,
+        cancel,
+        wide,
+        grid,
+        zero_sums,  # on a grid, summing to zero: +0.0, as math.fsum
+        np.zeros((3, 5)),
+        -np.zeros((2, 3)),
+        np.ones((2, 0)),
+    ):
         assert bits(fsum_rows(rows)) == bits(fsums(rows) if rows.shape[1] else np.zeros(2))
 
 
@@ -93,56 +104,128 @@ def views_of(positions: Points, rng: np.random.Generator) -> np.ndarray:
     return out
 
 
+def assert_moves_are_paths(answer: object, paths: list[Path]) -> None:
+    """`answer` is StraightMoves whose every row is the Path of `paths` bit for bit: a Line to
+    the very floats (signs of zero included) where it goes, STAY elsewhere."""
+    assert isinstance(answer, StraightMoves)
+    assert answer.ends.shape == (len(paths), 2) and answer.ends.dtype == np.float64
+    assert answer.goes.tolist() == [bool(p) for p in paths]
+    assert answer.paths() == paths
+    for end, go, path in zip(answer.ends, answer.goes, paths, strict=True):
+        if go:
+            (segment,) = path.segments
+            assert type(segment) is Line
+            assert bits(end) == bits(np.array(segment.end))
+
+
+def drawn_positions(n: int, rng: np.random.Generator, kind: str) -> Points:
+    """n centres: anywhere, on the world's grid (snapped, as a run's positions are), or some
+    robots at one point (points gather there)."""
+    positions = rng.uniform(-3.0 * n, 3.0 * n, size=(n, 2))
+    if kind == "grid":
+        positions = snap(positions)
+    elif kind == "together":
+        positions[: n // 2 + 1] = positions[0]
+    return positions
+
+
+def mirrored_views_of(positions: Points, rng: np.random.Generator) -> np.ndarray:
+    """Every robot's view of `positions`, x mirrored or not, shuffled: the paper's frames (on the
+    grid, the views' sums take `fsum_rows`' exact path)."""
+    n = len(positions)
+    out = np.empty((n, n - 1, 2))
+    for robot in range(n):
+        others = np.delete(positions, robot, axis=0) - positions[robot]
+        if rng.random() < 0.5:
+            others[:, 0] *= -1.0
+        out[robot] = others[rng.permutation(n - 1)]
+    return out
+
+
+KINDS = st.sampled_from(["any", "grid", "together"])
+
+
 @SETTINGS
-@given(st.integers(2, 40), st.integers(0, 2**32 - 1), st.sampled_from([1e-3, 0.5, 5.0]))
+@given(
+    st.integers(2, 60),
+    st.integers(0, 2**32 - 1),
+    st.sampled_from([1e-3, 0.5, 5.0]),
+    KINDS,
+    st.booleans(),
+)
 def test_gathering_hook_gives_every_robot_the_path_of_its_own_compute(
-    n: int, seed: int, tolerance: float
+    n: int, seed: int, tolerance: float, kind: str, turned: bool
 ) -> None:
     rng = np.random.default_rng(seed)
-    positions = rng.uniform(-3.0 * n, 3.0 * n, size=(n, 2))
-    views = views_of(positions, rng)
+    positions = drawn_positions(n, rng, kind)
+    views = views_of(positions, rng) if turned else mirrored_views_of(positions, rng)
     params = GatheringParams(n, tolerance)
-    assert list(GATHERING.compute_views(views, params)) == [
-        GATHERING.compute(view, params) for view in views
-    ]
+    want = [GATHERING.compute(view, params) for view in views]
+    assert_moves_are_paths(GATHERING.compute_views(views, params), want)
 
 
 @SETTINGS
-@given(st.integers(2, 40), st.integers(0, 2**32 - 1), st.booleans())
+@given(
+    st.integers(2, 60), st.integers(0, 2**32 - 1), KINDS, st.booleans(), st.sampled_from([0.0, 1.0])
+)
 def test_go_to_cog_hook_gives_every_robot_the_path_of_its_own_compute(
-    n: int, seed: int, together: bool
+    n: int, seed: int, kind: str, turned: bool, tolerance: float
 ) -> None:
     rng = np.random.default_rng(seed)
-    positions = rng.uniform(-3.0 * n, 3.0 * n, size=(n, 2))
-    if together:  # point robots gathered at one point, as the run ends
+    positions = drawn_positions(n, rng, kind)
+    if kind == "together" and rng.random() < 0.5:  # point robots gathered at one point
         positions[:] = positions[0]
-    views = views_of(positions, rng)
-    params = make_oblot_params(n, {"tolerance": 0.0})
-    assert list(GO_TO_COG.compute_views(views, params)) == [
-        GO_TO_COG.compute(view, params) for view in views
-    ]
+    views = views_of(positions, rng) if turned else mirrored_views_of(positions, rng)
+    params = make_oblot_params(n, {"tolerance": tolerance})
+    want = [GO_TO_COG.compute(view, params) for view in views]
+    assert_moves_are_paths(GO_TO_COG.compute_views(views, params), want)
+
+
+def test_gathering_hook_steps_short_of_g_and_stays_as_compute_does() -> None:
+    """Views where some robots reach G, some stop short of it (the gap caps the step) and some
+    stay (touching): every branch of `_toward` in one call."""
+    positions = np.array([[0.0, 0.0], [2.0, 0.0], [10.0, 3.0], [-7.5, 4.25], [3.0, -9.0]])
+    rng = np.random.default_rng(1)
+    views = mirrored_views_of(positions, rng)
+    params = GatheringParams(5, 1e-3)
+    want = [GATHERING.compute(view, params) for view in views]
+    assert {len(p) for p in want} == {0, 1}
+    assert_moves_are_paths(GATHERING.compute_views(views, params), want)
+
+
+def test_go_to_cog_hook_refuses_a_target_that_is_not_finite_as_compute_does() -> None:
+    views = np.array([[[1.0, 2.0]], [[np.inf, 0.0]]])
+    params = make_oblot_params(2, {"tolerance": 0.0})
+    with pytest.raises(OblotRuleError, match="not a finite point"):
+        GO_TO_COG.compute(views[1], params)
+    with pytest.raises(OblotRuleError, match="not a finite point"):
+        GO_TO_COG.compute_views(views, params)
 
 
 def test_hooks_answer_a_round_of_empty_views_as_compute_does() -> None:
     views = np.zeros((1, 0, 2))
     params = GatheringParams(1, 1e-3)
-    assert list(GATHERING.compute_views(views, params)) == [GATHERING.compute(views[0], params)]
+    assert_moves_are_paths(
+        GATHERING.compute_views(views, params), [GATHERING.compute(views[0], params)]
+    )
     oblot = make_oblot_params(1, {"tolerance": 0.0})
-    assert list(GO_TO_COG.compute_views(views, oblot)) == [GO_TO_COG.compute(views[0], oblot)]
+    assert_moves_are_paths(
+        GO_TO_COG.compute_views(views, oblot), [GO_TO_COG.compute(views[0], oblot)]
+    )
 
 
 @pytest.mark.parametrize(
     "frames, frame_change",
     [("y-axis", "fixed"), ("disoriented", "fixed"), ("chirality", "every-look")],
 )
+@pytest.mark.parametrize("n", [9, 90])  # 90: the hashes sorted as values (view_orders)
 def test_the_views_built_at_once_are_the_views_built_one_by_one(
-    frames: str, frame_change: str
+    frames: str, frame_change: str, n: int
 ) -> None:
-    n = 9
     model = RobotModel.of(frames=frames, frame_change=frame_change)
     setting = Configured.of(GATHERING, n)
     positions = np.random.default_rng(5).uniform(-20.0, 20.0, size=(n, 2))
-    robots = [0, 2, 3, 7, 8]
+    robots = [0, 2, 3, 7, 8] if n == 9 else [r for r in range(n) if r % 7]
     at_once = Looks(model, setting, n, 11, False).views_at_once(positions, 4, robots)
     alone = Looks(model, setting, n, 11, False)
     assert at_once is not None
@@ -183,6 +266,25 @@ def test_a_record_is_the_same_with_the_round_hook_and_without(
     with_hook = record_of(tmp_path, "hook", algorithm, seed, kw)
     monkeypatch.setattr(Configured, "views_compute", lambda self: None)
     assert record_of(tmp_path, "alone", algorithm, seed, kw) == with_hook
+
+
+@pytest.mark.parametrize(
+    "algorithm, kw",
+    [("gathering", {}), ("oblot-go-to-cog", {"bodies": "points", "frames": "disoriented"})],
+)
+def test_a_large_round_is_the_same_with_the_round_hook_and_without(
+    tmp_path: FsPath, monkeypatch: pytest.MonkeyPatch, algorithm: str, kw: dict[str, Any]
+) -> None:
+    """n = 70: a round's view orders sorted as values (view_orders), the hook's arrays."""
+
+    def record(name: str) -> bytes:
+        target = tmp_path / f"{name}.jsonl"
+        fatswarm.run(70, algorithm=algorithm, seed=2, record=target, max_rounds=8, **kw)
+        return target.read_bytes()
+
+    with_hook = record("hook")
+    monkeypatch.setattr(Configured, "views_compute", lambda self: None)
+    assert record("alone") == with_hook
 
 
 class Faulty:
@@ -270,10 +372,11 @@ def test_straight_moves_are_the_lines_and_stays_they_stand_for() -> None:
 
 
 class StraightGathering:
-    """Gathering whose round hook answers StraightMoves: the arrays form of its paths."""
+    """Gathering, counting the calls of its compute alone: none while its round hook (which
+    answers StraightMoves) answers."""
 
     name = "straight-gathering"
-    computed = 0  # calls of compute alone: none while the hook answers
+    computed = 0
 
     def __getattr__(self, name: str) -> Any:
         return getattr(GATHERING, name)
@@ -282,13 +385,8 @@ class StraightGathering:
         StraightGathering.computed += 1
         return GATHERING.compute(view, params)
 
-    def compute_views(self, views: np.ndarray, params: GatheringParams) -> Any:
-        from fatswarm.domain.path import Line, StraightMoves
-
-        paths = GATHERING.compute_views(views, params)
-        ends = [p.segments[0].end if p else (0.0, 0.0) for p in paths]  # type: ignore[union-attr]
-        goes = [bool(p) and type(p.segments[0]) is Line for p in paths]
-        return StraightMoves(np.array(ends, dtype=np.float64).reshape(-1, 2), np.array(goes))
+    def compute_views(self, views: np.ndarray, params: GatheringParams) -> StraightMoves:
+        return GATHERING.compute_views(views, params)
 
 
 def test_a_hook_answering_straight_moves_makes_the_record_of_compute_alone(
