@@ -19,6 +19,7 @@ from fatswarm.agent.row_sums import fsum_rows, nearest_norms
 from fatswarm.domain.assumptions import Assumptions
 from fatswarm.domain.path import STAY, Line, Path, Points, StraightMoves
 from fatswarm.domain.robot_model import Bodies, Visibility
+from fatswarm.domain.scratch import scratch
 from fatswarm.domain.seam import AlgorithmParamsError, ParamSpec, ParamValue, Views
 from fatswarm.domain.tolerance import CONTACT
 
@@ -129,8 +130,11 @@ class Gathering:
         k, m = views.shape[0], views.shape[1]
         if m == 0:
             return StraightMoves(np.zeros((k, 2)), np.zeros(k, dtype=np.bool_))
-        centre = fsum_rows(views) / (m + 1)  # (k, 2); the robot itself, at the origin, adds 0
-        gaps = (nearest_norms(views[:, :, 0], views[:, :, 1]) - CONTACT) / 2.0
+        coords = scratch("gathering", (2, k, m))  # every x, then every y: rows contiguous
+        np.copyto(coords, views.transpose(2, 0, 1))
+        sums = fsum_rows(coords.reshape(2 * k, m)) / (m + 1)  # the robot itself adds nothing
+        gaps = (nearest_norms(coords[0], coords[1]) - CONTACT) / 2.0
+        centre = sums.reshape(2, k).T  # (k, 2)
         return _towards(centre, gaps, params.tolerance)
 
     def goal(self, positions: Points, params: GatheringParams) -> bool:

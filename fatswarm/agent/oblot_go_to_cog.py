@@ -22,6 +22,7 @@ from fatswarm.agent.oblot_common import (
 from fatswarm.agent.row_sums import fsum_rows
 from fatswarm.domain.assumptions import Assumptions
 from fatswarm.domain.path import Path, Points, StraightMoves
+from fatswarm.domain.scratch import scratch
 from fatswarm.domain.seam import ParamSpec, ParamValue, Views
 
 # The peer's robots see every robot (`Simulator/Simulation.java:101`), one row per robot
@@ -61,7 +62,10 @@ class OblotGoToCoG:
         k, m = views.shape[0], views.shape[1]
         if m == 0:  # the target is the origin: within any tolerance (>= 0)
             return StraightMoves(np.zeros((k, 2)), np.zeros(k, dtype=np.bool_))
-        centre = fsum_rows(views) / (m + 1)  # the robot itself, at the origin, adds nothing
+        coords = scratch("oblot-go-to-cog", (2, k, m))  # every x, then every y: rows contiguous
+        np.copyto(coords, views.transpose(2, 0, 1))
+        sums = fsum_rows(coords.reshape(2 * k, m)) / (m + 1)  # the robot itself adds nothing
+        centre = sums.reshape(2, k).T  # (k, 2)
         if not np.isfinite(centre).all():
             row = int(np.flatnonzero(~np.isfinite(centre).all(axis=1))[0])
             go_to((float(centre[row, 0]), float(centre[row, 1])), params)  # raises

@@ -82,15 +82,29 @@ def nearest_norms(xs: Rows, ys: Rows) -> Sums:
     (m >= 1): `np.hypot` only on each row's candidates, the elements whose x^2 + y^2 is within
     NEAR_REL of the row's least. Outside that margin an element's norm is larger by far more than
     np.hypot's error (under 1 ulp), so it cannot be the least; rows where squares could underflow
-    or overflow, or hold NaN, take `np.hypot` whole."""
+    or overflow, or hold NaN, take `np.hypot` whole. The common case, a round where each row has
+    one candidate, needs no search for them: each row's least square is its candidate."""
     shape = np.broadcast_shapes(np.shape(xs), np.shape(ys))
     squares = np.multiply(xs, xs, out=scratch("nearest_norms", shape))
     squares += np.multiply(ys, ys, out=scratch("nearest_norms.y", shape))
-    least = squares.min(axis=1)
+    if len(squares) == 0:
+        return np.empty(0, dtype=np.float64)
+    every = np.arange(len(squares))
+    first = squares.argmin(axis=1)  # a row's least (its first NaN, if any)
+    least = squares[every, first]
+    near = np.less_equal(
+        squares, (least * (1.0 + NEAR_REL))[:, None], out=scratch("nearest_norms", shape, np.bool_)
+    )
+    if (
+        bool((least >= SQUARE_TINY).all())
+        and float(squares.max()) <= SQUARE_HUGE  # NaN: not so
+        and np.count_nonzero(near) == len(squares)  # every row one candidate: its least
+    ):
+        norms: Sums = np.hypot(xs[every, first], ys[every, first])
+        return norms
     out = np.empty(len(xs), dtype=np.float64)
     plain = (least >= SQUARE_TINY) & (squares.max(axis=1) <= SQUARE_HUGE)  # NaN: not plain
-    near = scratch("nearest_norms", shape, np.bool_)
-    rows, cols = np.nonzero(np.less_equal(squares, (least * (1.0 + NEAR_REL))[:, None], out=near))
+    rows, cols = np.nonzero(near)
     norms = np.hypot(xs[rows, cols], ys[rows, cols])
     out.fill(np.inf)
     np.minimum.at(out, rows, norms)

@@ -44,8 +44,12 @@ def view_order(seed: int, round_no: int, robot: int, k: int) -> np.ndarray:
     return order
 
 
-def view_orders(seed: int, round_no: int, robots: Sequence[int], k: int) -> np.ndarray:
-    """`view_order` of every robot of `robots` at once: row i is robot robots[i]'s, (m, k) int64.
+def view_orders(
+    seed: int, round_no: int, robots: Sequence[int], k: int, among_all: bool = False
+) -> np.ndarray:
+    """`view_order` of every robot of `robots` at once: row i is robot robots[i]'s, (m, k) int64;
+    with `among_all`, each index j among the others is that robot's among all k + 1 robots
+    (j + 1 from robots[i] on: robots[i] itself skipped), what a round's views gather.
 
     The same hashes; they are distinct within a row (splitmix64's finaliser is a bijection and the
     keys differ), so any sort gives each row the very order `view_order` gives. The hashes are
@@ -54,24 +58,40 @@ def view_orders(seed: int, round_no: int, robots: Sequence[int], k: int) -> np.n
     chance of about k^2 2^-65) is argsorted whole instead.
     """
     z = _hashes(seed, round_no, robots, k)
-    if z.size < SORT_VALUES:
+    if z.size < SORT_VALUES or k < 2:
         order: np.ndarray = z.argsort(axis=1)
+        if among_all:
+            order += order >= np.asarray(robots, dtype=np.int64)[:, None]
         return order
-    bits = (k - 1).bit_length()
+    bits = k.bit_length() if among_all else (k - 1).bit_length()
     low = np.uint64((1 << bits) - 1)
-    z &= ~low  # the hash's high bits, then the index in the low ones
-    z |= _indices(k)[None, :]
+    z &= ~low  # the hash's high bits, then the index in the low ones (increasing along a row)
+    z |= _skipping(k, tuple(robots)) if among_all else _indices(k)[None, :]
     z.sort(axis=1)
     m = len(z)
     gaps = np.subtract(z[:, 1:], z[:, :-1], out=scratch("view_orders", (m, k - 1), np.uint64))
-    near = np.less_equal(gaps, low, out=scratch("view_orders", (m, k - 1), np.bool_))
-    doubtful = np.flatnonzero(near.any(axis=1))  # high bits maybe equal: which first unsure
+    # sorted and distinct, each gap is positive; one within `low`: the high bits may be equal,
+    # so which hash is the smaller is not sure in that row
+    doubtful = np.flatnonzero((gaps <= low).any(axis=1) if gaps.min() <= low else ())
     z &= low
     order = z.view(np.int64)
     if len(doubtful):
         picked = [robots[i] for i in doubtful.tolist()]
-        order[doubtful] = _hashes(seed, round_no, picked, k).argsort(axis=1)
+        redone = _hashes(seed, round_no, picked, k).argsort(axis=1)
+        if among_all:
+            redone += redone >= np.asarray(picked, dtype=np.int64)[:, None]
+        order[doubtful] = redone
     return order
+
+
+@functools.lru_cache(maxsize=2)
+def _skipping(k: int, robots: tuple[int, ...]) -> np.ndarray:
+    """(m, k) uint64, read-only: j + 1 where j >= robots[i], else j: index j among robot
+    robots[i]'s others as one among all robots (the same robots look every fsync round)."""
+    j = np.arange(k, dtype=np.int64)[None, :]
+    out = (j + (j >= np.asarray(robots, dtype=np.int64)[:, None])).astype(np.uint64)
+    out.flags.writeable = False
+    return out
 
 
 def _hashes(seed: int, round_no: int, robots: Sequence[int], k: int) -> np.ndarray:

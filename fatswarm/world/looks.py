@@ -18,7 +18,6 @@ from fatswarm.domain.draws import look_noise, view_order, view_orders
 from fatswarm.domain.frames import Frame, draw_frame
 from fatswarm.domain.path import Path, Points
 from fatswarm.domain.robot_model import Bodies, FrameChange, Lights, RobotModel
-from fatswarm.domain.scratch import scratch
 from fatswarm.domain.seam import Configured
 from fatswarm.world.sight import seen
 
@@ -115,17 +114,19 @@ class Looks:
         if not self.plain or not robots or len(robots) * k > AHEAD_LIMIT:
             return None
         rows = np.asarray(robots, dtype=np.intp)
-        order = view_orders(self.seed, look_round, robots, k)
-        order += np.greater_equal(order, rows[:, None], out=scratch("views", order.shape, np.bool_))
-        # (an index among the others is one among all robots)
+        order = view_orders(self.seed, look_round, robots, k, True)  # indices among all robots
         frames: Sequence[Frame]
         if self._fixed is not None and self._fixed_sign is not None:  # drawn once
             frames, sign = [self._fixed[robot] for robot in robots], self._fixed_sign[rows]
         else:
             frames = [self.frame(robot, look_round) for robot in robots]
             sign = _mirror_signs(frames)
-        rel: Points = np.take(positions, order, axis=0)  # (m, k, 2): one gather, then in place
-        rel -= positions[rows][:, None, :]  # the same differences
+        # each point as one complex number: one gather, and a complex difference is the two
+        # coordinates' differences, the very operations (faster than (m, k, 2) broadcast)
+        table = np.ascontiguousarray(positions, dtype=np.float64).view(np.complex128)[:, 0]
+        pairs = np.take(table, order)
+        pairs -= table[rows][:, None]
+        rel: Points = pairs.view(np.float64).reshape(len(rows), k, 2)
         if (sign < 0.0).any():  # x * 1.0 is x, bit for bit: the mirror of to_local alone
             rel[:, :, 0] *= sign[:, None]
         turned = [i for i, frame in enumerate(frames) if frame.rotation]

@@ -87,6 +87,10 @@ def test_view_orders_of_a_whole_round_are_view_order_of_each_robot(
     assert np.array_equal(rows, want)
     for row, robot in list(zip(rows, robots, strict=True))[:: m // 5]:
         assert np.array_equal(row, view_order(seed, round_no, robot, k))
+    skipped = want + (want >= np.array(robots)[:, None])  # robot robots[i] itself left out
+    assert np.array_equal(view_orders(seed, round_no, robots, k, True), skipped)
+    small = robots[:3]  # argsorted: under SORT_VALUES
+    assert np.array_equal(view_orders(seed, round_no, small, k, True), skipped[:3])
 
 
 def test_hashes_alike_in_their_high_bits_are_argsorted_as_they_are(
@@ -103,3 +107,5 @@ def test_hashes_alike_in_their_high_bits_are_argsorted_as_they_are(
     got = view_orders(1, 2, list(range(70)), 64)
     assert np.array_equal(got, hashes.argsort(axis=1))
     assert got[9].tolist().index(30) < got[9].tolist().index(2)
+    skipped = got + (got >= np.arange(70)[:, None])
+    assert np.array_equal(view_orders(1, 2, list(range(70)), 64, True), skipped)

@@ -88,6 +88,9 @@ def test_nearest_norms_gives_the_least_hypot_of_every_row_bit_for_bit() -> None:
     ys[22, :] = 0.0
     want = np.hypot(xs, ys).min(axis=1)
     assert bits(nearest_norms(xs, ys)) == bits(want)
+    # rows of one candidate each (every row's least far from its next): no search for them
+    assert bits(nearest_norms(xs[23:], ys[23:])) == bits(want[23:])
+    assert nearest_norms(xs[:0], ys[:0]).shape == (0,)
 
 
 def views_of(positions: Points, rng: np.random.Generator) -> np.ndarray:
