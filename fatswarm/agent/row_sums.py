@@ -51,10 +51,10 @@ def fsum_rows(values: Rows) -> Sums:
     high = np.add(x, sigma, out=scratch("fsum_rows", x.shape))
     high -= sigma
     exact = high.sum(axis=1)
-    rest = np.subtract(x, high, out=high)  # exact; |rest| <= 2^-53 sigma: sum <= m 2^-53 sigma
-    if not rest.any():  # every value a sum of high parts (all on a common grid): exact is exact
-        out += exact  # 0.0 + s is s, and a zero sum +0.0, as math.fsum has it
+    if np.array_equal(high, x):  # every value its own high part (all on a common grid): the sum
+        out += exact  # is exact; 0.0 + s is s, and a zero sum +0.0, as math.fsum has it
         return out
+    rest = np.subtract(x, high, out=high)  # exact; |rest| <= 2^-53 sigma: sum <= m 2^-53 sigma
     approx = rest.sum(axis=1)
     # |approx - sum(rest)| <= (m - 1) u / (1 - (m - 1) u) * sum|rest|: doubled for the rounding
     # of the bound's own computation

@@ -28,7 +28,7 @@ ROTATION_STREAM: Final = 0x2074  # each private frame's rotation (--frames chira
 FRAME_LOOK_STREAM: Final = 0xF1A5  # mirrors drawn by key (disoriented, --frame-change every-look)
 NOISE_STREAM: Final = 0x9015  # the sensors' error on each position a Look shows (--noise)
 
-SORT_VALUES: Final = 4096
+SORT_VALUES: Final = 2048
 """`view_orders` sorts hashes as values from this many in all; below, argsort costs less."""
 
 

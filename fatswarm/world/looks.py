@@ -49,6 +49,7 @@ class Looks:
             else None
         )
         self._fixed_sign = None if self._fixed is None else _mirror_signs(self._fixed)
+        self._fixed_turns = self._fixed is not None and any(f.rotation for f in self._fixed)
         # every robot's colour (palette index; the first at the start); none without lights
         self.colours: list[int] | None = [0] * n if self.palette else None
         # whether a view is every other robot, exact, with no colours and nothing recorded
@@ -116,8 +117,10 @@ class Looks:
         rows = np.asarray(robots, dtype=np.intp)
         order = view_orders(self.seed, look_round, robots, k, True)  # indices among all robots
         frames: Sequence[Frame]
-        if self._fixed is not None and self._fixed_sign is not None:  # drawn once
-            frames, sign = [self._fixed[robot] for robot in robots], self._fixed_sign[rows]
+        fixed = self._fixed
+        if fixed is not None and self._fixed_sign is not None:  # drawn once
+            sign = self._fixed_sign[rows]
+            frames = [fixed[robot] for robot in robots] if self._fixed_turns else ()
         else:
             frames = [self.frame(robot, look_round) for robot in robots]
             sign = _mirror_signs(frames)
