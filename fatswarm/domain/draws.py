@@ -104,6 +104,11 @@ def _hashes(seed: int, round_no: int, robots: Sequence[int], k: int) -> np.ndarr
     x = (x ^ (x >> _S27)) * _C3
     keys = x ^ (x >> _S31)
     z: np.ndarray = np.add(_spread(k)[None, :], keys[:, None])
+    if z.size < SORT_VALUES:  # few: fewer calls
+        z = (z ^ (z >> _S30)) * _C2
+        z = (z ^ (z >> _S27)) * _C3
+        z ^= z >> _S31
+        return z
     t = scratch("view_orders", z.shape, np.uint64)  # in place: fresh arrays cost page faults
     np.right_shift(z, _S30, out=t)
     z ^= t
