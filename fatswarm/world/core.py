@@ -354,6 +354,14 @@ class WorldCore:
         self.looked.add(robot)
         return True
 
+    def admit_looks(self, robots: Sequence[int]) -> list[bool]:
+        """`admit_look` of each of `robots` in turn (whether each was admitted), at once where
+        every one is active in the open round (a lock step's round hook)."""
+        if self.open_round and self.active_set.issuperset(robots):
+            self.looked.update(robots)
+            return [True] * len(robots)
+        return [self.admit_look(robot) for robot in robots]
+
     def move(self, robot: int | None, msg: MoveSubmitted) -> bool:
         """Hold a move for the open round from the robot `robot` it came from (None: a key with no
         robot); False if refused (counted)."""

@@ -104,9 +104,12 @@ class Rounds:
         else:
             outcome = apply_round(before, paths, points=points)
         after = np.asarray(outcome.positions, dtype=np.float64)
-        traveled = {r: float(outcome.traveled.get(r, 0.0)) for r in paths}
-        held_robots = w.held_robots()
-        timed_out = [r for r in w.active if r not in held_robots]
+        if isinstance(paths, LinePaths):  # apply_lines: every mover's, as apply_round gives it
+            traveled = outcome.traveled
+        else:
+            traveled = {r: float(outcome.traveled.get(r, 0.0)) for r in paths}
+        holding = w.held_robots()
+        timed_out = [] if holding >= w.active_set else [r for r in w.active if r not in holding]
         w.last_timed_out = tuple(timed_out)
         down, back = self._crashes(round_no)
         entry = round_entry(

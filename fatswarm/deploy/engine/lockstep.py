@@ -535,7 +535,7 @@ class _Bus:
         views = world.views_of(lookers)
         if views is None:
             return False
-        admitted = [world.admit_look(robot) for robot in lookers]
+        admitted = world.admit_looks(lookers)
         try:
             answer: Sequence[Path] | StraightMoves | None = self.batch(views)
         except Exception:  # each robot's own compute then says what it says alone
