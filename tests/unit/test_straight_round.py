@@ -282,3 +282,26 @@ def test_a_record_is_the_same_through_straight_moves_through_paths_and_alone(
     monkeypatch.setattr(Configured, "views_compute", lambda self: None)
     alone = record(tmp_path, "alone", Straight(INNER[inner], wild), scheduler, seed, kw)
     assert arrays == through_paths == alone
+
+
+class Misshapen(Straight):
+    """`Straight` whose StraightMoves have a row too many: not the contract's, so each robot's
+    own compute answers (as for a hook that gives k + 1 Paths)."""
+
+    def compute_views(self, views: np.ndarray, params: Any) -> Any:
+        answer = Straight.compute_views(self, views, params)
+        if not isinstance(answer, StraightMoves):
+            return answer
+        ends = np.vstack([answer.ends, [[1.0, 1.0]]])
+        return StraightMoves(ends, np.append(answer.goes, True))
+
+
+def test_straight_moves_of_the_wrong_shape_leave_each_robot_its_own_compute(
+    tmp_path: FsPath, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    misshapen = Misshapen(GATHERING)
+    hooked = record(tmp_path, "misshapen", misshapen, "fsync", 1, {"frames": "disoriented"})
+    assert misshapen.answered > 0
+    monkeypatch.setattr(Configured, "views_compute", lambda self: None)
+    alone = record(tmp_path, "alone", Straight(GATHERING), "fsync", 1, {"frames": "disoriented"})
+    assert hooked == alone
