@@ -115,7 +115,11 @@ class FrameRows:
         local = np.asarray(ends, dtype=np.float64)
         world = local.copy()
         world[:, 0] *= self.sign  # the mirror alone: -x, bit for bit; x elsewhere
-        if self.turns.any():
+        if self.turns.all():  # every frame turns (as drawn rotations do): whole columns
+            x, y, c, s = local[:, 0], local[:, 1], self.cos_back, self.sin_back
+            world[:, 0] = self.turned_sign * (c * x - s * y)
+            world[:, 1] = s * x + c * y
+        elif self.turns.any():
             at = np.flatnonzero(self.turns)
             x, y = local[at, 0], local[at, 1]
             c, s = self.cos_back[at], self.sin_back[at]

@@ -16,6 +16,7 @@ import math
 from collections import Counter
 from collections.abc import KeysView, Sequence
 from dataclasses import dataclass, replace
+from itertools import compress
 from typing import Final
 
 import numpy as np
@@ -417,21 +418,25 @@ class WorldCore:
         turn, by `hold` itself, if any would be refused); the lines are kept as arrays
         (`held_lines`, world axes) and made Paths only if `held` is read."""
         robots = list(robots)
-        held = self._held
+        chosen, held = set(robots), self._held
         if not (
             round_no == self.open_round
-            and self.active_set.issuperset(robots)
-            and self.looked.issuperset(robots)
-            and held.keys().isdisjoint(robots)
-            and len(set(robots)) == len(robots)
+            and len(chosen) == len(robots)
+            and self.active_set.issuperset(chosen)
+            and self.looked.issuperset(chosen)
+            and (not held or held.keys().isdisjoint(chosen))
         ):  # some would be refused: each in turn, as `hold` refuses and counts them
             for robot, (x, y), go in zip(robots, ends.tolist(), goes.tolist(), strict=True):
                 self.hold(robot, round_no, Path((Line((x, y)),)) if go else STAY, None)
             return
-        movers = [robot for robot, go in zip(robots, goes.tolist(), strict=True) if go]
-        held.update(dict.fromkeys(robots, STAY))  # (to_world of a stay is a stay)
+        if goes.all():
+            movers = robots
+        else:  # the others stay (to_world of a stay is a stay)
+            movers = list(compress(robots, goes.tolist()))
+            held.update(dict.fromkeys(robots, STAY))
+            ends = ends[goes]
         if movers:
-            world = self.looks.lines_to_world(movers, round_no, ends[goes])
+            world = self.looks.lines_to_world(movers, round_no, ends)
             held.update(dict.fromkeys(movers, _IN_LINES))
             lines = self._lines
             if lines is None:
@@ -439,7 +444,7 @@ class WorldCore:
             else:  # a second batch in one round
                 lines.robots.extend(movers)
                 lines.ends = np.concatenate((lines.ends, world))
-        self.missing.difference_update(robots)
+        self.missing.difference_update(chosen)
 
     def _said(self, robot: int, round_no: int, failed: str) -> None:
         """Log a failed compute the first time one of its kind comes (`failure_kind`: the

@@ -50,6 +50,7 @@ class Looks:
         )
         self._fixed_sign = None if self._fixed is None else _mirror_signs(self._fixed)
         self._fixed_rows = None if self._fixed is None else FrameRows.of(self._fixed)
+        self._everyone = list(range(n))
         # every robot's colour (palette index; the first at the start); none without lights
         self.colours: list[int] | None = [0] * n if self.palette else None
         # whether a view is every other robot, exact, with no colours and nothing recorded
@@ -163,8 +164,11 @@ class Looks:
         """(m, 2): row i the end of a straight line robot robots[i] computed in the frame of its
         Look of round `look_round` (relative to it), in world axes: `to_world` of each one's
         `Path((Line(ends[i]),))`, the same bits, at once (`FrameRows.lines_to_world`)."""
-        if self._fixed_rows is not None:
-            rows = self._fixed_rows.take(np.asarray(robots, dtype=np.intp))
+        if self._fixed_rows is not None:  # every robot's frame drawn once: its row
+            whole = len(robots) == self.n and robots == self._everyone
+            rows = self._fixed_rows
+            if not whole:
+                rows = rows.take(np.asarray(robots, dtype=np.intp))
         else:  # a frame per Look: drawn per robot, then turned as arrays
             rows = FrameRows.of([self.frame(robot, look_round) for robot in robots])
         return rows.lines_to_world(ends)

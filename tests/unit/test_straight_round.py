@@ -75,13 +75,13 @@ def test_looks_turn_a_rounds_lines_to_world_as_each_robots_to_world(
     n = 12
     model = RobotModel.of(frames=frames, frame_change=frame_change)
     looks = Looks(model, Configured.of(GATHERING, n), n, 7, False)
-    robots = [0, 3, 4, 9, 11]
-    ends = np.random.default_rng(1).normal(size=(len(robots), 2)) * 40.0
-    ends[0] = (-0.0, 0.0)
-    world = looks.lines_to_world(robots, 5, ends)
-    for robot, end, got in zip(robots, ends.tolist(), world, strict=True):
-        alone = looks.to_world(robot, 5, Path((Line((end[0], end[1])),)))
-        assert bits(got) == path_bits(alone)
+    for robots in ([0, 3, 4, 9, 11], list(range(n)), [11, 2, 5]):  # some, everyone, any order
+        ends = np.random.default_rng(len(robots)).normal(size=(len(robots), 2)) * 40.0
+        ends[0] = (-0.0, 0.0)
+        world = looks.lines_to_world(robots, 5, ends)
+        for robot, end, got in zip(robots, ends.tolist(), world, strict=True):
+            alone = looks.to_world(robot, 5, Path((Line((end[0], end[1])),)))
+            assert bits(got) == path_bits(alone)
 
 
 def open_world(n: int = 6, frames: str = "disoriented") -> WorldCore:
