@@ -78,7 +78,7 @@ class Rounds:
                 keep = ~np.isin(movers, np.fromiter(gone, dtype=np.intp, count=len(gone)))
                 movers, ends = movers[keep], ends[keep]
             # world frame: transform(path, start, False)'s `1.0 * x + start`, and 1.0 * x is x
-            ends = ends + before[movers]
+            ends = ends + (before if len(movers) == len(before) else before[movers])
             paths, cut = LinePaths(movers, ends), []
         else:
             at = before.tolist()  # Python floats: the same values, read faster than numpy scalars
@@ -175,13 +175,17 @@ class Rounds:
         the rule of the record's `crashed` and `recovered` round fields (README, "Faults")."""
         w = self.books
         limit = crash_after(w.setup.n)
-        crashed = w.tracker.crashed
-        down = [
-            r
-            for r, since in enumerate(w.gone_since)
-            if since is not None and round_no - since >= limit and r not in crashed
-        ]
-        back = sorted(r for r in crashed if w.alive[r] and r not in w.stuck)
+        crashed, gone_since = w.tracker.crashed, w.gone_since
+        down = (
+            []
+            if gone_since.count(None) == len(gone_since)  # every agent there (a lock step's)
+            else [
+                r
+                for r, since in enumerate(gone_since)
+                if since is not None and round_no - since >= limit and r not in crashed
+            ]
+        )
+        back = sorted(r for r in crashed if w.alive[r] and r not in w.stuck) if crashed else []
         return down, back
 
 

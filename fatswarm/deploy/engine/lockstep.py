@@ -588,7 +588,7 @@ class _Bus:
         ):
             return False
         # plain_path of one Line of floats: finite and inside the wire's bounds (NaN fails)
-        if not bool((np.abs(ends[goes]) <= MAX_COORD).all()):
+        if not bool((np.abs(ends if goes.all() else ends[goes]) <= MAX_COORD).all()):
             return False
         if all(admitted):
             robots = lookers
