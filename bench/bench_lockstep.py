@@ -9,8 +9,9 @@ Every figure is in process through `fatswarm.run` (fsync, spread start), start-u
 clock runs from the first committed round to the last. `no-compute` is an algorithm that computes
 nothing (every robot steps 1e-4 to its right), so its cost per Look is the emulator's alone;
 `no-compute-views` is the same through the round hook (`compute_views`: the lock step builds the
-round's views as one array and takes every path of the round in one call). `gathering` and
-`oblot-go-to-cog` (on point robots) have the round hook; `uniform-circle` plans each round once.
+round's views as one array and takes every move of the round in one call, as arrays:
+`StraightMoves`). `gathering` and `oblot-go-to-cog` (on point robots) have the round hook;
+`uniform-circle` plans each round once.
 Each side runs in its own process, with its checkout's python (`--baseline-python`, default
 DIR/../basevenv/bin/python if it exists), from its checkout's folder. `--peer CMD` runs a shell
 command after each side, in turn, `--repeats` times: it must print one JSON object a line,
@@ -32,6 +33,9 @@ import time
 from collections.abc import Mapping, Sequence
 from typing import Any, Final
 
+import numpy as np
+
+from fatswarm.domain import path as _path
 from fatswarm.domain.path import Line, Path, Points
 
 SIZES: Final = (16, 64, 256)
@@ -65,12 +69,19 @@ class NoCompute:
 
 
 class NoComputeViews(NoCompute):
-    """NoCompute with the round hook: every robot of a round steps right in one call."""
+    """NoCompute with the round hook: every robot of a round steps right in one call, answered
+    as arrays (`StraightMoves`: the hook's fast form)."""
 
     name = "no-compute-views"
 
-    def compute_views(self, views: Points, params: None) -> list[Path]:
-        return [_RIGHT] * len(views)
+    def compute_views(self, views: Points, params: None) -> Any:
+        k = len(views)
+        straight = getattr(_path, "StraightMoves", None)
+        if straight is None:  # a checkout from before the fast form (--baseline): k Paths
+            return [_RIGHT] * k
+        ends = np.zeros((k, 2), dtype=np.float64)
+        ends[:, 0] = STEP
+        return straight(ends, np.ones(k, dtype=np.bool_))
 
 
 _RIGHT: Final = Path((Line((STEP, 0.0)),))

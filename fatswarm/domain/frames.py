@@ -8,10 +8,12 @@ a view is then mirrored by negation alone, the very bits it has always had.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
+from numpy.typing import NDArray
 
 from fatswarm.domain.draws import FRAME_LOOK_STREAM, ROTATION_STREAM, draw_flip, keyed_fraction
 from fatswarm.domain.path import Arc, Line, Path, Point, Points, Segment
@@ -69,6 +71,63 @@ class Frame:
 PAPER_FRAME: Final = Frame()
 
 
+@dataclass(frozen=True, slots=True, eq=False)  # holds arrays
+class FrameRows:
+    """k frames as arrays, row i frame i's: what `Frame` does to one robot's path, done to k
+    robots' straight lines at once (`lines_to_world`)."""
+
+    sign: NDArray[np.float64]  # (k,) -1.0 where the frame is a mirror alone, else 1.0
+    turns: NDArray[np.bool_]  # (k,) whether the frame turns (a rotation other than 0)
+    cos_back: NDArray[np.float64]  # (k,) math.cos(-rotation) (1.0 where it does not turn)
+    sin_back: NDArray[np.float64]  # (k,) math.sin(-rotation) (0.0 where it does not turn)
+    turned_sign: NDArray[np.float64]  # (k,) -1.0 where the frame mirrors, else 1.0
+
+    @staticmethod
+    def of(frames: Sequence[Frame]) -> FrameRows:
+        """The rows of `frames`, in order (each number as `path_to_world` computes it)."""
+        back = [
+            (math.cos(-f.rotation), math.sin(-f.rotation)) if f.rotation else (1.0, 0.0)
+            for f in frames
+        ]
+        return FrameRows(
+            sign=np.array([-1.0 if f.mirror and not f.rotation else 1.0 for f in frames]),
+            turns=np.array([bool(f.rotation) for f in frames], dtype=np.bool_),
+            cos_back=np.array([c for c, _ in back], dtype=np.float64),
+            sin_back=np.array([s for _, s in back], dtype=np.float64),
+            turned_sign=np.array([-1.0 if f.mirror else 1.0 for f in frames]),
+        )
+
+    def take(self, rows: NDArray[np.intp]) -> FrameRows:
+        """The frames of `rows`, in their order."""
+        return FrameRows(
+            self.sign[rows],
+            self.turns[rows],
+            self.cos_back[rows],
+            self.sin_back[rows],
+            self.turned_sign[rows],
+        )
+
+    def lines_to_world(self, ends: Points) -> Points:
+        """(k, 2): row i the end of a straight line computed in frame i (relative to its robot),
+        in world axes (a new array): `Frame.path_to_world` of `Path((Line(ends[i]),))` for every
+        row, with its very operations, so the very bits (x * 1.0 is x; the turned rows alone
+        are turned, each float as `back` makes it)."""
+        local = np.asarray(ends, dtype=np.float64)
+        world = local.copy()
+        world[:, 0] *= self.sign  # the mirror alone: -x, bit for bit; x elsewhere
+        if self.turns.all():  # every frame turns (as drawn rotations do): whole columns
+            x, y, c, s = local[:, 0], local[:, 1], self.cos_back, self.sin_back
+            world[:, 0] = self.turned_sign * (c * x - s * y)
+            world[:, 1] = s * x + c * y
+        elif self.turns.any():
+            at = np.flatnonzero(self.turns)
+            x, y = local[at, 0], local[at, 1]
+            c, s = self.cos_back[at], self.sin_back[at]
+            world[at, 0] = self.turned_sign[at] * (c * x - s * y)
+            world[at, 1] = s * x + c * y
+        return world
+
+
 def draw_frame(model: RobotModel, seed: int, robot: int, look_round: int) -> Frame:
     """Robot `robot`'s frame for its Look in round `look_round` under `model`: a pure function of
     the seed, the robot and (with `--frame-change every-look`) the round of its Look."""
@@ -86,4 +145,4 @@ def draw_frame(model: RobotModel, seed: int, robot: int, look_round: int) -> Fra
     return Frame(rotation, keyed_fraction(FRAME_LOOK_STREAM, seed, *keys) < 0.5)
 
 
-__all__ = ["PAPER_FRAME", "Frame", "draw_frame"]
+__all__ = ["PAPER_FRAME", "Frame", "FrameRows", "draw_frame"]

@@ -12,17 +12,20 @@ end test are the core's (`world.physics.apply_round`, `world.progress`).
 
 from __future__ import annotations
 
+import math
 from collections import Counter
-from collections.abc import Sequence
-from dataclasses import replace
+from collections.abc import KeysView, Sequence
+from dataclasses import dataclass, replace
+from itertools import compress
 from typing import Final
 
 import numpy as np
+from numpy.typing import NDArray
 
 from fatswarm.domain.draws import crash_plan
 from fatswarm.domain.figures import known_numbers
 from fatswarm.domain.outcome import Status
-from fatswarm.domain.path import Path, Points, path_length
+from fatswarm.domain.path import STAY, Line, Path, Points, path_length
 from fatswarm.domain.seam import AlgorithmFailure, Configured, failure_kind
 from fatswarm.domain.tolerance import snap
 from fatswarm.world.effects import Effect, Level, Note, Rejected
@@ -48,6 +51,19 @@ from fatswarm.world.rounds import Rounds
 from fatswarm.world.setup import WorldSetup
 
 FIRST_LOOK: Final = LookRequest()  # an agent's first Look: any round
+# The held move of a robot whose line is kept among the held lines (`HeldLines`) until `held` is
+# read (then its Path takes this place): never seen outside the core; a NaN path, were it to leak,
+# physics refuses loudly.
+_IN_LINES: Final = Path((Line((math.nan, math.nan)),))
+
+
+@dataclass(slots=True)
+class HeldLines:
+    """Moves of the open round held at once (`WorldCore.hold_lines`): robots[i] goes in a straight
+    line to ends[i] (world axes, relative to it)."""
+
+    robots: list[int]  # in the order they were held
+    ends: Points  # (m, 2)
 
 
 class WorldCore:
@@ -95,7 +111,11 @@ class WorldCore:
         self.active: tuple[int, ...] = ()
         self.active_set: frozenset[int] = frozenset()  # the same, for O(1) membership
         self.looked: set[int] = set()
-        self.held: dict[int, Path] = {}  # world axes, relative to the robot
+        # the held moves (`held`): every held robot's, world axes, relative to it; the lines held
+        # at once are kept as arrays (`held_lines`) and their place here is _IN_LINES until read
+        self._held: dict[int, Path] = {}
+        self._lines: HeldLines | None = None
+        self._apart = False  # a robot holds a move (not a stay) of its own: not among the lines
         self.held_colours: dict[int, int] = {}  # the colours of the held moves (luminous)
         self.failed: dict[int, str] = {}  # held robots whose compute raised: why (they stay)
         self.failure_kinds: set[str] = set()  # the kinds of failure said on the log so far
@@ -123,6 +143,46 @@ class WorldCore:
         else:
             self._replay(history)
         self.gone_since = [self.committed] * n  # no agent seen yet: counted from here
+
+    @property
+    def held(self) -> dict[int, Path]:
+        """The open round's held moves: robot -> its path, world axes, relative to it (the lines
+        held at once made Paths here, once: `held_lines` reads them without)."""
+        if self._lines is not None:
+            self._settle_lines()
+        return self._held
+
+    @held.setter
+    def held(self, held: dict[int, Path]) -> None:
+        self._held, self._lines, self._apart = held, None, False
+
+    def held_robots(self) -> KeysView[int]:
+        """The robots whose move is held (`held`'s keys, no Path made)."""
+        return self._held.keys()
+
+    def held_lines(self) -> tuple[NDArray[np.intp], Points] | None:
+        """The open round's held moves that are not stays, as arrays, if every one is a line
+        held at once (`hold_lines`): the robots ascending (m,) and their ends (m, 2), world axes,
+        relative to each, each the very floats `held` gives; None otherwise (then read `held`)."""
+        lines = self._lines
+        if self._apart:
+            return None
+        if lines is None:
+            return np.empty(0, dtype=np.intp), np.empty((0, 2), dtype=np.float64)
+        robots = np.asarray(lines.robots, dtype=np.intp)
+        if len(robots) > 1 and bool((robots[1:] < robots[:-1]).any()):
+            order = np.argsort(robots, kind="stable")
+            return robots[order], lines.ends[order]
+        return robots, lines.ends
+
+    def _settle_lines(self) -> None:
+        """The held lines made Paths in `held` (Python floats: `Path((Line((x, y)),))`)."""
+        lines, self._lines = self._lines, None
+        assert lines is not None
+        held = self._held
+        for robot, (x, y) in zip(lines.robots, lines.ends.tolist(), strict=True):
+            held[robot] = Path((Line((x, y)),))
+        self._apart = self._apart or bool(lines.robots)
 
     def _header(self) -> Header:
         """The record's first line for this run (`WorldSetup.header`: the settings' codec)."""
@@ -240,7 +300,7 @@ class WorldCore:
         moved in it, and asks for a round after the last it moved in (at this world process);
         otherwise the shell holds the Look until this becomes true."""
         after = request.after if request.epoch == self.epoch else 0
-        return self.open_round > after and robot in self.active_set and robot not in self.held
+        return self.open_round > after and robot in self.active_set and robot not in self._held
 
     def look(self, robot: int) -> Snapshot | None:
         """Robot `robot`'s snapshot, or None (refused, counted) if it is not active now."""
@@ -295,6 +355,14 @@ class WorldCore:
         self.looked.add(robot)
         return True
 
+    def admit_looks(self, robots: Sequence[int]) -> list[bool]:
+        """`admit_look` of each of `robots` in turn (whether each was admitted), at once where
+        every one is active in the open round (a lock step's round hook)."""
+        if self.open_round and self.active_set.issuperset(robots):
+            self.looked.update(robots)
+            return [True] * len(robots)
+        return [self.admit_look(robot) for robot in robots]
+
     def move(self, robot: int | None, msg: MoveSubmitted) -> bool:
         """Hold a move for the open round from the robot `robot` it came from (None: a key with no
         robot); False if refused (counted)."""
@@ -320,23 +388,63 @@ class WorldCore:
             self.reject("move-not-active", f"robot {robot} round {round_no}")
         elif robot not in self.looked:
             self.reject("move-without-look", f"robot {robot} round {round_no}")
-        elif robot in self.held:
+        elif robot in self._held:
             self.reject("move-duplicate", f"robot {robot} round {round_no}")
         elif not self._colour_ok(colour):
             self.reject("move-bad-colour", f"robot {robot} colour {colour}")
         elif failed is not None:
-            self.held[robot] = Path()
+            self._held[robot] = Path()
             self.failed[robot] = failed
             self.missing.discard(robot)
             self._said(robot, round_no, failed)
             return True
         else:
-            self.held[robot] = self.looks.to_world(robot, round_no, path)
+            world = self.looks.to_world(robot, round_no, path)
+            self._held[robot] = world
+            if world.segments:
+                self._apart = True
             if colour is not None:
                 self.held_colours[robot] = colour
             self.missing.discard(robot)
             return True
         return False
+
+    def hold_lines(
+        self, robots: Sequence[int], round_no: int, ends: Points, goes: NDArray[np.bool_]
+    ) -> None:
+        """`hold` of k moves at once, row i robot robots[i]'s: a straight line to ends[i] (in
+        the frame of its Look, relative to it) where goes[i], else a stay; no colour, none
+        failed. The moves are checked as `hold` checks each, refusals counted the same (in
+        turn, by `hold` itself, if any would be refused); the lines are kept as arrays
+        (`held_lines`, world axes) and made Paths only if `held` is read."""
+        robots = list(robots)
+        chosen, held = set(robots), self._held
+        if not (
+            round_no == self.open_round
+            and len(chosen) == len(robots)
+            and self.active_set.issuperset(chosen)
+            and self.looked.issuperset(chosen)
+            and (not held or held.keys().isdisjoint(chosen))
+        ):  # some would be refused: each in turn, as `hold` refuses and counts them
+            for robot, (x, y), go in zip(robots, ends.tolist(), goes.tolist(), strict=True):
+                self.hold(robot, round_no, Path((Line((x, y)),)) if go else STAY, None)
+            return
+        if goes.all():
+            movers = robots
+        else:  # the others stay (to_world of a stay is a stay)
+            movers = list(compress(robots, goes.tolist()))
+            held.update(dict.fromkeys(robots, STAY))
+            ends = ends[goes]
+        if movers:
+            world = self.looks.lines_to_world(movers, round_no, ends)
+            held.update(dict.fromkeys(movers, _IN_LINES))
+            lines = self._lines
+            if lines is None:
+                self._lines = HeldLines(movers, world)
+            else:  # a second batch in one round
+                lines.robots.extend(movers)
+                lines.ends = np.concatenate((lines.ends, world))
+        self.missing.difference_update(chosen)
 
     def _said(self, robot: int, round_no: int, failed: str) -> None:
         """Log a failed compute the first time one of its kind comes (`failure_kind`: the
@@ -361,7 +469,7 @@ class WorldCore:
         moved (once, and again only when a late move joins them); None otherwise."""
         if not self.open_round or self.missing:
             return None
-        robots = tuple(sorted(self.held))
+        robots = tuple(sorted(self._held))
         if self.noticed == (self.open_round, robots):
             return None
         self.noticed = (self.open_round, robots)
@@ -395,7 +503,7 @@ class WorldCore:
             open_round=self.open_round,
             status=self.status,
             collisions=self.collisions_total,
-            held=tuple(sorted(self.held)) if self.open_round else (),
+            held=tuple(sorted(self._held)) if self.open_round else (),
             epoch=self.epoch,
         )
         fields = self.model.reply_fields()
@@ -442,7 +550,7 @@ class WorldCore:
         self.alive[robot] = alive
         self.gone_since[robot] = None if alive else self.committed
         self._agents = None  # only the agents' view changed
-        if alive and robot in self.active_set and robot not in self.held:
+        if alive and robot in self.active_set and robot not in self._held:
             self.missing.add(robot)
         elif not alive:
             self.missing.discard(robot)  # a robot gone mid-round is not waited for

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from fatswarm.domain.draws import look_noise, view_order, view_orders
-from fatswarm.domain.frames import Frame, draw_frame
+from fatswarm.domain.frames import Frame, FrameRows, draw_frame
 from fatswarm.domain.path import Path, Points
 from fatswarm.domain.robot_model import Bodies, FrameChange, Lights, RobotModel
 from fatswarm.domain.seam import Configured
@@ -50,6 +50,8 @@ class Looks:
         )
         self._fixed_sign = None if self._fixed is None else _mirror_signs(self._fixed)
         self._fixed_turns = self._fixed is not None and any(f.rotation for f in self._fixed)
+        self._fixed_rows = None if self._fixed is None else FrameRows.of(self._fixed)
+        self._everyone = list(range(n))
         # every robot's colour (palette index; the first at the start); none without lights
         self.colours: list[int] | None = [0] * n if self.palette else None
         # whether a view is every other robot, exact, with no colours and nothing recorded
@@ -162,6 +164,19 @@ class Looks:
     def to_world(self, robot: int, look_round: int, path: Path) -> Path:
         """A path robot `robot` computed in the frame of its Look, in world axes."""
         return self.frame(robot, look_round).path_to_world(path)
+
+    def lines_to_world(self, robots: Sequence[int], look_round: int, ends: Points) -> Points:
+        """(m, 2): row i the end of a straight line robot robots[i] computed in the frame of its
+        Look of round `look_round` (relative to it), in world axes: `to_world` of each one's
+        `Path((Line(ends[i]),))`, the same bits, at once (`FrameRows.lines_to_world`)."""
+        if self._fixed_rows is not None:  # every robot's frame drawn once: its row
+            whole = len(robots) == self.n and robots == self._everyone
+            rows = self._fixed_rows
+            if not whole:
+                rows = rows.take(np.asarray(robots, dtype=np.intp))
+        else:  # a frame per Look: drawn per robot, then turned as arrays
+            rows = FrameRows.of([self.frame(robot, look_round) for robot in robots])
+        return rows.lines_to_world(ends)
 
     def show(self, colours: Mapping[int, int], skip: Collection[int] = ()) -> bool:
         """The robots of `colours` show their new colour now (a move starts), but those of

@@ -7,9 +7,12 @@ answers looks and moves; a model opens and commits what the coordinator asks, th
 
 from __future__ import annotations
 
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Collection, KeysView, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
 
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path, Points
@@ -73,6 +76,10 @@ class Books(Protocol):
     crash_plan: dict[int, int]  # robot -> the round (an async run: cycle) it crashes in
     tracker: ProgressTracker
     last_timed_out: tuple[int, ...]
+
+    def held_robots(self) -> KeysView[int]: ...  # `held`'s keys, no Path made
+
+    def held_lines(self) -> tuple[NDArray[np.intp], Points] | None: ...  # the moves as arrays
 
     def reply(self, ok: bool, reason: str = "") -> ControlReply: ...
 
