@@ -13,12 +13,14 @@ typed fields in those shapes (`Result`, `RunResult`, `Outcome`...), tied to this
 from __future__ import annotations
 
 import enum
+import functools
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Final, Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 
 from fatswarm.domain.path import Points
 
@@ -98,12 +100,11 @@ def min_gap(positions: Points) -> float | None:
     n = len(pts)
     if n < 2:
         return None
-    if n <= PAIRWISE_UP_TO:
-        dx = pts[:, None, 0] - pts[None, :, 0]
-        dy = pts[:, None, 1] - pts[None, :, 1]
-        squares = dx * dx + dy * dy
-        np.fill_diagonal(squares, np.inf)
-        return math.sqrt(float(np.min(squares))) - 2 * RADIUS
+    if n <= PAIRWISE_UP_TO:  # each pair once: (x_j - x_i)^2 is (x_i - x_j)^2, to the bit
+        first, second = _pairs(n)
+        xs, ys = pts[:, 0], pts[:, 1]
+        dx, dy = xs[first] - xs[second], ys[first] - ys[second]
+        return math.sqrt(float((dx * dx + dy * dy).min())) - 2 * RADIUS
     axis = 0 if np.ptp(pts[:, 0]) >= np.ptp(pts[:, 1]) else 1
     order = np.argsort(pts[:, axis], kind="stable")
     along, across = pts[order, axis], pts[order, 1 - axis]
@@ -120,6 +121,15 @@ def min_gap(positions: Points) -> float | None:
         dx, dy = along[second] - along[first], across[second] - across[first]
         best2 = min(best2, float(np.min(dx * dx + dy * dy)))
     return math.sqrt(best2) - 2 * RADIUS
+
+
+@functools.lru_cache(maxsize=16)
+def _pairs(n: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """(i, j) of every pair i < j of n robots (read-only)."""
+    first, second = np.triu_indices(n, 1)
+    first.setflags(write=False)
+    second.setflags(write=False)
+    return first, second
 
 
 def failures(round_no: int, line: Mapping[str, Any]) -> int:
@@ -305,7 +315,15 @@ def place(where: Place, figures: Iterable[Figure] | None = None) -> tuple[Figure
 def derived_figures() -> tuple[Figure, ...]:
     """The figures that follow from each round: the positions after it (`derive`), or its line's
     other fields (`tally`)."""
-    return tuple(f for f in FIGURES if f.derive is not None or f.tally is not None)
+    global _derived_cache  # made again when FIGURES is another tuple
+    of, derived = _derived_cache
+    if of is not FIGURES:  # FIGURES read now: a test may add one
+        derived = tuple(f for f in FIGURES if f.derive is not None or f.tally is not None)
+        _derived_cache = (FIGURES, derived)
+    return derived
+
+
+_derived_cache: tuple[tuple[Figure, ...] | None, tuple[Figure, ...]] = (None, ())
 
 
 def derived(
@@ -356,12 +374,14 @@ class RunFolder:
         self, positions: Points, round_no: int = 0, line: Mapping[str, Any] | None = None
     ) -> None:
         pts = np.asarray(positions, dtype=np.float64)
-        if self._last is not None and np.array_equal(self._last[0], pts):
-            rounds = self._last[1]
+        figures = derived_figures()
+        last = self._last
+        if last is not None and last[0].shape == pts.shape and bool((last[0] == pts).all()):
+            rounds = last[1]  # (np.array_equal's test, without its checks of the arguments)
         else:
-            rounds = {f.name: f.derive(pts) for f in derived_figures() if f.derive is not None}
+            rounds = {f.name: f.derive(pts) for f in figures if f.derive is not None}
             self._last = (pts.copy(), rounds)
-        for f in derived_figures():
+        for f in figures:
             value = rounds.get(f.name) if f.tally is None else f.tally(round_no, line or {})
             self.values[f.name] = summarise(f.summary, self.values.get(f.name), value)
 

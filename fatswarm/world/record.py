@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 import os
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, fields
@@ -183,6 +184,15 @@ class LineMoves(LazyMoves):
 
     def robots(self) -> list[int]:
         return [int(r) for r in self.robots_.tolist()]
+
+    def lengths(self, before: Points) -> list[float]:
+        """Each move's path length from its robot's position in `before` ((n, 2)), as
+        `path_length` measures its one Line (the same floats)."""
+        starts = np.asarray(before, dtype=np.float64)[self.robots_].tolist()
+        return [
+            0.0 + math.hypot(ex - x, ey - y)
+            for (x, y), (ex, ey) in zip(starts, self.ends.tolist(), strict=True)
+        ]
 
     def text(self) -> str:
         k = len(self.robots_)
