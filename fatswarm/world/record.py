@@ -430,12 +430,9 @@ def round_text(entry: RoundEntry) -> str:
     moves = entry.moves
     moved = moves.text() if isinstance(moves, LazyMoves) else _moves_text(_by_robot(moves))
     points = _points_text(entry.positions)
-    if (
-        "n" in points
-        or "inf" in moved
-        or "nan" in moved
-        or any(type(key) is not str or key in _ROUND_HEAD for key in extra)
-    ):
+    if not all(isinstance(key, str) for key in extra):
+        raise TypeError("keywords must be strings")  # as the writer's `round(**extra)` raised
+    if "n" in points or "inf" in moved or "nan" in moved or not _ROUND_HEAD.isdisjoint(extra):
         return _dumps(round_fields(entry))  # refused (NaN), or an odd line: as the dict says
     parts = [
         '{"type":"round","round":',
