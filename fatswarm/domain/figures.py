@@ -97,19 +97,29 @@ def min_gap(positions: Points) -> float | None:
     at n = 256). Both take the least of the same squares, so they give the same bits.
     """
     pts = np.asarray(positions, dtype=np.float64).reshape(-1, 2)
-    n = len(pts)
-    if n < 2:
+    if len(pts) < 2:
         return None
+    return math.sqrt(_closest(pts)[0]) - 2 * RADIUS
+
+
+def _closest(pts: Points) -> tuple[float, int, int]:
+    """The least squared centre distance of two of the (n, 2) `pts` (n >= 2), and a pair of
+    robots (i, j) at it (`min_gap`'s measure; NaN if a coordinate is: then i, j say nothing)."""
+    n = len(pts)
     if n <= PAIRWISE_UP_TO:  # each pair once: (x_j - x_i)^2 is (x_i - x_j)^2, to the bit
         first, second = _pairs(n)
         xs, ys = pts[:, 0], pts[:, 1]
         dx, dy = xs[first] - xs[second], ys[first] - ys[second]
-        return math.sqrt(float((dx * dx + dy * dy).min())) - 2 * RADIUS
+        squares = dx * dx + dy * dy
+        k = int(squares.argmin())  # (the first NaN, if any: the least is NaN then, as np.min's)
+        return float(squares[k]), int(first[k]), int(second[k])
     axis = 0 if np.ptp(pts[:, 0]) >= np.ptp(pts[:, 1]) else 1
     order = np.argsort(pts[:, axis], kind="stable")
     along, across = pts[order, axis], pts[order, 1 - axis]
     dx, dy = np.diff(along), np.diff(across)
-    best2 = float(np.min(dx * dx + dy * dy))
+    squares = dx * dx + dy * dy
+    k = int(squares.argmin())
+    best2, pair = float(squares[k]), (k, k + 1)
     reach = math.sqrt(best2) * (1 + 1e-9)  # a rounding margin: no closer pair is left out
     counts = np.searchsorted(along, along + reach, side="right") - np.arange(n) - 2
     np.maximum(counts, 0, out=counts)  # the pairs (i, i + 2...) within reach along the axis
@@ -119,8 +129,49 @@ def min_gap(positions: Points) -> float | None:
         starts = np.repeat(np.cumsum(counts) - counts, counts)
         second = first + 2 + (np.arange(total) - starts)
         dx, dy = along[second] - along[first], across[second] - across[first]
-        best2 = min(best2, float(np.min(dx * dx + dy * dy)))
-    return math.sqrt(best2) - 2 * RADIUS
+        squares = dx * dx + dy * dy
+        k = int(squares.argmin())
+        if squares[k] < best2:  # (the least of the two, as `min(best2, ...)`)
+            best2, pair = float(squares[k]), (int(first[k]), int(second[k]))
+    return best2, int(order[pair[0]]), int(order[pair[1]])
+
+
+class _GapMemo:
+    """`min_gap` round after round, measured again only where robots moved: when few did and
+    the closest pair of the positions before did not, the least over the pairs of robots that
+    stayed is that pair's (the same squares), so only the pairs with a mover are measured. The
+    same bits as `min_gap` (the least of the same squares); NaN or infinity: measured whole."""
+
+    def __init__(self) -> None:
+        self._last: tuple[Points, float, int, int] | None = None  # positions, least, its pair
+
+    def min_gap(self, pts: Points) -> float | None:
+        n = len(pts)
+        if n < 2:
+            return None
+        last = self._last
+        if last is None or last[0].shape != pts.shape or not np.isfinite(pts).all():
+            return self._whole(pts)
+        before, best2, i, j = last
+        movers = np.flatnonzero((before != pts).any(axis=1))  # (-0.0 for 0.0: the same squares)
+        if 4 * len(movers) > n or i in movers or j in movers:
+            return self._whole(pts)
+        if len(movers):
+            xs, ys = pts[:, 0], pts[:, 1]
+            dx = xs[movers, None] - xs[None, :]
+            dy = ys[movers, None] - ys[None, :]
+            squares = dx * dx + dy * dy
+            squares[np.arange(len(movers)), movers] = np.inf  # (itself)
+            k = int(squares.argmin())
+            if squares.flat[k] < best2:
+                best2, i, j = float(squares.flat[k]), int(movers[k // n]), k % n
+        self._last = (pts.copy(), best2, i, j)
+        return math.sqrt(best2) - 2 * RADIUS
+
+    def _whole(self, pts: Points) -> float:
+        best2, i, j = _closest(pts)
+        self._last = (pts.copy(), best2, i, j) if math.isfinite(best2) else None
+        return math.sqrt(best2) - 2 * RADIUS
 
 
 @functools.lru_cache(maxsize=16)
@@ -369,6 +420,7 @@ class RunFolder:
     def __init__(self, values: Mapping[str, FigureValue] | None = None) -> None:
         self.values: dict[str, FigureValue] = dict(values or {})
         self._last: tuple[Points, dict[str, FigureValue]] | None = None
+        self._gap = _GapMemo()  # min_gap kept from round to round
 
     def add(
         self, positions: Points, round_no: int = 0, line: Mapping[str, Any] | None = None
@@ -379,7 +431,11 @@ class RunFolder:
         if last is not None and last[0].shape == pts.shape and bool((last[0] == pts).all()):
             rounds = last[1]  # (np.array_equal's test, without its checks of the arguments)
         else:
-            rounds = {f.name: f.derive(pts) for f in figures if f.derive is not None}
+            rounds = {
+                f.name: self._gap.min_gap(pts) if f.derive is min_gap else f.derive(pts)
+                for f in figures
+                if f.derive is not None
+            }
             self._last = (pts.copy(), rounds)
         for f in figures:
             value = rounds.get(f.name) if f.tally is None else f.tally(round_no, line or {})

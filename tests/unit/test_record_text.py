@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fatswarm.domain.figures import min_gap
+from fatswarm.domain.figures import _GapMemo, min_gap
 from fatswarm.domain.path import Arc, Line, Path
 from fatswarm.world.core import WorldCore
 from fatswarm.world.journal import load_configured
@@ -278,3 +278,24 @@ def test_the_core_books_a_round_as_arrays_as_it_books_its_paths(measured: str) -
         )
     )
     assert by_arrays.tracker.snapshot() == by_paths.tracker.snapshot()
+
+
+@settings(max_examples=120, deadline=None)
+@given(st.data(), st.sampled_from([3, 12, 81, 120]))
+def test_min_gap_kept_round_to_round_is_min_gap_of_each_round(data: st.DataObject, n: int) -> None:
+    """Few movers a round (the memo measures only their pairs), or many, or the closest pair
+    moving: each round's value is min_gap's, to the bit."""
+    rng = np.random.default_rng(data.draw(st.integers(0, 2**32 - 1)))
+    pts = rng.uniform(-2.0 * n, 2.0 * n, (n, 2))
+    memo = _GapMemo()
+    for _ in range(data.draw(st.integers(1, 6))):
+        few = st.integers(0, max(1, n // 4))
+        movers = rng.choice(n, size=data.draw(st.one_of(few, st.integers(0, n))), replace=False)
+        if data.draw(st.booleans()):  # a mover comes close to someone, or onto him
+            other = int(rng.integers(n))
+            pts[movers] = pts[other] + data.draw(st.sampled_from([0.0, 1e-300, 2.5, -0.0]))
+        else:
+            pts[movers] += rng.normal(size=(len(movers), 2)) * data.draw(st.sampled_from([1, 9]))
+        got, expected = memo.min_gap(pts), min_gap(pts)
+        assert got is not None and expected is not None
+        assert np.float64(got).view(np.int64) == np.float64(expected).view(np.int64)
