@@ -124,7 +124,8 @@ class LazyMoves(Sequence[Move]):
 
 class PathMoves(LazyMoves):
     """Moves of robots `robots` (increasing) along world-frame `paths`, having covered
-    `traveled` (0 where absent): `round_entry`'s."""
+    `traveled` (0 where absent): `round_entry`'s (the mappings copied: a caller may reuse
+    them)."""
 
     __slots__ = ("_paths", "_robots", "_traveled")
 
@@ -132,7 +133,7 @@ class PathMoves(LazyMoves):
         self, robots: Sequence[int], paths: Mapping[int, Path], traveled: Mapping[int, float]
     ) -> None:
         super().__init__()
-        self._robots, self._paths, self._traveled = robots, paths, traveled
+        self._robots, self._paths, self._traveled = list(robots), dict(paths), dict(traveled)
 
     def _make(self) -> tuple[Move, ...]:
         paths, get = self._paths, self._traveled.get
@@ -152,27 +153,30 @@ class PathMoves(LazyMoves):
 
 
 class LineMoves(LazyMoves):
-    """The common round's moves as arrays: robot `robots[i]` (increasing, (k,) ints) went along
+    """The common round's moves as arrays: robot `movers[i]` (increasing, (k,) ints) went along
     one straight line from its position before the round to `ends[i]` ((k, 2) float64, world
     frame), covering `traveled[i]` ((k,) float64). Move i is exactly
-    `Move(robots[i], Path((Line((ends[i, 0], ends[i, 1])),)), traveled[i])` in Python numbers."""
+    `Move(movers[i], Path((Line((ends[i, 0], ends[i, 1])),)), traveled[i])` in Python numbers.
+    The arrays are kept as given, not copied: they are not to be changed after."""
 
-    __slots__ = ("ends", "robots_", "traveled")
+    __slots__ = ("ends", "movers", "traveled")
 
     def __init__(
-        self, robots: NDArray[np.integer[Any]], ends: Points, traveled: NDArray[np.float64]
+        self, movers: NDArray[np.integer[Any]], ends: Points, traveled: NDArray[np.float64]
     ) -> None:
         super().__init__()
-        assert robots.dtype.kind in "iu", f"robots must be integers, not {robots.dtype}"
-        assert ends.shape == (len(robots), 2) and traveled.shape == (len(robots),)
-        assert bool(np.all(robots[1:] > robots[:-1])), "robots must increase"
-        self.robots_, self.ends, self.traveled = robots, ends, traveled
+        assert movers.dtype.kind in "iu", f"movers must be integers, not {movers.dtype}"
+        self.movers = movers
+        self.ends = np.asarray(ends, dtype=np.float64)
+        self.traveled = np.asarray(traveled, dtype=np.float64)
+        assert self.ends.shape == (len(movers), 2) and self.traveled.shape == (len(movers),)
+        assert bool(np.all(movers[1:] > movers[:-1])), "movers must increase"
 
     def _make(self) -> tuple[Move, ...]:
         return tuple(
             Move(r, Path((Line((x, y)),)), t)
             for r, (x, y), t in zip(
-                self.robots_.tolist(),
+                self.movers.tolist(),
                 self.ends.tolist(),
                 self.traveled.tolist(),
                 strict=True,
@@ -180,28 +184,27 @@ class LineMoves(LazyMoves):
         )
 
     def __len__(self) -> int:
-        return len(self.robots_)
+        return len(self.movers)
 
     def robots(self) -> list[int]:
-        return [int(r) for r in self.robots_.tolist()]
+        return [int(r) for r in self.movers.tolist()]
 
     def lengths(self, before: Points) -> list[float]:
         """Each move's path length from its robot's position in `before` ((n, 2)), as
         `path_length` measures its one Line (the same floats)."""
-        starts = np.asarray(before, dtype=np.float64)[self.robots_].tolist()
+        starts = np.asarray(before, dtype=np.float64)[self.movers].tolist()
         return [
             0.0 + math.hypot(ex - x, ey - y)
             for (x, y), (ex, ey) in zip(starts, self.ends.tolist(), strict=True)
         ]
 
     def text(self) -> str:
-        k = len(self.robots_)
+        k = len(self.movers)
         values: list[Any] = [None] * (4 * k)
-        values[0::4] = self.robots_.tolist()
-        ends = np.asarray(self.ends, dtype=np.float64)
-        values[1::4] = ends[:, 0].tolist()
-        values[2::4] = ends[:, 1].tolist()
-        values[3::4] = np.asarray(self.traveled, dtype=np.float64).tolist()
+        values[0::4] = self.movers.tolist()
+        values[1::4] = self.ends[:, 0].tolist()
+        values[2::4] = self.ends[:, 1].tolist()
+        values[3::4] = self.traveled.tolist()
         return "[" + _repeated(_LINE_MOVE, k) % tuple(values) + "]"
 
 
