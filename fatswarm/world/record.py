@@ -354,13 +354,14 @@ def _dumps(value: Any) -> str:
 # holds an `n`, and they go the dict's way, to be refused as `_dumps` refuses them.
 _LINE_MOVE: Final = '{"robot":%d,"path":[{"line":[%r,%r]}],"traveled":%r}'
 _POINT: Final = "[%r,%r]"
+_ROW: Final = "%r,%r"  # a point without its brackets (PointsMemo)
 _ROUND_HEAD: Final = frozenset(("type", "round", "active", "moves", "positions", "collisions"))
 
 
 @functools.lru_cache(maxsize=64)
-def _repeated(item: str, k: int) -> str:
-    """`k` copies of the format `item`, comma-separated."""
-    return ",".join([item] * k)
+def _repeated(item: str, k: int, between: str = ",") -> str:
+    """`k` copies of the format `item`, `between` each two."""
+    return between.join([item] * k)
 
 
 def _path_text(path: Path) -> str:
@@ -401,12 +402,45 @@ def _by_robot(moves: Moves) -> Sequence[Move]:
     return [m for _, m in sorted({m.robot: m for m in moves}.items(), key=lambda rm: rm[0])]
 
 
-def _points_text(positions: Points) -> str:
-    """`_dumps(_positions_list(positions))` of (n, 2) positions (NaN, infinity included)."""
+def _points_text(positions: Points, memo: PointsMemo | None = None) -> str:
+    """`_dumps(_positions_list(positions))` of (n, 2) positions (NaN, infinity included);
+    `memo`: the text of the positions written before, of which rows equal to the bit are kept."""
     arr = np.asarray(positions, dtype=np.float64)
     if arr.ndim != 2 or arr.shape[1] != 2:
         return _dumps(_positions_list(positions))  # refused there as before
+    if memo is not None:
+        return memo.text(arr)
     return "[" + _repeated(_POINT, len(arr)) % tuple(arr.ravel().tolist()) + "]"
+
+
+class PointsMemo:
+    """The text of the positions of the round line written last, row by row: a row whose two
+    floats are the same bits (so the same `repr`) is not formatted again. A writer's: most
+    rounds leave most robots where they were, and a float's text is the line's main cost."""
+
+    def __init__(self) -> None:
+        self._bits: NDArray[np.int64] | None = None  # the positions' bits, (n, 2)
+        self._inner = ""  # the text less its outer brackets: "x,y],[x,y],[..."
+        self._rows: list[str] | None = None  # the same, row by row ("x,y"), once split
+
+    def text(self, arr: Points) -> str:
+        """The JSON text of the (n, 2) float64 positions `arr`."""
+        n = len(arr)
+        if n == 0:
+            return "[]"
+        bits = arr.view(np.int64) if arr.flags.c_contiguous else arr.copy().view(np.int64)
+        last = self._bits
+        changed = None if last is None or last.shape != bits.shape else (last != bits).any(1)
+        if changed is None or 2 * int(np.count_nonzero(changed)) > n:
+            self._inner = _repeated(_ROW, n, "],[") % tuple(arr.ravel().tolist())
+            self._rows = None
+        else:
+            rows = self._rows if self._rows is not None else self._inner.split("],[")
+            for i in np.flatnonzero(changed).tolist():
+                rows[i] = _ROW % (float(arr[i, 0]), float(arr[i, 1]))
+            self._rows, self._inner = rows, "],[".join(rows)
+        self._bits = bits.copy()
+        return "[[" + self._inner + "]]"
 
 
 def round_fields(entry: RoundEntry) -> dict[str, Any]:
@@ -425,14 +459,15 @@ def round_fields(entry: RoundEntry) -> dict[str, Any]:
     }
 
 
-def round_text(entry: RoundEntry) -> str:
+def round_text(entry: RoundEntry, memo: PointsMemo | None = None) -> str:
     """The round line's text in the record, without its newline: exactly `_dumps(round_fields(
-    entry))` (a test holds the two together), built faster. Raises ValueError for NaN or
-    infinity, TypeError for a value JSON has no form of, as `json.dumps` does."""
+    entry))` (a test holds the two together), built faster. `memo`: the positions' text of the
+    line written before (a writer's `PointsMemo`). Raises ValueError for NaN or infinity,
+    TypeError for a value JSON has no form of, as `json.dumps` does."""
     extra = entry.extra
     moves = entry.moves
     moved = moves.text() if isinstance(moves, LazyMoves) else _moves_text(_by_robot(moves))
-    points = _points_text(entry.positions)
+    points = _points_text(entry.positions, memo)
     if not all(isinstance(key, str) for key in extra):
         raise TypeError("keywords must be strings")  # as the writer's `round(**extra)` raised
     if "n" in points or "inf" in moved or "nan" in moved or not _ROUND_HEAD.isdisjoint(extra):
@@ -477,6 +512,7 @@ class RecordWriter:
         self.path = os.fspath(path)
         self.fsync = fsync
         self._newline_first = append and _ends_without_newline(self.path)
+        self._points = PointsMemo()  # the positions' text of the round line written last
         try:
             self._fh: IO[str] | None = open(  # noqa: SIM115
                 self.path, "a" if append else "w", encoding="utf-8"
@@ -598,7 +634,7 @@ class RecordWriter:
                 **line.extra,
             )
         elif isinstance(line, RoundEntry):
-            self.put(round_text(line))
+            self.put(round_text(line, self._points))
         else:
             counted = {k: getattr(line, k) for k in result_figures()}
             kept = {k: v for k, v in counted.items() if v is not None}
@@ -647,6 +683,7 @@ __all__ = [
     "Move",
     "Moves",
     "PathMoves",
+    "PointsMemo",
     "RecordFormatError",
     "RecordWriter",
     "Result",

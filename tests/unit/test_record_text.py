@@ -8,6 +8,7 @@ import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
+from pathlib import Path as FsPath
 from typing import Any
 
 import numpy as np
@@ -25,6 +26,7 @@ from fatswarm.world.progress import ProgressTracker
 from fatswarm.world.record import (
     LineMoves,
     Move,
+    PointsMemo,
     RecordWriter,
     RoundEntry,
     line_text,
@@ -299,3 +301,41 @@ def test_min_gap_kept_round_to_round_is_min_gap_of_each_round(data: st.DataObjec
         got, expected = memo.min_gap(pts), min_gap(pts)
         assert got is not None and expected is not None
         assert np.float64(got).view(np.int64) == np.float64(expected).view(np.int64)
+
+
+@SETTINGS
+@given(st.data())
+def test_positions_kept_from_the_line_before_give_the_text_of_the_positions(
+    data: st.DataObject,
+) -> None:
+    """Rows the same to the bit keep their text; a row whose zero changed sign, or any other
+    bit, is written anew; a new number of robots starts afresh."""
+    memo = PointsMemo()
+    n = data.draw(st.integers(0, 7))
+    pts = np.array(data.draw(st.lists(st.tuples(FLOATS, FLOATS), min_size=n, max_size=n)))
+    pts = pts.reshape(-1, 2)
+    for _ in range(data.draw(st.integers(1, 6))):
+        if data.draw(st.booleans()) and n:
+            rows = data.draw(st.lists(st.integers(0, n - 1), max_size=n))
+            pts = pts.copy()
+            pts[rows] = data.draw(st.sampled_from([-0.0, 0.0, 1e16, 3.0, 1e-300]))
+        elif data.draw(st.booleans()):
+            n = data.draw(st.integers(0, 7))
+            pts = np.array(data.draw(st.lists(st.tuples(FLOATS, FLOATS), min_size=n, max_size=n)))
+            pts = pts.reshape(-1, 2)
+        view = pts if data.draw(st.booleans()) else np.asfortranarray(pts)
+        expected = json.dumps([[float(x), float(y)] for x, y in pts], separators=(",", ":"))
+        assert memo.text(view) == expected
+
+
+def test_a_writer_writes_a_run_of_round_lines_as_json_dumps_did(tmp_path: FsPath) -> None:
+    pts = np.array([[0.0, 1.0], [-0.0, 2.5], [1e16, -1e-300]])
+    entries = []
+    for k in range(1, 6):
+        pts = pts.copy()
+        pts[k % 3] = [pts[k % 3, 0] * -1.0, 0.1 * k]  # one robot, its zero's sign flipped too
+        entries.append(round_entry(k, [0, 1, 2], {}, {}, pts))
+    with RecordWriter(tmp_path / "run.jsonl") as w:
+        for entry in entries:
+            w.append(entry)
+    assert (tmp_path / "run.jsonl").read_text().splitlines() == [old_text(e) for e in entries]
