@@ -136,26 +136,51 @@ def _closest(pts: Points) -> tuple[float, int, int]:
     return best2, int(order[pair[0]]), int(order[pair[1]])
 
 
+NEAR_MARGIN: Final = 1.0  # _GapMemo's near pairs: those within the least distance + this
+NEAR_BACKOFF: Final = 8  # rounds without near pairs after a list that served no round, at
+NEAR_BACKOFF_MAX: Final = 256  # first; twice as many after each such list, up to this
+
+
 class _GapMemo:
-    """`min_gap` round after round, measured again only where robots moved: when few did and
-    the closest pair of the positions before did not, the least over the pairs of robots that
-    stayed is that pair's (the same squares), so only the pairs with a mover are measured. The
-    same bits as `min_gap` (the least of the same squares); NaN or infinity: measured whole."""
+    """`min_gap` round after round with the same bits (the least of the same squares), measuring
+    only pairs that can be the closest:
+
+    - few movers, the closest pair before among the stills: the least over the stills' pairs is
+      that pair's (their squares are as before), so only the pairs with a mover are measured;
+    - else, the near pairs of the last whole measure (those within its least distance +
+      NEAR_MARGIN, positions P0): while every robot is within D of its place in P0, a pair that
+      is not near is more than that distance - 2 D apart, so if the least of the near pairs is
+      below it (with a wide rounding margin), it is the least of all;
+    - else (or NaN, infinity) every pair, as `min_gap`.
+    """
 
     def __init__(self) -> None:
         self._last: tuple[Points, float, int, int] | None = None  # positions, least, its pair
+        # P0, its near pairs (i, j), and their bound R (the least distance + NEAR_MARGIN)
+        self._near: tuple[Points, NDArray[np.intp], NDArray[np.intp], float] | None = None
+        self._served = 0  # rounds the near pairs answered
+        self._backoff = 0  # rounds to go without near pairs
+        self._wait = NEAR_BACKOFF // 2  # the backoff after a list that served no round
 
-    def min_gap(self, pts: Points) -> float | None:
-        n = len(pts)
-        if n < 2:
+    def min_gap(self, positions: Points) -> float | None:
+        pts = positions.reshape(-1, 2)
+        if len(pts) < 2:
             return None
-        last = self._last
-        if last is None or last[0].shape != pts.shape or not np.isfinite(pts).all():
-            return self._whole(pts)
+        if not np.isfinite(pts).all():
+            self._last = self._near = None
+            return math.sqrt(_closest(pts)[0]) - 2 * RADIUS
+        found = self._few_moved(pts) or self._near_ones(pts) or self._whole(pts)
+        self._last = (pts.copy(), *found)
+        return math.sqrt(found[0]) - 2 * RADIUS
+
+    def _few_moved(self, pts: Points) -> tuple[float, int, int] | None:
+        last, n = self._last, len(pts)
+        if last is None or last[0].shape != pts.shape:
+            return None
         before, best2, i, j = last
         movers = np.flatnonzero((before != pts).any(axis=1))  # (-0.0 for 0.0: the same squares)
         if 4 * len(movers) > n or i in movers or j in movers:
-            return self._whole(pts)
+            return None
         if len(movers):
             xs, ys = pts[:, 0], pts[:, 1]
             dx = xs[movers, None] - xs[None, :]
@@ -165,13 +190,65 @@ class _GapMemo:
             k = int(squares.argmin())
             if squares.flat[k] < best2:
                 best2, i, j = float(squares.flat[k]), int(movers[k // n]), k % n
-        self._last = (pts.copy(), best2, i, j)
-        return math.sqrt(best2) - 2 * RADIUS
+        return best2, i, j
 
-    def _whole(self, pts: Points) -> float:
+    def _near_ones(self, pts: Points) -> tuple[float, int, int] | None:
+        near = self._near
+        if near is None or near[0].shape != pts.shape:
+            return None
+        start, first, second, bound = near
+        if not len(first):
+            return None
+        moved = np.hypot(pts[:, 0] - start[:, 0], pts[:, 1] - start[:, 1])
+        reach = float(moved.max())
+        xs, ys = pts[:, 0], pts[:, 1]
+        dx, dy = xs[first] - xs[second], ys[first] - ys[second]
+        squares = dx * dx + dy * dy
+        k = int(squares.argmin())
+        best2 = float(squares[k])
+        scale = float(np.abs(pts).max())
+        if math.sqrt(best2) + 2 * reach * (1 + 1e-6) + 1e-6 + 1e-9 * scale >= bound:
+            return None  # a pair that is not near might be closer
+        self._served += 1
+        return best2, int(first[k]), int(second[k])
+
+    def _whole(self, pts: Points) -> tuple[float, int, int]:
         best2, i, j = _closest(pts)
-        self._last = (pts.copy(), best2, i, j) if math.isfinite(best2) else None
-        return math.sqrt(best2) - 2 * RADIUS
+        if self._near is not None and self._served:
+            self._wait = NEAR_BACKOFF // 2
+        elif self._near is not None:  # robots that moved too far for near pairs to pay: wait
+            self._wait = min(2 * self._wait, NEAR_BACKOFF_MAX)
+            self._backoff = self._wait
+        self._near, self._served = None, 0
+        if self._backoff:
+            self._backoff -= 1
+        else:
+            bound = math.sqrt(best2) + NEAR_MARGIN
+            scale = float(np.abs(pts).max())
+            first, second = _within(pts, bound * (1 + 1e-6) + 1e-9 * scale)
+            self._near = (pts.copy(), first, second, bound)
+        return best2, i, j
+
+
+def _within(pts: Points, reach: float) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """The pairs (i, j) of the (n, 2) `pts` whose centres may be `reach` apart or closer (every
+    such pair, and maybe others)."""
+    n = len(pts)
+    if n <= PAIRWISE_UP_TO:
+        first, second = _pairs(n)
+        xs, ys = pts[:, 0], pts[:, 1]
+        dx, dy = xs[first] - xs[second], ys[first] - ys[second]
+        keep = dx * dx + dy * dy <= reach * reach
+        return first[keep], second[keep]
+    order = np.argsort(pts[:, 0], kind="stable")
+    along = pts[order, 0]
+    counts = np.searchsorted(along, along + reach, side="right") - np.arange(n) - 1
+    np.maximum(counts, 0, out=counts)  # the pairs (i, i + 1...) within reach along x
+    total = int(counts.sum())
+    first = np.repeat(np.arange(n), counts)
+    starts = np.repeat(np.cumsum(counts) - counts, counts)
+    second = first + 1 + (np.arange(total) - starts)
+    return order[first], order[second]
 
 
 @functools.lru_cache(maxsize=16)

@@ -290,14 +290,17 @@ def test_min_gap_kept_round_to_round_is_min_gap_of_each_round(data: st.DataObjec
     rng = np.random.default_rng(data.draw(st.integers(0, 2**32 - 1)))
     pts = rng.uniform(-2.0 * n, 2.0 * n, (n, 2))
     memo = _GapMemo()
-    for _ in range(data.draw(st.integers(1, 6))):
+    for _ in range(data.draw(st.integers(1, 12))):
         few = st.integers(0, max(1, n // 4))
         movers = rng.choice(n, size=data.draw(st.one_of(few, st.integers(0, n))), replace=False)
-        if data.draw(st.booleans()):  # a mover comes close to someone, or onto him
+        how = data.draw(st.sampled_from(["onto", "some", "all"]))
+        if how == "onto":  # a mover comes close to someone, or onto him
             other = int(rng.integers(n))
             pts[movers] = pts[other] + data.draw(st.sampled_from([0.0, 1e-300, 2.5, -0.0]))
-        else:
+        elif how == "some":
             pts[movers] += rng.normal(size=(len(movers), 2)) * data.draw(st.sampled_from([1, 9]))
+        else:  # every robot a little (the near pairs of the last whole measure answer)
+            pts += rng.normal(size=(n, 2)) * data.draw(st.sampled_from([1e-4, 0.05, 0.3]))
         got, expected = memo.min_gap(pts), min_gap(pts)
         assert got is not None and expected is not None
         assert np.float64(got).view(np.int64) == np.float64(expected).view(np.int64)
@@ -339,3 +342,16 @@ def test_a_writer_writes_a_run_of_round_lines_as_json_dumps_did(tmp_path: FsPath
         for entry in entries:
             w.append(entry)
     assert (tmp_path / "run.jsonl").read_text().splitlines() == [old_text(e) for e in entries]
+
+
+@pytest.mark.parametrize("n", [2, 30, 120, 300])
+@pytest.mark.parametrize("step", [1e-4, 0.02, 0.4, 3.0])
+def test_min_gap_kept_while_every_robot_moves_is_min_gap_of_each_round(n: int, step: float) -> None:
+    rng = np.random.default_rng(n)
+    pts = rng.uniform(-1.5 * n, 1.5 * n, (n, 2)) + 1e5 * (n == 300)  # (far from the origin too)
+    memo = _GapMemo()
+    for _ in range(40):
+        pts = pts + rng.normal(size=(n, 2)) * step
+        got, expected = memo.min_gap(pts), min_gap(pts)
+        assert got is not None and expected is not None
+        assert np.float64(got).view(np.int64) == np.float64(expected).view(np.int64)
