@@ -143,7 +143,8 @@ NEAR_BACKOFF_MAX: Final = 256  # first; twice as many after each such list, up t
 
 class _GapMemo:
     """`min_gap` round after round with the same bits (the least of the same squares), measuring
-    only pairs that can be the closest:
+    only pairs that can be the closest (above PAIRWISE_UP_TO robots: up to it, every pair at
+    once costs less than the bookkeeping):
 
     - few movers, the closest pair before among the stills: the least over the stills' pairs is
       that pair's (their squares are as before), so only the pairs with a mover are measured;
@@ -166,7 +167,7 @@ class _GapMemo:
         pts = positions.reshape(-1, 2)
         if len(pts) < 2:
             return None
-        if not np.isfinite(pts).all():
+        if len(pts) <= PAIRWISE_UP_TO or not np.isfinite(pts).all():  # (every pair: cheaper)
             self._last = self._near = None
             return math.sqrt(_closest(pts)[0]) - 2 * RADIUS
         found = self._few_moved(pts) or self._near_ones(pts) or self._whole(pts)

@@ -283,7 +283,7 @@ def test_the_core_books_a_round_as_arrays_as_it_books_its_paths(measured: str) -
 
 
 @settings(max_examples=120, deadline=None)
-@given(st.data(), st.sampled_from([3, 12, 81, 120]))
+@given(st.data(), st.sampled_from([3, 81, 120, 200]))
 def test_min_gap_kept_round_to_round_is_min_gap_of_each_round(data: st.DataObject, n: int) -> None:
     """Few movers a round (the memo measures only their pairs), or many, or the closest pair
     moving: each round's value is min_gap's, to the bit."""
@@ -344,7 +344,7 @@ def test_a_writer_writes_a_run_of_round_lines_as_json_dumps_did(tmp_path: FsPath
     assert (tmp_path / "run.jsonl").read_text().splitlines() == [old_text(e) for e in entries]
 
 
-@pytest.mark.parametrize("n", [2, 30, 120, 300])
+@pytest.mark.parametrize("n", [2, 81, 120, 300])
 @pytest.mark.parametrize("step", [1e-4, 0.02, 0.4, 3.0])
 def test_min_gap_kept_while_every_robot_moves_is_min_gap_of_each_round(n: int, step: float) -> None:
     rng = np.random.default_rng(n)
