@@ -13,12 +13,14 @@ typed fields in those shapes (`Result`, `RunResult`, `Outcome`...), tied to this
 from __future__ import annotations
 
 import enum
+import functools
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Final, Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 
 from fatswarm.domain.path import Points
 
@@ -95,20 +97,29 @@ def min_gap(positions: Points) -> float | None:
     at n = 256). Both take the least of the same squares, so they give the same bits.
     """
     pts = np.asarray(positions, dtype=np.float64).reshape(-1, 2)
-    n = len(pts)
-    if n < 2:
+    if len(pts) < 2:
         return None
-    if n <= PAIRWISE_UP_TO:
-        dx = pts[:, None, 0] - pts[None, :, 0]
-        dy = pts[:, None, 1] - pts[None, :, 1]
+    return math.sqrt(_closest(pts)[0]) - 2 * RADIUS
+
+
+def _closest(pts: Points) -> tuple[float, int, int]:
+    """The least squared centre distance of two of the (n, 2) `pts` (n >= 2), and a pair of
+    robots (i, j) at it (`min_gap`'s measure; NaN if a coordinate is: then i, j say nothing)."""
+    n = len(pts)
+    if n <= PAIRWISE_UP_TO:  # each pair once: (x_j - x_i)^2 is (x_i - x_j)^2, to the bit
+        first, second = _pairs(n)
+        xs, ys = pts[:, 0], pts[:, 1]
+        dx, dy = xs[first] - xs[second], ys[first] - ys[second]
         squares = dx * dx + dy * dy
-        np.fill_diagonal(squares, np.inf)
-        return math.sqrt(float(np.min(squares))) - 2 * RADIUS
+        k = int(squares.argmin())  # (the first NaN, if any: the least is NaN then, as np.min's)
+        return float(squares[k]), int(first[k]), int(second[k])
     axis = 0 if np.ptp(pts[:, 0]) >= np.ptp(pts[:, 1]) else 1
     order = np.argsort(pts[:, axis], kind="stable")
     along, across = pts[order, axis], pts[order, 1 - axis]
     dx, dy = np.diff(along), np.diff(across)
-    best2 = float(np.min(dx * dx + dy * dy))
+    squares = dx * dx + dy * dy
+    k = int(squares.argmin())
+    best2, pair = float(squares[k]), (k, k + 1)
     reach = math.sqrt(best2) * (1 + 1e-9)  # a rounding margin: no closer pair is left out
     counts = np.searchsorted(along, along + reach, side="right") - np.arange(n) - 2
     np.maximum(counts, 0, out=counts)  # the pairs (i, i + 2...) within reach along the axis
@@ -118,8 +129,136 @@ def min_gap(positions: Points) -> float | None:
         starts = np.repeat(np.cumsum(counts) - counts, counts)
         second = first + 2 + (np.arange(total) - starts)
         dx, dy = along[second] - along[first], across[second] - across[first]
-        best2 = min(best2, float(np.min(dx * dx + dy * dy)))
-    return math.sqrt(best2) - 2 * RADIUS
+        squares = dx * dx + dy * dy
+        k = int(squares.argmin())
+        if squares[k] < best2:  # (the least of the two, as `min(best2, ...)`)
+            best2, pair = float(squares[k]), (int(first[k]), int(second[k]))
+    return best2, int(order[pair[0]]), int(order[pair[1]])
+
+
+NEAR_MARGIN: Final = 1.0  # _GapMemo's near pairs: those within the least distance + this
+NEAR_BACKOFF: Final = 8  # rounds without near pairs after a list that served no round, at
+NEAR_BACKOFF_MAX: Final = 256  # first; twice as many after each such list, up to this
+
+
+class _GapMemo:
+    """`min_gap` round after round with the same bits (the least of the same squares), measuring
+    only pairs that can be the closest (above PAIRWISE_UP_TO robots: up to it, every pair at
+    once costs less than the bookkeeping):
+
+    - few movers, the closest pair before among the stills: the least over the stills' pairs is
+      that pair's (their squares are as before), so only the pairs with a mover are measured;
+    - else, the near pairs of the last whole measure (those within its least distance +
+      NEAR_MARGIN, positions P0): while every robot is within D of its place in P0, a pair that
+      is not near is more than that distance - 2 D apart, so if the least of the near pairs is
+      below it (with a wide rounding margin), it is the least of all;
+    - else (or NaN, infinity) every pair, as `min_gap`.
+    """
+
+    def __init__(self) -> None:
+        self._last: tuple[Points, float, int, int] | None = None  # positions, least, its pair
+        # P0, its near pairs (i, j), and their bound R (the least distance + NEAR_MARGIN)
+        self._near: tuple[Points, NDArray[np.intp], NDArray[np.intp], float] | None = None
+        self._served = 0  # rounds the near pairs answered
+        self._backoff = 0  # rounds to go without near pairs
+        self._wait = NEAR_BACKOFF // 2  # the backoff after a list that served no round
+
+    def min_gap(self, positions: Points) -> float | None:
+        pts = positions.reshape(-1, 2)
+        if len(pts) < 2:
+            return None
+        if len(pts) <= PAIRWISE_UP_TO or not np.isfinite(pts).all():  # (every pair: cheaper)
+            self._last = self._near = None
+            return math.sqrt(_closest(pts)[0]) - 2 * RADIUS
+        found = self._few_moved(pts) or self._near_ones(pts) or self._whole(pts)
+        self._last = (pts.copy(), *found)
+        return math.sqrt(found[0]) - 2 * RADIUS
+
+    def _few_moved(self, pts: Points) -> tuple[float, int, int] | None:
+        last, n = self._last, len(pts)
+        if last is None or last[0].shape != pts.shape:
+            return None
+        before, best2, i, j = last
+        movers = np.flatnonzero((before != pts).any(axis=1))  # (-0.0 for 0.0: the same squares)
+        if 4 * len(movers) > n or i in movers or j in movers:
+            return None
+        if len(movers):
+            xs, ys = pts[:, 0], pts[:, 1]
+            dx = xs[movers, None] - xs[None, :]
+            dy = ys[movers, None] - ys[None, :]
+            squares = dx * dx + dy * dy
+            squares[np.arange(len(movers)), movers] = np.inf  # (itself)
+            k = int(squares.argmin())
+            if squares.flat[k] < best2:
+                best2, i, j = float(squares.flat[k]), int(movers[k // n]), k % n
+        return best2, i, j
+
+    def _near_ones(self, pts: Points) -> tuple[float, int, int] | None:
+        near = self._near
+        if near is None or near[0].shape != pts.shape:
+            return None
+        start, first, second, bound = near
+        if not len(first):
+            return None
+        moved = np.hypot(pts[:, 0] - start[:, 0], pts[:, 1] - start[:, 1])
+        reach = float(moved.max())
+        xs, ys = pts[:, 0], pts[:, 1]
+        dx, dy = xs[first] - xs[second], ys[first] - ys[second]
+        squares = dx * dx + dy * dy
+        k = int(squares.argmin())
+        best2 = float(squares[k])
+        scale = float(np.abs(pts).max())
+        if math.sqrt(best2) + 2 * reach * (1 + 1e-6) + 1e-6 + 1e-9 * scale >= bound:
+            return None  # a pair that is not near might be closer
+        self._served += 1
+        return best2, int(first[k]), int(second[k])
+
+    def _whole(self, pts: Points) -> tuple[float, int, int]:
+        best2, i, j = _closest(pts)
+        if self._near is not None and self._served:
+            self._wait = NEAR_BACKOFF // 2
+        elif self._near is not None:  # robots that moved too far for near pairs to pay: wait
+            self._wait = min(2 * self._wait, NEAR_BACKOFF_MAX)
+            self._backoff = self._wait
+        self._near, self._served = None, 0
+        if self._backoff:
+            self._backoff -= 1
+        else:
+            bound = math.sqrt(best2) + NEAR_MARGIN
+            scale = float(np.abs(pts).max())
+            first, second = _within(pts, bound * (1 + 1e-6) + 1e-9 * scale)
+            self._near = (pts.copy(), first, second, bound)
+        return best2, i, j
+
+
+def _within(pts: Points, reach: float) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """The pairs (i, j) of the (n, 2) `pts` whose centres may be `reach` apart or closer (every
+    such pair, and maybe others)."""
+    n = len(pts)
+    if n <= PAIRWISE_UP_TO:
+        first, second = _pairs(n)
+        xs, ys = pts[:, 0], pts[:, 1]
+        dx, dy = xs[first] - xs[second], ys[first] - ys[second]
+        keep = dx * dx + dy * dy <= reach * reach
+        return first[keep], second[keep]
+    order = np.argsort(pts[:, 0], kind="stable")
+    along = pts[order, 0]
+    counts = np.searchsorted(along, along + reach, side="right") - np.arange(n) - 1
+    np.maximum(counts, 0, out=counts)  # the pairs (i, i + 1...) within reach along x
+    total = int(counts.sum())
+    first = np.repeat(np.arange(n), counts)
+    starts = np.repeat(np.cumsum(counts) - counts, counts)
+    second = first + 1 + (np.arange(total) - starts)
+    return order[first], order[second]
+
+
+@functools.lru_cache(maxsize=16)
+def _pairs(n: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """(i, j) of every pair i < j of n robots (read-only)."""
+    first, second = np.triu_indices(n, 1)
+    first.setflags(write=False)
+    second.setflags(write=False)
+    return first, second
 
 
 def failures(round_no: int, line: Mapping[str, Any]) -> int:
@@ -305,7 +444,15 @@ def place(where: Place, figures: Iterable[Figure] | None = None) -> tuple[Figure
 def derived_figures() -> tuple[Figure, ...]:
     """The figures that follow from each round: the positions after it (`derive`), or its line's
     other fields (`tally`)."""
-    return tuple(f for f in FIGURES if f.derive is not None or f.tally is not None)
+    global _derived_cache  # made again when FIGURES is another tuple
+    of, derived = _derived_cache
+    if of is not FIGURES:  # FIGURES read now: a test may add one
+        derived = tuple(f for f in FIGURES if f.derive is not None or f.tally is not None)
+        _derived_cache = (FIGURES, derived)
+    return derived
+
+
+_derived_cache: tuple[tuple[Figure, ...] | None, tuple[Figure, ...]] = (None, ())
 
 
 def derived(
@@ -351,17 +498,24 @@ class RunFolder:
     def __init__(self, values: Mapping[str, FigureValue] | None = None) -> None:
         self.values: dict[str, FigureValue] = dict(values or {})
         self._last: tuple[Points, dict[str, FigureValue]] | None = None
+        self._gap = _GapMemo()  # min_gap kept from round to round
 
     def add(
         self, positions: Points, round_no: int = 0, line: Mapping[str, Any] | None = None
     ) -> None:
         pts = np.asarray(positions, dtype=np.float64)
-        if self._last is not None and np.array_equal(self._last[0], pts):
-            rounds = self._last[1]
+        figures = derived_figures()
+        last = self._last
+        if last is not None and last[0].shape == pts.shape and bool((last[0] == pts).all()):
+            rounds = last[1]  # (np.array_equal's test, without its checks of the arguments)
         else:
-            rounds = {f.name: f.derive(pts) for f in derived_figures() if f.derive is not None}
+            rounds = {
+                f.name: self._gap.min_gap(pts) if f.derive is min_gap else f.derive(pts)
+                for f in figures
+                if f.derive is not None
+            }
             self._last = (pts.copy(), rounds)
-        for f in derived_figures():
+        for f in figures:
             value = rounds.get(f.name) if f.tally is None else f.tally(round_no, line or {})
             self.values[f.name] = summarise(f.summary, self.values.get(f.name), value)
 

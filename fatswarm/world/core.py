@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from collections.abc import KeysView, Sequence
+from collections.abc import Collection, KeysView, Mapping, Sequence
 from dataclasses import dataclass, replace
 from itertools import compress
 from typing import Final
@@ -46,7 +46,7 @@ from fatswarm.world.protocol import (
     Snapshot,
 )
 from fatswarm.world.readout import CoreReadout
-from fatswarm.world.record import Header, Result, RoundEntry, RunRecord
+from fatswarm.world.record import Header, LineMoves, Result, RoundEntry, RunRecord
 from fatswarm.world.rounds import Rounds
 from fatswarm.world.setup import WorldSetup
 
@@ -265,19 +265,22 @@ class WorldCore:
         for robot in timed_out:
             self.timeouts[robot] += 1
         before, collisions = booking.before, booking.collisions
-        measured = {} if booking.lengths is None else booking.lengths
-        for robot, path in paths.items():
-            length = measured.get(robot)
-            if length is None:
-                length = path_length((float(before[robot, 0]), float(before[robot, 1])), path)
-            self.last_length[robot] = length
+        self._book_lengths(before, paths, booking.lengths)
+        movers: Collection[int]
+        traveled: Mapping[int, float] | list[float] | None
+        if isinstance(paths, LineMoves):  # the common round as arrays: no Path per robot
+            movers, traveled = paths.robots(), paths.traveled.tolist()
+            moved = tuple(movers)
+        else:
+            movers, traveled = paths.keys(), booking.traveled
+            moved = tuple(sorted(paths))
         self.collisions_total += len(collisions)
         self.tracker.observe(
-            [r for r in active if r not in timed_out],
-            paths.keys(),
+            [r for r in active if r not in timed_out] if timed_out else active,
+            movers,
             before,
             booking.after,
-            booking.traveled,
+            traveled,
             len(collisions),
             changed=True if booking.relit else None,
             line=booking.line,
@@ -285,8 +288,37 @@ class WorldCore:
         self.positions, self.committed = booking.after, round_no
         self.active = tuple(active)
         self.active_set = frozenset(self.active)
-        self.moved = tuple(sorted(paths))
+        self.moved = moved
         self.stopped = tuple(sorted({c.robot for c in collisions}))
+
+    def _book_lengths(
+        self,
+        before: Points,
+        paths: Mapping[int, Path] | LineMoves,
+        measured: Mapping[int, float] | NDArray[np.float64] | None,
+    ) -> None:
+        """Each mover's path length (the agents' books): physics' where it measured it (a
+        mapping, or with LineMoves an array of every one), else measured here as `path_length`
+        from its position `before`."""
+        last_length = self.last_length
+        if isinstance(paths, LineMoves):
+            movers = paths.robots()
+            if isinstance(measured, np.ndarray):
+                lengths = measured.tolist()
+            else:
+                lengths = paths.lengths(before)
+                if measured:
+                    lengths = [measured.get(r, k) for r, k in zip(movers, lengths, strict=True)]
+            for robot, length in zip(movers, lengths, strict=True):
+                last_length[robot] = length
+            return
+        assert not isinstance(measured, np.ndarray), "lengths as an array go with LineMoves"
+        known = {} if measured is None else measured
+        for robot, path in paths.items():
+            length = known.get(robot)
+            if length is None:
+                length = path_length((float(before[robot, 0]), float(before[robot, 1])), path)
+            last_length[robot] = length
 
     # -- requests -------------------------------------------------------------------------------
 

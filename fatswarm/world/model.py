@@ -21,6 +21,7 @@ from fatswarm.world.looks import Looks
 from fatswarm.world.physics import Collision
 from fatswarm.world.progress import ProgressTracker
 from fatswarm.world.protocol import Begin, Commit, ControlReply
+from fatswarm.world.record import LineMoves
 from fatswarm.world.setup import WorldSetup
 
 
@@ -31,17 +32,21 @@ class RoundBooking:
 
     round: int
     active: Sequence[int]
-    paths: Mapping[int, Path]  # the moves applied (non-empty), world frame, from `before`
+    # the moves applied (non-empty), world frame, from `before`; or the common round's (every
+    # path one Line) as arrays, what the round line holds (`LineMoves`: movers, ends, traveled)
+    paths: Mapping[int, Path] | LineMoves
     timed_out: Collection[int]  # active robots without a move
     before: Points
     after: Points
-    traveled: Mapping[int, float]  # the arc length each mover covered
+    traveled: Mapping[int, float] | None  # the arc length each mover covered (None: LineMoves')
     collisions: Sequence[Collision]
     crashed: Collection[int] = ()  # robots that count as crashed from this round (agents gone)
     recovered: Collection[int] = ()  # crashed robots whose agent is back
     stuck: Collection[int] = ()  # robots the crash adversary crashes in this round, for good
     relit: bool = False  # a colour changed: the configuration changed, though none may have moved
-    lengths: Mapping[int, float] | None = None  # the paths' lengths physics measured, where it did
+    # the paths' lengths physics measured, where it did; with LineMoves, an array of every one
+    # in its order, or None: measured here as physics does (`0.0 + math.hypot`)
+    lengths: Mapping[int, float] | NDArray[np.float64] | None = None
     # the round line's other fields (`RoundEntry.extra`): its `failed` robots stayed without
     # asking to, and the run's figures derived from the line (failures) count them
     line: Mapping[str, Any] | None = None

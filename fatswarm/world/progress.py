@@ -6,7 +6,7 @@ world so both decide `formed`, `stalled` and `max_rounds` the same way.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection, Iterable, Mapping
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Final
 
@@ -106,7 +106,7 @@ class ProgressTracker:
         movers: Collection[int],
         before: Points,
         after: Points,
-        traveled: Mapping[int, float] | None = None,
+        traveled: Mapping[int, float] | Sequence[float] | None = None,
         collisions: int = 0,
         changed: bool | None = None,
         line: Mapping[str, Any] | None = None,
@@ -115,7 +115,8 @@ class ProgressTracker:
         """Account one committed round; returns the status (None while the run goes on).
 
         `movers`: the active robots that asked for a non-empty path; `before`/`after`: (n, 2)
-        positions around the round; `traveled`: arc length each mover covered. `changed`: whether
+        positions around the round; `traveled`: arc length each mover covered (by robot, or in
+        the order of `movers`: the distance adds them in that order). `changed`: whether
         the configuration changed, if the caller knows better than `before`/`after` (an async
         cycle whose move ended at the instant of the previous line moved all the same).
         `line`: the round line's other fields (`RoundEntry.extra`): its `failed` robots stayed
@@ -127,11 +128,11 @@ class ProgressTracker:
         """
         if self._status is not None:
             raise RuntimeError(f"the run already ended ({self._status}); no more rounds")
-        active_set = {int(r) for r in active}
-        bad = [r for r in active_set | set(movers) if not 0 <= r < self.n]
-        active_set |= self._crashed  # a crashed robot stays, as if active and asking to stay
-        if bad:
+        active_set = set(map(int, active))
+        if _outside(active_set, self.n) or _outside(movers, self.n):
+            bad = [r for r in active_set | set(movers) if not 0 <= r < self.n]
             raise ValueError(f"robots {sorted(bad)} are not in 0..{self.n - 1}")
+        active_set |= self._crashed  # a crashed robot stays, as if active and asking to stay
         self._count(active_set, movers, traveled, collisions)
         before_arr = np.asarray(before, dtype=np.float64)
         after_arr = np.asarray(after, dtype=np.float64)
@@ -156,15 +157,17 @@ class ProgressTracker:
         self,
         active: set[int],
         movers: Collection[int],
-        traveled: Mapping[int, float] | None,
+        traveled: Mapping[int, float] | Sequence[float] | None,
         collisions: int,
     ) -> None:
         """The round's figures: rounds, moves, distance, collisions and epochs."""
         self._rounds += 1
+        moves = self._moves
         for robot in movers:
-            self._moves[robot] += 1
+            moves[robot] += 1
         if traveled:
-            self._distance += float(sum(traveled.values()))
+            each = traveled.values() if isinstance(traveled, Mapping) else traveled
+            self._distance += float(sum(each))
         self._collisions += collisions
         self._epoch_seen |= active
         if len(self._epoch_seen) == self.n:
@@ -186,6 +189,11 @@ class ProgressTracker:
         )
 
 
+def _outside(robots: Collection[int], n: int) -> bool:
+    """Whether some of `robots` are not robots of an n-robot run (not in 0..n-1)."""
+    return bool(robots) and (min(robots) < 0 or max(robots) >= n)
+
+
 def configuration_changed(before: Points, after: Points) -> bool:
     """True when some robot's centre moved by more than MOVE_TOLERANCE."""
     if before.shape != after.shape:
@@ -193,7 +201,7 @@ def configuration_changed(before: Points, after: Points) -> bool:
     if before.size == 0:
         return False
     shift = np.hypot(after[:, 0] - before[:, 0], after[:, 1] - before[:, 1])
-    return bool(np.max(shift) > MOVE_TOLERANCE)
+    return bool(shift.max() > MOVE_TOLERANCE)
 
 
 __all__ = [

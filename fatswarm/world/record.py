@@ -7,18 +7,21 @@ every line. Robots' private frames (X flips) are never recorded.
 
 from __future__ import annotations
 
+import functools
 import json
+import math
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from types import TracebackType
-from typing import IO, Any, Final
+from typing import IO, Any, Final, overload
 
 import numpy as np
+from numpy.typing import NDArray
 
 from fatswarm.domain import figures, record_lines
 from fatswarm.domain.outcome import Status
-from fatswarm.domain.path import Path, Points, to_record
+from fatswarm.domain.path import Arc, Line, Path, Points, to_record
 from fatswarm.domain.seam import ParamValue
 from fatswarm.world.physics import Collision
 
@@ -66,6 +69,148 @@ class Move:
     traveled: float
 
 
+class LazyMoves(Sequence[Move]):
+    """A round's moves (increasing robot), each `Move` made only when one is read: the world
+    builds a round line every round, and most are written (`round_text`, from what this holds)
+    or handed on without anyone reading their moves. Equal to the tuple of its Moves."""
+
+    __slots__ = ("_made",)
+
+    def __init__(self) -> None:
+        self._made: tuple[Move, ...] | None = None
+
+    def _make(self) -> tuple[Move, ...]:
+        raise NotImplementedError
+
+    def made(self) -> tuple[Move, ...]:
+        """The Moves, as a tuple (made once)."""
+        if self._made is None:
+            self._made = self._make()
+        return self._made
+
+    def text(self) -> str:
+        """The record's JSON of the moves list (`round_text`'s), NaN or infinity included."""
+        return _moves_text(self.made())
+
+    def robots(self) -> list[int]:
+        """The movers, increasing."""
+        return [m.robot for m in self.made()]
+
+    @overload
+    def __getitem__(self, index: int) -> Move: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> tuple[Move, ...]: ...
+
+    def __getitem__(self, index: int | slice) -> Move | tuple[Move, ...]:
+        return self.made()[index]
+
+    def __len__(self) -> int:
+        return len(self.made())
+
+    def __iter__(self) -> Iterator[Move]:
+        return iter(self.made())
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, LazyMoves):
+            other = other.made()
+        return isinstance(other, tuple) and self.made() == other
+
+    __hash__ = None  # type: ignore[assignment]  # (equal to a tuple: not hashable as one)
+
+    def __repr__(self) -> str:
+        return repr(self.made())
+
+
+class PathMoves(LazyMoves):
+    """Moves of robots `robots` (increasing) along world-frame `paths`, having covered
+    `traveled` (0 where absent): `round_entry`'s (the mappings copied: a caller may reuse
+    them)."""
+
+    __slots__ = ("_paths", "_robots", "_traveled")
+
+    def __init__(
+        self, robots: Sequence[int], paths: Mapping[int, Path], traveled: Mapping[int, float]
+    ) -> None:
+        super().__init__()
+        self._robots, self._paths, self._traveled = list(robots), dict(paths), dict(traveled)
+
+    def _make(self) -> tuple[Move, ...]:
+        paths, get = self._paths, self._traveled.get
+        return tuple(Move(r, paths[r], float(get(r, 0.0))) for r in self._robots)
+
+    def __len__(self) -> int:
+        return len(self._robots)
+
+    def robots(self) -> list[int]:
+        return list(self._robots)
+
+    def text(self) -> str:
+        if self._made is not None:
+            return _moves_text(self._made)
+        paths, get = self._paths, self._traveled.get
+        return _moves_text_of((r, paths[r], float(get(r, 0.0))) for r in self._robots)
+
+
+class LineMoves(LazyMoves):
+    """The common round's moves as arrays: robot `movers[i]` (increasing, (k,) ints) went along
+    one straight line from its position before the round to `ends[i]` ((k, 2) float64, world
+    frame), covering `traveled[i]` ((k,) float64). Move i is exactly
+    `Move(movers[i], Path((Line((ends[i, 0], ends[i, 1])),)), traveled[i])` in Python numbers.
+    The arrays are kept as given, not copied: they are not to be changed after."""
+
+    __slots__ = ("ends", "movers", "traveled")
+
+    def __init__(
+        self, movers: NDArray[np.integer[Any]], ends: Points, traveled: NDArray[np.float64]
+    ) -> None:
+        super().__init__()
+        assert movers.dtype.kind in "iu", f"movers must be integers, not {movers.dtype}"
+        self.movers = movers
+        self.ends = np.asarray(ends, dtype=np.float64)
+        self.traveled = np.asarray(traveled, dtype=np.float64)
+        assert self.ends.shape == (len(movers), 2) and self.traveled.shape == (len(movers),)
+        assert bool(np.all(movers[1:] > movers[:-1])), "movers must increase"
+
+    def _make(self) -> tuple[Move, ...]:
+        return tuple(
+            Move(r, Path((Line((x, y)),)), t)
+            for r, (x, y), t in zip(
+                self.movers.tolist(),
+                self.ends.tolist(),
+                self.traveled.tolist(),
+                strict=True,
+            )
+        )
+
+    def __len__(self) -> int:
+        return len(self.movers)
+
+    def robots(self) -> list[int]:
+        return [int(r) for r in self.movers.tolist()]
+
+    def lengths(self, before: Points) -> list[float]:
+        """Each move's path length from its robot's position in `before` ((n, 2)), as
+        `path_length` measures its one Line (the same floats)."""
+        starts = np.asarray(before, dtype=np.float64)[self.movers].tolist()
+        return [
+            0.0 + math.hypot(ex - x, ey - y)
+            for (x, y), (ex, ey) in zip(starts, self.ends.tolist(), strict=True)
+        ]
+
+    def text(self) -> str:
+        k = len(self.movers)
+        values: list[Any] = [None] * (4 * k)
+        values[0::4] = self.movers.tolist()
+        values[1::4] = self.ends[:, 0].tolist()
+        values[2::4] = self.ends[:, 1].tolist()
+        values[3::4] = self.traveled.tolist()
+        return "[" + _repeated(_LINE_MOVE, k) % tuple(values) + "]"
+
+
+Moves = tuple[Move, ...] | LazyMoves  # a round's moves: read as a sequence of Move
+
+
 @dataclass(frozen=True, slots=True)
 class RoundEntry:
     """One committed round: who was active, who moved how, positions after (n, 2), contacts;
@@ -77,7 +222,7 @@ class RoundEntry:
 
     round: int
     active: tuple[int, ...]
-    moves: tuple[Move, ...]
+    moves: Moves  # a tuple, or made only when read (`LazyMoves`)
     positions: Points
     collisions: tuple[Collision, ...]
     extra: dict[str, Any] = field(default_factory=dict)
@@ -92,8 +237,8 @@ class RoundEntry:
 def round_entry(
     round_no: int,
     active: Sequence[int],
-    paths: Mapping[int, Path],
-    covered: Mapping[int, float],
+    paths: Mapping[int, Path] | LineMoves,
+    covered: Mapping[int, float] | None,
     positions: Points,
     collisions: Iterable[Collision] = (),
     *,
@@ -105,23 +250,32 @@ def round_entry(
     """The one builder of a round line, for the round models and the async ones (a cycle).
 
     `paths`: each mover's world-frame path (a robot that stays has none); `covered`: the arc
-    length each covered (0 where absent). The other fields in the line's order: an async cycle's
-    `times` (look, start, end, origin), the robot lists (`ROBOT_LISTS`, each written only when
-    not empty, in the order given), then the model's (lights, views), then `failed` (robot ->
-    why its compute raised, written only when some did).
+    length each covered (0 where absent). Or, the common round (every path one straight line)
+    as arrays: `paths` a `LineMoves` (movers, their lines' ends, traveled) and `covered` None;
+    the entry and its line are the same as from the Paths. The other fields in the line's
+    order: an async cycle's `times` (look, start, end, origin), the robot lists
+    (`ROBOT_LISTS`, each written only when not empty, in the order given), then the model's
+    (lights, views), then `failed` (robot -> why its compute raised, written only when some
+    did). The moves are made only when read (`LazyMoves`).
     """
-    extra: dict[str, Any] = dict(times or {})
+    extra: dict[str, Any] = dict(times) if times else {}
     for key, listed in robots:
         assert key in record_lines.ROBOT_LISTS, f"{key!r} is no robot list of the round line"
-        if listed:
+        if len(listed):
             extra[key] = list(listed)
-    extra.update(model or {})
+    if model:
+        extra.update(model)
     if failed:
         extra["failed"] = {str(r): text for r, text in sorted(failed.items())}
+    if isinstance(paths, LineMoves):
+        assert covered is None, "a LineMoves carries what each covered"
+        moves: LazyMoves = paths
+    else:
+        moves = PathMoves(sorted(paths), paths, covered or {})
     return RoundEntry(
         round_no,
-        tuple(active),
-        tuple(Move(r, p, float(covered.get(r, 0.0))) for r, p in sorted(paths.items())),
+        active if type(active) is tuple else tuple(active),
+        moves,
         positions,
         tuple(collisions),
         extra,
@@ -188,6 +342,163 @@ def collision_to_record(c: Collision) -> dict[str, Any]:
     }
 
 
+def _dumps(value: Any) -> str:
+    """JSON as every record line is written: compact, ASCII, no NaN or infinity (ValueError)."""
+    return json.dumps(value, separators=(",", ":"), allow_nan=False)
+
+
+# The record's round line written piece by piece: the very text `_dumps` gives of the line as a
+# dict (`round_fields`), made faster where a round has many robots. JSON writes a float as its
+# `repr` and an int as its `str`, and so does `%r` (of a float) and `%d` (of an int), which
+# format a whole list of numbers in one call; NaN and infinity are the only numbers whose text
+# holds an `n`, and they go the dict's way, to be refused as `_dumps` refuses them.
+_LINE_MOVE: Final = '{"robot":%d,"path":[{"line":[%r,%r]}],"traveled":%r}'
+_POINT: Final = "[%r,%r]"
+_ROW: Final = "%r,%r"  # a point without its brackets (PointsMemo)
+_ROUND_HEAD: Final = frozenset(("type", "round", "active", "moves", "positions", "collisions"))
+
+
+@functools.lru_cache(maxsize=64)
+def _repeated(item: str, k: int, between: str = ",") -> str:
+    """`k` copies of the format `item`, `between` each two."""
+    return between.join([item] * k)
+
+
+def _path_text(path: Path) -> str:
+    """`_dumps(to_record(path))`."""
+    segments = []
+    for seg in path.segments:
+        if isinstance(seg, Line):
+            x, y = float(seg.end[0]), float(seg.end[1])
+            segments.append(f'{{"line":[{x!r},{y!r}]}}')
+        else:
+            assert isinstance(seg, Arc)
+            cx, cy, sweep = float(seg.center[0]), float(seg.center[1]), float(seg.sweep)
+            segments.append(f'{{"arc":[{cx!r},{cy!r},{sweep!r}]}}')
+    return "[" + ",".join(segments) + "]"
+
+
+def _moves_text_of(moves: Iterable[tuple[int, Path, float]]) -> str:
+    """The JSON of a round line's moves list, of (robot, path, traveled) in its order."""
+    return (
+        "["
+        + ",".join(
+            f'{{"robot":{int(r)},"path":{_path_text(p)},"traveled":{float(t)!r}}}'
+            for r, p, t in moves
+        )
+        + "]"
+    )
+
+
+def _moves_text(moves: Iterable[Move]) -> str:
+    return _moves_text_of((m.robot, m.path, m.traveled) for m in moves)
+
+
+def _by_robot(moves: Moves) -> Sequence[Move]:
+    """A line's moves in the order the record writes them: by robot, one each (the last given);
+    a `LazyMoves` is so already."""
+    if isinstance(moves, LazyMoves):
+        return moves
+    return [m for _, m in sorted({m.robot: m for m in moves}.items(), key=lambda rm: rm[0])]
+
+
+def _points_text(positions: Points, memo: PointsMemo | None = None) -> str:
+    """`_dumps(_positions_list(positions))` of (n, 2) positions (NaN, infinity included);
+    `memo`: the text of the positions written before, of which rows equal to the bit are kept."""
+    arr = np.asarray(positions, dtype=np.float64)
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        return _dumps(_positions_list(positions))  # refused there as before
+    if memo is not None:
+        return memo.text(arr)
+    return "[" + _repeated(_POINT, len(arr)) % tuple(arr.ravel().tolist()) + "]"
+
+
+class PointsMemo:
+    """The text of the positions of the round line written last, row by row: a row whose two
+    floats are the same bits (so the same `repr`) is not formatted again. A writer's: most
+    rounds leave most robots where they were, and a float's text is the line's main cost."""
+
+    def __init__(self) -> None:
+        self._bits: NDArray[np.int64] | None = None  # the positions' bits, (n, 2)
+        self._inner = ""  # the text less its outer brackets: "x,y],[x,y],[..."
+        self._rows: list[str] | None = None  # the same, row by row ("x,y"), once split
+
+    def text(self, arr: Points) -> str:
+        """The JSON text of the (n, 2) float64 positions `arr`."""
+        n = len(arr)
+        if n == 0:
+            return "[]"
+        bits = arr.view(np.int64) if arr.flags.c_contiguous else arr.copy().view(np.int64)
+        last = self._bits
+        changed = None if last is None or last.shape != bits.shape else (last != bits).any(1)
+        if changed is None or 2 * int(np.count_nonzero(changed)) > n:
+            self._inner = _repeated(_ROW, n, "],[") % tuple(arr.ravel().tolist())
+            self._rows = None
+        else:
+            rows = self._rows if self._rows is not None else self._inner.split("],[")
+            for i in np.flatnonzero(changed).tolist():
+                rows[i] = _ROW % (float(arr[i, 0]), float(arr[i, 1]))
+            self._rows, self._inner = rows, "],[".join(rows)
+        self._bits = bits.copy()
+        return "[[" + self._inner + "]]"
+
+
+def round_fields(entry: RoundEntry) -> dict[str, Any]:
+    """A round line as the JSON object the record holds (its fields in the line's order)."""
+    return {
+        "type": "round",
+        "round": int(entry.round),
+        "active": [int(r) for r in entry.active],
+        "moves": [
+            {"robot": int(m.robot), "path": to_record(m.path), "traveled": float(m.traveled)}
+            for m in _by_robot(entry.moves)
+        ],
+        "positions": _positions_list(entry.positions),
+        "collisions": [collision_to_record(c) for c in entry.collisions],
+        **entry.extra,
+    }
+
+
+def round_text(entry: RoundEntry, memo: PointsMemo | None = None) -> str:
+    """The round line's text in the record, without its newline: exactly `_dumps(round_fields(
+    entry))` (a test holds the two together), built faster. `memo`: the positions' text of the
+    line written before (a writer's `PointsMemo`). Raises ValueError for NaN or infinity,
+    TypeError for a value JSON has no form of, as `json.dumps` does."""
+    extra = entry.extra
+    moves = entry.moves
+    moved = moves.text() if isinstance(moves, LazyMoves) else _moves_text(_by_robot(moves))
+    points = _points_text(entry.positions, memo)
+    if not all(isinstance(key, str) for key in extra):
+        raise TypeError("keywords must be strings")  # as the writer's `round(**extra)` raised
+    if "n" in points or "inf" in moved or "nan" in moved or not _ROUND_HEAD.isdisjoint(extra):
+        return _dumps(round_fields(entry))  # refused (NaN), or an odd line: as the dict says
+    parts = [
+        '{"type":"round","round":',
+        str(int(entry.round)),
+        ',"active":[',
+        ",".join([str(int(r)) for r in entry.active]),
+        '],"moves":',
+        moved,
+        ',"positions":',
+        points,
+        ',"collisions":',
+        _dumps([collision_to_record(c) for c in entry.collisions]) if entry.collisions else "[]",
+    ]
+    for key, value in extra.items():
+        parts += (",", _dumps(key), ":", _dumps(value))
+    parts.append("}")
+    return "".join(parts)
+
+
+def line_text(line: Header | RoundEntry | Result) -> str:
+    """A record line as the record holds it (without its newline)."""
+    if isinstance(line, RoundEntry):
+        return round_text(line)
+    out = _LineText()
+    out.append(line)
+    return out.text
+
+
 class RecordWriter:
     """Writes record lines to a file, flushing each (and fsyncing it if `fsync`).
 
@@ -201,6 +512,7 @@ class RecordWriter:
         self.path = os.fspath(path)
         self.fsync = fsync
         self._newline_first = append and _ends_without_newline(self.path)
+        self._points = PointsMemo()  # the positions' text of the round line written last
         try:
             self._fh: IO[str] | None = open(  # noqa: SIM115
                 self.path, "a" if append else "w", encoding="utf-8"
@@ -223,9 +535,13 @@ class RecordWriter:
 
     def write(self, entry: Mapping[str, Any]) -> None:
         """Append one JSON object as one line."""
+        self.put(_dumps(entry))
+
+    def put(self, text: str) -> None:
+        """Append one line of JSON text (`line_text`'s, without its newline)."""
         if self._fh is None:
             raise RuntimeError(f"run record {self.path} is closed")
-        line = json.dumps(entry, separators=(",", ":"), allow_nan=False) + "\n"
+        line = text + "\n"
         if self._newline_first:
             line, self._newline_first = "\n" + line, False
         try:
@@ -318,10 +634,7 @@ class RecordWriter:
                 **line.extra,
             )
         elif isinstance(line, RoundEntry):
-            moves = {m.robot: (m.path, m.traveled) for m in line.moves}
-            self.round(
-                line.round, line.active, moves, line.positions, line.collisions, **line.extra
-            )
+            self.put(round_text(line, self._points))
         else:
             counted = {k: getattr(line, k) for k in result_figures()}
             kept = {k: v for k, v in counted.items() if v is not None}
@@ -337,6 +650,16 @@ class RecordWriter:
                 raise RecordWriteError(
                     f"cannot write the run record {self.path}: {exc.strerror or exc}"
                 ) from exc
+
+
+class _LineText(RecordWriter):
+    """The text RecordWriter writes a line as, kept instead of written (no file)."""
+
+    def __init__(self) -> None:  # (RecordWriter's opens the file: not called)
+        self.text = ""
+
+    def put(self, text: str) -> None:
+        self.text = text
 
 
 def _ends_without_newline(path: str) -> bool:
@@ -355,14 +678,22 @@ def _ends_without_newline(path: str) -> bool:
 __all__ = [
     "VERSION",
     "Header",
+    "LazyMoves",
+    "LineMoves",
     "Move",
+    "Moves",
+    "PathMoves",
+    "PointsMemo",
     "RecordFormatError",
     "RecordWriter",
     "Result",
     "RoundEntry",
     "RunRecord",
     "collision_to_record",
+    "line_text",
     "move_origin",
     "result_figures",
     "round_entry",
+    "round_fields",
+    "round_text",
 ]

@@ -112,17 +112,17 @@ def test_a_record_that_cannot_be_written_says_after_which_round_and_how_to_go_on
     whole = target.read_bytes()
     target.unlink()  # the same command again: the same header
     capsys.readouterr()
-    write = RecordWriter.write
+    put = RecordWriter.put  # (every line goes through it as text)
 
-    def full_disk(self: RecordWriter, entry: dict[str, object]) -> None:
-        if entry.get("round") == 6:  # half the line reaches the disk, then it is full
+    def full_disk(self: RecordWriter, text: str) -> None:
+        if text.startswith('{"type":"round","round":6,'):  # half of it is written: disk full
             assert self._fh is not None
             self._fh.write('{"type":"round","round":6,"act')
             self._fh.flush()
             raise RecordWriteError(f"cannot write the run record {self.path}: No space left")
-        write(self, entry)
+        put(self, text)
 
-    monkeypatch.setattr(RecordWriter, "write", full_disk)
+    monkeypatch.setattr(RecordWriter, "put", full_disk)
     assert fatswarm(*RUN, "-q", "--record", str(target)) == ExitCode.RECORD_FAILED
     err = capsys.readouterr().err
     assert err == (

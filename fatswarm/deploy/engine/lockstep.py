@@ -49,7 +49,7 @@ from fatswarm.world.journal import Journal, perform
 from fatswarm.world.looks import Seen
 from fatswarm.world.physics import validate_configuration
 from fatswarm.world.protocol import ControlReply, ControlRequest, MoveSubmitted
-from fatswarm.world.record import Header, RecordWriter, Result, RoundEntry, RunRecord
+from fatswarm.world.record import Header, Result, RoundEntry, RunRecord, line_text
 from fatswarm.world.setup import WorldSetup
 
 # Default round cap = ROUNDS_PER_STEP[scheduler] * (n + STEP_SLACK). The algorithm needs about
@@ -766,23 +766,6 @@ class ReplayedRecord:
     def close(self) -> None:
         if self.journal is not None:
             self.journal.close()
-
-
-class _LineText(RecordWriter):
-    """The text RecordWriter writes a line as, kept instead of written (no file)."""
-
-    def __init__(self) -> None:  # (RecordWriter's opens the file: not called)
-        self.text = ""
-
-    def write(self, entry: Mapping[str, Any]) -> None:
-        self.text = json.dumps(entry, separators=(",", ":"), allow_nan=False)
-
-
-def line_text(line: Header | RoundEntry | Result) -> str:
-    """A record line as the record holds it (without its newline)."""
-    out = _LineText()
-    out.append(line)
-    return out.text
 
 
 def _difference(k: int, recorded: RoundEntry | Result, made: RoundEntry | Result) -> str:

@@ -72,7 +72,7 @@ class Step:
         return Step(
             line.round,
             line.active,
-            line.moves,
+            tuple(line.moves),  # (a round's moves are made when read: a tuple here)
             line.collisions,
             line.derived,
             _end(line),
