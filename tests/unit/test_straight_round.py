@@ -163,6 +163,11 @@ def test_line_paths_make_no_path_until_one_is_read() -> None:
     assert path_bits(paths[4]) == bits([[-0.0, 3.5]])
 
 
+def _as_paths(answer: Any) -> Any:
+    """A round hook's answer as k Paths (the inner hooks answer StraightMoves)."""
+    return answer.paths() if isinstance(answer, StraightMoves) else answer
+
+
 class Straight:
     """`inner`'s round hook answered as StraightMoves (where every path is a line or a stay);
     `wild`: a robot whose view's first row has x < -12 asks for a NaN line, y > 12 for a line
@@ -191,7 +196,7 @@ class Straight:
     def compute_views(self, views: np.ndarray, params: Any) -> Any:
         paths = [
             self._wild(v, p)
-            for v, p in zip(views, self.inner.compute_views(views, params), strict=True)
+            for v, p in zip(views, _as_paths(self.inner.compute_views(views, params)), strict=True)
         ]
         if not all(not p or (len(p) == 1 and type(p.segments[0]) is Line) for p in paths):
             return paths
