@@ -96,6 +96,30 @@ def spread_rounds() -> list[Round]:
     return out
 
 
+def order_rounds() -> list[Round]:
+    """Rounds whose paths come in another order than the robots' (the order of the movers decides
+    the frame, ties and the snap's order), and ends on half-grid points (ties of the snap)."""
+    out: list[Round] = []
+    for n in (3, 16, 64, 100):
+        for kind in ("spread", "clustered"):
+            start = _start(n, 11, kind)
+            rng = np.random.default_rng(_seed(f"order-{kind}-{n}"))
+            steps = _directions(rng, n, rng.choice((1e-4, 0.5, 3.0), size=n))
+            paths = _lines(start, range(n), steps)
+            backwards = dict(reversed(paths.items()))
+            shuffled = {r: paths[r] for r in rng.permutation(n).tolist()}
+            out.append((f"order-back-{kind}-n{n}", start, backwards, False))
+            out.append((f"order-shuffled-{kind}-n{n}", start, shuffled, False))
+            out.append((f"order-shuffled-{kind}-n{n}-pts", start, shuffled, True))
+            half = snap(start + steps) + GRID / 2.0 * rng.integers(0, 2, size=(n, 2))
+            ties = {
+                r: Path((Line((float(x), float(y))),)) for r, (x, y) in enumerate(half.tolist())
+            }
+            out.append((f"half-grid-{kind}-n{n}", start, ties, False))
+            out.append((f"half-grid-{kind}-n{n}-pts", start, ties, True))
+    return out
+
+
 def random_rounds() -> list[Round]:
     """Random starts of every kind, random movers with moves of every length and direction, and
     moves toward the centre (where pairs meet and stop one another); fat and point robots."""
@@ -321,6 +345,7 @@ def collect(quick: bool = False) -> list[Round]:
         return spread_rounds()[::5] + contact_rounds()[::9] + error_rounds()
     return (
         spread_rounds()
+        + order_rounds()
         + random_rounds()
         + contact_rounds()
         + arc_rounds()

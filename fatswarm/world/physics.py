@@ -17,8 +17,11 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from math import isfinite
+from functools import lru_cache
+from itertools import chain, starmap
+from math import hypot, isfinite
 from numbers import Real
+from operator import attrgetter, itemgetter
 from typing import Any, Final
 
 import numpy as np
@@ -46,11 +49,13 @@ from fatswarm.domain.tolerance import (
     snap_point,
 )
 from fatswarm.world.motion import (
+    BoolArray,
     FloatArray,
     IntArray,
     Motion,
     build_motion,
     first_contacts,
+    line_motion,
     positions_at,
 )
 
@@ -111,6 +116,8 @@ def _as_points(positions: Any) -> Points:
         raise InvalidConfigurationError(
             f"positions must be a list of [x, y] number pairs ({exc})"
         ) from None
+    if arr.ndim == 2 and arr.shape[1] == 2 and arr.size and np.isfinite(arr).all():
+        return arr  # the common case: the checks below all pass
     if arr.size == 0:
         raise InvalidConfigurationError("positions are empty: give at least one robot as [x, y]")
     if arr.ndim != 2 or arr.shape[1] != 2:
@@ -256,26 +263,33 @@ def _check_moves(paths: Mapping[int, Path], n: int) -> list[tuple[int, Path]]:
 
 
 def _sweep_pairs(
-    lo: FloatArray, hi: FloatArray, first: IntArray, second: IntArray, reach: float
+    lo: FloatArray, hi: FloatArray, first: IntArray, second: IntArray | None, reach: float
 ) -> tuple[IntArray, IntArray]:
-    """Every pair (a in `first`, b in `second`) whose intervals [lo, hi] (one axis, per robot) come
-    within `reach`, and maybe a few more: a sort and sweep, O((m + k) log k) for k = len(second);
-    up to BRUTE_PAIRS pairs, every pair (first, then second) instead.
+    """Every pair (a in `first`, b in `second`, every robot if None) whose intervals [lo, hi] (one
+    axis, per robot) come within `reach`, and maybe a few more: a sort and sweep,
+    O((m + k) log k) for k = len(second); up to BRUTE_PAIRS pairs, every pair (first, then second)
+    instead.
     """
-    if len(first) * len(second) <= BRUTE_PAIRS:  # few: every pair, already in their order
-        return np.repeat(first, len(second)), np.tile(second, len(first))
-    lo_b = lo[second]
+    if second is None:
+        lo_b, hi_b, count = lo, hi, len(lo)
+    else:
+        lo_b, hi_b, count = lo[second], hi[second], len(second)
+    if len(first) * count <= BRUTE_PAIRS:  # few: every pair, already in their order
+        every = np.arange(count, dtype=np.intp) if second is None else second
+        return np.repeat(first, count), np.tile(every, len(first))
     order = lo_b.argsort(kind="stable")
     lo_sorted = lo_b[order]
-    width = float((hi[second] - lo_b).max()) if len(second) else 0.0
+    width = float((hi_b - lo_b).max()) if count else 0.0
     pad = reach + width + 1.0  # generous: the exact test of the pairs comes after
     begin = lo_sorted.searchsorted(lo[first] - pad, side="left")
     end = lo_sorted.searchsorted(hi[first] + reach + 1.0, side="right")
     counts = end - begin
-    total = int(counts.sum())
-    offsets = (begin - counts.cumsum() + counts).repeat(counts)
+    ends = counts.cumsum()
+    total = int(ends[-1]) if len(ends) else 0
+    offsets = (begin - ends + counts).repeat(counts)
     pi = first.repeat(counts)
-    pj = second[order[np.arange(total, dtype=np.intp) + offsets]]
+    at = order[np.arange(total, dtype=np.intp) + offsets]
+    pj = at if second is None else second[at]
     return pi, pj
 
 
@@ -398,6 +412,59 @@ def _snap_movers(final: Points, movers: IntArray) -> None:
         _snap_one(final, int(robot), pj[pi == robot])
 
 
+def _snap_near(
+    final: Points, movers: IntArray, si: IntArray, sj: IntArray, everyone: bool = False
+) -> None:
+    """`_snap_movers`, given pairs (mover, robot) (si, sj) among which are all pairs closer than
+    SNAP_REACH: the same corners (each mover's test is against the same robots, in the same
+    order of movers), without searching for the pairs again."""
+    d = final.take(si, axis=0) - final.take(sj, axis=0)
+    near = (np.hypot(d[:, 0], d[:, 1]) < SNAP_REACH) & (si != sj)
+    crowded: IntArray | None = None
+    alone = movers
+    if near.any():
+        pi, pj = si[near], sj[near]
+        near_someone = np.zeros(len(final), dtype=np.bool_)
+        near_someone[pi] = True
+        is_crowded = near_someone[movers]
+        alone, crowded = movers[~is_crowded], movers[is_crowded]
+    if len(alone):  # no robot can refuse their nearest corner: all at once
+        every = everyone and crowded is None  # alone is movers, which is arange(n)
+        p = final if every else final.take(alone, axis=0)
+        nearest = _nearest_corners(p)
+        if every:
+            final[:] = nearest
+        else:
+            final[alone] = nearest
+    if crowded is not None:
+        for robot in crowded.tolist():
+            _snap_one(final, robot, pj[pi == robot])
+
+
+def _nearest_corners(p: Points) -> Points:
+    """The nearest of the four grid points around each point of `p` ((m, 2)), the first of
+    (floor x, floor y), (floor x, ceil y), (ceil x, floor y), (ceil x, ceil y) at the least
+    np.hypot: `_snap_movers`' corners (base + _CORNERS * GRID), distances and argmin, a column at
+    a time."""
+    base = np.floor(p / GRID)
+    base *= GRID
+    lo = base + 0.0  # the corners' coordinates: base + 0 * GRID, base + 1 * GRID
+    hi = base + GRID
+    d_lo, d_hi = lo - p, hi - p
+    dist = np.empty((len(p), 4))
+    np.hypot(d_lo[:, 0], d_lo[:, 1], out=dist[:, 0])
+    np.hypot(d_lo[:, 0], d_hi[:, 1], out=dist[:, 1])
+    np.hypot(d_hi[:, 0], d_lo[:, 1], out=dist[:, 2])
+    np.hypot(d_hi[:, 0], d_hi[:, 1], out=dist[:, 3])
+    k = dist.argmin(axis=1)
+    step = np.empty((len(p), 2))
+    step[:, 0] = k >> 1  # corner k is (k // 2, k % 2) steps of GRID from base
+    step[:, 1] = k & 1
+    step *= GRID
+    step += lo  # lo + 0.0 is lo, lo + GRID is hi (lo is base, or +0.0 for base -0.0)
+    return step
+
+
 def _snap_one(final: Points, robot: int, neighbours: IntArray) -> None:
     """`_snap_movers` for one mover, tested against the robots `neighbours` (all those within
     SNAP_REACH: no other can refuse a corner)."""
@@ -432,6 +499,10 @@ def apply_round(
     anything moves; PhysicsInvariantError if discs overlap afterwards (a physics bug).
     """
     start = _as_points(positions)
+    lines = _straight_lines(paths, len(start))
+    if lines is not None:  # the common round: every path one Line (`apply_lines`)
+        keys, ends = lines
+        return _line_round(start, np.array(keys, dtype=np.intp), keys, ends, points)
     moves = _check_moves(paths, len(start))
     traveled = {robot: 0.0 for robot, _ in moves}
     # Simulate in a frame centred on a mover (a grid point: the shift is exact for grid positions
@@ -450,6 +521,171 @@ def apply_round(
     # Every pair that can meet: a robot never leaves its path's box, so no other pair can overlap,
     # before, during or after the round (stills among themselves are the caller's business).
     pi, pj = _candidate_pairs(mo, mo.robots, np.arange(len(start), dtype=np.intp))
+    final, collisions = _contacts(start, mo, origin, pi, pj, None)
+    return _outcome(start, final, mo, dict(moves), traveled, collisions)
+
+
+def apply_lines(
+    positions: Points, movers: IntArray, ends: Points, *, points: bool = False
+) -> RoundOutcome:
+    """`apply_round(positions, {r: Path((Line((x, y)),)) for r, (x, y) in zip(movers, ends)})`,
+    with the same bits and the same errors, without a Path per robot.
+
+    `movers`: (m,) robot ids, increasing; `ends`: (m, 2) world-frame end points of their straight
+    lines (what `transform(Path((Line(end),)), start)` gives). Raises InvalidRoundError if movers
+    and ends do not match in shape or the movers are not increasing.
+    """
+    start = _as_points(positions)
+    robots = np.asarray(movers)
+    e = np.asarray(ends, dtype=np.float64)
+    m = len(robots) if robots.ndim == 1 else -1
+    if robots.dtype.kind not in "iu" or e.shape != (m, 2):
+        raise InvalidRoundError(
+            f"apply_lines takes movers as an (m,) int array and ends as (m, 2) floats, got "
+            f"{robots.dtype} {robots.shape} and {e.shape}"
+        )
+    if m == 0:
+        return RoundOutcome(positions=start, traveled={})
+    if m > 1 and not (robots[1:] > robots[:-1]).all():
+        raise InvalidRoundError("apply_lines takes each mover once, in increasing order")
+    if robots[0] < 0 or robots[-1] >= len(start) or not np.isfinite(e).all():
+        xy = e.tolist()  # apply_round says what is wrong, as it would for these paths
+        paths = {
+            int(r): Path((Line((x, y)),)) for r, (x, y) in zip(robots.tolist(), xy, strict=True)
+        }
+        return apply_round(start, paths, points=points)
+    return _line_round(start, robots.astype(np.intp, copy=False), robots.tolist(), e, points)
+
+
+_INT: Final = frozenset({int})
+_PATH: Final = frozenset({Path})
+_ONE: Final = frozenset({1})
+_LINE: Final = frozenset({Line})
+_TUPLE: Final = frozenset({tuple})
+_TWO: Final = frozenset({2})
+_FLOAT: Final = frozenset({float})
+_SEGMENTS: Final = attrgetter("segments")
+_END: Final = attrgetter("end")
+_FIRST: Final = itemgetter(0)
+
+
+def _straight_lines(paths: Mapping[int, Path], n: int) -> tuple[list[int], Points] | None:
+    """The round as (robots, (m, 2) world ends) if every key is an int robot of the n and every
+    path one Line to a tuple of two finite floats, checked in bulk (no loop in Python); None for
+    any other round, which `_check_moves` then checks path by path (raising what it must)."""
+    keys = list(paths)
+    if not keys or set(map(type, keys)) != _INT or min(keys) < 0 or max(keys) >= n:
+        return None
+    values = list(paths.values())
+    if set(map(type, values)) != _PATH:
+        return None
+    segments = list(map(_SEGMENTS, values))
+    if set(map(len, segments)) != _ONE:
+        return None
+    firsts = list(map(_FIRST, segments))
+    if set(map(type, firsts)) != _LINE:
+        return None
+    ends = list(map(_END, firsts))
+    if set(map(type, ends)) != _TUPLE or set(map(len, ends)) != _TWO:
+        return None
+    flat = list(chain.from_iterable(ends))
+    if set(map(type, flat)) != _FLOAT or not isfinite(sum(flat)):  # any inf or nan: not finite
+        return None
+    return keys, np.array(flat, dtype=np.float64).reshape(len(keys), 2)
+
+
+def _line_round(
+    start: Points, robots: IntArray, keys: list[int], ends: Points, points: bool
+) -> RoundOutcome:
+    """apply_round when every path is one Line, from arrays: `robots` (m,) (`keys` the same as
+    ints), world `ends` (m, 2), checked. The very arithmetic of build_motion's `_single_lines`,
+    the general path and `_outcome`, on arrays; a round whose movers' boxes come nowhere near
+    another robot skips the contact search (as the general path does when it finds no pair)."""
+    n = len(start)
+    everyone = len(keys) == n and keys == list(range(n))  # robots is arange(n)
+    ox, oy = snap_point(*start[keys[0]].tolist())  # as the general path: a frame on a mover
+    origin = np.array((ox, oy))
+    here_w = start if everyone else start.take(robots, axis=0)
+    here = here_w - origin  # the local frame's start points: start - origin, row by row
+    e = ends + np.array((-ox, -oy))
+    total = list(starmap(hypot, (e - here).tolist()))  # CPython's hypot, as _single_lines
+    if not isfinite(max(total)):
+        k = next(k for k, t in enumerate(total) if not isfinite(t))
+        raise PathFormatError(
+            f"robot {keys[k]}: the path is too long to simulate (length {total[k]})"
+        )
+    world = list(starmap(hypot, (ends - here_w).tolist()))  # _outcome's lengths: world frame
+    if min(total) > 0.0:
+        traveled = dict(zip(keys, world, strict=True))
+        lengths = traveled.copy()
+    else:  # a zero-length line moves nobody: not a row, traveled 0.0, no length
+        keep = np.array(total) > 0.0
+        if not keep.any():
+            return RoundOutcome(positions=start, traveled=dict.fromkeys(keys, 0.0))
+        robots, here, e = robots[keep], here[keep], e[keep]
+        everyone = False
+        traveled = dict.fromkeys(keys, 0.0)
+        lengths = {r: w for r, w, t in zip(keys, world, total, strict=True) if t > 0.0}
+        traveled.update(lengths)
+        total = [t for t in total if t > 0.0]
+    if points:  # every mover to its end, on the grid
+        if everyone:
+            return RoundOutcome(snap(e + origin), traveled, [], lengths)
+        final = start.copy()
+        final[robots] = snap(e + origin)
+        return RoundOutcome(final, traveled, [], lengths)
+    lo = np.where(e < here, e, here)  # min([here, end]): the end only if strictly less
+    hi = np.where(e > here, e, here)
+    if everyone:  # boxes_t: (4, n) xmin, ymin, xmax, ymax of every robot in the local frame
+        boxes_t = np.concatenate((lo.T, hi.T))
+        local = here
+    else:
+        local = start - origin
+        boxes_t = np.concatenate((local.T, local.T))
+        boxes_t[:2, robots] = lo.T
+        boxes_t[2:, robots] = hi.T
+    si, sj = _reach_pairs(boxes_t, robots)
+    close = _boxes_close(boxes_t, si, sj)
+    if everyone:  # each pair once, as (lower id, higher id)
+        close &= sj > si
+    else:
+        is_mover = np.zeros(n, dtype=np.bool_)
+        is_mover[robots] = True
+        close &= (si != sj) & ~(is_mover.take(sj) & (sj < si))
+    if not close.any():  # no pair can meet: every mover to its end
+        if everyone:
+            final = e + origin
+        else:
+            final = start.copy()
+            final[robots] = e + origin
+        _snap_near(final, robots, si, sj, everyone)
+        return RoundOutcome(final, traveled, [], lengths)
+    pi, pj = si[close], sj[close]
+    if len(robots) * n > BRUTE_PAIRS:  # from the sweep: into the brute force's order
+        rank = np.empty(n, dtype=np.intp)
+        rank[robots] = np.arange(len(robots), dtype=np.intp)
+        order = np.lexsort((pj, rank[pi]))
+        pi, pj = pi[order], pj[order]
+    box = np.concatenate((lo, hi), axis=1)
+    mo = line_motion(local, robots, here, e, np.array(total, dtype=np.float64), box)
+    final, collisions = _contacts(start, mo, (ox, oy), pi, pj, (si, sj))
+    if collisions:  # as _outcome: the whole path's (world) length unless stopped short
+        rows = zip(robots.tolist(), mo.stop.tolist(), total, strict=True)
+        traveled.update({r: lengths[r] if stop >= t else stop for r, stop, t in rows})
+    return RoundOutcome(final, traveled, collisions, lengths)
+
+
+def _contacts(
+    start: Points,
+    mo: Motion,
+    origin: tuple[float, float],
+    pi: IntArray,
+    pj: IntArray,
+    near: tuple[IntArray, IntArray] | None,
+) -> tuple[Points, list[Collision]]:
+    """The round's end positions (on the grid) and contacts, given its candidate pairs (pi, pj),
+    in order; `near`: pairs (mover, robot) that include every pair closer than SNAP_REACH at the
+    end, if known (else `_snap_movers` finds them)."""
     if pi.size:
         a, b, dist = _closest_pair(start, pi, pj)
         if dist < OVERLAP_DISTANCE:
@@ -460,7 +696,10 @@ def apply_round(
     collisions = _simulate(mo, pi, pj) if pi.size else []  # no pair, no contact
     final = start.copy()
     final[mo.robots] = positions_at(mo, mo.robots, mo.stop) + np.array(origin)
-    _snap_movers(final, mo.robots)
+    if near is None:
+        _snap_movers(final, mo.robots)
+    else:
+        _snap_near(final, mo.robots, *near)
     collisions = [  # a stopped robot's recorded point is where it is: on the grid
         Collision(c.robot, c.other, c.t, (float(final[c.robot, 0]), float(final[c.robot, 1])))
         for c in collisions
@@ -471,7 +710,39 @@ def apply_round(
             raise PhysicsInvariantError(
                 f"physics bug: robots {a} and {b} overlap after the round (centres {dist!r} apart)"
             )
-    return _outcome(start, final, mo, dict(moves), traveled, collisions)
+    return final, collisions
+
+
+def _reach_pairs(boxes_t: FloatArray, movers: IntArray) -> tuple[IntArray, IntArray]:
+    """Pairs (mover, any robot) that include every pair whose boxes ((4, n): xmin, ymin, xmax,
+    ymax) come within 3 on the wider axis: every pair that can meet (`_boxes_close`) and every
+    pair that can end within SNAP_REACH. Up to BRUTE_PAIRS, every pair in the brute order."""
+    n = boxes_t.shape[1]
+    m = len(movers)
+    if m * n <= BRUTE_PAIRS:
+        return movers.repeat(n), _tiled(n, m)
+    xs, ys = boxes_t[0], boxes_t[1]
+    ax = 0 if xs.max() - xs.min() >= ys.max() - ys.min() else 1
+    return _sweep_pairs(boxes_t[ax], boxes_t[ax + 2], movers, None, 2.0 + BOX_MARGIN)
+
+
+@lru_cache(maxsize=64)
+def _tiled(n: int, m: int) -> IntArray:
+    """0, 1, ..., n - 1, m times over (read-only: shared by the rounds that ask for it)."""
+    out = np.tile(np.arange(n, dtype=np.intp), m)
+    out.setflags(write=False)
+    return out
+
+
+def _boxes_close(boxes_t: FloatArray, pi: IntArray, pj: IntArray) -> BoolArray:
+    """Whether the boxes ((4, n)) of each pair come within 2 + BOX_MARGIN: `_candidate_pairs`'
+    test, with the same arithmetic."""
+    bi, bj = boxes_t.take(pi, axis=1), boxes_t.take(pj, axis=1)
+    gap = np.maximum(bj[:2] - bi[2:], bi[:2] - bj[2:])
+    np.maximum(gap, 0.0, out=gap)
+    gap *= gap
+    close: BoolArray = gap[0] + gap[1] < (2.0 + BOX_MARGIN) ** 2
+    return close
 
 
 def _outcome(
