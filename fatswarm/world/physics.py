@@ -18,7 +18,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
-from itertools import chain, starmap
+from itertools import chain
 from math import hypot, isfinite
 from numbers import Real
 from operator import attrgetter, itemgetter
@@ -263,18 +263,23 @@ def _check_moves(paths: Mapping[int, Path], n: int) -> list[tuple[int, Path]]:
 
 
 def _sweep_pairs(
-    lo: FloatArray, hi: FloatArray, first: IntArray, second: IntArray | None, reach: float
+    lo: FloatArray,
+    hi: FloatArray,
+    first: IntArray,
+    second: IntArray | None,
+    reach: float,
+    brute: int = 0,
 ) -> tuple[IntArray, IntArray]:
     """Every pair (a in `first`, b in `second`, every robot if None) whose intervals [lo, hi] (one
     axis, per robot) come within `reach`, and maybe a few more: a sort and sweep,
-    O((m + k) log k) for k = len(second); up to BRUTE_PAIRS pairs, every pair (first, then second)
-    instead.
+    O((m + k) log k) for k = len(second); up to `brute` (BRUTE_PAIRS if 0) pairs, every pair
+    (first, then second) instead.
     """
     if second is None:
         lo_b, hi_b, count = lo, hi, len(lo)
     else:
         lo_b, hi_b, count = lo[second], hi[second], len(second)
-    if len(first) * count <= BRUTE_PAIRS:  # few: every pair, already in their order
+    if len(first) * count <= (brute or BRUTE_PAIRS):  # few: every pair, already in their order
         every = np.arange(count, dtype=np.intp) if second is None else second
         return np.repeat(first, count), np.tile(every, len(first))
     order = lo_b.argsort(kind="stable")
@@ -365,6 +370,7 @@ def _closest_pair(points: Points, pi: IntArray, pj: IntArray) -> tuple[int, int,
 
 
 _CORNERS = np.array([[0, 0], [0, 1], [1, 0], [1, 1]], dtype=np.float64)
+_CORNER_STEPS: Final = _CORNERS * GRID
 
 
 BRUTE_PAIRS = 2048
@@ -375,6 +381,12 @@ SNAP_FEW = 2
 SNAP_REACH = CONTACT + 1e-3
 """Only a robot closer than this to a mover's end can refuse one of its grid corners (a corner is
 within GRID * sqrt(2) of the end): `_snap_movers` tests those alone."""
+NEAR_REACH = SNAP_REACH + 1e-6
+"""A round of Lines whose boxes (local frame) come nowhere within this of another robot's has no
+pair that can meet (2 + BOX_MARGIN) and no mover that ends within SNAP_REACH of anyone (the world
+frame's rounding of the end, below 1e-9, is far inside the margin)."""
+REACH_BRUTE = 512
+"""Up to this many pairs, `_reach_pairs` takes every pair rather than sort and sweep."""
 
 
 def _snap_movers(final: Points, movers: IntArray) -> None:
@@ -413,21 +425,27 @@ def _snap_movers(final: Points, movers: IntArray) -> None:
 
 
 def _snap_near(
-    final: Points, movers: IntArray, si: IntArray, sj: IntArray, everyone: bool = False
+    final: Points,
+    movers: IntArray,
+    pairs: tuple[IntArray, IntArray] | None,
+    everyone: bool = False,
 ) -> None:
-    """`_snap_movers`, given pairs (mover, robot) (si, sj) among which are all pairs closer than
-    SNAP_REACH: the same corners (each mover's test is against the same robots, in the same
-    order of movers), without searching for the pairs again."""
-    d = final.take(si, axis=0) - final.take(sj, axis=0)
-    near = (np.hypot(d[:, 0], d[:, 1]) < SNAP_REACH) & (si != sj)
+    """`_snap_movers`, given pairs (mover, robot) among which are all pairs closer than SNAP_REACH
+    (None: there is none): the same corners (each mover's test is against the same robots, in
+    the same order of movers), without searching for the pairs again. `everyone`: the movers are
+    arange(n)."""
     crowded: IntArray | None = None
     alone = movers
-    if near.any():
-        pi, pj = si[near], sj[near]
-        near_someone = np.zeros(len(final), dtype=np.bool_)
-        near_someone[pi] = True
-        is_crowded = near_someone[movers]
-        alone, crowded = movers[~is_crowded], movers[is_crowded]
+    if pairs is not None:
+        si, sj = pairs
+        d = final.take(si, axis=0) - final.take(sj, axis=0)
+        near = (np.hypot(d[:, 0], d[:, 1]) < SNAP_REACH) & (si != sj)
+        if near.any():
+            pi, pj = si[near], sj[near]
+            near_someone = np.zeros(len(final), dtype=np.bool_)
+            near_someone[pi] = True
+            is_crowded = near_someone[movers]
+            alone, crowded = movers[~is_crowded], movers[is_crowded]
     if len(alone):  # no robot can refuse their nearest corner: all at once
         every = everyone and crowded is None  # alone is movers, which is arange(n)
         p = final if every else final.take(alone, axis=0)
@@ -442,27 +460,16 @@ def _snap_near(
 
 
 def _nearest_corners(p: Points) -> Points:
-    """The nearest of the four grid points around each point of `p` ((m, 2)), the first of
-    (floor x, floor y), (floor x, ceil y), (ceil x, floor y), (ceil x, ceil y) at the least
-    np.hypot: `_snap_movers`' corners (base + _CORNERS * GRID), distances and argmin, a column at
-    a time."""
+    """The nearest of the four grid points around each point of `p` ((m, 2)), the first at the
+    least np.hypot in _CORNERS' order: `_snap_movers`' very corners, distances and argmin."""
     base = np.floor(p / GRID)
     base *= GRID
-    lo = base + 0.0  # the corners' coordinates: base + 0 * GRID, base + 1 * GRID
-    hi = base + GRID
-    d_lo, d_hi = lo - p, hi - p
-    dist = np.empty((len(p), 4))
-    np.hypot(d_lo[:, 0], d_lo[:, 1], out=dist[:, 0])
-    np.hypot(d_lo[:, 0], d_hi[:, 1], out=dist[:, 1])
-    np.hypot(d_hi[:, 0], d_lo[:, 1], out=dist[:, 2])
-    np.hypot(d_hi[:, 0], d_hi[:, 1], out=dist[:, 3])
-    k = dist.argmin(axis=1)
-    step = np.empty((len(p), 2))
-    step[:, 0] = k >> 1  # corner k is (k // 2, k % 2) steps of GRID from base
-    step[:, 1] = k & 1
-    step *= GRID
-    step += lo  # lo + 0.0 is lo, lo + GRID is hi (lo is base, or +0.0 for base -0.0)
-    return step
+    corners = base[:, None, :] + _CORNER_STEPS  # (m, 4, 2); corner 0 is base + 0.0
+    d = corners - p[:, None, :]
+    k = np.hypot(d[:, :, 0], d[:, :, 1]).argmin(axis=1)
+    k += np.arange(0, 4 * len(p), 4)
+    nearest: Points = corners.reshape(-1, 2).take(k, axis=0)
+    return nearest
 
 
 def _snap_one(final: Points, robot: int, neighbours: IntArray) -> None:
@@ -608,13 +615,13 @@ def _line_round(
     here_w = start if everyone else start.take(robots, axis=0)
     here = here_w - origin  # the local frame's start points: start - origin, row by row
     e = ends + np.array((-ox, -oy))
-    total = list(starmap(hypot, (e - here).tolist()))  # CPython's hypot, as _single_lines
+    total = list(map(hypot, *(e - here).T.tolist()))  # CPython's hypot, as _single_lines
     if not isfinite(max(total)):
         k = next(k for k, t in enumerate(total) if not isfinite(t))
         raise PathFormatError(
             f"robot {keys[k]}: the path is too long to simulate (length {total[k]})"
         )
-    world = list(starmap(hypot, (ends - here_w).tolist()))  # _outcome's lengths: world frame
+    world = list(map(hypot, *(ends - here_w).T.tolist()))  # _outcome's lengths: world frame
     if min(total) > 0.0:
         traveled = dict(zip(keys, world, strict=True))
         lengths = traveled.copy()
@@ -644,31 +651,36 @@ def _line_round(
         boxes_t = np.concatenate((local.T, local.T))
         boxes_t[:2, robots] = lo.T
         boxes_t[2:, robots] = hi.T
-    si, sj = _reach_pairs(boxes_t, robots)
-    close = _boxes_close(boxes_t, si, sj)
+    if everyone:
+        final = e + origin
+    else:
+        final = start.copy()
+        final[robots] = e + origin
+    si, sj, brute = _reach_pairs(boxes_t, robots)
+    near = _boxes_close(boxes_t, si, sj, NEAR_REACH) & (si != sj)
+    if not near.any():  # no pair can meet, no mover ends within SNAP_REACH of anyone
+        _snap_near(final, robots, None, everyone)
+        return RoundOutcome(final, traveled, [], lengths)
+    si, sj = si[near], sj[near]  # both (a, b) and (b, a) where both move: `_snap_near`
+    close = _boxes_close(boxes_t, si, sj, 2.0 + BOX_MARGIN)
     if everyone:  # each pair once, as (lower id, higher id)
         close &= sj > si
     else:
         is_mover = np.zeros(n, dtype=np.bool_)
         is_mover[robots] = True
-        close &= (si != sj) & ~(is_mover.take(sj) & (sj < si))
+        close &= ~(is_mover.take(sj) & (sj < si))
     if not close.any():  # no pair can meet: every mover to its end
-        if everyone:
-            final = e + origin
-        else:
-            final = start.copy()
-            final[robots] = e + origin
-        _snap_near(final, robots, si, sj, everyone)
+        _snap_near(final, robots, (si, sj), everyone)
         return RoundOutcome(final, traveled, [], lengths)
     pi, pj = si[close], sj[close]
-    if len(robots) * n > BRUTE_PAIRS:  # from the sweep: into the brute force's order
+    if not brute:  # from the sweep: into the brute force's order
         rank = np.empty(n, dtype=np.intp)
         rank[robots] = np.arange(len(robots), dtype=np.intp)
         order = np.lexsort((pj, rank[pi]))
         pi, pj = pi[order], pj[order]
     box = np.concatenate((lo, hi), axis=1)
     mo = line_motion(local, robots, here, e, np.array(total, dtype=np.float64), box)
-    final, collisions = _contacts(start, mo, (ox, oy), pi, pj, (si, sj))
+    final, collisions = _contacts(start, mo, (ox, oy), pi, pj, (si, sj))  # final anew
     if collisions:  # as _outcome: the whole path's (world) length unless stopped short
         rows = zip(robots.tolist(), mo.stop.tolist(), total, strict=True)
         traveled.update({r: lengths[r] if stop >= t else stop for r, stop, t in rows})
@@ -699,7 +711,7 @@ def _contacts(
     if near is None:
         _snap_movers(final, mo.robots)
     else:
-        _snap_near(final, mo.robots, *near)
+        _snap_near(final, mo.robots, near)
     collisions = [  # a stopped robot's recorded point is where it is: on the grid
         Collision(c.robot, c.other, c.t, (float(final[c.robot, 0]), float(final[c.robot, 1])))
         for c in collisions
@@ -713,17 +725,18 @@ def _contacts(
     return final, collisions
 
 
-def _reach_pairs(boxes_t: FloatArray, movers: IntArray) -> tuple[IntArray, IntArray]:
+def _reach_pairs(boxes_t: FloatArray, movers: IntArray) -> tuple[IntArray, IntArray, bool]:
     """Pairs (mover, any robot) that include every pair whose boxes ((4, n): xmin, ymin, xmax,
-    ymax) come within 3 on the wider axis: every pair that can meet (`_boxes_close`) and every
-    pair that can end within SNAP_REACH. Up to BRUTE_PAIRS, every pair in the brute order."""
+    ymax) come within 3 on the wider axis, so every pair within NEAR_REACH; and whether they come
+    in the brute force's order (every pair, up to REACH_BRUTE of them), else from a sweep."""
     n = boxes_t.shape[1]
     m = len(movers)
-    if m * n <= BRUTE_PAIRS:
-        return movers.repeat(n), _tiled(n, m)
+    if m * n <= REACH_BRUTE:
+        return movers.repeat(n), _tiled(n, m), True
     xs, ys = boxes_t[0], boxes_t[1]
     ax = 0 if xs.max() - xs.min() >= ys.max() - ys.min() else 1
-    return _sweep_pairs(boxes_t[ax], boxes_t[ax + 2], movers, None, 2.0 + BOX_MARGIN)
+    pi, pj = _sweep_pairs(boxes_t[ax], boxes_t[ax + 2], movers, None, 2.0 + BOX_MARGIN, REACH_BRUTE)
+    return pi, pj, False
 
 
 @lru_cache(maxsize=64)
@@ -734,14 +747,14 @@ def _tiled(n: int, m: int) -> IntArray:
     return out
 
 
-def _boxes_close(boxes_t: FloatArray, pi: IntArray, pj: IntArray) -> BoolArray:
-    """Whether the boxes ((4, n)) of each pair come within 2 + BOX_MARGIN: `_candidate_pairs`'
-    test, with the same arithmetic."""
+def _boxes_close(boxes_t: FloatArray, pi: IntArray, pj: IntArray, reach: float) -> BoolArray:
+    """Whether the boxes ((4, n)) of each pair come within `reach`; at 2 + BOX_MARGIN,
+    `_candidate_pairs`' test, with the same arithmetic."""
     bi, bj = boxes_t.take(pi, axis=1), boxes_t.take(pj, axis=1)
     gap = np.maximum(bj[:2] - bi[2:], bi[:2] - bj[2:])
     np.maximum(gap, 0.0, out=gap)
     gap *= gap
-    close: BoolArray = gap[0] + gap[1] < (2.0 + BOX_MARGIN) ** 2
+    close: BoolArray = gap[0] + gap[1] < reach**2
     return close
 
 
