@@ -21,7 +21,6 @@ from functools import lru_cache
 from itertools import chain
 from math import hypot, isfinite
 from numbers import Real
-from operator import attrgetter, itemgetter
 from typing import Any, Final
 
 import numpy as np
@@ -461,15 +460,37 @@ def _snap_near(
 
 def _nearest_corners(p: Points) -> Points:
     """The nearest of the four grid points around each point of `p` ((m, 2)), the first at the
-    least np.hypot in _CORNERS' order: `_snap_movers`' very corners, distances and argmin."""
+    least np.hypot in _CORNERS' order: `_snap_movers`' very corners, distances and argmin (as
+    (m, 4, 2) arrays for a few points, a column at a time for many: the same values)."""
     base = np.floor(p / GRID)
     base *= GRID
-    corners = base[:, None, :] + _CORNER_STEPS  # (m, 4, 2); corner 0 is base + 0.0
-    d = corners - p[:, None, :]
-    k = np.hypot(d[:, :, 0], d[:, :, 1]).argmin(axis=1)
-    k += np.arange(0, 4 * len(p), 4)
-    nearest: Points = corners.reshape(-1, 2).take(k, axis=0)
-    return nearest
+    if len(p) <= CORNERS_AT_ONCE:
+        corners = base[:, None, :] + _CORNER_STEPS  # (m, 4, 2); corner 0 is base + 0.0
+        d = corners - p[:, None, :]
+        k = np.hypot(d[:, :, 0], d[:, :, 1]).argmin(axis=1)
+        k += np.arange(0, 4 * len(p), 4)
+        nearest: Points = corners.reshape(-1, 2).take(k, axis=0)
+        return nearest
+    lo = base + 0.0  # the corners' coordinates: base + 0 * GRID, base + 1 * GRID
+    hi = base + GRID
+    d_lo, d_hi = lo - p, hi - p
+    dist = np.empty((len(p), 4))
+    np.hypot(d_lo[:, 0], d_lo[:, 1], out=dist[:, 0])
+    np.hypot(d_lo[:, 0], d_hi[:, 1], out=dist[:, 1])
+    np.hypot(d_hi[:, 0], d_lo[:, 1], out=dist[:, 2])
+    np.hypot(d_hi[:, 0], d_hi[:, 1], out=dist[:, 3])
+    k = dist.argmin(axis=1)
+    step = np.empty((len(p), 2))
+    step[:, 0] = k >> 1  # corner k is (k // 2, k % 2) steps of GRID from base
+    step[:, 1] = k & 1
+    step *= GRID
+    step += lo  # lo + 0.0 is lo, lo + GRID is hi (lo is base, or +0.0 for base -0.0)
+    return step
+
+
+CORNERS_AT_ONCE = 32
+"""Up to this many points, `_nearest_corners` works on (m, 4, 2) arrays (fewer numpy calls);
+beyond, on columns (broadcasting over small trailing axes is slow)."""
 
 
 def _snap_one(final: Points, robot: int, neighbours: IntArray) -> None:
@@ -571,9 +592,6 @@ _LINE: Final = frozenset({Line})
 _TUPLE: Final = frozenset({tuple})
 _TWO: Final = frozenset({2})
 _FLOAT: Final = frozenset({float})
-_SEGMENTS: Final = attrgetter("segments")
-_END: Final = attrgetter("end")
-_FIRST: Final = itemgetter(0)
 
 
 def _straight_lines(paths: Mapping[int, Path], n: int) -> tuple[list[int], Points] | None:
@@ -581,18 +599,20 @@ def _straight_lines(paths: Mapping[int, Path], n: int) -> tuple[list[int], Point
     path one Line to a tuple of two finite floats, checked in bulk (no loop in Python); None for
     any other round, which `_check_moves` then checks path by path (raising what it must)."""
     keys = list(paths)
-    if not keys or set(map(type, keys)) != _INT or min(keys) < 0 or max(keys) >= n:
+    if not keys or set(map(type, keys)) != _INT:
+        return None
+    if keys != list(range(n)) and (min(keys) < 0 or max(keys) >= n):  # ints: equal means 0 .. n - 1
         return None
     values = list(paths.values())
     if set(map(type, values)) != _PATH:
         return None
-    segments = list(map(_SEGMENTS, values))
+    segments = [path.segments for path in values]
     if set(map(len, segments)) != _ONE:
         return None
-    firsts = list(map(_FIRST, segments))
+    firsts = [segs[0] for segs in segments]
     if set(map(type, firsts)) != _LINE:
         return None
-    ends = list(map(_END, firsts))
+    ends = [line.end for line in firsts]
     if set(map(type, ends)) != _TUPLE or set(map(len, ends)) != _TWO:
         return None
     flat = list(chain.from_iterable(ends))

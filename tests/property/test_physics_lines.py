@@ -13,8 +13,15 @@ from hypothesis import strategies as st
 
 from fatswarm.domain.path import Line, Path
 from fatswarm.domain.tolerance import GRID, snap
-from fatswarm.world.physics import InvalidRoundError, RoundOutcome, apply_lines, apply_round
+from fatswarm.world.physics import (
+    InvalidRoundError,
+    RoundOutcome,
+    _nearest_corners,
+    apply_lines,
+    apply_round,
+)
 
+CORNERS = np.array([[0, 0], [0, 1], [1, 0], [1, 1]], dtype=np.float64)  # _snap_one's order
 STEPS = (0.0, 1e-9, 1e-4, 0.3, 1.0, 2.5, 6.0)  # lengths of moves: none, tiny, small, contacts
 
 
@@ -114,3 +121,20 @@ def test_apply_lines_without_movers_moves_nobody() -> None:
     start = np.array([[0.0, 0.0], [4.0, 0.0]])
     out = apply_lines(start, np.zeros(0, dtype=np.intp), np.zeros((0, 2)))
     assert out.positions.tobytes() == start.tobytes() and out.traveled == {}
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(1, 80), st.integers(0, 2**32 - 1))
+def test_nearest_corners_are_the_snaps_nearest_corners(m: int, seed: int) -> None:
+    """Both forms of `_nearest_corners` (few points, many) pick `_snap_one`'s first corner,
+    ties (half-grid points) and points near 0 included."""
+    rng = np.random.default_rng(seed)
+    p = rng.uniform(-1e3, 1e3, (m, 2))
+    p[: m // 3] = snap(p[: m // 3]) + GRID / 2.0
+    p[m // 3 : m // 2] = rng.uniform(-3 * GRID, 3 * GRID, (m // 2 - m // 3, 2))
+    expected = []
+    for x, y in p.tolist():
+        corners = np.floor(np.array([x, y]) / GRID) * GRID + CORNERS * GRID
+        order = np.argsort(np.hypot(corners[:, 0] - x, corners[:, 1] - y), kind="stable")
+        expected.append(corners[order[0]] + 0.0)
+    assert _nearest_corners(p).tobytes() == np.array(expected).tobytes()
