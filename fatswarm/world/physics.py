@@ -609,7 +609,7 @@ def _straight_lines(paths: Mapping[int, Path], n: int) -> tuple[list[int], Point
     segments = [path.segments for path in values]
     if set(map(len, segments)) != _ONE:
         return None
-    firsts = [segs[0] for segs in segments]
+    firsts: list[Any] = [segs[0] for segs in segments]  # Lines, once their types are checked
     if set(map(type, firsts)) != _LINE:
         return None
     ends = [line.end for line in firsts]
