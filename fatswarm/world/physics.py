@@ -6,6 +6,9 @@ still obstacles for the rest of the round. Discs never overlap, at any time of t
 Point robots (`--bodies points`, `points=True`) have no extent: every mover covers its whole path,
 robots may meet and share a point, and nothing is a collision.
 
+`apply_lines` is `apply_round` for a round of straight lines held as arrays (the same bits); a
+round whose every path is one Line takes that road too, checked in bulk.
+
 Method: an event loop over the pairs whose path boxes come within 2; per pair, adaptive subdivision
 of time proves intervals overlap-free with lower bounds on the distance (exact for straight relative
 motion, an arc against a robot at rest and two arcs up to their turning-rate drift; Lipschitz and
