@@ -454,9 +454,20 @@ def speed_rounds() -> dict[str, list[Round]]:
     return out
 
 
+def _as_lines(batch: list[Round]) -> list[tuple[Points, np.ndarray, np.ndarray, bool]]:
+    """The rounds of `batch` as apply_lines' arrays (every path one Line, movers increasing)."""
+    out = []
+    for _, pos, paths, pts in batch:
+        movers = sorted(paths)
+        ends = [paths[r].segments[0].end for r in movers]
+        out.append((pos, np.array(movers, dtype=np.intp), np.array(ends, dtype=np.float64), pts))
+    return out
+
+
 def speed_figures(rounds: dict[str, list[Round]], repeats: int = 5) -> dict[str, float]:
-    """us CPU per apply_round call of each set: the best of `repeats` passes."""
-    from fatswarm.world.physics import apply_round
+    """us CPU per apply_round call of each set: the best of `repeats` passes; and per
+    apply_lines call on the same rounds as arrays, where the checkout has it."""
+    from fatswarm.world import physics
 
     figures: dict[str, float] = {}
     for label, batch in rounds.items():
@@ -466,9 +477,21 @@ def speed_figures(rounds: dict[str, list[Round]], repeats: int = 5) -> dict[str,
             c0 = time.process_time()
             for _ in range(calls):
                 for _, pos, paths, pts in batch:
-                    apply_round(pos, paths, points=pts)
+                    physics.apply_round(pos, paths, points=pts)
             best = min(best, time.process_time() - c0)
         figures[label] = 1e6 * best / (calls * len(batch))
+        apply_lines = getattr(physics, "apply_lines", None)
+        if apply_lines is None:
+            continue
+        lines = _as_lines(batch)
+        best = float("inf")
+        for _ in range(repeats + 1):
+            c0 = time.process_time()
+            for _ in range(calls):
+                for pos, movers, ends, pts in lines:
+                    apply_lines(pos, movers, ends, points=pts)
+            best = min(best, time.process_time() - c0)
+        figures[f"{label} lines"] = 1e6 * best / (calls * len(batch))
     return figures
 
 
@@ -514,6 +537,9 @@ def speed_against(other: FsPath | None, alternations: int) -> None:
     for label, there in best["there"].items():
         now = best["here"][label]
         print(f"{label:>16} {there:>20.1f} {now:>14.1f} {there / now:>5.2f}x")
+        lines = best["here"].get(f"{label} lines")
+        if lines is not None:
+            print(f"{'(apply_lines)':>16} {'':>20} {lines:>14.1f} {there / lines:>5.2f}x")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
