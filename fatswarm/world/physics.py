@@ -533,7 +533,9 @@ def apply_round(
     lines = _straight_lines(paths, len(start))
     if lines is not None:  # the common round: every path one Line (`apply_lines`)
         keys, ends = lines
-        return _line_round(start, np.array(keys, dtype=np.intp), keys, ends, points)
+        n = len(start)
+        robots = _every(n) if keys == list(range(n)) else np.array(keys, dtype=np.intp)
+        return _line_round(start, robots, keys, ends, points)
     moves = _check_moves(paths, len(start))
     traveled = {robot: 0.0 for robot, _ in moves}
     # Simulate in a frame centred on a mover (a grid point: the shift is exact for grid positions
@@ -637,7 +639,7 @@ def _line_round(
     origin = np.array((ox, oy))
     here_w = start if everyone else start.take(robots, axis=0)
     here = here_w - origin  # the local frame's start points: start - origin, row by row
-    e = ends + np.array((-ox, -oy))
+    e = ends - origin  # ends + (-ox, -oy), as _single_lines: x - y is x + (-y)
     total = list(map(hypot, *(e - here).T.tolist()))  # CPython's hypot, as _single_lines
     if not isfinite(max(total)):
         k = next(k for k, t in enumerate(total) if not isfinite(t))
@@ -674,16 +676,20 @@ def _line_round(
         boxes_t = np.concatenate((local.T, local.T))
         boxes_t[:2, robots] = lo.T
         boxes_t[2:, robots] = hi.T
+    si, sj, brute = _reach_pairs(boxes_t, robots)
+    near = _boxes_close(boxes_t, si, sj, NEAR_REACH)  # each mover with itself among them
+    if np.count_nonzero(near) == len(robots):  # no pair can meet, no mover ends near anyone:
+        if everyone:  # every mover to the grid point nearest its end (`_snap_near`)
+            return RoundOutcome(_nearest_corners(e + origin), traveled, [], lengths)
+        final = start.copy()
+        final[robots] = _nearest_corners(e + origin)
+        return RoundOutcome(final, traveled, [], lengths)
     if everyone:
         final = e + origin
     else:
         final = start.copy()
         final[robots] = e + origin
-    si, sj, brute = _reach_pairs(boxes_t, robots)
-    near = _boxes_close(boxes_t, si, sj, NEAR_REACH) & (si != sj)
-    if not near.any():  # no pair can meet, no mover ends within SNAP_REACH of anyone
-        _snap_near(final, robots, None, everyone)
-        return RoundOutcome(final, traveled, [], lengths)
+    near &= si != sj
     si, sj = si[near], sj[near]  # both (a, b) and (b, a) where both move: `_snap_near`
     close = _boxes_close(boxes_t, si, sj, 2.0 + BOX_MARGIN)
     if everyone:  # each pair once, as (lower id, higher id)
@@ -760,6 +766,14 @@ def _reach_pairs(boxes_t: FloatArray, movers: IntArray) -> tuple[IntArray, IntAr
     ax = 0 if xs.max() - xs.min() >= ys.max() - ys.min() else 1
     pi, pj = _sweep_pairs(boxes_t[ax], boxes_t[ax + 2], movers, None, 2.0 + BOX_MARGIN, REACH_BRUTE)
     return pi, pj, False
+
+
+@lru_cache(maxsize=64)
+def _every(n: int) -> IntArray:
+    """0, 1, ..., n - 1 (read-only: shared by the rounds that ask for it)."""
+    out = np.arange(n, dtype=np.intp)
+    out.setflags(write=False)
+    return out
 
 
 @lru_cache(maxsize=64)
