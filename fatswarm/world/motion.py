@@ -222,14 +222,22 @@ def _single_lines(
             f"robot {moves[k][0]}: the path is too long to simulate (length {float(length[k])})"
         )
     keep = length > 0.0
-    robots, total, m = every[keep], length[keep], int(keep.sum())
+    box = np.concatenate((lo[keep], hi[keep]), axis=1)
+    return line_motion(start, every[keep], here[keep], e[keep], length[keep], box)
+
+
+def line_motion(
+    start: Points, robots: IntArray, here: Points, end: Points, total: FloatArray, box: FloatArray
+) -> Motion:
+    """The Motion of rows that each follow one Line of positive length: robot, start point, end
+    point, length and bounding box per row (every array of the same m rows)."""
+    m = len(robots)
     table = np.zeros((m, 1, 13), dtype=np.float64)
     table[:, 0, _T1] = total
     table[:, 0, _LEN] = total
-    table[:, 0, _SX : _SY + 1] = here[keep]
-    table[:, 0, _EX : _EY + 1] = e[keep]
-    box = np.concatenate((lo[keep], hi[keep]), axis=1)
-    return _motion(start, robots, np.ones(m, dtype=np.intp), table, total, e[keep], box)
+    table[:, 0, _SX : _SY + 1] = here
+    table[:, 0, _EX : _EY + 1] = end
+    return _motion(start, robots, np.ones(m, dtype=np.intp), table, total, end, box)
 
 
 def _segments_at(mo: Motion, rows: IntArray, t: FloatArray) -> FloatArray:

@@ -6,6 +6,9 @@ still obstacles for the rest of the round. Discs never overlap, at any time of t
 Point robots (`--bodies points`, `points=True`) have no extent: every mover covers its whole path,
 robots may meet and share a point, and nothing is a collision.
 
+`apply_lines` is `apply_round` for a round of straight lines held as arrays (the same bits); a
+round whose every path is one Line takes that road too, checked in bulk.
+
 Method: an event loop over the pairs whose path boxes come within 2; per pair, adaptive subdivision
 of time proves intervals overlap-free with lower bounds on the distance (exact for straight relative
 motion, an arc against a robot at rest and two arcs up to their turning-rate drift; Lipschitz and
@@ -17,7 +20,9 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from math import isfinite
+from functools import lru_cache
+from itertools import chain
+from math import hypot, isfinite
 from numbers import Real
 from typing import Any, Final
 
@@ -46,11 +51,13 @@ from fatswarm.domain.tolerance import (
     snap_point,
 )
 from fatswarm.world.motion import (
+    BoolArray,
     FloatArray,
     IntArray,
     Motion,
     build_motion,
     first_contacts,
+    line_motion,
     positions_at,
 )
 
@@ -111,6 +118,8 @@ def _as_points(positions: Any) -> Points:
         raise InvalidConfigurationError(
             f"positions must be a list of [x, y] number pairs ({exc})"
         ) from None
+    if arr.ndim == 2 and arr.shape[1] == 2 and arr.size and np.isfinite(arr).all():
+        return arr  # the common case: the checks below all pass
     if arr.size == 0:
         raise InvalidConfigurationError("positions are empty: give at least one robot as [x, y]")
     if arr.ndim != 2 or arr.shape[1] != 2:
@@ -256,26 +265,38 @@ def _check_moves(paths: Mapping[int, Path], n: int) -> list[tuple[int, Path]]:
 
 
 def _sweep_pairs(
-    lo: FloatArray, hi: FloatArray, first: IntArray, second: IntArray, reach: float
+    lo: FloatArray,
+    hi: FloatArray,
+    first: IntArray,
+    second: IntArray | None,
+    reach: float,
+    brute: int = 0,
 ) -> tuple[IntArray, IntArray]:
-    """Every pair (a in `first`, b in `second`) whose intervals [lo, hi] (one axis, per robot) come
-    within `reach`, and maybe a few more: a sort and sweep, O((m + k) log k) for k = len(second);
-    up to BRUTE_PAIRS pairs, every pair (first, then second) instead.
+    """Every pair (a in `first`, b in `second`, every robot if None) whose intervals [lo, hi] (one
+    axis, per robot) come within `reach`, and maybe a few more: a sort and sweep,
+    O((m + k) log k) for k = len(second); up to `brute` (BRUTE_PAIRS if 0) pairs, every pair
+    (first, then second) instead.
     """
-    if len(first) * len(second) <= BRUTE_PAIRS:  # few: every pair, already in their order
-        return np.repeat(first, len(second)), np.tile(second, len(first))
-    lo_b = lo[second]
+    if second is None:
+        lo_b, hi_b, count = lo, hi, len(lo)
+    else:
+        lo_b, hi_b, count = lo[second], hi[second], len(second)
+    if len(first) * count <= (brute or BRUTE_PAIRS):  # few: every pair, already in their order
+        every = np.arange(count, dtype=np.intp) if second is None else second
+        return np.repeat(first, count), np.tile(every, len(first))
     order = lo_b.argsort(kind="stable")
     lo_sorted = lo_b[order]
-    width = float((hi[second] - lo_b).max()) if len(second) else 0.0
+    width = float((hi_b - lo_b).max()) if count else 0.0
     pad = reach + width + 1.0  # generous: the exact test of the pairs comes after
     begin = lo_sorted.searchsorted(lo[first] - pad, side="left")
     end = lo_sorted.searchsorted(hi[first] + reach + 1.0, side="right")
     counts = end - begin
-    total = int(counts.sum())
-    offsets = (begin - counts.cumsum() + counts).repeat(counts)
+    ends = counts.cumsum()
+    total = int(ends[-1]) if len(ends) else 0
+    offsets = (begin - ends + counts).repeat(counts)
     pi = first.repeat(counts)
-    pj = second[order[np.arange(total, dtype=np.intp) + offsets]]
+    at = order[np.arange(total, dtype=np.intp) + offsets]
+    pj = at if second is None else second[at]
     return pi, pj
 
 
@@ -351,6 +372,7 @@ def _closest_pair(points: Points, pi: IntArray, pj: IntArray) -> tuple[int, int,
 
 
 _CORNERS = np.array([[0, 0], [0, 1], [1, 0], [1, 1]], dtype=np.float64)
+_CORNER_STEPS: Final = _CORNERS * GRID
 
 
 BRUTE_PAIRS = 2048
@@ -361,6 +383,12 @@ SNAP_FEW = 2
 SNAP_REACH = CONTACT + 1e-3
 """Only a robot closer than this to a mover's end can refuse one of its grid corners (a corner is
 within GRID * sqrt(2) of the end): `_snap_movers` tests those alone."""
+NEAR_REACH = SNAP_REACH + 1e-6
+"""A round of Lines whose boxes (local frame) come nowhere within this of another robot's has no
+pair that can meet (2 + BOX_MARGIN) and no mover that ends within SNAP_REACH of anyone (the world
+frame's rounding of the end, below 1e-9, is far inside the margin)."""
+REACH_BRUTE = 512
+"""Up to this many pairs, `_reach_pairs` takes every pair rather than sort and sweep."""
 
 
 def _snap_movers(final: Points, movers: IntArray) -> None:
@@ -398,6 +426,76 @@ def _snap_movers(final: Points, movers: IntArray) -> None:
         _snap_one(final, int(robot), pj[pi == robot])
 
 
+def _snap_near(
+    final: Points,
+    movers: IntArray,
+    pairs: tuple[IntArray, IntArray] | None,
+    everyone: bool = False,
+) -> None:
+    """`_snap_movers`, given pairs (mover, robot) among which are all pairs closer than SNAP_REACH
+    (None: there is none): the same corners (each mover's test is against the same robots, in
+    the same order of movers), without searching for the pairs again. `everyone`: the movers are
+    arange(n)."""
+    crowded: IntArray | None = None
+    alone = movers
+    if pairs is not None:
+        si, sj = pairs
+        d = final.take(si, axis=0) - final.take(sj, axis=0)
+        near = (np.hypot(d[:, 0], d[:, 1]) < SNAP_REACH) & (si != sj)
+        if near.any():
+            pi, pj = si[near], sj[near]
+            near_someone = np.zeros(len(final), dtype=np.bool_)
+            near_someone[pi] = True
+            is_crowded = near_someone[movers]
+            alone, crowded = movers[~is_crowded], movers[is_crowded]
+    if len(alone):  # no robot can refuse their nearest corner: all at once
+        every = everyone and crowded is None  # alone is movers, which is arange(n)
+        p = final if every else final.take(alone, axis=0)
+        nearest = _nearest_corners(p)
+        if every:
+            final[:] = nearest
+        else:
+            final[alone] = nearest
+    if crowded is not None:
+        for robot in crowded.tolist():
+            _snap_one(final, robot, pj[pi == robot])
+
+
+def _nearest_corners(p: Points) -> Points:
+    """The nearest of the four grid points around each point of `p` ((m, 2)), the first at the
+    least np.hypot in _CORNERS' order: `_snap_movers`' very corners, distances and argmin (as
+    (m, 4, 2) arrays for a few points, a column at a time for many: the same values)."""
+    base = np.floor(p / GRID)
+    base *= GRID
+    if len(p) <= CORNERS_AT_ONCE:
+        corners = base[:, None, :] + _CORNER_STEPS  # (m, 4, 2); corner 0 is base + 0.0
+        d = corners - p[:, None, :]
+        k = np.hypot(d[:, :, 0], d[:, :, 1]).argmin(axis=1)
+        k += np.arange(0, 4 * len(p), 4)
+        nearest: Points = corners.reshape(-1, 2).take(k, axis=0)
+        return nearest
+    lo = base + 0.0  # the corners' coordinates: base + 0 * GRID, base + 1 * GRID
+    hi = base + GRID
+    d_lo, d_hi = lo - p, hi - p
+    dist = np.empty((len(p), 4))
+    np.hypot(d_lo[:, 0], d_lo[:, 1], out=dist[:, 0])
+    np.hypot(d_lo[:, 0], d_hi[:, 1], out=dist[:, 1])
+    np.hypot(d_hi[:, 0], d_lo[:, 1], out=dist[:, 2])
+    np.hypot(d_hi[:, 0], d_hi[:, 1], out=dist[:, 3])
+    k = dist.argmin(axis=1)
+    step = np.empty((len(p), 2))
+    step[:, 0] = k >> 1  # corner k is (k // 2, k % 2) steps of GRID from base
+    step[:, 1] = k & 1
+    step *= GRID
+    step += lo  # lo + 0.0 is lo, lo + GRID is hi (lo is base, or +0.0 for base -0.0)
+    return step
+
+
+CORNERS_AT_ONCE = 32
+"""Up to this many points, `_nearest_corners` works on (m, 4, 2) arrays (fewer numpy calls);
+beyond, on columns (broadcasting over small trailing axes is slow)."""
+
+
 def _snap_one(final: Points, robot: int, neighbours: IntArray) -> None:
     """`_snap_movers` for one mover, tested against the robots `neighbours` (all those within
     SNAP_REACH: no other can refuse a corner)."""
@@ -432,6 +530,12 @@ def apply_round(
     anything moves; PhysicsInvariantError if discs overlap afterwards (a physics bug).
     """
     start = _as_points(positions)
+    lines = _straight_lines(paths, len(start))
+    if lines is not None:  # the common round: every path one Line (`apply_lines`)
+        keys, ends = lines
+        n = len(start)
+        robots = _every(n) if keys == list(range(n)) else np.array(keys, dtype=np.intp)
+        return _line_round(start, robots, keys, ends, points)
     moves = _check_moves(paths, len(start))
     traveled = {robot: 0.0 for robot, _ in moves}
     # Simulate in a frame centred on a mover (a grid point: the shift is exact for grid positions
@@ -450,6 +554,179 @@ def apply_round(
     # Every pair that can meet: a robot never leaves its path's box, so no other pair can overlap,
     # before, during or after the round (stills among themselves are the caller's business).
     pi, pj = _candidate_pairs(mo, mo.robots, np.arange(len(start), dtype=np.intp))
+    final, collisions = _contacts(start, mo, origin, pi, pj, None)
+    return _outcome(start, final, mo, dict(moves), traveled, collisions)
+
+
+def apply_lines(
+    positions: Points, movers: IntArray, ends: Points, *, points: bool = False
+) -> RoundOutcome:
+    """`apply_round(positions, {r: Path((Line((x, y)),)) for r, (x, y) in zip(movers, ends)})`,
+    with the same bits and the same errors, without a Path per robot.
+
+    `movers`: (m,) robot ids, increasing; `ends`: (m, 2) world-frame end points of their straight
+    lines (what `transform(Path((Line(end),)), start)` gives). Raises InvalidRoundError if movers
+    and ends do not match in shape or the movers are not increasing.
+    """
+    start = _as_points(positions)
+    robots = np.asarray(movers)
+    e = np.asarray(ends, dtype=np.float64)
+    m = len(robots) if robots.ndim == 1 else -1
+    if robots.dtype.kind not in "iu" or e.shape != (m, 2):
+        raise InvalidRoundError(
+            f"apply_lines takes movers as an (m,) int array and ends as (m, 2) floats, got "
+            f"{robots.dtype} {robots.shape} and {e.shape}"
+        )
+    if m == 0:
+        return RoundOutcome(positions=start, traveled={})
+    if m > 1 and not (robots[1:] > robots[:-1]).all():
+        raise InvalidRoundError("apply_lines takes each mover once, in increasing order")
+    if robots[0] < 0 or robots[-1] >= len(start) or not np.isfinite(e).all():
+        xy = e.tolist()  # apply_round says what is wrong, as it would for these paths
+        paths = {
+            int(r): Path((Line((x, y)),)) for r, (x, y) in zip(robots.tolist(), xy, strict=True)
+        }
+        return apply_round(start, paths, points=points)
+    return _line_round(start, robots.astype(np.intp, copy=False), robots.tolist(), e, points)
+
+
+_INT: Final = frozenset({int})
+_PATH: Final = frozenset({Path})
+_ONE: Final = frozenset({1})
+_LINE: Final = frozenset({Line})
+_TUPLE: Final = frozenset({tuple})
+_TWO: Final = frozenset({2})
+_FLOAT: Final = frozenset({float})
+
+
+def _straight_lines(paths: Mapping[int, Path], n: int) -> tuple[list[int], Points] | None:
+    """The round as (robots, (m, 2) world ends) if every key is an int robot of the n and every
+    path one Line to a tuple of two finite floats, checked in bulk (no loop in Python); None for
+    any other round, which `_check_moves` then checks path by path (raising what it must)."""
+    keys = list(paths)
+    if not keys or set(map(type, keys)) != _INT:
+        return None
+    if keys != list(range(n)) and (min(keys) < 0 or max(keys) >= n):  # ints: equal means 0 .. n - 1
+        return None
+    values = list(paths.values())
+    if set(map(type, values)) != _PATH:
+        return None
+    segments = [path.segments for path in values]
+    if set(map(len, segments)) != _ONE:
+        return None
+    firsts: list[Any] = [segs[0] for segs in segments]  # Lines, once their types are checked
+    if set(map(type, firsts)) != _LINE:
+        return None
+    ends = [line.end for line in firsts]
+    if set(map(type, ends)) != _TUPLE or set(map(len, ends)) != _TWO:
+        return None
+    flat = list(chain.from_iterable(ends))
+    if set(map(type, flat)) != _FLOAT or not isfinite(sum(flat)):  # any inf or nan: not finite
+        return None
+    return keys, np.array(flat, dtype=np.float64).reshape(len(keys), 2)
+
+
+def _line_round(
+    start: Points, robots: IntArray, keys: list[int], ends: Points, points: bool
+) -> RoundOutcome:
+    """apply_round when every path is one Line, from arrays: `robots` (m,) (`keys` the same as
+    ints), world `ends` (m, 2), checked. The very arithmetic of build_motion's `_single_lines`,
+    the general path and `_outcome`, on arrays; a round whose movers' boxes come nowhere near
+    another robot skips the contact search (as the general path does when it finds no pair)."""
+    n = len(start)
+    everyone = len(keys) == n and keys == list(range(n))  # robots is arange(n)
+    ox, oy = snap_point(*start[keys[0]].tolist())  # as the general path: a frame on a mover
+    origin = np.array((ox, oy))
+    here_w = start if everyone else start.take(robots, axis=0)
+    here = here_w - origin  # the local frame's start points: start - origin, row by row
+    e = ends - origin  # ends + (-ox, -oy), as _single_lines: x - y is x + (-y)
+    total = list(map(hypot, *(e - here).T.tolist()))  # CPython's hypot, as _single_lines
+    if not isfinite(max(total)):
+        k = next(k for k, t in enumerate(total) if not isfinite(t))
+        raise PathFormatError(
+            f"robot {keys[k]}: the path is too long to simulate (length {total[k]})"
+        )
+    world = list(map(hypot, *(ends - here_w).T.tolist()))  # _outcome's lengths: world frame
+    if min(total) > 0.0:
+        traveled = dict(zip(keys, world, strict=True))
+        lengths = traveled.copy()
+    else:  # a zero-length line moves nobody: not a row, traveled 0.0, no length
+        keep = np.array(total) > 0.0
+        if not keep.any():
+            return RoundOutcome(positions=start, traveled=dict.fromkeys(keys, 0.0))
+        robots, here, e = robots[keep], here[keep], e[keep]
+        everyone = False
+        traveled = dict.fromkeys(keys, 0.0)
+        lengths = {r: w for r, w, t in zip(keys, world, total, strict=True) if t > 0.0}
+        traveled.update(lengths)
+        total = [t for t in total if t > 0.0]
+    if points:  # every mover to its end, on the grid
+        if everyone:
+            return RoundOutcome(snap(e + origin), traveled, [], lengths)
+        final = start.copy()
+        final[robots] = snap(e + origin)
+        return RoundOutcome(final, traveled, [], lengths)
+    lo = np.where(e < here, e, here)  # min([here, end]): the end only if strictly less
+    hi = np.where(e > here, e, here)
+    if everyone:  # boxes_t: (4, n) xmin, ymin, xmax, ymax of every robot in the local frame
+        boxes_t = np.concatenate((lo.T, hi.T))
+        local = here
+    else:
+        local = start - origin
+        boxes_t = np.concatenate((local.T, local.T))
+        boxes_t[:2, robots] = lo.T
+        boxes_t[2:, robots] = hi.T
+    si, sj, brute = _reach_pairs(boxes_t, robots)
+    near = _boxes_close(boxes_t, si, sj, NEAR_REACH)  # each mover with itself among them
+    if np.count_nonzero(near) == len(robots):  # no pair can meet, no mover ends near anyone:
+        if everyone:  # every mover to the grid point nearest its end (`_snap_near`)
+            return RoundOutcome(_nearest_corners(e + origin), traveled, [], lengths)
+        final = start.copy()
+        final[robots] = _nearest_corners(e + origin)
+        return RoundOutcome(final, traveled, [], lengths)
+    if everyone:
+        final = e + origin
+    else:
+        final = start.copy()
+        final[robots] = e + origin
+    near &= si != sj
+    si, sj = si[near], sj[near]  # both (a, b) and (b, a) where both move: `_snap_near`
+    close = _boxes_close(boxes_t, si, sj, 2.0 + BOX_MARGIN)
+    if everyone:  # each pair once, as (lower id, higher id)
+        close &= sj > si
+    else:
+        is_mover = np.zeros(n, dtype=np.bool_)
+        is_mover[robots] = True
+        close &= ~(is_mover.take(sj) & (sj < si))
+    if not close.any():  # no pair can meet: every mover to its end
+        _snap_near(final, robots, (si, sj), everyone)
+        return RoundOutcome(final, traveled, [], lengths)
+    pi, pj = si[close], sj[close]
+    if not brute:  # from the sweep: into the brute force's order
+        rank = np.empty(n, dtype=np.intp)
+        rank[robots] = np.arange(len(robots), dtype=np.intp)
+        order = np.lexsort((pj, rank[pi]))
+        pi, pj = pi[order], pj[order]
+    box = np.concatenate((lo, hi), axis=1)
+    mo = line_motion(local, robots, here, e, np.array(total, dtype=np.float64), box)
+    final, collisions = _contacts(start, mo, (ox, oy), pi, pj, (si, sj))  # final anew
+    if collisions:  # as _outcome: the whole path's (world) length unless stopped short
+        rows = zip(robots.tolist(), mo.stop.tolist(), total, strict=True)
+        traveled.update({r: lengths[r] if stop >= t else stop for r, stop, t in rows})
+    return RoundOutcome(final, traveled, collisions, lengths)
+
+
+def _contacts(
+    start: Points,
+    mo: Motion,
+    origin: tuple[float, float],
+    pi: IntArray,
+    pj: IntArray,
+    near: tuple[IntArray, IntArray] | None,
+) -> tuple[Points, list[Collision]]:
+    """The round's end positions (on the grid) and contacts, given its candidate pairs (pi, pj),
+    in order; `near`: pairs (mover, robot) that include every pair closer than SNAP_REACH at the
+    end, if known (else `_snap_movers` finds them)."""
     if pi.size:
         a, b, dist = _closest_pair(start, pi, pj)
         if dist < OVERLAP_DISTANCE:
@@ -460,7 +737,10 @@ def apply_round(
     collisions = _simulate(mo, pi, pj) if pi.size else []  # no pair, no contact
     final = start.copy()
     final[mo.robots] = positions_at(mo, mo.robots, mo.stop) + np.array(origin)
-    _snap_movers(final, mo.robots)
+    if near is None:
+        _snap_movers(final, mo.robots)
+    else:
+        _snap_near(final, mo.robots, near)
     collisions = [  # a stopped robot's recorded point is where it is: on the grid
         Collision(c.robot, c.other, c.t, (float(final[c.robot, 0]), float(final[c.robot, 1])))
         for c in collisions
@@ -471,7 +751,48 @@ def apply_round(
             raise PhysicsInvariantError(
                 f"physics bug: robots {a} and {b} overlap after the round (centres {dist!r} apart)"
             )
-    return _outcome(start, final, mo, dict(moves), traveled, collisions)
+    return final, collisions
+
+
+def _reach_pairs(boxes_t: FloatArray, movers: IntArray) -> tuple[IntArray, IntArray, bool]:
+    """Pairs (mover, any robot) that include every pair whose boxes ((4, n): xmin, ymin, xmax,
+    ymax) come within 3 on the wider axis, so every pair within NEAR_REACH; and whether they come
+    in the brute force's order (every pair, up to REACH_BRUTE of them), else from a sweep."""
+    n = boxes_t.shape[1]
+    m = len(movers)
+    if m * n <= REACH_BRUTE:
+        return movers.repeat(n), _tiled(n, m), True
+    xs, ys = boxes_t[0], boxes_t[1]
+    ax = 0 if xs.max() - xs.min() >= ys.max() - ys.min() else 1
+    pi, pj = _sweep_pairs(boxes_t[ax], boxes_t[ax + 2], movers, None, 2.0 + BOX_MARGIN, REACH_BRUTE)
+    return pi, pj, False
+
+
+@lru_cache(maxsize=64)
+def _every(n: int) -> IntArray:
+    """0, 1, ..., n - 1 (read-only: shared by the rounds that ask for it)."""
+    out = np.arange(n, dtype=np.intp)
+    out.setflags(write=False)
+    return out
+
+
+@lru_cache(maxsize=64)
+def _tiled(n: int, m: int) -> IntArray:
+    """0, 1, ..., n - 1, m times over (read-only: shared by the rounds that ask for it)."""
+    out = np.tile(np.arange(n, dtype=np.intp), m)
+    out.setflags(write=False)
+    return out
+
+
+def _boxes_close(boxes_t: FloatArray, pi: IntArray, pj: IntArray, reach: float) -> BoolArray:
+    """Whether the boxes ((4, n)) of each pair come within `reach`; at 2 + BOX_MARGIN,
+    `_candidate_pairs`' test, with the same arithmetic."""
+    bi, bj = boxes_t.take(pi, axis=1), boxes_t.take(pj, axis=1)
+    gap = np.maximum(bj[:2] - bi[2:], bi[:2] - bj[2:])
+    np.maximum(gap, 0.0, out=gap)
+    gap *= gap
+    close: BoolArray = gap[0] + gap[1] < reach**2
+    return close
 
 
 def _outcome(
