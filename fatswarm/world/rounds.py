@@ -7,20 +7,19 @@ a robot whose agent stays gone counts as crashed by the rule of the record's `cr
 
 from __future__ import annotations
 
-from collections.abc import ItemsView, Iterator, KeysView, Mapping, ValuesView
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from fatswarm.domain.draws import cut_fraction
-from fatswarm.domain.path import Line, Path, Points, transform
+from fatswarm.domain.path import Path, Points, transform
 from fatswarm.world.effects import Committed
 from fatswarm.world.faults import crash_after, cut_path, stuck_in
 from fatswarm.world.model import Books, RoundBooking
-from fatswarm.world.physics import RoundOutcome, apply_round
+from fatswarm.world.physics import RoundOutcome, apply_lines, apply_round
 from fatswarm.world.protocol import Begin, Commit, ControlReply
-from fatswarm.world.record import round_entry
+from fatswarm.world.record import LineMoves, round_entry
 
 
 class Rounds:
@@ -64,14 +63,15 @@ class Rounds:
     def commit_open_round(self) -> None:
         """Apply the held moves through physics, emit the round's record line, then book it.
         Where every move held is a straight line held as arrays (`Books.held_lines`) and no
-        adversary cuts them, the round goes to physics as arrays (`apply_lines`), its paths a
-        `LinePaths` that makes a Path only for what reads one."""
+        adversary cuts them, the round goes to physics as arrays (`apply_lines`) and on to the
+        round line and the books as arrays (`LineMoves`), no Path made for any robot."""
         w = self.books
         round_no, before = w.open_round, w.positions
         stuck = stuck_in(w.crash_plan, round_no)
         gone = w.stuck | frozenset(stuck)  # a crashed robot's moves are not applied
         lines = w.held_lines() if w.setup.non_rigid is None else None
-        paths: Mapping[int, Path]
+        line_moves: LineMoves | None = None
+        paths: Mapping[int, Path] = {}
         if lines is not None:
             movers, ends = lines
             if gone and len(movers):
@@ -79,7 +79,7 @@ class Rounds:
                 movers, ends = movers[keep], ends[keep]
             # world frame: transform(path, start, False)'s `1.0 * x + start`, and 1.0 * x is x
             ends = ends + (before if len(movers) == len(before) else before[movers])
-            paths, cut = LinePaths(movers, ends), []
+            cut: list[int] = []
         else:
             at = before.tolist()  # Python floats: the same values, read faster than numpy scalars
             held = {  # the lockstep runner applies and records non-empty paths only: so do we
@@ -97,17 +97,22 @@ class Rounds:
         colours, w.held_colours = w.held_colours, {}
         relit = w.looks.show(colours, skip=gone)  # as the moves start
         points = w.looks.points  # point bodies: no contact (world/physics.py)
-        if not paths:
-            outcome = RoundOutcome(before.copy())
-        elif isinstance(paths, LinePaths):
-            outcome = apply_lines(before, paths.movers, paths.ends, points=points)
-        else:
+        traveled: Mapping[int, float] | None
+        if lines is not None:  # physics' traveled is in the movers' order: the line's arrays
+            outcome = (
+                apply_lines(before, movers, ends, points=points)
+                if len(movers)
+                else RoundOutcome(before.copy())
+            )
+            covered = np.fromiter(outcome.traveled.values(), dtype=np.float64, count=len(movers))
+            line_moves, traveled = LineMoves(movers, ends, covered), None
+        elif paths:
             outcome = apply_round(before, paths, points=points)
-        after = np.asarray(outcome.positions, dtype=np.float64)
-        if isinstance(paths, LinePaths):  # apply_lines: every mover's, as apply_round gives it
-            traveled = outcome.traveled
-        else:
             traveled = {r: float(outcome.traveled.get(r, 0.0)) for r in paths}
+        else:
+            outcome, traveled = RoundOutcome(before.copy()), {}
+        after = np.asarray(outcome.positions, dtype=np.float64)
+        moved: Mapping[int, Path] | LineMoves = paths if line_moves is None else line_moves
         holding = w.held_robots()
         timed_out = [] if holding >= w.active_set else [r for r in w.active if r not in holding]
         w.last_timed_out = tuple(timed_out)
@@ -115,7 +120,7 @@ class Rounds:
         entry = round_entry(
             round_no,
             w.active,
-            paths,
+            moved,
             traveled,
             after,
             outcome.collisions,
@@ -134,7 +139,7 @@ class Rounds:
                 RoundBooking(
                     round=round_no,
                     active=w.active,
-                    paths=paths,
+                    paths=moved,
                     timed_out=timed_out,
                     before=before,
                     after=after,
@@ -189,61 +194,4 @@ class Rounds:
         return down, back
 
 
-class LinePaths(Mapping[int, Path]):
-    """A round's moves that are all straight lines, as a mapping robot -> world path (what the
-    round line and the books take): `movers` (m,) ascending, `ends` (m, 2) their lines' ends,
-    world frame. Each Path, `Path((Line((x, y)),))` of Python floats, is made the first time a
-    path is read, all at once; the keys, their number and membership make none."""
-
-    __slots__ = ("_keys", "_paths", "ends", "movers")
-
-    def __init__(self, movers: NDArray[np.intp], ends: Points) -> None:
-        self.movers, self.ends = movers, ends
-        self._keys: dict[int, None] = dict.fromkeys(movers.tolist())
-        self._paths: dict[int, Path] | None = None
-
-    def _made(self) -> dict[int, Path]:
-        if self._paths is None:
-            self._paths = {
-                robot: Path((Line((x, y)),))
-                for robot, (x, y) in zip(self._keys, self.ends.tolist(), strict=True)
-            }
-        return self._paths
-
-    def __getitem__(self, robot: int) -> Path:
-        return self._made()[robot]
-
-    def __iter__(self) -> Iterator[int]:
-        return iter(self._keys)
-
-    def __len__(self) -> int:
-        return len(self._keys)
-
-    def __contains__(self, robot: object) -> bool:
-        return robot in self._keys
-
-    def keys(self) -> KeysView[int]:
-        return self._keys.keys()
-
-    def items(self) -> ItemsView[int, Path]:
-        return self._made().items()
-
-    def values(self) -> ValuesView[Path]:
-        return self._made().values()
-
-
-# SHIM (arrays branch): physics' `apply_lines` (fatswarm/world/physics.py) comes with the physics
-# branch; until it is merged this stand-in makes the Paths and calls apply_round, the very round.
-# At merge, delete it and import `apply_lines` from fatswarm.world.physics instead.
-def apply_lines(
-    positions: Points, movers: NDArray[np.intp], ends: Points, *, points: bool = False
-) -> RoundOutcome:
-    """`apply_round(positions, {movers[i]: Path((Line(ends[i]),))}, points=points)`."""
-    paths = {
-        robot: Path((Line((x, y)),))
-        for robot, (x, y) in zip(movers.tolist(), ends.tolist(), strict=True)
-    }
-    return apply_round(positions, paths, points=points)
-
-
-__all__ = ["LinePaths", "Rounds", "apply_lines"]
+__all__ = ["Rounds"]

@@ -1,6 +1,6 @@
 """A round whose hook answers StraightMoves goes from the hook's arrays to physics as arrays
 (`Lockstep._straight`, `WorldCore.hold_lines`, `Looks.lines_to_world`, `FrameRows`, the commit's
-`LinePaths`): the very bits and the very records of the per-robot Paths and of compute alone."""
+`LineMoves`): the very bits and the very records of the per-robot Paths and of compute alone."""
 
 from __future__ import annotations
 
@@ -22,12 +22,11 @@ from fatswarm.domain.path import STAY, Line, Path, Points, StraightMoves
 from fatswarm.domain.robot_model import RobotModel
 from fatswarm.domain.seam import Configured
 from fatswarm.domain.wire import MAX_COORD
-from fatswarm.world import rounds
+from fatswarm.world import physics, rounds
 from fatswarm.world.core import WorldCore
 from fatswarm.world.looks import Looks
 from fatswarm.world.protocol import Begin
 from fatswarm.world.record import RecordWriter
-from fatswarm.world.rounds import LinePaths
 from fatswarm.world.setup import WorldSetup
 
 FLOATS = st.floats(allow_nan=False, allow_infinity=False) | st.sampled_from(
@@ -150,19 +149,6 @@ def test_held_lines_stand_for_the_held_paths_until_held_is_read() -> None:
     assert mixed.held_lines() is None
 
 
-def test_line_paths_make_no_path_until_one_is_read() -> None:
-    movers = np.array([1, 4, 7], dtype=np.intp)
-    ends = np.array([[1.0, 2.0], [-0.0, 3.5], [1e16, 5e-324]])
-    paths = LinePaths(movers, ends)
-    assert list(paths) == [1, 4, 7] and len(paths) == 3 and 4 in paths and 2 not in paths
-    assert sorted(paths) == [1, 4, 7] and list(paths.keys()) == [1, 4, 7]
-    assert paths._paths is None  # nothing read yet
-    assert dict(paths.items()) == {
-        r: Path((Line((x, y)),)) for r, (x, y) in zip([1, 4, 7], ends.tolist(), strict=True)
-    }
-    assert path_bits(paths[4]) == bits([[-0.0, 3.5]])
-
-
 def _as_paths(answer: Any) -> Any:
     """A round hook's answer as k Paths (the inner hooks answer StraightMoves)."""
     return answer.paths() if isinstance(answer, StraightMoves) else answer
@@ -268,7 +254,7 @@ def test_a_record_is_the_same_through_straight_moves_through_paths_and_alone(
     kw = dict(kw)
     wild = kw.pop("wild", False)
     lined = 0
-    real = rounds.apply_lines
+    real = physics.apply_lines
 
     def counted(*args: Any, **kwargs: Any) -> Any:
         nonlocal lined
