@@ -137,11 +137,6 @@ class WorldCore:
         """The positions or the agents changed: the observers' figures and agents are made again."""
         self._agents, self._figures = None, None
 
-    @property
-    def effects_due(self) -> bool:
-        """Whether the shell has something to do (`take_effects` would give something)."""
-        return bool(self._effects)
-
     def take_effects(self) -> list[Effect]:
         """What the shell is to do since it last asked, in order (record lines, log notes)."""
         effects, self._effects = self._effects, []

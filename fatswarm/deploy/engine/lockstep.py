@@ -471,8 +471,7 @@ class _Bus:
         # opened is acted at once (unless stopped: a replay's agents take the round over).
         if reply.ok and reply.open_round and reply.open_round != opened and not self.stopped():
             self._act(reply.open_round, self.readout.active)
-            if world.effects_due:
-                self.perform()
+            self.perform()
             notice = world.moves_notice()
             if notice is not None:
                 self.events.append(notice)
