@@ -69,25 +69,28 @@ def driving(core: CoordinatorCore, link: Link) -> Generator[None, None, Finished
     """`drive`'s loop, one exchange at a time: it yields after each request the world answered
     (all a world changes on) and returns how the core finished. A lock step advances it round by
     round (deploy/engine/lockstep.py); `drive` runs it out."""
-    todo: deque[Action] = deque(core.start(link.now()))
-    while not link.stopped():
-        link.note(core.pop_notes())
+    now, stopped, pop_notes = link.now, link.stopped, core.pop_notes  # (looked up once)
+    todo: deque[Action] = deque(core.start(now()))
+    while not stopped():
+        notes = pop_notes()
+        if notes:
+            link.note(notes)
         if not todo:
             events = link.wait(core.next_deadline())
             if events is None:
                 break
             for event in events:
-                todo.extend(feed(core, event, link.now()))
-            todo.extend(core.on_tick(link.now()))
+                todo.extend(feed(core, event, now()))
+            todo.extend(core.on_tick(now()))
             continue
         action = todo.popleft()
         if isinstance(action, Finished):
-            link.note(core.pop_notes())
+            link.note(pop_notes())
             return action
-        todo.extend(core.on_reply(link.ask(action.request), link.now()))
+        todo.extend(core.on_reply(link.ask(action.request), now()))
         yield
     finished = core.stop()
-    link.note(core.pop_notes())
+    link.note(pop_notes())
     return finished
 
 

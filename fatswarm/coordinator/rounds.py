@@ -78,6 +78,7 @@ class CoreMisuse(RuntimeError):
 
 
 _WAITING = (Phase.RETRY, Phase.GATHER, Phase.REJOIN, Phase.COLLECT, Phase.PACE)  # with a deadline
+_NONE: frozenset[int] = frozenset()
 
 
 class CoordinatorCore:
@@ -109,6 +110,7 @@ class CoordinatorCore:
         self._deadline: float | None = None  # of the phases in _WAITING; None in GATHER: anyone
         self._gather_s = 0.0
         self._live: set[int] = set()
+        self._live_order: tuple[int, ...] | None = None  # `_live` sorted, until it changes
         self._planned_live: frozenset[int] = frozenset()  # live when the scheduler last planned
         self._gone_at: dict[int, float] = {}  # robots of `_planned_live` gone since, and when
         self._held: set[int] = set()
@@ -176,6 +178,8 @@ class CoordinatorCore:
 
     def pop_notes(self) -> list[Note]:
         """The notes since the last call, oldest first."""
+        if not self._notes:
+            return []
         notes = list(self._notes)
         self._notes.clear()
         return notes
@@ -218,12 +222,15 @@ class CoordinatorCore:
         if robot < 0 or (self._n is not None and robot >= self._n):
             return []
         if alive:
-            self._live.add(robot)
+            if robot not in self._live:
+                self._live.add(robot)
+                self._live_order = None
             self._gone_at.pop(robot, None)
             if robot in self._active_set and robot not in self._held:
                 self._waiting.add(robot)  # (only read in COLLECT, where it is kept up to date)
         elif robot in self._live:
             self._live.discard(robot)
+            self._live_order = None
             self._waiting.discard(robot)
             if robot in self._planned_live:
                 self._gone_at[robot] = now
@@ -324,6 +331,7 @@ class CoordinatorCore:
     def _first_hello(self, reply: ControlReply, now: float) -> list[Action]:
         self._n = reply.n  # the world owns the run's parameters
         self._live = {r for r in self._live if r < self._n}
+        self._live_order = None
         self._scheduler = self._make_scheduler(self._n)
         if reply.status != Status.RUNNING:
             return self._finish(Status(reply.status))  # nothing to wait for
@@ -390,6 +398,8 @@ class CoordinatorCore:
     def rejoining(self, now: float) -> frozenset[int]:
         """Agents live when the scheduler last planned, gone since, whose move timeout (counted
         from when they went) has not run out: no round is planned without them meanwhile."""
+        if not self._gone_at:
+            return _NONE
         wait_s = self.times.move_timeout_s
         return frozenset(
             r
@@ -402,15 +412,18 @@ class CoordinatorCore:
         if self._next is not None and self._next[0] == round_no:
             return self._next[1]
         assert self._scheduler is not None
-        self._plan_over_live()
-        self._next = (round_no, tuple(self._scheduler.active(round_no, sorted(self._live))))
+        live = self._plan_over_live()
+        self._next = (round_no, tuple(self._scheduler.active(round_no, live)))
         return self._next[1]
 
-    def _plan_over_live(self) -> None:
+    def _plan_over_live(self) -> tuple[int, ...]:
         """Note a new plan over the live agents (`_plan` calls it): the agents gone before it are
-        no longer waited for."""
-        self._planned_live = frozenset(self._live)
+        no longer waited for. The live agents, sorted."""
+        if self._live_order is None:  # (else the same agents as at the last plan)
+            self._live_order = tuple(sorted(self._live))
+            self._planned_live = frozenset(self._live_order)
         self._gone_at.clear()
+        return self._live_order
 
     def _take_plan(self) -> None:
         """Make `round`'s planned active set the current one (a new round: nothing held yet)."""
@@ -435,7 +448,9 @@ class CoordinatorCore:
         # or retried), none of a round it opened anew (it restarted while the core paced).
         self._held = set(reply.held) & self.active_set if reply.open_round == self._round else set()
         self._phase, self._deadline = Phase.COLLECT, now + self.times.move_timeout_s
-        self._waiting = {r for r in self.active if r in self._live and r not in self._held}
+        self._waiting = self._live.intersection(self._active_set)
+        if self._held:
+            self._waiting -= self._held
         return self._collected(now)
 
     def _collected(self, now: float) -> list[Action]:
@@ -443,7 +458,8 @@ class CoordinatorCore:
         assert self._deadline is not None
         if self._waiting and now < self._deadline:
             return []
-        timed_out = tuple(r for r in self.active if r not in self._held)
+        active, held = self.active, self._held
+        timed_out = () if held.issuperset(active) else tuple(r for r in active if r not in held)
         self._phase, self._deadline = Phase.COMMIT, None
         paced = self._began_at is not None and now < self._began_at + self.times.pace_s
         self._chained = bool(self._live) and not paced and not self.rejoining(now)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
@@ -65,7 +65,10 @@ class _Deadlines:
 
     def sync(self, round_no: int, live: list[int]) -> None:
         """Forget robots that left; a robot that (re)joins must be active within K rounds."""
-        for robot in [r for r in self.due if r not in live]:
+        live_set = set(live)
+        if self.due.keys() == live_set:  # (nobody came or went: nothing to do)
+            return
+        for robot in [r for r in self.due if r not in live_set]:
             del self.due[robot]
         for robot in live:
             self.due.setdefault(robot, round_no + self.fairness - 1)
@@ -80,10 +83,19 @@ class Fsync:
     """Fully synchronous: every live robot in every round."""
 
     name: str = "fsync"
+    # the last live tuple and its active set (a coordinator asks with the same tuple until an
+    # agent comes or goes)
+    _last: tuple[tuple[int, ...], list[int]] | None = field(
+        default=None, init=False, repr=False, compare=False
+    )
 
     def active(self, round_no: int, live: Sequence[int]) -> list[int]:
         del round_no
-        return _live_list(live)
+        if type(live) is not tuple:
+            return _live_list(live)
+        if self._last is None or self._last[0] is not live:
+            self._last = (live, _live_list(live))
+        return list(self._last[1])
 
 
 class Ssync:
@@ -108,7 +120,7 @@ class Ssync:
         chosen: set[int] = set()
         while not chosen:  # redrawing keeps the subset uniform over the non-empty ones
             picked = self._rng.random(len(robots)) < SSYNC_P
-            chosen = {r for r, p in zip(robots, picked, strict=True) if p}
+            chosen = {r for r, p in zip(robots, picked.tolist(), strict=True) if p}
         chosen |= {r for r in robots if self._deadlines.due[r] <= round_no}
         out = sorted(chosen)
         self._deadlines.mark(round_no, out)

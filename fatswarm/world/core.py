@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from collections import Counter
 from collections.abc import Collection, KeysView, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from itertools import compress
 from typing import Final
 
@@ -334,6 +334,17 @@ class WorldCore:
         after = request.after if request.epoch == self.epoch else 0
         return self.open_round > after and robot in self.active_set and robot not in self._held
 
+    def lookers(self, robots: Sequence[int]) -> list[int]:
+        """The robots of `robots` whose first Look is answered now (`may_look` of each, at once):
+        a lock step's round, its Looks all asked as it opens."""
+        if not self.open_round:
+            return []
+        held = self._held
+        if not held and robots == self.active:  # a round just opened: all of its active robots
+            return list(robots)
+        active = self.active_set
+        return [robot for robot in robots if robot in active and robot not in held]
+
     def look(self, robot: int) -> Snapshot | None:
         """Robot `robot`'s snapshot, or None (refused, counted) if it is not active now."""
         seen = self.view_of(robot)
@@ -514,32 +525,36 @@ class WorldCore:
         if self.status != Status.RUNNING:
             return self.reply(False, f"the run has ended ({self.status})"), False
         if isinstance(req, Begin):
-            return self.model.begin(req)
+            refused, changed = self.model.begin(req)
+            return self.reply(refused is None, refused or ""), changed
         if req.then_active and max(req.then_active) >= self.setup.n:  # refused whole, not halfway
             return self.reply(False, "next round's active set names robots not of this run"), False
-        reply, changed = self.model.commit(req)
-        then = req.then
-        if reply.ok and changed and then is not None and self.status == Status.RUNNING:
-            reply = self.model.begin(then)[0]
-        if reply.ok and changed:
-            reply = replace(reply, timed_out=self.last_timed_out)
-        return reply, changed
+        refused, changed = self.model.commit(req)
+        if refused is None and changed:
+            then = req.then
+            if then is not None and self.status == Status.RUNNING:
+                refused = self.model.begin(then)[0]
+            if refused is None:  # the round committed (and the next one opened, if asked)
+                return self.reply(True, timed_out=self.last_timed_out), True
+        return self.reply(refused is None, refused or ""), changed
 
-    def reply(self, ok: bool, reason: str = "") -> ControlReply:
-        """A reply to the coordinator: the world as it stands (and the model's fields)."""
-        reply = ControlReply(
-            ok=ok,
-            reason=reason,
-            n=self.setup.n,
-            committed=self.committed,
-            open_round=self.open_round,
-            status=self.status,
-            collisions=self.collisions_total,
-            held=tuple(sorted(self._held)) if self.open_round else (),
+    def reply(self, ok: bool, reason: str = "", timed_out: tuple[int, ...] = ()) -> ControlReply:
+        """A reply to the coordinator: the world as it stands (and the model's fields).
+        `timed_out`: the reply to a Commit's, the robots of the round it committed without a move.
+        """
+        return ControlReply(
+            ok,
+            reason,
+            self.setup.n,
+            self.committed,
+            self.open_round,
+            self.status,
+            self.collisions_total,
+            tuple(sorted(self._held)) if self.open_round else (),
             epoch=self.epoch,
+            timed_out=timed_out,
+            **self.model.reply_fields(),
         )
-        fields = self.model.reply_fields()
-        return replace(reply, **fields) if fields else reply
 
     def _goal(self, positions: Points) -> bool:
         """The run's goal: the algorithm's for all robots, or once the crash adversary has crashed

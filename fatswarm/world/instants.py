@@ -22,9 +22,9 @@ from fatswarm.domain.path import Path, transform
 from fatswarm.world.asynchrony import AsyncWorld, CycleDone
 from fatswarm.world.effects import Committed
 from fatswarm.world.faults import cut_path
-from fatswarm.world.model import Books
+from fatswarm.world.model import Answer, Books
 from fatswarm.world.progress import MOVE_TOLERANCE
-from fatswarm.world.protocol import Begin, Commit, ControlReply
+from fatswarm.world.protocol import Begin, Commit
 from fatswarm.world.record import RunRecord, round_entry
 from fatswarm.world.setup import WorldSetup
 
@@ -90,26 +90,26 @@ class Instants:
     def time(self) -> float | None:
         return self.clock.now
 
-    def begin(self, req: Begin) -> tuple[ControlReply, bool]:
+    def begin(self, req: Begin) -> Answer:
         """Open the instant `req.at` for the robots due then, once the world has got there."""
         w = self.books
         if req.round != w.committed + 1:
-            return w.reply(False, f"next round is {w.committed + 1}, not {req.round}"), False
+            return f"next round is {w.committed + 1}, not {req.round}", False
         if w.open_round == req.round and w.active == req.active:
-            return w.reply(True), False  # a coordinator retrying: keep what is held
+            return None, False  # a coordinator retrying: keep what is held
         if w.open_round:
-            return w.reply(False, f"round {w.open_round} is open"), False
+            return f"round {w.open_round} is open", False
         if req.at is None:
-            return w.reply(False, "an async world opens instants: Begin needs `at`"), False
+            return "an async world opens instants: Begin needs `at`", False
         refused = self._set_looks(req)
         if refused is not None:
-            return w.reply(False, refused), False
+            return refused, False
         changed = self._settle()
         due = tuple(self.clock.looking())
         if w.status != Status.RUNNING or not due or due != req.active or self.clock.now != req.at:
-            return w.reply(True), changed  # not opened: the reply says what is due, and when
+            return None, changed  # not opened: the reply says what is due, and when
         self._open(req.round, due)
-        return w.reply(True), True
+        return None, True
 
     def _set_looks(self, req: Begin) -> str | None:
         """Set the first Looks `req` gives; why not, if a robot or a time is refused."""
@@ -141,19 +141,19 @@ class Instants:
         w.failed = {}
         w.missing = {r for r in due if w.alive[r] and r not in crashing}
 
-    def commit(self, req: Commit) -> tuple[ControlReply, bool]:
+    def commit(self, req: Commit) -> Answer:
         w = self.books
         if req.round == w.committed and not w.open_round:
-            return w.reply(True), False  # the reply to a commit was lost: it is done
+            return None, False  # the reply to a commit was lost: it is done
         if req.round != w.open_round:
-            return w.reply(False, f"round {req.round} is not open"), False
+            return f"round {req.round} is not open", False
         delays = {int(r): (float(c), float(wait)) for r, c, wait in req.delays}
         missing = [r for r in w.active if r not in w.stuck and r not in delays]
         if missing:
-            return w.reply(False, f"no delays for robots {missing}"), False
+            return f"no delays for robots {missing}", False
         self._delays = delays
         self.commit_open_round()
-        return w.reply(True), True
+        return None, True
 
     def commit_open_round(self) -> None:
         """Hand the instant's moves to the clock, each with its delays (a robot with no move

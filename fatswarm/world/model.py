@@ -20,7 +20,7 @@ from fatswarm.world.effects import Effect
 from fatswarm.world.looks import Looks
 from fatswarm.world.physics import Collision
 from fatswarm.world.progress import ProgressTracker
-from fatswarm.world.protocol import Begin, Commit, ControlReply
+from fatswarm.world.protocol import Begin, Commit
 from fatswarm.world.record import LineMoves
 from fatswarm.world.setup import WorldSetup
 
@@ -86,8 +86,6 @@ class Books(Protocol):
 
     def held_lines(self) -> tuple[NDArray[np.intp], Points] | None: ...  # the moves as arrays
 
-    def reply(self, ok: bool, reason: str = "") -> ControlReply: ...
-
     def emit(self, effect: Effect) -> None: ...
 
     def views_changed(self) -> None: ...
@@ -97,15 +95,19 @@ class Books(Protocol):
     def finish(self) -> None: ...
 
 
+Answer = tuple[str | None, bool]  # why a model refused a request (None: taken), and whether the
+# state changed: the core makes the one reply from it and the state after (`WorldCore.control`)
+
+
 class Model(Protocol):
     """What the world core asks of its model: open and commit, and the fields it adds."""
 
-    def begin(self, req: Begin) -> tuple[ControlReply, bool]:
-        """Open what `req` asks; the reply, and whether the state changed."""
+    def begin(self, req: Begin) -> Answer:
+        """Open what `req` asks; why not (None: taken), and whether the state changed."""
         ...
 
-    def commit(self, req: Commit) -> tuple[ControlReply, bool]:
-        """Commit what `req` asks; the reply, and whether the state changed."""
+    def commit(self, req: Commit) -> Answer:
+        """Commit what `req` asks; why not (None: taken), and whether the state changed."""
         ...
 
     def reply_fields(self) -> dict[str, Any]:
@@ -121,4 +123,4 @@ class Model(Protocol):
         ...
 
 
-__all__ = ["Books", "Model", "RoundBooking"]
+__all__ = ["Answer", "Books", "Model", "RoundBooking"]

@@ -8,6 +8,7 @@ a robot whose agent stays gone counts as crashed by the rule of the record's `cr
 from __future__ import annotations
 
 from collections.abc import Mapping
+from itertools import compress
 from typing import Any
 
 import numpy as np
@@ -16,9 +17,9 @@ from fatswarm.domain.draws import cut_fraction
 from fatswarm.domain.path import Path, Points, transform
 from fatswarm.world.effects import Committed
 from fatswarm.world.faults import crash_after, cut_path, stuck_in
-from fatswarm.world.model import Books, RoundBooking
+from fatswarm.world.model import Answer, Books, RoundBooking
 from fatswarm.world.physics import RoundOutcome, apply_lines, apply_round
-from fatswarm.world.protocol import Begin, Commit, ControlReply
+from fatswarm.world.protocol import Begin, Commit
 from fatswarm.world.record import LineMoves, round_entry
 
 
@@ -28,28 +29,28 @@ class Rounds:
     def __init__(self, books: Books) -> None:
         self.books = books
 
-    def begin(self, req: Begin) -> tuple[ControlReply, bool]:
+    def begin(self, req: Begin) -> Answer:
         w = self.books
         if req.round != w.committed + 1:
-            return w.reply(False, f"next round is {w.committed + 1}, not {req.round}"), False
+            return f"next round is {w.committed + 1}, not {req.round}", False
         if not req.active or req.active[-1] >= w.setup.n:
-            return w.reply(False, "active set empty or not robots of this run"), False
+            return "active set empty or not robots of this run", False
         if w.open_round == req.round and w.active == req.active:
-            return w.reply(True), False  # a coordinator retrying: keep what is held
+            return None, False  # a coordinator retrying: keep what is held
         w.open_round, w.active = req.round, req.active
         w.active_set = frozenset(req.active)
         w.looked, w.held, w.noticed, w.failed = set(), {}, None, {}
-        w.missing = {r for r in req.active if w.alive[r]}
-        return w.reply(True), True
+        w.missing = set(compress(req.active, map(w.alive.__getitem__, req.active)))  # the live
+        return None, True
 
-    def commit(self, req: Commit) -> tuple[ControlReply, bool]:
+    def commit(self, req: Commit) -> Answer:
         w = self.books
         if req.round == w.committed and not w.open_round:
-            return w.reply(True), False  # the reply to a commit was lost: it is durable
+            return None, False  # the reply to a commit was lost: it is durable
         if req.round != w.open_round:
-            return w.reply(False, f"round {req.round} is not open"), False
+            return f"round {req.round} is not open", False
         self.commit_open_round()
-        return w.reply(True), True
+        return None, True
 
     def reply_fields(self) -> dict[str, Any]:
         return {}

@@ -28,6 +28,23 @@ def test_fsync_activates_every_live_robot() -> None:
     assert sched.name == "fsync"
 
 
+def test_fsync_asked_with_the_same_live_tuple_again_follows_it_and_gives_its_own_list() -> None:
+    sched = make_scheduler("fsync", 5, 0)
+    live = (0, 2, 4)
+    first = sched.active(1, live)
+    first.append(1)  # the caller's list: the next answer is not changed by it
+    assert sched.active(2, live) == [0, 2, 4]
+    assert sched.active(3, (4, 0)) == [0, 4]  # another tuple: its robots
+    assert sched.active(4, [3, 1]) == [1, 3]  # a list: read anew each time
+
+
+@pytest.mark.parametrize("name", ["ssync", "centralized"])
+def test_live_sets_given_as_tuples_give_the_same_sequence_as_lists(name: str) -> None:
+    tuples = make_scheduler(name, 7, 3)
+    live = tuple(range(7))
+    assert [tuples.active(k, live) for k in range(1, 61)] == run(name, 7, 3, 60)
+
+
 @pytest.mark.parametrize("name", ["ssync", "centralized"])
 def test_same_seed_gives_same_sequence(name: str) -> None:
     assert run(name, 7, 3, 60) == run(name, 7, 3, 60)

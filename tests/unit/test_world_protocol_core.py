@@ -224,6 +224,24 @@ def test_may_look_only_while_active_in_the_open_round_and_not_moved(tmp_path: Fs
     assert [w.may_look(r) for r in range(3)] == [True, False, True]
 
 
+def test_lookers_are_the_robots_that_may_look_each(tmp_path: FsPath) -> None:
+    w = _live(_world(tmp_path), 0, 1, 2)
+
+    def each(robots: tuple[int, ...]) -> list[int]:
+        return [r for r in robots if w.may_look(r)]
+
+    assert w.lookers((0, 1, 2)) == [] == each((0, 1, 2))  # no round open
+    assert _ctl(w, Begin(1, (0, 2)).encode()).ok
+    for robots in [w.active, (0, 2), (0, 1, 2), (2,), ()]:  # a round just opened
+        assert w.lookers(robots) == each(robots)
+    w.lookers(w.active).append(1)  # a list of the caller's own
+    assert w.lookers(w.active) == [0, 2] and w.active == (0, 2)
+    assert look_bytes(w, snapshot_key(SWARM, 2)) is not None
+    assert _move(w, 2, 2, 1, STAY)
+    for robots in [w.active, (0, 1, 2), (2, 0)]:  # robot 2 moved: it looks no more
+        assert w.lookers(robots) == each(robots) == [r for r in robots if r == 0]
+
+
 def test_a_look_after_a_round_waits_for_a_later_one_unless_another_world_answered_it(
     tmp_path: FsPath,
 ) -> None:

@@ -461,17 +461,18 @@ class _Bus:
         """The world core answers at once; a round it opens has every robot Look, Compute and
         Move at once too (each Look is held at the world until then), and its moves notice
         comes back as the next event."""
-        readout = self.readout
-        opened = readout.open_round
+        world = self.world
+        opened = self.readout.open_round
         try:
-            reply, _ = self.world.control(request)
+            reply, _ = world.control(request)
         finally:  # what was committed is recorded, even when the algorithm's goal raised
             self.perform()
-        opens = reply.ok and readout.open_round and readout.open_round != opened
-        if opens and not self.stopped():  # (stopped: a replay's agents take the round over)
-            self._act(readout.open_round, readout.active)
+        # The reply says where the world stands after the request (it is made last). A round it
+        # opened is acted at once (unless stopped: a replay's agents take the round over).
+        if reply.ok and reply.open_round and reply.open_round != opened and not self.stopped():
+            self._act(reply.open_round, self.readout.active)
             self.perform()
-            notice = self.world.moves_notice()
+            notice = world.moves_notice()
             if notice is not None:
                 self.events.append(notice)
         return reply
@@ -499,7 +500,7 @@ class _Bus:
         world = self.world
         planned = None
         # the others' Looks stay held (robots the async adversary crashed)
-        lookers = [robot for robot in active if world.may_look(robot)]
+        lookers = world.lookers(active)
         if self.planner is not None:
             planned = self.planner.paths(self.readout.positions, active, self.flips)
         elif self.batch is not None and self._act_at_once(round_no, lookers):
