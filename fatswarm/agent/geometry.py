@@ -116,7 +116,9 @@ def _sq_distances(xs: np.ndarray, ys: np.ndarray, cx: float, cy: float) -> np.nd
 def _overshoot(circle: Circle, xs: np.ndarray, ys: np.ndarray) -> float:
     """How far the farthest point lies outside `circle` (<= 0: none does)."""
     cx, cy = circle.center
-    return float(np.max(np.hypot(xs - cx, ys - cy))) - circle.radius
+    d = np.hypot(xs - cx, ys - cy)
+    # the largest (or the first NaN), as np.max gives it (hypot gives no -0.0 to tell apart)
+    return float(d[d.argmax()]) - circle.radius
 
 
 def _far_from_origin(pts: np.ndarray, x0: float, y0: float, reach2: float) -> bool:
