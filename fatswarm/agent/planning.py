@@ -145,11 +145,11 @@ def ranked(first: np.ndarray, tol: float, tie_keys: TieKeys | None = None) -> It
         low = float(keys[i])  # (the same sum low + tol as on a numpy scalar, cheaper)
         if low == math.inf:
             return
-        tied = keys <= low + tol
-        if np.count_nonzero(tied) > 1:  # rare outside mirror pairs: settle on the next columns
+        tied = (keys <= low + tol).nonzero()[0]
+        if len(tied) > 1:  # rare outside mirror pairs: settle on the next columns
             if rest is None:
                 rest = tie_keys() if tie_keys is not None else ()
-            group = tied.nonzero()[0].tolist()
+            group = tied.tolist()
             for col in rest:
                 values = col[group].tolist()
                 bound = min(values) + tol
