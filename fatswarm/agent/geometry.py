@@ -53,17 +53,26 @@ def _sec_through(support: list[Point], p: Point) -> tuple[Disc, list[Point]]:
     through p are tried: the diametral circles of p and each support point, then the circumcircles
     of p and each support pair. Returns the circle and the points that pin it.
 
-    The circle routines are written out here: this runs a few times per `sec`.
+    The circle routines and the enclosure test (every point within r (1 + SEC_SLACK_REL) of the
+    centre) are written out here, on Python floats: this runs a few times per `sec`, and calls
+    cost more than the arithmetic.
     """
     px, py = p
+    hypot = math.hypot
+    best_r = 0.0  # best's radius (read only once best is set)
     best: Disc | None = None
     pinned: list[Point] = []
     for q in support:
         cx, cy = (px + q[0]) / 2.0, (py + q[1]) / 2.0
-        r = math.hypot(px - cx, py - cy)
+        r = hypot(px - cx, py - cy)
         # p's own distance from the centre is r, bit for bit: only the support needs checking.
-        if (best is None or r < best[2]) and _encloses(cx, cy, r, support):
-            best, pinned = (cx, cy, r), [p, q]
+        if best is None or r < best_r:
+            lim = r * (1.0 + SEC_SLACK_REL) + 1e-300
+            for x, y in support:
+                if not hypot(x - cx, y - cy) <= lim:
+                    break
+            else:
+                best_r, best, pinned = r, (cx, cy, r), [p, q]
     for i in range(len(support) - 1):
         q = support[i]
         bx, by = q[0] - px, q[1] - py
@@ -77,23 +86,21 @@ def _sec_through(support: list[Point], p: Point) -> tuple[Disc, list[Point]]:
             b2, c2 = bx * bx + by * by, cx * cx + cy * cy
             ux = (cy * b2 - by * c2) / d
             uy = (bx * c2 - cx * b2) / d
-            r = math.hypot(ux, uy)
-            if (best is None or r < best[2]) and _encloses(px + ux, py + uy, r, [*support, p]):
-                best, pinned = (px + ux, py + uy, r), [p, q, s]
+            r = hypot(ux, uy)
+            if best is None or r < best_r:
+                ox, oy = px + ux, py + uy
+                lim = r * (1.0 + SEC_SLACK_REL) + 1e-300
+                for x, y in support:
+                    if not hypot(x - ox, y - oy) <= lim:
+                        break
+                else:
+                    if hypot(px - ox, py - oy) <= lim:
+                        best_r, best, pinned = r, (ox, oy, r), [p, q, s]
     if best is None:  # only rounding gets here: fall back to the farthest pair
         far = max(support, key=lambda q: math.hypot(q[0] - px, q[1] - py))
         cx, cy = (px + far[0]) / 2.0, (py + far[1]) / 2.0
         best, pinned = (cx, cy, math.hypot(px - cx, py - cy)), [p, far]
     return best, pinned
-
-
-def _encloses(cx: float, cy: float, r: float, pts: list[Point]) -> bool:
-    """Whether the circle holds every point, up to its relative slack."""
-    lim = r * (1.0 + SEC_SLACK_REL) + 1e-300
-    for x, y in pts:  # noqa: SIM110 (a loop: cheaper than all() over a generator, called often)
-        if not math.hypot(x - cx, y - cy) <= lim:
-            return False
-    return True
 
 
 def _sq_distances(xs: np.ndarray, ys: np.ndarray, cx: float, cy: float) -> np.ndarray:
@@ -109,7 +116,9 @@ def _sq_distances(xs: np.ndarray, ys: np.ndarray, cx: float, cy: float) -> np.nd
 def _overshoot(circle: Circle, xs: np.ndarray, ys: np.ndarray) -> float:
     """How far the farthest point lies outside `circle` (<= 0: none does)."""
     cx, cy = circle.center
-    return float(np.max(np.hypot(xs - cx, ys - cy))) - circle.radius
+    d = np.hypot(xs - cx, ys - cy)
+    # the largest (or the first NaN), as np.max gives it (hypot gives no -0.0 to tell apart)
+    return float(d[d.argmax()]) - circle.radius
 
 
 def _far_from_origin(pts: np.ndarray, x0: float, y0: float, reach2: float) -> bool:

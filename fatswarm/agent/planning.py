@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import bisect
 import math
-import operator
 from collections.abc import Callable, Iterator
 from typing import NamedTuple
 
@@ -79,18 +78,20 @@ def _top_unmatched(pts: Points, cx: float, tol_at: float, tol_eq: float) -> int 
     n = len(pts)
     if n < 2 or not 0.0 <= tol_at < math.inf:
         return None
-    y_list = pts[:, 1].tolist()
-    if not all(map(operator.le, y_list, y_list[1:])):  # not sorted (or NaN: it compares False)
+    ys = pts[:, 1]
+    if np.count_nonzero(ys[:-1] <= ys[1:]) < n - 1:  # not sorted (or NaN: it compares False)
         return None
+    y_list = ys.tolist()
     if not math.isfinite(y_list[0]) or not math.isfinite(y_list[-1]):  # sorted: all finite then
         return None
     if n > MATCH_WINDOW:
         # mirror_matched compares all pairs when a window [y - tol, y + tol] holds more than
         # MATCH_WINDOW robots: these are MATCH_WINDOW rows apart, so no more than 2 tol apart in
-        # y (and a margin for the rounding of y +- tol, as mirror_matched's own)
+        # y (and a margin for the rounding of y +- tol, as mirror_matched's own). The
+        # differences are finite (the heights are), so "some <= 2 reach" is "not min > 2 reach".
         reach = tol_at + 1e-9 * (max(abs(y_list[0]), abs(y_list[-1])) + tol_at)
-        apart = map(operator.sub, y_list[MATCH_WINDOW:], y_list[:-MATCH_WINDOW])
-        if not min(apart) > 2.0 * reach:
+        apart = ys[MATCH_WINDOW:] - ys[:-MATCH_WINDOW]
+        if np.count_nonzero(apart <= 2.0 * reach):
             return None
     x_list = pts[:, 0].tolist()
     tol2 = tol_at * tol_at
@@ -118,6 +119,8 @@ def _top_unmatched(pts: Points, cx: float, tol_at: float, tol_eq: float) -> int 
             return -1
     # first_ranked: the lowest index of the largest y (found[-1] has the largest y among the
     # lowest indices), the ties within tol_eq of it, then the second key over them
+    if len(found) == 1 and tol_eq >= 0.0:  # low <= low + tol_eq: the one robot ties with itself
+        return found[0]
     low = -y_list[found[0]]
     tied = sorted(q for q in found if -y_list[q] <= low + tol_eq)
     if len(tied) == 1:
@@ -139,8 +142,8 @@ def ranked(first: np.ndarray, tol: float, tie_keys: TieKeys | None = None) -> It
     copied = False
     for _ in range(len(keys)):
         i = int(keys.argmin())
-        low = keys[i]
-        if low == np.inf:
+        low = float(keys[i])  # (the same sum low + tol as on a numpy scalar, cheaper)
+        if low == math.inf:
             return
         tied = (keys <= low + tol).nonzero()[0]
         if len(tied) > 1:  # rare outside mirror pairs: settle on the next columns
