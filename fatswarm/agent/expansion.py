@@ -63,9 +63,12 @@ def _radial_move(pts: Points, leader: int, circle: Circle, reach: float) -> Path
     ux, uy = ux / norm, uy / norm
     others = without(pts, leader)
     d = pts[leader] - others
-    b = d @ np.array((ux, uy))
+    dx, dy = d[:, 0], d[:, 1]
+    # Dot products written out (each product rounded, then the sum): `@` goes to BLAS, whose
+    # kernel (fused multiply-add or not) depends on the CPU, and the plan must not.
+    b = dx * ux + dy * uy
     e = b * b
-    e -= np.einsum("ij,ij->i", d, d)
+    e -= dx * dx + dy * dy
     e += reach * reach
     t = np.sqrt(np.maximum(e, 0.0, out=e), out=e)
     t -= b

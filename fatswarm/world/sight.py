@@ -157,6 +157,15 @@ def _seen_one(
     return cand[~_discs_hidden(rel, dist, cand)]
 
 
+def _dots(pj: _Floats, rel: _Floats) -> _Floats:
+    """Every candidate's dot product with every robot, written out (each product rounded, then
+    the sum) rather than `pj @ rel.T`: BLAS picks its kernel (fused multiply-add or not) by the
+    CPU, and what a robot sees must not depend on it."""
+    out: _Floats = pj[:, 0, None] * rel[None, :, 0]
+    out += pj[:, 1, None] * rel[None, :, 1]
+    return out
+
+
 def _centres_blocked(rel: _Floats, dist: _Floats, cand: _Indices) -> _Bools:
     """Per candidate j: does a third disc come closer than 1 - slack to the segment O-j?
 
@@ -165,7 +174,7 @@ def _centres_blocked(rel: _Floats, dist: _Floats, cand: _Indices) -> _Bools:
     """
     pj = rel[cand]
     dj = dist[cand][:, None]
-    dot = pj @ rel.T
+    dot = _dots(pj, rel)
     cross = pj[:, 0, None] * rel[None, :, 1] - pj[:, 1, None] * rel[None, :, 0]
     inside = (dot > 0.0) & (dot < dj * dj)
     blocked = inside & (np.abs(cross) < (ROBOT_RADIUS - GRAZE_SLACK) * dj)
@@ -178,7 +187,7 @@ def _points_blocked(rel: _Floats, dist: _Floats, cand: _Indices) -> _Bools:
     GRAZE_SLACK of its line, more than GRAZE_SLACK from either end along it)?"""
     pj = rel[cand]
     dj = dist[cand][:, None]
-    dot = pj @ rel.T  # |j| times k's coordinate along O-j
+    dot = _dots(pj, rel)  # |j| times k's coordinate along O-j
     cross = pj[:, 0, None] * rel[None, :, 1] - pj[:, 1, None] * rel[None, :, 0]
     inside = (dot > GRAZE_SLACK * dj) & (dot < (dj - GRAZE_SLACK) * dj)
     blocked = inside & (np.abs(cross) < GRAZE_SLACK * dj) & np.isfinite(dist)[None, :]
@@ -211,7 +220,7 @@ def _blocking_pairs(
     cos_a = np.sqrt(1.0 - sin_a * sin_a)
     cos_b = np.sqrt(1.0 - sin_b * sin_b)
     pj = rel[cand]
-    dot = pj @ rel.T
+    dot = _dots(pj, rel)
     # cos(alpha_j + beta_k) < 1 exactly where the two intervals can meet (their sum is < 90 deg)
     cos_sum = cos_a[:, None] * cos_b[None, :] - sin_a[:, None] * sin_b[None, :]
     nearer = dk[None, :] < dj[:, None]  # the observer (inf) and j itself are never nearer

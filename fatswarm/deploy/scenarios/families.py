@@ -449,7 +449,9 @@ def draw_rim(rng: np.random.Generator, n: int) -> Built:
     x -= x[-1] * float(rng.uniform(0.2, 0.8))
     local = np.column_stack([x, x * x / (2.0 * radius)])
     c, s = math.cos(phase), math.sin(phase)
-    return variant, local @ np.array([[c, s], [-s, c]]) + center, None
+    # the rotation written out, not `local @ R` (BLAS's kernel, and so the bits, vary by CPU)
+    turned = np.column_stack([x * c - local[:, 1] * s, x * s + local[:, 1] * c])
+    return variant, turned + center, None
 
 
 def draw_formed(rng: np.random.Generator, n: int) -> Built:

@@ -88,6 +88,13 @@ def translate_exactly(points: ArrayLike, offset: ArrayLike) -> Points:
     return exact_translation(points, offset)[0]
 
 
+def along(points: Points, direction: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Every point's dot product with `direction`, written out (each product rounded, then the
+    sum) rather than `points @ direction`: BLAS's kernel, and so its last bits, vary by CPU."""
+    out: NDArray[np.float64] = points[:, 0] * direction[0] + points[:, 1] * direction[1]
+    return out
+
+
 def nudge_extreme(points: ArrayLike, direction: ArrayLike, magnitude: float) -> Points:
     """Move the robot farthest along `direction` by `magnitude` along it: it nears nobody.
 
@@ -96,7 +103,7 @@ def nudge_extreme(points: ArrayLike, direction: ArrayLike, magnitude: float) -> 
     pts = np.array(points, dtype=np.float64)
     u = np.asarray(direction, dtype=np.float64)
     u = u / float(np.hypot(u[0], u[1]))
-    index = int(np.argmax(pts @ u))
+    index = int(np.argmax(along(pts, u)))
     pts[index] += magnitude * u
     return pts
 
@@ -125,7 +132,7 @@ def nudge(
             return pts, i
         u = pick(rng)
     for _ in range(200):  # the extreme robot along u nears nobody; want one not in `avoid`
-        index = int(np.argmax(pts @ u))
+        index = int(np.argmax(along(pts, u)))
         if index not in skip:
             break
         u = pick(rng)

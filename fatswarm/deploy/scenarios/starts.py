@@ -98,12 +98,19 @@ def _clump(rng: np.random.Generator, count: int) -> list[np.ndarray]:
             phi = 2.0 * math.pi * rng.random()
             p = base + CONTACT * np.array([math.cos(phi), math.sin(phi)])
             if _fits(p, placed, CONTACT) and (
-                best is None or np.linalg.norm(p - centroid) < np.linalg.norm(best - centroid)
+                best is None or _length(p - centroid) < _length(best - centroid)
             ):
                 best = p
         if best is not None:
             placed.append(best)
     return placed
+
+
+def _length(v: np.ndarray) -> float:
+    """|v| of one 2-vector written out: `np.linalg.norm(v)` is sqrt(v . v) through BLAS, whose
+    kernel (fused multiply-add or not) varies by CPU."""
+    x, y = float(v[0]), float(v[1])
+    return math.sqrt(x * x + y * y)
 
 
 def _radius_about_centroid(pts: np.ndarray) -> float:
