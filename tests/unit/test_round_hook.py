@@ -316,29 +316,34 @@ class Faulty:
         return paths
 
 
+def ten_robot_record(
+    tmp_path: FsPath, monkeypatch: pytest.MonkeyPatch, algorithm: Any, hook: bool, seed: int
+) -> bytes:
+    """12 fsync rounds of `algorithm` from a start of 10 discs drawn with `seed`, with its round
+    hook or (`hook` False) with each robot's compute alone: the record's bytes."""
+    if not hook:
+        monkeypatch.setattr(Configured, "views_compute", lambda self: None)
+    target = tmp_path / f"{getattr(algorithm, 'name', 'run')}-{hook}.jsonl"
+    start = np.random.default_rng(seed).uniform(-30.0, 30.0, size=(10, 2))
+    start = np.round(start / 4.0) * 4.0 + np.arange(10)[:, None] * 0.01
+    with RecordWriter(target) as journal:
+        run_lockstep(
+            start,
+            Configured.of(algorithm, 10),
+            make_scheduler("fsync", 10, 0),
+            seed=1,
+            max_rounds=12,
+            record=journal,
+        )
+    monkeypatch.undo()
+    return target.read_bytes()
+
+
 def test_a_failing_hook_leaves_each_robot_what_its_own_compute_gives(
     tmp_path: FsPath, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    def run(hook: bool) -> bytes:
-        faulty = Faulty()
-        if not hook:
-            monkeypatch.setattr(Configured, "views_compute", lambda self: None)
-        target = tmp_path / f"faulty-{hook}.jsonl"
-        start = np.random.default_rng(2).uniform(-30.0, 30.0, size=(10, 2))
-        start = np.round(start / 4.0) * 4.0 + np.arange(10)[:, None] * 0.01
-        with RecordWriter(target) as journal:
-            run_lockstep(
-                start,
-                Configured.of(faulty, 10),
-                make_scheduler("fsync", 10, 0),
-                seed=1,
-                max_rounds=12,
-                record=journal,
-            )
-        monkeypatch.undo()
-        return target.read_bytes()
-
-    assert run(True) == run(False)
+    with_hook = ten_robot_record(tmp_path, monkeypatch, Faulty(), True, 2)
+    assert with_hook == ten_robot_record(tmp_path, monkeypatch, Faulty(), False, 2)
 
 
 def test_a_subclass_that_changes_compute_does_not_inherit_its_parents_round_hooks() -> None:
@@ -395,25 +400,7 @@ class StraightGathering:
 def test_a_hook_answering_straight_moves_makes_the_record_of_compute_alone(
     tmp_path: FsPath, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    def run(hook: bool) -> bytes:
-        if not hook:
-            monkeypatch.setattr(Configured, "views_compute", lambda self: None)
-        target = tmp_path / f"straight-{hook}.jsonl"
-        start = np.random.default_rng(5).uniform(-30.0, 30.0, size=(10, 2))
-        start = np.round(start / 4.0) * 4.0 + np.arange(10)[:, None] * 0.01
-        with RecordWriter(target) as journal:
-            run_lockstep(
-                start,
-                Configured.of(StraightGathering(), 10),
-                make_scheduler("fsync", 10, 0),
-                seed=1,
-                max_rounds=12,
-                record=journal,
-            )
-        monkeypatch.undo()
-        return target.read_bytes()
-
-    with_hook = run(True)
+    with_hook = ten_robot_record(tmp_path, monkeypatch, StraightGathering(), True, 5)
     assert StraightGathering.computed == 0  # every round went through the hook's arrays
-    assert run(False) == with_hook
+    assert ten_robot_record(tmp_path, monkeypatch, StraightGathering(), False, 5) == with_hook
     assert StraightGathering.computed > 0
