@@ -50,15 +50,21 @@ def orientation_of(pts: Points, cx: float, tol_at: float, tol_eq: float) -> floa
     """
     best = _top_unmatched(pts, cx, tol_at, tol_eq)
     if best is None:  # not settled among the top few: match every robot
-        unmatched = ~mirror_matched(pts, cx, tol_at)
-        if not unmatched[unmatched.argmax()]:
-            return 0.0
-        idx = unmatched.nonzero()[0]
-        xs, ys = pts[:, 0], pts[:, 1]
-        best = int(idx[first_ranked(-ys[idx], tol_eq, lambda: (-np.abs(xs[idx] - cx),))])
-    elif best < 0:
+        return orientation_of_all(pts, cx, tol_at, tol_eq)
+    if best < 0:
         return 0.0
     return 1.0 if float(pts[best, 0]) - cx > 0 else -1.0
+
+
+def orientation_of_all(pts: Points, cx: float, tol_at: float, tol_eq: float) -> float:
+    """`orientation_of` by matching every robot with its mirror image (no top-down shortcut)."""
+    unmatched = ~mirror_matched(pts, cx, tol_at)
+    if not unmatched[unmatched.argmax()]:
+        return 0.0
+    idx = unmatched.nonzero()[0]
+    xs, ys = pts[:, 0], pts[:, 1]
+    best = int(idx[first_ranked(-ys[idx], tol_eq, lambda: (-np.abs(xs[idx] - cx),))])
+    return 1.0 if float(xs[best]) - cx > 0 else -1.0
 
 
 TOP_ROBOTS = 16

@@ -13,19 +13,6 @@ import numpy as np
 import pytest
 
 from fatswarm.agent import planning
-from fatswarm.agent.geometry import mirror_matched
-from fatswarm.agent.planning import first_ranked
-from fatswarm.domain.path import Points
-
-
-def plain_orientation_of(pts: Points, cx: float, tol_at: float, tol_eq: float) -> float:
-    unmatched = ~mirror_matched(pts, cx, tol_at)
-    if not unmatched[unmatched.argmax()]:
-        return 0.0
-    idx = unmatched.nonzero()[0]
-    xs, ys = pts[:, 0], pts[:, 1]
-    best = int(idx[first_ranked(-ys[idx], tol_eq, lambda: (-np.abs(xs[idx] - cx),))])
-    return 1.0 if float(xs[best]) - cx > 0 else -1.0
 
 
 def _clouds(seed: int, count: int) -> list[np.ndarray]:
@@ -64,7 +51,7 @@ def test_orientation_of_gives_the_plain_answer(seed: int) -> None:
                     (3.0, 0.0),
                 ):
                     got = planning.orientation_of(ordered, cx, tol_at, tol_eq)
-                    assert got == plain_orientation_of(ordered, cx, tol_at, tol_eq)
+                    assert got == planning.orientation_of_all(ordered, cx, tol_at, tol_eq)
                     top_down += planning._top_unmatched(ordered, cx, tol_at, tol_eq) is not None
     assert top_down > 1000  # the top-down pass was taken, not only the plain one
 
@@ -75,4 +62,4 @@ def test_orientation_of_stays_plain_for_odd_tolerances_and_values() -> None:
         for tol_at in (-1.0, np.nan, np.inf, 0.0, 1e-6):
             with np.errstate(invalid="ignore"):
                 got = planning.orientation_of(rows, 0.0, tol_at, 1e-9)
-                assert got == plain_orientation_of(rows, 0.0, tol_at, 1e-9)
+                assert got == planning.orientation_of_all(rows, 0.0, tol_at, 1e-9)
