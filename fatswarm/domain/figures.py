@@ -26,6 +26,7 @@ from fatswarm.domain.path import Points
 
 RADIUS: Final = 1.0  # every robot is a unit disc: the rim-to-rim gap is the centres' less 2
 PAIRWISE_UP_TO: Final = 80  # min_gap measures every pair up to this many robots (faster there)
+KEPT_FROM: Final = 48  # a run's min_gap is kept from round to round (`_GapMemo`) from this many
 
 
 class Place(enum.Flag):
@@ -106,11 +107,8 @@ def _closest(pts: Points) -> tuple[float, int, int]:
     """The least squared centre distance of two of the (n, 2) `pts` (n >= 2), and a pair of
     robots (i, j) at it (`min_gap`'s measure; NaN if a coordinate is: then i, j say nothing)."""
     n = len(pts)
-    if n <= PAIRWISE_UP_TO:  # each pair once: (x_j - x_i)^2 is (x_i - x_j)^2, to the bit
-        first, second = _pairs(n)
-        xs, ys = pts[:, 0], pts[:, 1]
-        dx, dy = xs[first] - xs[second], ys[first] - ys[second]
-        squares = dx * dx + dy * dy
+    if n <= PAIRWISE_UP_TO:
+        first, second, squares = _pair_squares(pts)
         k = int(squares.argmin())  # (the first NaN, if any: the least is NaN then, as np.min's)
         return float(squares[k]), int(first[k]), int(second[k])
     axis = 0 if np.ptp(pts[:, 0]) >= np.ptp(pts[:, 1]) else 1
@@ -136,6 +134,21 @@ def _closest(pts: Points) -> tuple[float, int, int]:
     return best2, int(order[pair[0]]), int(order[pair[1]])
 
 
+def _pair_squares(
+    pts: Points, first: NDArray[np.intp] | None = None, second: NDArray[np.intp] | None = None
+) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float64]]:
+    """(i, j, the squared centre distance of i and j) of every pair i < j of the (n, 2) `pts`,
+    or of the pairs (first, second) given: `dx * dx + dy * dy` of dx = x_i - x_j, dy = y_i - y_j
+    ((x_j - x_i)^2 is (x_i - x_j)^2, to the bit). The points taken as complex numbers x + iy:
+    one gather and one subtraction give both differences, each IEEE's as apart."""
+    if first is None or second is None:
+        first, second = _pairs(len(pts))
+    z = np.ascontiguousarray(pts).view(np.complex128).reshape(len(pts))
+    d = z[first] - z[second]
+    dx, dy = d.real, d.imag
+    return first, second, dx * dx + dy * dy
+
+
 NEAR_MARGIN: Final = 1.0  # _GapMemo's near pairs: those within the least distance + this
 NEAR_BACKOFF: Final = 8  # rounds without near pairs after a list that served no round, at
 NEAR_BACKOFF_MAX: Final = 256  # first; twice as many after each such list, up to this
@@ -143,35 +156,41 @@ NEAR_BACKOFF_MAX: Final = 256  # first; twice as many after each such list, up t
 
 class _GapMemo:
     """`min_gap` round after round with the same bits (the least of the same squares), measuring
-    only pairs that can be the closest (above PAIRWISE_UP_TO robots: up to it, every pair at
-    once costs less than the bookkeeping):
+    only pairs that can be the closest:
 
-    - few movers, the closest pair before among the stills: the least over the stills' pairs is
-      that pair's (their squares are as before), so only the pairs with a mover are measured;
-    - else, the near pairs of the last whole measure (those within its least distance +
-      NEAR_MARGIN, positions P0): while every robot is within D of its place in P0, a pair that
-      is not near is more than that distance - 2 D apart, so if the least of the near pairs is
-      below it (with a wide rounding margin), it is the least of all;
-    - else (or NaN, infinity) every pair, as `min_gap`.
+    - the near pairs of the last whole measure (those within its least distance + NEAR_MARGIN,
+      positions P0): while every robot is within D of its place in P0, a pair that is not near
+      is more than that distance - 2 D apart, so if the least of the near pairs is below it (with
+      a wide rounding margin), it is the least of all;
+    - else, few movers, the closest pair before among the stills: the least over the stills'
+      pairs is that pair's (their squares are as before), so only the pairs with a mover are
+      measured;
+    - else (or NaN, infinity) every pair, as `min_gap` (up to PAIRWISE_UP_TO robots, with the
+      near pairs of the same squares).
     """
 
     def __init__(self) -> None:
         self._last: tuple[Points, float, int, int] | None = None  # positions, least, its pair
-        # P0, its near pairs (i, j), and their bound R (the least distance + NEAR_MARGIN)
-        self._near: tuple[Points, NDArray[np.intp], NDArray[np.intp], float] | None = None
+        # P0, its near pairs (i, j), their bound R (the least distance + NEAR_MARGIN), and the
+        # largest coordinate of P0 (in magnitude)
+        self._near: tuple[Points, NDArray[np.intp], NDArray[np.intp], float, float] | None = None
         self._served = 0  # rounds the near pairs answered
         self._backoff = 0  # rounds to go without near pairs
         self._wait = NEAR_BACKOFF // 2  # the backoff after a list that served no round
 
     def min_gap(self, positions: Points) -> float | None:
         pts = positions.reshape(-1, 2)
-        if len(pts) < 2:
-            return None
-        if len(pts) <= PAIRWISE_UP_TO or not np.isfinite(pts).all():  # (every pair: cheaper)
-            self._last = self._near = None
-            return math.sqrt(_closest(pts)[0]) - 2 * RADIUS
-        found = self._few_moved(pts) or self._near_ones(pts) or self._whole(pts)
-        self._last = (pts.copy(), *found)
+        if len(pts) < KEPT_FROM:  # (every pair at once: cheaper than keeping any)
+            return math.sqrt(_closest(pts)[0]) - 2 * RADIUS if len(pts) >= 2 else None
+        found = self._near_ones(pts)  # (finite positions only: a NaN or infinity fails it)
+        if found is None:
+            if not np.isfinite(pts).all():
+                self._last = self._near = None
+                return math.sqrt(_closest(pts)[0]) - 2 * RADIUS
+            few = len(pts) > PAIRWISE_UP_TO  # (up to it, every pair costs less than the movers')
+            found = (few and self._few_moved(pts)) or self._whole(pts)
+        if len(pts) > PAIRWISE_UP_TO:
+            self._last = (pts.copy(), *found)
         return math.sqrt(found[0]) - 2 * RADIUS
 
     def _few_moved(self, pts: Points) -> tuple[float, int, int] | None:
@@ -197,24 +216,28 @@ class _GapMemo:
         near = self._near
         if near is None or near[0].shape != pts.shape:
             return None
-        start, first, second, bound = near
-        if not len(first):
+        start, first, second, bound, scale = near
+        # each robot is within hypot(dx, dy) <= sqrt(2) max(|dx|, |dy|) of its place in P0; NaN
+        # (or an infinity: P0 is finite) fails the test below
+        reach = 1.5 * float(np.abs(pts - start).max())
+        if not reach < bound:
             return None
-        moved = np.hypot(pts[:, 0] - start[:, 0], pts[:, 1] - start[:, 1])
-        reach = float(moved.max())
-        xs, ys = pts[:, 0], pts[:, 1]
-        dx, dy = xs[first] - xs[second], ys[first] - ys[second]
-        squares = dx * dx + dy * dy
+        _, _, squares = _pair_squares(pts, first, second)
         k = int(squares.argmin())
         best2 = float(squares[k])
-        scale = float(np.abs(pts).max())
+        scale += reach  # |p| <= |p0| + reach, for every coordinate p of a robot (p0 of P0)
         if math.sqrt(best2) + 2 * reach * (1 + 1e-6) + 1e-6 + 1e-9 * scale >= bound:
             return None  # a pair that is not near might be closer
         self._served += 1
         return best2, int(first[k]), int(second[k])
 
     def _whole(self, pts: Points) -> tuple[float, int, int]:
-        best2, i, j = _closest(pts)
+        if len(pts) <= PAIRWISE_UP_TO:  # every pair: its squares give the near pairs too
+            first, second, squares = _pair_squares(pts)
+            k = int(squares.argmin())
+            best2, i, j = float(squares[k]), int(first[k]), int(second[k])
+        else:
+            best2, i, j = _closest(pts)
         if self._near is not None and self._served:
             self._wait = NEAR_BACKOFF // 2
         elif self._near is not None:  # robots that moved too far for near pairs to pay: wait
@@ -226,21 +249,20 @@ class _GapMemo:
         else:
             bound = math.sqrt(best2) + NEAR_MARGIN
             scale = float(np.abs(pts).max())
-            first, second = _within(pts, bound * (1 + 1e-6) + 1e-9 * scale)
-            self._near = (pts.copy(), first, second, bound)
+            reach = bound * (1 + 1e-6) + 1e-9 * scale
+            if len(pts) <= PAIRWISE_UP_TO:
+                keep = squares <= reach * reach
+                near_first, near_second = first[keep], second[keep]
+            else:
+                near_first, near_second = _within(pts, reach)
+            self._near = (pts.copy(), near_first, near_second, bound, scale)
         return best2, i, j
 
 
 def _within(pts: Points, reach: float) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
     """The pairs (i, j) of the (n, 2) `pts` whose centres may be `reach` apart or closer (every
-    such pair, and maybe others)."""
+    such pair, and maybe others), above PAIRWISE_UP_TO robots."""
     n = len(pts)
-    if n <= PAIRWISE_UP_TO:
-        first, second = _pairs(n)
-        xs, ys = pts[:, 0], pts[:, 1]
-        dx, dy = xs[first] - xs[second], ys[first] - ys[second]
-        keep = dx * dx + dy * dy <= reach * reach
-        return first[keep], second[keep]
     order = np.argsort(pts[:, 0], kind="stable")
     along = pts[order, 0]
     counts = np.searchsorted(along, along + reach, side="right") - np.arange(n) - 1
@@ -497,7 +519,8 @@ class RunFolder:
 
     def __init__(self, values: Mapping[str, FigureValue] | None = None) -> None:
         self.values: dict[str, FigureValue] = dict(values or {})
-        self._last: tuple[Points, dict[str, FigureValue]] | None = None
+        # the last positions' shape and bytes, and their values of the figures
+        self._last: tuple[tuple[tuple[int, ...], bytes], dict[str, FigureValue]] | None = None
         self._gap = _GapMemo()  # min_gap kept from round to round
 
     def add(
@@ -505,19 +528,21 @@ class RunFolder:
     ) -> None:
         pts = np.asarray(positions, dtype=np.float64)
         figures = derived_figures()
+        seen = (pts.shape, pts.tobytes())  # the positions to the bit
         last = self._last
-        if last is not None and last[0].shape == pts.shape and bool((last[0] == pts).all()):
-            rounds = last[1]  # (np.array_equal's test, without its checks of the arguments)
+        if last is not None and last[0] == seen:
+            rounds = last[1]  # (the same bits: the same values)
         else:
             rounds = {
                 f.name: self._gap.min_gap(pts) if f.derive is min_gap else f.derive(pts)
                 for f in figures
                 if f.derive is not None
             }
-            self._last = (pts.copy(), rounds)
+            self._last = (seen, rounds)
+        values, of_line = self.values, line or {}
         for f in figures:
-            value = rounds.get(f.name) if f.tally is None else f.tally(round_no, line or {})
-            self.values[f.name] = summarise(f.summary, self.values.get(f.name), value)
+            value = rounds.get(f.name) if f.tally is None else f.tally(round_no, of_line)
+            values[f.name] = summarise(f.summary, values.get(f.name), value)
 
     def snapshot(self) -> dict[str, FigureValue]:
         return {f.name: self.values.get(f.name) for f in derived_figures()}

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from collections.abc import Collection, KeysView, Mapping, Sequence
+from collections.abc import Collection, Iterable, KeysView, Mapping, Sequence
 from dataclasses import dataclass
 from itertools import compress
 from typing import Final
@@ -298,19 +298,23 @@ class WorldCore:
         measured: Mapping[int, float] | NDArray[np.float64] | None,
     ) -> None:
         """Each mover's path length (the agents' books): physics' where it measured it (a
-        mapping, or with LineMoves an array of every one), else measured here as `path_length`
-        from its position `before`."""
+        mapping of movers, or with LineMoves an array of every one), else measured here as
+        `path_length` from its position `before`."""
         last_length = self.last_length
         if isinstance(paths, LineMoves):
-            movers = paths.robots()
+            lengths: Iterable[tuple[int, float]]
             if isinstance(measured, np.ndarray):
-                lengths = measured.tolist()
+                lengths = zip(paths.robots(), measured.tolist(), strict=True)
+            elif measured is not None and len(measured) == len(paths):
+                lengths = measured.items()  # every mover's (its keys are movers'): none to measure
             else:
-                lengths = paths.lengths(before)
-                if measured:
-                    lengths = [measured.get(r, k) for r, k in zip(movers, lengths, strict=True)]
-            for robot, length in zip(movers, lengths, strict=True):
-                last_length[robot] = length
+                known = {} if measured is None else measured
+                lengths = (
+                    (robot, known.get(robot, here))
+                    for robot, here in zip(paths.robots(), paths.lengths(before), strict=True)
+                )
+            for robot, each in lengths:
+                last_length[robot] = each
             return
         assert not isinstance(measured, np.ndarray), "lengths as an array go with LineMoves"
         known = {} if measured is None else measured

@@ -200,7 +200,10 @@ def configuration_changed(before: Points, after: Points) -> bool:
         raise ValueError(f"positions changed shape: {before.shape} -> {after.shape}")
     if before.size == 0:
         return False
-    shift = np.hypot(after[:, 0] - before[:, 0], after[:, 1] - before[:, 1])
+    delta = after - before
+    if np.abs(delta).max() > MOVE_TOLERANCE:  # hypot(dx, dy) >= |dx|, |dy|: some shift is above
+        return True
+    shift = np.hypot(delta[:, 0], delta[:, 1])  # (NaN, or every |dx|, |dy| within: measured)
     return bool(shift.max() > MOVE_TOLERANCE)
 
 

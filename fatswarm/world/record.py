@@ -164,13 +164,13 @@ class LineMoves(LazyMoves):
     def __init__(
         self, movers: NDArray[np.integer[Any]], ends: Points, traveled: NDArray[np.float64]
     ) -> None:
-        super().__init__()
+        self._made = None  # (LazyMoves.__init__, inlined: a LineMoves is made every round)
         assert movers.dtype.kind in "iu", f"movers must be integers, not {movers.dtype}"
         self.movers = movers
         self.ends = np.asarray(ends, dtype=np.float64)
         self.traveled = np.asarray(traveled, dtype=np.float64)
         assert self.ends.shape == (len(movers), 2) and self.traveled.shape == (len(movers),)
-        assert bool(np.all(movers[1:] > movers[:-1])), "movers must increase"
+        assert len(movers) < 2 or (movers[1:] > movers[:-1]).all(), "movers must increase"
 
     def _make(self) -> tuple[Move, ...]:
         return tuple(
@@ -187,16 +187,17 @@ class LineMoves(LazyMoves):
         return len(self.movers)
 
     def robots(self) -> list[int]:
-        return [int(r) for r in self.movers.tolist()]
+        movers: list[int] = self.movers.tolist()  # Python ints (`movers` is of integers)
+        return movers
 
     def lengths(self, before: Points) -> list[float]:
         """Each move's path length from its robot's position in `before` ((n, 2)), as
-        `path_length` measures its one Line (the same floats)."""
-        starts = np.asarray(before, dtype=np.float64)[self.movers].tolist()
-        return [
-            0.0 + math.hypot(ex - x, ey - y)
-            for (x, y), (ex, ey) in zip(starts, self.ends.tolist(), strict=True)
-        ]
+        `path_length` measures its one Line (the same floats: the differences are IEEE's in
+        numpy as in Python, CPython's `math.hypot` each, and `0.0 + h` is h for h >= 0)."""
+        starts = np.asarray(before, dtype=np.float64)[self.movers]
+        with np.errstate(over="ignore", invalid="ignore"):  # (as Python's floats: no warning)
+            delta = (self.ends - starts).T.tolist()
+        return list(map(math.hypot, delta[0], delta[1]))
 
     def text(self) -> str:
         k = len(self.movers)
