@@ -257,11 +257,13 @@ class WorldCore:
                 f"have been gone for {crash_after(self.setup.n)} rounds; they stay where they "
                 "are, and are not waited for",
             )
-        self.tracker.crash(crashed)
-        self.tracker.recover(booking.recovered)
+            self.tracker.crash(crashed)
+        if booking.recovered:
+            self.tracker.recover(booking.recovered)
         self.views_changed()
+        last_active = self.last_active
         for robot in active:
-            self.last_active[robot] = round_no
+            last_active[robot] = round_no
         for robot in timed_out:
             self.timeouts[robot] += 1
         before, collisions = booking.before, booking.collisions
@@ -286,10 +288,11 @@ class WorldCore:
             line=booking.line,
         )
         self.positions, self.committed = booking.after, round_no
-        self.active = tuple(active)
-        self.active_set = frozenset(self.active)
+        if active is not self.active:  # (the open round's own: its set was made as it opened)
+            self.active = tuple(active)
+            self.active_set = frozenset(self.active)
         self.moved = moved
-        self.stopped = tuple(sorted({c.robot for c in collisions}))
+        self.stopped = tuple(sorted({c.robot for c in collisions})) if collisions else ()
 
     def _book_lengths(
         self,

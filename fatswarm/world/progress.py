@@ -69,6 +69,7 @@ class ProgressTracker:
         self._rounds = 0
         self._epochs = 0
         self._moves = [0] * n
+        self._robots = frozenset(range(n))
         self._distance = 0.0
         self._collisions = 0
         self._epoch_seen: set[int] = set()
@@ -128,12 +129,17 @@ class ProgressTracker:
         """
         if self._status is not None:
             raise RuntimeError(f"the run already ended ({self._status}); no more rounds")
-        active_set = set(map(int, active))
-        if _outside(active_set, self.n) or _outside(movers, self.n):
-            bad = [r for r in active_set | set(movers) if not 0 <= r < self.n]
-            raise ValueError(f"robots {sorted(bad)} are not in 0..{self.n - 1}")
+        active_set, mover_set = set(active), set(movers)
+        robots = self._robots  # (each equal to one of 0..n-1: as its int, in a set)
+        each_once = robots.issuperset(active_set) and robots.issuperset(mover_set)
+        if not each_once:  # some robot is not an int of 0..n-1: as its int, or refused
+            active_set = set(map(int, active))
+            if _outside(active_set, self.n) or _outside(movers, self.n):
+                bad = [r for r in active_set | mover_set if not 0 <= r < self.n]
+                raise ValueError(f"robots {sorted(bad)} are not in 0..{self.n - 1}")
         active_set |= self._crashed  # a crashed robot stays, as if active and asking to stay
-        self._count(active_set, movers, traveled, collisions)
+        everyone = each_once and len(mover_set) == len(movers) == self.n  # every robot, once
+        self._count(active_set, movers, everyone, traveled, collisions)
         before_arr = np.asarray(before, dtype=np.float64)
         after_arr = np.asarray(after, dtype=np.float64)
         self._derived.add(after_arr, self._rounds, line)
@@ -145,7 +151,7 @@ class ProgressTracker:
         else:
             if not stale:
                 self._seen_since_change |= active_set
-                self._wanting_since_change |= set(movers) | {int(r) for r in failed}
+                self._wanting_since_change |= mover_set | {int(r) for r in failed}
             if len(self._seen_since_change) == self.n:
                 formed = not self._wanting_since_change and bool(self.goal(after_arr))
                 self._status = Status.FORMED if formed else Status.STALLED
@@ -157,14 +163,19 @@ class ProgressTracker:
         self,
         active: set[int],
         movers: Collection[int],
+        everyone: bool,
         traveled: Mapping[int, float] | Sequence[float] | None,
         collisions: int,
     ) -> None:
-        """The round's figures: rounds, moves, distance, collisions and epochs."""
+        """The round's figures: rounds, moves, distance, collisions and epochs (`everyone`: the
+        movers are every robot, each once)."""
         self._rounds += 1
-        moves = self._moves
-        for robot in movers:
-            moves[robot] += 1
+        if everyone:
+            self._moves = list(map(_ONE_MORE, self._moves))
+        else:
+            moves = self._moves
+            for robot in movers:
+                moves[robot] += 1
         if traveled:
             each = traveled.values() if isinstance(traveled, Mapping) else traveled
             self._distance += float(sum(each))
@@ -187,6 +198,9 @@ class ProgressTracker:
             crashed=tuple(sorted(self._crashed)),
             derived=self._derived.snapshot(),
         )
+
+
+_ONE_MORE: Final = (1).__add__  # m -> 1 + m
 
 
 def _outside(robots: Collection[int], n: int) -> bool:
