@@ -28,11 +28,12 @@ from fatswarm.domain.figures import (
     round_value,
     summarise,
 )
+from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Line, Path, path_length
 from fatswarm.world.core import WorldCore
 from fatswarm.world.journal import load_configured
 from fatswarm.world.model import RoundBooking
-from fatswarm.world.progress import MOVE_TOLERANCE, configuration_changed
+from fatswarm.world.progress import MOVE_TOLERANCE, ProgressTracker, configuration_changed
 from fatswarm.world.record import LineMoves
 from fatswarm.world.setup import WorldSetup
 
@@ -253,3 +254,66 @@ def test_a_runs_figures_folded_are_those_of_every_round_measured_anew(
                 assert bits([got[name]]) == bits([value]) or math.isnan(value)
             else:
                 assert got[name] == value
+
+
+class _TrackerAsItWas(ProgressTracker):
+    """`observe` as it was: each robot made an int, checked by its least and largest, and the
+    moves counted one by one."""
+
+    def observe(  # type: ignore[override]
+        self,
+        active: Any,
+        movers: Any,
+        before: np.ndarray,
+        after: np.ndarray,
+        traveled: Any = None,
+        collisions: int = 0,
+    ) -> Status | None:
+        active_set = {int(r) for r in active}
+        if any(not 0 <= r < self.n for r in [*active_set, *movers]):
+            bad = [r for r in active_set | set(movers) if not 0 <= r < self.n]
+            raise ValueError(f"robots {sorted(bad)} are not in 0..{self.n - 1}")
+        active_set |= self._crashed
+        self._count(active_set, movers, False, traveled, collisions)
+        self._derived.add(after, self._rounds, None)
+        if _changed_as_it_was(before, after):
+            self._seen_since_change, self._wanting_since_change = set(), set()
+        else:
+            self._seen_since_change |= active_set
+            self._wanting_since_change |= set(movers)
+            if len(self._seen_since_change) == self.n:
+                formed = not self._wanting_since_change and bool(self.goal(after))
+                self._status = Status.FORMED if formed else Status.STALLED
+        return self._status
+
+
+ROBOT = st.integers(-1, 4).flatmap(
+    lambda r: st.sampled_from([r, np.int64(r), float(r), r + 0.5, bool(r) if r in (0, 1) else r])
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.data())
+def test_the_tracker_counts_as_it_did_robot_by_robot(data: st.DataObject) -> None:
+    """Robots as ints, numpy ints, whole floats, halves, bools, repeated or not of the run (then
+    refused with the same words): the snapshot, status and error are the ones it gave."""
+    n = 4
+    now, was = ProgressTracker(n, lambda _: True), _TrackerAsItWas(n, lambda _: True)
+    pts = np.zeros((n, 2))
+    for _ in range(data.draw(st.integers(1, 6))):
+        everyone = data.draw(st.booleans())
+        active: Any = list(range(n)) if everyone else data.draw(st.lists(ROBOT, max_size=6))
+        movers: Any = list(range(n)) if everyone else data.draw(st.lists(ROBOT, max_size=6))
+        after = pts + data.draw(st.sampled_from([0.0, 1.0]))
+        traveled = [1.0] * len(movers)
+        outcomes = []
+        for tracker in (now, was):
+            try:
+                outcomes.append(repr(tracker.observe(active, movers, pts, after, traveled)))
+            except (ValueError, TypeError, IndexError) as exc:
+                outcomes.append(f"{type(exc).__name__}: {exc}")
+        assert outcomes[0] == outcomes[1]
+        if "Error" in outcomes[0] or now.done:
+            break
+        assert now.snapshot() == was.snapshot()
+        pts = after
