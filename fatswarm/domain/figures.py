@@ -287,7 +287,7 @@ def failures(round_no: int, line: Mapping[str, Any]) -> int:
     """How many computes of a round failed: the entries of its line's `failed`."""
     del round_no
     failed = line.get("failed")
-    return len(failed) if isinstance(failed, Mapping) else 0
+    return 0 if failed is None or not isinstance(failed, Mapping) else len(failed)
 
 
 def first_failure(round_no: int, line: Mapping[str, Any]) -> str | None:
@@ -295,7 +295,7 @@ def first_failure(round_no: int, line: Mapping[str, Any]) -> str | None:
     in round 3: ViewError: ...` (`cycle` for an async run's line: it has a `look`); None if none
     failed."""
     failed = line.get("failed")
-    if not isinstance(failed, Mapping) or not failed:
+    if failed is None or not isinstance(failed, Mapping) or not failed:
         return None
     robot = min(failed, key=lambda r: int(r) if str(r).isdigit() else -1)
     word = "cycle" if "look" in line else "round"
@@ -500,15 +500,20 @@ def summarise(how: Summary, so_far: FigureValue, value: FigureValue) -> FigureVa
     `value` (None: the figure does not apply to it, and the run's value stays)."""
     if value is None:
         return so_far
-    if so_far is None or how == Summary.LAST:
+    if so_far is None or how == _LAST:
         return value
-    if how == Summary.FIRST:
+    if how == _FIRST:
         return so_far
-    if how == Summary.MIN:
+    if how == _MIN:
         return min(so_far, value)
-    if how == Summary.MAX:
+    if how == _MAX:
         return max(so_far, value)
     return so_far + value  # type: ignore[operator]
+
+
+# (the members read once: an enum's member read from its class costs more than the test, and the
+# folder summarises every derived figure every round)
+_LAST, _FIRST, _MIN, _MAX = Summary.LAST, Summary.FIRST, Summary.MIN, Summary.MAX
 
 
 class RunFolder:
