@@ -256,7 +256,7 @@ class CoordinatorCore:
         """The world holds these robots' moves; notices of other rounds (or robots), or of another
         world process than the one that answered last (one since restarted), are ignored."""
         if notice.round == self._round and notice.epoch == self._epoch:
-            robots = set(notice.robots) & self.active_set
+            robots = self.active_set.intersection(notice.robots)
             self._held |= robots  # kept while the world keeps the round open
             self._waiting -= robots
         if self._phase is Phase.COLLECT:
@@ -429,8 +429,9 @@ class CoordinatorCore:
         """Make `round`'s planned active set the current one (a new round: nothing held yet)."""
         if self._planned is None or self._planned[0] != self._round:
             active = self._plan(self._round)
+            if self._planned is None or active != self._planned[1]:  # (else the same set)
+                self._active_set = frozenset(active)
             self._planned, self._next = (self._round, active), None
-            self._active_set = frozenset(active)
             self._held = set()
 
     def _begin(self, now: float) -> list[Action]:
@@ -446,7 +447,12 @@ class CoordinatorCore:
             return self._retry(now)  # then Hello, and on from where the world stands
         # What the world holds is what counts: moves of a round it kept (this coordinator restarted,
         # or retried), none of a round it opened anew (it restarted while the core paced).
-        self._held = set(reply.held) & self.active_set if reply.open_round == self._round else set()
+        held = reply.held
+        self._held = (
+            set(self.active_set.intersection(held))
+            if held and reply.open_round == self._round
+            else set()
+        )
         self._phase, self._deadline = Phase.COLLECT, now + self.times.move_timeout_s
         self._waiting = self._live.intersection(self._active_set)
         if self._held:

@@ -169,8 +169,9 @@ class WorldCore:
             return None
         if lines is None:
             return np.empty(0, dtype=np.intp), np.empty((0, 2), dtype=np.float64)
-        robots = np.asarray(lines.robots, dtype=np.intp)
-        if len(robots) > 1 and bool((robots[1:] < robots[:-1]).any()):
+        listed = lines.robots
+        robots = np.asarray(listed, dtype=np.intp)
+        if len(listed) > 1 and listed != sorted(listed):  # (no robot twice: sorted is ascending)
             order = np.argsort(robots, kind="stable")
             return robots[order], lines.ends[order]
         return robots, lines.ends
@@ -453,13 +454,17 @@ class WorldCore:
         return False
 
     def hold_lines(
-        self, robots: Sequence[int], round_no: int, ends: Points, goes: NDArray[np.bool_]
+        self,
+        robots: Sequence[int],
+        round_no: int,
+        ends: Points,
+        goes: NDArray[np.bool_] | None = None,
     ) -> None:
         """`hold` of k moves at once, row i robot robots[i]'s: a straight line to ends[i] (in
-        the frame of its Look, relative to it) where goes[i], else a stay; no colour, none
-        failed. The moves are checked as `hold` checks each, refusals counted the same (in
-        turn, by `hold` itself, if any would be refused); the lines are kept as arrays
-        (`held_lines`, world axes) and made Paths only if `held` is read."""
+        the frame of its Look, relative to it) where goes[i] (None: every one goes), else a
+        stay; no colour, none failed. The moves are checked as `hold` checks each, refusals
+        counted the same (in turn, by `hold` itself, if any would be refused); the lines are
+        kept as arrays (`held_lines`, world axes) and made Paths only if `held` is read."""
         robots = list(robots)
         chosen, held = set(robots), self._held
         if not (
@@ -469,10 +474,11 @@ class WorldCore:
             and self.looked.issuperset(chosen)
             and (not held or held.keys().isdisjoint(chosen))
         ):  # some would be refused: each in turn, as `hold` refuses and counts them
-            for robot, (x, y), go in zip(robots, ends.tolist(), goes.tolist(), strict=True):
+            each = [True] * len(robots) if goes is None else goes.tolist()
+            for robot, (x, y), go in zip(robots, ends.tolist(), each, strict=True):
                 self.hold(robot, round_no, Path((Line((x, y)),)) if go else STAY, None)
             return
-        if goes.all():
+        if goes is None or np.count_nonzero(goes) == len(robots):
             movers = robots
         else:  # the others stay (to_world of a stay is a stay)
             movers = list(compress(robots, goes.tolist()))
@@ -542,7 +548,22 @@ class WorldCore:
         """A reply to the coordinator: the world as it stands (and the model's fields).
         `timed_out`: the reply to a Commit's, the robots of the round it committed without a move.
         """
-        return ControlReply(
+        held, fields = self._held, self.model.reply_fields()
+        if fields:
+            return ControlReply(
+                ok,
+                reason,
+                self.setup.n,
+                self.committed,
+                self.open_round,
+                self.status,
+                self.collisions_total,
+                tuple(sorted(held)) if held and self.open_round else (),
+                epoch=self.epoch,
+                timed_out=timed_out,
+                **fields,
+            )
+        return ControlReply(  # (a call with no ** is the cheaper: the rounds' every reply)
             ok,
             reason,
             self.setup.n,
@@ -550,10 +571,9 @@ class WorldCore:
             self.open_round,
             self.status,
             self.collisions_total,
-            tuple(sorted(self._held)) if self.open_round else (),
+            tuple(sorted(held)) if held and self.open_round else (),
             epoch=self.epoch,
             timed_out=timed_out,
-            **self.model.reply_fields(),
         )
 
     def _goal(self, positions: Points) -> bool:
