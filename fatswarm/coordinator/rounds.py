@@ -13,11 +13,13 @@ from dataclasses import dataclass
 
 from fatswarm.coordinator.schedule import Scheduler
 from fatswarm.domain.outcome import Status
+from fatswarm.domain.quick import quick_init
 from fatswarm.world.protocol import Begin, Commit, ControlReply, Hello, MovesHeld
 
 MAX_NOTES = 256  # notes nobody takes are dropped oldest first (a driver may ignore them)
 
 
+@quick_init
 @dataclass(frozen=True, slots=True)
 class Ask:
     """Send this control request to the world; feed its reply (or None) to `on_reply`."""
@@ -256,7 +258,12 @@ class CoordinatorCore:
         """The world holds these robots' moves; notices of other rounds (or robots), or of another
         world process than the one that answered last (one since restarted), are ignored."""
         if notice.round == self._round and notice.epoch == self._epoch:
-            robots = self.active_set.intersection(notice.robots)
+            active_set = self.active_set
+            robots = (
+                active_set  # (every active robot: the set as it is)
+                if notice.robots == self.active
+                else active_set.intersection(notice.robots)
+            )
             self._held |= robots  # kept while the world keeps the round open
             self._waiting -= robots
         if self._phase is Phase.COLLECT:

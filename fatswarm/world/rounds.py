@@ -41,7 +41,12 @@ class Rounds:
             w.active_set = frozenset(req.active)
         w.open_round, w.active = req.round, req.active
         w.looked, w.held, w.noticed, w.failed = set(), {}, None, {}
-        w.missing = set(compress(req.active, map(w.alive.__getitem__, req.active)))  # the live
+        # the live ones (every one: the set as it is)
+        w.missing = (
+            set(w.active_set)
+            if all(w.alive)
+            else set(compress(req.active, map(w.alive.__getitem__, req.active)))
+        )
         return None, True
 
     def commit(self, req: Commit) -> Answer:
