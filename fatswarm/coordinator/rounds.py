@@ -461,7 +461,9 @@ class CoordinatorCore:
             else set()
         )
         self._phase, self._deadline = Phase.COLLECT, now + self.times.move_timeout_s
-        self._waiting = self._live.intersection(self._active_set)
+        active, live = self._active_set, self._live
+        # (every active robot live, as a lock step's: a copy of the set, no new hashing)
+        self._waiting = set(active) if live.issuperset(active) else live.intersection(active)
         if self._held:
             self._waiting -= self._held
         return self._collected(now)

@@ -37,7 +37,8 @@ def quick_init(cls: C) -> C:
         body.append(f"    _set_{f.name}(self, {f.name})\n")
     signature = ", ".join(["self", *positional, *(["*", *keywords] if keywords else [])])
     source = f"def __init__({signature}):\n" + ("".join(body) or "    pass\n")
-    exec(source, names)  # made of the class's own field names alone
+    where = f"<quick_init {cls.__module__}.{cls.__qualname__}>"  # (for tracebacks, profiles)
+    exec(compile(source, where, "exec"), names)  # made of the class's own field names alone
     init = names["__init__"]
     init.__qualname__ = f"{cls.__qualname__}.__init__"
     init.__module__ = cls.__module__
