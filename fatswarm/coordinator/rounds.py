@@ -13,11 +13,13 @@ from dataclasses import dataclass
 
 from fatswarm.coordinator.schedule import Scheduler
 from fatswarm.domain.outcome import Status
+from fatswarm.domain.quick import quick_init
 from fatswarm.world.protocol import Begin, Commit, ControlReply, Hello, MovesHeld
 
 MAX_NOTES = 256  # notes nobody takes are dropped oldest first (a driver may ignore them)
 
 
+@quick_init
 @dataclass(frozen=True, slots=True)
 class Ask:
     """Send this control request to the world; feed its reply (or None) to `on_reply`."""
@@ -256,7 +258,12 @@ class CoordinatorCore:
         """The world holds these robots' moves; notices of other rounds (or robots), or of another
         world process than the one that answered last (one since restarted), are ignored."""
         if notice.round == self._round and notice.epoch == self._epoch:
-            robots = set(notice.robots) & self.active_set
+            active_set = self.active_set
+            robots = (
+                active_set  # (every active robot: the set as it is)
+                if notice.robots == self.active
+                else active_set.intersection(notice.robots)
+            )
             self._held |= robots  # kept while the world keeps the round open
             self._waiting -= robots
         if self._phase is Phase.COLLECT:
@@ -429,8 +436,9 @@ class CoordinatorCore:
         """Make `round`'s planned active set the current one (a new round: nothing held yet)."""
         if self._planned is None or self._planned[0] != self._round:
             active = self._plan(self._round)
+            if self._planned is None or active != self._planned[1]:  # (else the same set)
+                self._active_set = frozenset(active)
             self._planned, self._next = (self._round, active), None
-            self._active_set = frozenset(active)
             self._held = set()
 
     def _begin(self, now: float) -> list[Action]:
@@ -446,9 +454,16 @@ class CoordinatorCore:
             return self._retry(now)  # then Hello, and on from where the world stands
         # What the world holds is what counts: moves of a round it kept (this coordinator restarted,
         # or retried), none of a round it opened anew (it restarted while the core paced).
-        self._held = set(reply.held) & self.active_set if reply.open_round == self._round else set()
+        held = reply.held
+        self._held = (
+            set(self.active_set.intersection(held))
+            if held and reply.open_round == self._round
+            else set()
+        )
         self._phase, self._deadline = Phase.COLLECT, now + self.times.move_timeout_s
-        self._waiting = self._live.intersection(self._active_set)
+        active, live = self._active_set, self._live
+        # (every active robot live, as a lock step's: a copy of the set, no new hashing)
+        self._waiting = set(active) if live.issuperset(active) else live.intersection(active)
         if self._held:
             self._waiting -= self._held
         return self._collected(now)

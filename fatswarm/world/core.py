@@ -169,8 +169,9 @@ class WorldCore:
             return None
         if lines is None:
             return np.empty(0, dtype=np.intp), np.empty((0, 2), dtype=np.float64)
-        robots = np.asarray(lines.robots, dtype=np.intp)
-        if len(robots) > 1 and bool((robots[1:] < robots[:-1]).any()):
+        listed = lines.robots
+        robots = np.asarray(listed, dtype=np.intp)
+        if len(listed) > 1 and listed != sorted(listed):  # (no robot twice: sorted is ascending)
             order = np.argsort(robots, kind="stable")
             return robots[order], lines.ends[order]
         return robots, lines.ends
@@ -408,10 +409,21 @@ class WorldCore:
     def admit_looks(self, robots: Sequence[int]) -> list[bool]:
         """`admit_look` of each of `robots` in turn (whether each was admitted), at once where
         every one is active in the open round (a lock step's round hook)."""
+        if self.open_round and self._every_active(robots):  # (the set as it is: no new one)
+            self.looked.update(self.active_set)
+            return [True] * len(robots)
         if self.open_round and self.active_set.issuperset(robots):
             self.looked.update(robots)
             return [True] * len(robots)
         return [self.admit_look(robot) for robot in robots]
+
+    def _every_active(self, robots: Sequence[int]) -> bool:
+        """Whether `robots` are the open round's active robots, in their order, each once."""
+        active = self.active
+        return (
+            len(robots) == len(active) == len(self.active_set)
+            and (robots if type(robots) is tuple else tuple(robots)) == active
+        )
 
     def move(self, robot: int | None, msg: MoveSubmitted) -> bool:
         """Hold a move for the open round from the robot `robot` it came from (None: a key with no
@@ -460,26 +472,41 @@ class WorldCore:
         return False
 
     def hold_lines(
-        self, robots: Sequence[int], round_no: int, ends: Points, goes: NDArray[np.bool_]
+        self,
+        robots: Sequence[int],
+        round_no: int,
+        ends: Points,
+        goes: NDArray[np.bool_] | None = None,
     ) -> None:
         """`hold` of k moves at once, row i robot robots[i]'s: a straight line to ends[i] (in
-        the frame of its Look, relative to it) where goes[i], else a stay; no colour, none
-        failed. The moves are checked as `hold` checks each, refusals counted the same (in
-        turn, by `hold` itself, if any would be refused); the lines are kept as arrays
-        (`held_lines`, world axes) and made Paths only if `held` is read."""
+        the frame of its Look, relative to it) where goes[i] (None: every one goes), else a
+        stay; no colour, none failed. The moves are checked as `hold` checks each, refusals
+        counted the same (in turn, by `hold` itself, if any would be refused); the lines are
+        kept as arrays (`held_lines`, world axes) and made Paths only if `held` is read."""
         robots = list(robots)
-        chosen, held = set(robots), self._held
-        if not (
-            round_no == self.open_round
-            and len(chosen) == len(robots)
-            and self.active_set.issuperset(chosen)
-            and self.looked.issuperset(chosen)
-            and (not held or held.keys().isdisjoint(chosen))
-        ):  # some would be refused: each in turn, as `hold` refuses and counts them
-            for robot, (x, y), go in zip(robots, ends.tolist(), goes.tolist(), strict=True):
-                self.hold(robot, round_no, Path((Line((x, y)),)) if go else STAY, None)
-            return
-        if goes.all():
+        held = self._held
+        chosen: Collection[int]
+        if (
+            not held
+            and round_no == self.open_round
+            and len(self.looked) == len(self.active_set)  # (only active robots look)
+            and self._every_active(robots)
+        ):  # every active robot, each once, all looked, none held: the set as it is
+            chosen = self.active_set
+        else:
+            chosen = set(robots)
+            if not (
+                round_no == self.open_round
+                and len(chosen) == len(robots)
+                and self.active_set.issuperset(chosen)
+                and self.looked.issuperset(chosen)
+                and (not held or held.keys().isdisjoint(chosen))
+            ):  # some would be refused: each in turn, as `hold` refuses and counts them
+                each = [True] * len(robots) if goes is None else goes.tolist()
+                for robot, (x, y), go in zip(robots, ends.tolist(), each, strict=True):
+                    self.hold(robot, round_no, Path((Line((x, y)),)) if go else STAY, None)
+                return
+        if goes is None or np.count_nonzero(goes) == len(robots):
             movers = robots
         else:  # the others stay (to_world of a stay is a stay)
             movers = list(compress(robots, goes.tolist()))
@@ -487,7 +514,10 @@ class WorldCore:
             ends = ends[goes]
         if movers:
             world = self.looks.lines_to_world(movers, round_no, ends)
-            held.update(dict.fromkeys(movers, _IN_LINES))
+            if held:
+                held.update(dict.fromkeys(movers, _IN_LINES))
+            else:  # (the same dict, made at once)
+                self._held = dict.fromkeys(movers, _IN_LINES)
             lines = self._lines
             if lines is None:
                 self._lines = HeldLines(movers, world)
@@ -549,7 +579,22 @@ class WorldCore:
         """A reply to the coordinator: the world as it stands (and the model's fields).
         `timed_out`: the reply to a Commit's, the robots of the round it committed without a move.
         """
-        return ControlReply(
+        held, fields = self._held, self.model.reply_fields()
+        if fields:
+            return ControlReply(
+                ok,
+                reason,
+                self.setup.n,
+                self.committed,
+                self.open_round,
+                self.status,
+                self.collisions_total,
+                tuple(sorted(held)) if held and self.open_round else (),
+                epoch=self.epoch,
+                timed_out=timed_out,
+                **fields,
+            )
+        return ControlReply(  # (a call with no ** is the cheaper: the rounds' every reply)
             ok,
             reason,
             self.setup.n,
@@ -557,10 +602,9 @@ class WorldCore:
             self.open_round,
             self.status,
             self.collisions_total,
-            tuple(sorted(self._held)) if self.open_round else (),
+            tuple(sorted(held)) if held and self.open_round else (),
             epoch=self.epoch,
             timed_out=timed_out,
-            **self.model.reply_fields(),
         )
 
     def _goal(self, positions: Points) -> bool:

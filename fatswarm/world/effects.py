@@ -12,10 +12,12 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
+from fatswarm.domain.quick import quick_init
 from fatswarm.world.progress import Progress
 from fatswarm.world.record import Header, Result, RoundEntry
 
 
+@quick_init
 @dataclass(frozen=True, slots=True)
 class Committed:
     """A round committed (or, under an async model, a cycle ended): its record line and the run's

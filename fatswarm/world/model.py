@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Path, Points
+from fatswarm.domain.quick import quick_init
 from fatswarm.world.effects import Effect
 from fatswarm.world.looks import Looks
 from fatswarm.world.physics import Collision
@@ -25,6 +26,7 @@ from fatswarm.world.record import LineMoves
 from fatswarm.world.setup import WorldSetup
 
 
+@quick_init
 @dataclass(frozen=True, slots=True, kw_only=True)
 class RoundBooking:
     """One committed round as the core books it (`Books.account`): live, from the model that

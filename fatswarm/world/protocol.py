@@ -23,6 +23,7 @@ from fatswarm.domain.path import (
     Points,
     to_record,
 )
+from fatswarm.domain.quick import quick_init
 from fatswarm.domain.seam import MAX_FAILURE, ParamValue
 from fatswarm.domain.wire import (
     MAX_ROBOTS,
@@ -301,6 +302,7 @@ def _times(pairs: Sequence[tuple[int, float]]) -> list[list[float]]:
     return [[int(r), float(t)] for r, t in pairs]
 
 
+@quick_init
 @dataclass(frozen=True, slots=True)
 class Begin:
     """Coordinator opens round `round` with active set `active` (before activating the agents).
@@ -324,6 +326,7 @@ class Begin:
         return pack("begin", fields)
 
 
+@quick_init
 @dataclass(frozen=True, slots=True)
 class Commit:
     """Coordinator closes round `round`: the world applies the moves it holds, through physics;
@@ -378,6 +381,7 @@ def decode_control(data: bytes | bytearray | memoryview) -> ControlRequest:
     )
 
 
+@quick_init
 @dataclass(frozen=True, slots=True)
 class ControlReply:
     """The world's answer to a control request: accepted or not (with why) and where it stands."""
@@ -458,6 +462,7 @@ class ControlReply:
 # --- world -> coordinator: moves held ---------------------------------------------------------
 
 
+@quick_init
 @dataclass(frozen=True, slots=True)
 class MovesHeld:
     """The world holds the moves of `robots` for round `round`, and every active robot whose agent

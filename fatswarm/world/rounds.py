@@ -37,10 +37,16 @@ class Rounds:
             return "active set empty or not robots of this run", False
         if w.open_round == req.round and w.active == req.active:
             return None, False  # a coordinator retrying: keep what is held
+        if req.active != w.active:  # (else the set of the last round's active robots is this)
+            w.active_set = frozenset(req.active)
         w.open_round, w.active = req.round, req.active
-        w.active_set = frozenset(req.active)
         w.looked, w.held, w.noticed, w.failed = set(), {}, None, {}
-        w.missing = set(compress(req.active, map(w.alive.__getitem__, req.active)))  # the live
+        # the live ones (every one: the set as it is)
+        w.missing = (
+            set(w.active_set)
+            if all(w.alive)
+            else set(compress(req.active, map(w.alive.__getitem__, req.active)))
+        )
         return None, True
 
     def commit(self, req: Commit) -> Answer:
@@ -68,8 +74,8 @@ class Rounds:
         round line and the books as arrays (`LineMoves`), no Path made for any robot."""
         w = self.books
         round_no, before = w.open_round, w.positions
-        stuck = stuck_in(w.crash_plan, round_no)
-        gone = w.stuck | frozenset(stuck)  # a crashed robot's moves are not applied
+        stuck = stuck_in(w.crash_plan, round_no) if w.crash_plan else []
+        gone = w.stuck | frozenset(stuck) if stuck else w.stuck  # their moves are not applied
         lines = w.held_lines() if w.setup.non_rigid is None else None
         line_moves: LineMoves | None = None
         paths: Mapping[int, Path] = {}
@@ -92,8 +98,8 @@ class Rounds:
                 held.pop(robot, None)
             cut = self._cut(round_no, before, held)
             paths = held
-        failed = dict(sorted(w.failed.items()))
-        for robot in gone:
+        failed = dict(sorted(w.failed.items())) if w.failed else {}
+        for robot in gone if failed else ():
             failed.pop(robot, None)
         colours, w.held_colours = w.held_colours, {}
         relit = w.looks.show(colours, skip=gone)  # as the moves start

@@ -72,6 +72,8 @@ ASYNC_REACH_UNIT: Final = 40.0  # robot radii of reach the plain async cap cover
 NON_RIGID_UNIT: Final = 0.5
 LOCKSTEP_SWARM: Final = "lockstep"
 SHOWN_FAULTS: Final = 3  # moves the world refuses logged in full; the rest are counted
+_FLOAT64: Final = np.dtype(np.float64)  # (an array's dtype is mostly this very object)
+_BOOL: Final = np.dtype(np.bool_)
 
 log = logging.getLogger("fatswarm.lockstep")
 
@@ -581,15 +583,18 @@ class _Bus:
         ends, goes, k = moves.ends, moves.goes, len(lookers)
         if not (
             type(ends) is np.ndarray
-            and ends.dtype == np.float64
+            and (ends.dtype is _FLOAT64 or ends.dtype == np.float64)
             and ends.shape == (k, 2)
             and type(goes) is np.ndarray
-            and goes.dtype == np.bool_
+            and (goes.dtype is _BOOL or goes.dtype == np.bool_)
             and goes.shape == (k,)
         ):
             return False
-        # plain_path of one Line of floats: finite and inside the wire's bounds (NaN fails)
-        if not bool((np.abs(ends if goes.all() else ends[goes]) <= MAX_COORD).all()):
+        # plain_path of one Line of floats: finite and inside the wire's bounds (NaN fails);
+        # count_nonzero: one C loop where .all() is a ufunc reduction (the same answer)
+        every = np.count_nonzero(goes) == k
+        going = ends if every else ends[goes]
+        if np.count_nonzero(np.abs(going) <= MAX_COORD) != going.size:
             return False
         if all(admitted):
             robots = lookers
@@ -597,8 +602,9 @@ class _Bus:
             ok = np.array(admitted, dtype=np.bool_)
             robots = [robot for robot, admit in zip(lookers, admitted, strict=True) if admit]
             ends, goes = ends[ok], goes[ok]
+            every = every or np.count_nonzero(goes) == len(robots)
         self.looks += len(robots)
-        self.world.hold_lines(robots, round_no, ends, goes)
+        self.world.hold_lines(robots, round_no, ends, None if every else goes)
         return True
 
     def _computed(self, seen: Seen) -> tuple[Path, int | None] | str:
@@ -642,9 +648,11 @@ class _Bus:
     def perform(self) -> None:
         """Do what the world asked: its record lines to the run record, its notes to the log,
         and every committed round (an ended cycle, under an async model) to `on_round`."""
-        for committed in perform(self.world.take_effects(), self.record):
-            if self.on_round is not None:
-                self.on_round(committed)
+        effects = self.world.take_effects()
+        if effects:  # (most calls have none: the round's Looks and moves ask for nothing)
+            for committed in perform(effects, self.record):
+                if self.on_round is not None:
+                    self.on_round(committed)
 
 
 def plain_path(path: Path) -> bool:

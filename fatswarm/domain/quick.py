@@ -1,0 +1,51 @@
+"""Frozen dataclasses built faster: the messages a round builds every time (a lock step's round
+builds each a few times) set their fields through their slots, not `object.__setattr__` by name.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, TypeVar
+
+C = TypeVar("C", bound=type)
+
+
+def quick_init(cls: C) -> C:
+    """`cls`, a frozen dataclass with slots, with an `__init__` that sets each field straight
+    through its slot (the slot's own descriptor) instead of `object.__setattr__(self, name, ...)`
+    as the dataclass's does: the same parameters (order, defaults, keyword-only ones), the same
+    object made, at about half the cost. Raises TypeError for a class it cannot do that for (no
+    slots, a field with a default factory or left out of `__init__`, a `__post_init__`)."""
+    params = getattr(cls, "__dataclass_params__", None)
+    if params is None or not params.frozen or "__slots__" not in cls.__dict__:
+        raise TypeError(f"quick_init takes a frozen dataclass with slots, not {cls.__name__}")
+    if hasattr(cls, "__post_init__"):
+        raise TypeError(f"quick_init cannot keep {cls.__name__}.__post_init__")
+    names: dict[str, Any] = {}
+    positional: list[str] = []
+    keywords: list[str] = []
+    body: list[str] = []
+    for f in dataclasses.fields(cls):
+        if not f.init or f.default_factory is not dataclasses.MISSING:
+            raise TypeError(f"quick_init cannot make {cls.__name__}.{f.name} (init or factory)")
+        names[f"_set_{f.name}"] = cls.__dict__[f.name].__set__
+        param = f.name
+        if f.default is not dataclasses.MISSING:
+            names[f"_default_{f.name}"] = f.default
+            param += f"=_default_{f.name}"
+        (keywords if f.kw_only else positional).append(param)
+        body.append(f"    _set_{f.name}(self, {f.name})\n")
+    signature = ", ".join(["self", *positional, *(["*", *keywords] if keywords else [])])
+    source = f"def __init__({signature}):\n" + ("".join(body) or "    pass\n")
+    where = f"<quick_init {cls.__module__}.{cls.__qualname__}>"  # (for tracebacks, profiles)
+    exec(compile(source, where, "exec"), names)  # made of the class's own field names alone
+    init = names["__init__"]
+    init.__qualname__ = f"{cls.__qualname__}.__init__"
+    init.__module__ = cls.__module__
+    made = cls.__dict__["__init__"]  # the dataclass's own
+    init.__doc__, init.__annotations__ = made.__doc__, dict(made.__annotations__)
+    cls.__init__ = init  # type: ignore[misc]
+    return cls
+
+
+__all__ = ["quick_init"]
