@@ -49,11 +49,18 @@ def view_order(seed: int, round_no: int, robot: int, k: int) -> np.ndarray:
 
 
 def view_orders(
-    seed: int, round_no: int, robots: Sequence[int], k: int, among_all: bool = False
+    seed: int,
+    round_no: int,
+    robots: Sequence[int],
+    k: int,
+    among_all: bool = False,
+    rounds: int = 1,
 ) -> np.ndarray:
     """`view_order` of every robot of `robots` at once: row i is robot robots[i]'s, (m, k) int64;
     with `among_all`, each index j among the others is that robot's among all k + 1 robots
-    (j + 1 from robots[i] on: robots[i] itself skipped), what a round's views gather.
+    (j + 1 from robots[i] on: robots[i] itself skipped), what a round's views gather. With
+    `rounds`, those of rounds round_no, round_no + 1, ... at once: (rounds * m, k), row r * m + i
+    robot robots[i]'s in round round_no + r.
 
     The same hashes; they are distinct within a row (splitmix64's finaliser is a bijection and the
     keys differ), so any sort gives each row the very order `view_order` gives. From SORT_VALUES
@@ -64,16 +71,20 @@ def view_orders(
     whole hashes instead.
     """
     bits = k.bit_length() if among_all else (k - 1).bit_length()
-    if len(robots) * k < SORT_VALUES or k < 2 or bits > HIGH_FROM:
+    if len(robots) * k * rounds < SORT_VALUES or k < 2 or bits > HIGH_FROM:
         ids = np.asarray(robots, dtype=np.uint64)
-        order: np.ndarray = _hashes(seed, round_no, ids, k).argsort(axis=1)
-        if among_all:
-            order += order >= ids.view(np.int64)[:, None]
+        order: np.ndarray = _hashes(seed, round_no, ids, k, True, rounds).argsort(axis=1)
+        if among_all:  # (each round's rows in turn)
+            rows = order if rounds == 1 else order.reshape(rounds, len(ids), k)
+            rows += rows >= ids.view(np.int64)[:, None]
         return order
     ids, low = _rows(tuple(robots), k, among_all)
-    z = _hashes(seed, round_no, ids, k, False)
+    z = _hashes(seed, round_no, ids, k, False, rounds)
     z &= _high_mask(bits)  # the hash's high bits, then the index in the low ones
-    z |= low
+    if rounds == 1:
+        z |= low
+    else:
+        z.reshape(rounds, len(ids), k)[...] |= low
     z.sort(axis=1)
     # sorted, a row's values are distinct; neighbours 2^HIGH_FROM apart or more differ in the
     # high bits, so such a row is in its hashes' order (a sieve across the rows first, at once)
@@ -88,19 +99,19 @@ def view_orders(
 def _redo(
     z: np.ndarray, seed: int, round_no: int, ids: np.ndarray, k: int, bits: int, among_all: bool
 ) -> np.ndarray:
-    """`view_orders`' sorted values `z` (m, k) as the order: the index in each one's low bits,
-    but in every row where two neighbours are less than 2^HIGH_FROM apart (their high bits may be
-    the same), the argsort of that row's whole hashes."""
+    """`view_orders`' sorted values `z` (rounds * m, k) as the order: the index in each one's
+    low bits, but in every row where two neighbours are less than 2^HIGH_FROM apart (their high
+    bits may be the same), the argsort of that row's whole hashes."""
     near = (z[:, 1:] - z[:, :-1] < _NEAR).any(axis=1)
     z &= _low_mask(bits)
     order = z.view(np.int64)
-    doubtful = np.flatnonzero(near)
-    if len(doubtful):
-        picked = ids[doubtful]
-        redone = _hashes(seed, round_no, picked, k).argsort(axis=1)
+    m = len(ids)
+    for row in np.flatnonzero(near).tolist():  # a few rows in a thousand, at n = 256
+        robot = ids[row % m : row % m + 1]
+        redone = _hashes(seed, round_no + row // m, robot, k).argsort(axis=1)
         if among_all:
-            redone += redone >= picked.view(np.int64)[:, None]
-        order[doubtful] = redone
+            redone += redone >= robot.view(np.int64)[:, None]
+        order[row] = redone[0]
     return order
 
 
@@ -137,22 +148,25 @@ def _round_key(seed: int, round_no: int) -> np.ndarray:
 
 
 def _hashes(
-    seed: int, round_no: int, robots: Sequence[int] | np.ndarray, k: int, last: bool = True
+    seed: int,
+    round_no: int,
+    robots: Sequence[int] | np.ndarray,
+    k: int,
+    last: bool = True,
+    rounds: int = 1,
 ) -> np.ndarray:
     """(m, k) uint64: the keyed splitmix64 hash of index j (1-based) of robot robots[i]'s view
     in round `round_no`, what `view_orders` sorts (a new array); without the finaliser's last
-    step, x ^ (x >> 31), unless `last`."""
-    x = np.bitwise_xor(np.asarray(robots, dtype=np.uint64), _round_key(seed, round_no))
-    x += _C1  # uint64 arrays wrap silently: that is the hash (`_mix64` of every robot's key at
-    t = x >> _S30  # once, the same bits)
-    x ^= t
-    x *= _C2
-    np.right_shift(x, _S27, out=t)
-    x ^= t
-    x *= _C3
-    np.right_shift(x, _S31, out=t)
-    x ^= t
-    z: np.ndarray = np.add(_spread(k), x[:, None])
+    step, x ^ (x >> 31), unless `last`. With `rounds`, (rounds * m, k): those of round_no,
+    round_no + 1, ... one after the other."""
+    ids = np.asarray(robots, dtype=np.uint64)
+    if rounds == 1:
+        x = np.bitwise_xor(ids, _round_key(seed, round_no))
+    else:
+        keys = np.arange(round_no, round_no + rounds, dtype=np.uint64)
+        keys ^= _constant(_mix64(LOOK_STREAM ^ (seed & _MASK64)))
+        x = np.bitwise_xor(_mix64_all(keys)[:, None], ids).reshape(-1)
+    z: np.ndarray = np.add(_spread(k), _mix64_all(x)[:, None])
     t = scratch("view_orders", z.shape, _U64)  # in place: fresh arrays cost page faults
     np.right_shift(z, _S30, out=t)
     z ^= t
@@ -164,6 +178,21 @@ def _hashes(
         np.right_shift(z, _S31, out=t)
         z ^= t
     return z
+
+
+def _mix64_all(x: np.ndarray) -> np.ndarray:
+    """`_mix64` of every value of `x` (uint64, changed in place: returned); uint64 arrays wrap
+    silently, as the hash does."""
+    x += _C1
+    t = x >> _S30
+    x ^= t
+    x *= _C2
+    np.right_shift(x, _S27, out=t)
+    x ^= t
+    x *= _C3
+    np.right_shift(x, _S31, out=t)
+    x ^= t
+    return x
 
 
 def cut_fraction(seed: int, round_no: int, robot: int) -> float:

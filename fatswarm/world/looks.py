@@ -30,6 +30,13 @@ Seen = tuple[Points, tuple[int, ...] | None, int | None]
 AHEAD_LIMIT = 1 << 20
 """`Looks.prepare` builds a round's views at once up to this many points (16 MB); past it, each
 view alone."""
+ORDERS_AHEAD = 1 << 16
+"""`Looks.views_at_once` draws every robot's view orders of rounds ahead, up to this many indices
+(512 kB), once rounds follow one another and two rounds or more fit: one call of each numpy
+operation for all of them (small swarms); 2 rounds the first time, then twice as many as the
+time before, up to ROUNDS_AHEAD."""
+ROUNDS_AHEAD = 64
+"""At most this many rounds' view orders drawn at once (`ORDERS_AHEAD`)."""
 FLIP_LIMIT = 1 << 16
 """`Looks.views_at_once` keeps the mirror as a factor of every coordinate (x by -1.0 or 1.0, y by
 1.0: one multiplication of whole rows) up to this many points (1 MB); past it, x alone."""
@@ -98,6 +105,10 @@ class Looks:
         self._everyone_ids = tuple(self._everyone)
         # the frames of the robots that looked last (`views_at_once`), while frames are fixed
         self._lookers: _Lookers | None = None
+        # every robot's view orders of the rounds from the first, drawn at once (`_orders`),
+        # and the round whose views were built last
+        self._orders_ahead: tuple[int, np.ndarray] | None = None
+        self._last_round = -1
         # every robot's colour (palette index; the first at the start); none without lights
         self.colours: list[int] | None = [0] * n if self.palette else None
         # whether a view is every other robot, exact, with no colours and nothing recorded
@@ -163,7 +174,7 @@ class Looks:
         if not self.plain or not robots or len(robots) * k > AHEAD_LIMIT:
             return None
         lookers = self._lookers_of(tuple(robots), look_round)
-        order = view_orders(self.seed, look_round, lookers.robots, k, True)  # among all robots
+        order = self._orders(look_round, lookers)  # indices among all robots
         # each point as one complex number: one gather, and a complex difference is the two
         # coordinates' differences, the very operations (faster than (m, k, 2) broadcast)
         table = np.ascontiguousarray(positions, dtype=np.float64).view(np.complex128)[:, 0]
@@ -181,6 +192,23 @@ class Looks:
             rel[at, :, 0] = c * x - s * y
             rel[at, :, 1] = s * x + c * y
         return rel
+
+    def _orders(self, look_round: int, lookers: _Lookers) -> np.ndarray:
+        """(m, n-1): `view_orders` of `lookers` in round `look_round` (among all robots): rows of
+        the rounds drawn ahead (`ORDERS_AHEAD`) where round after round asks, else drawn now."""
+        k = self.n - 1
+        follows, self._last_round = look_round == self._last_round + 1, look_round
+        ahead = self._orders_ahead
+        if ahead is not None and 0 <= look_round - ahead[0] < len(ahead[1]):
+            orders: np.ndarray = ahead[1][look_round - ahead[0]]
+            return orders if lookers.rows is None else orders[lookers.rows]
+        if not follows or not 0 < 2 * self.n * k <= ORDERS_AHEAD:
+            return view_orders(self.seed, look_round, lookers.robots, k, True)
+        # twice as many rounds as the last time: no more drawn in vain than were used
+        rounds = min(ROUNDS_AHEAD, ORDERS_AHEAD // (self.n * k), 2 * len(ahead[1]) if ahead else 2)
+        orders = view_orders(self.seed, look_round, self._everyone_ids, k, True, rounds)
+        self._orders_ahead = (look_round, orders.reshape(rounds, self.n, k))
+        return orders[: self.n] if lookers.rows is None else orders[lookers.rows]
 
     def _lookers_of(self, robots: tuple[int, ...], look_round: int) -> _Lookers:
         """What `views_at_once` needs of `robots`' frames for round `look_round`: kept while the
