@@ -30,9 +30,9 @@ Seen = tuple[Points, tuple[int, ...] | None, int | None]
 AHEAD_LIMIT = 1 << 20
 """`Looks.prepare` builds a round's views at once up to this many points (16 MB); past it, each
 view alone."""
-ORDERS_AHEAD = 1 << 16
+ORDERS_AHEAD = 1 << 15
 """`Looks.views_at_once` draws every robot's view orders of rounds ahead, up to this many indices
-(512 kB), once rounds follow one another and two rounds or more fit: one call of each numpy
+(256 kB), once rounds follow one another and two rounds or more fit: one call of each numpy
 operation for all of them (small swarms); 2 rounds the first time, then twice as many as the
 time before, up to ROUNDS_AHEAD."""
 ROUNDS_AHEAD = 64
