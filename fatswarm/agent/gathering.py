@@ -124,18 +124,18 @@ class Gathering:
 
     def compute_views(self, views: Views, params: GatheringParams) -> StraightMoves:
         """`compute` of every view of `views` (k, m, 2) at once, the very bits (the round hook:
-        fatswarm/domain/seam.py), as arrays: the sums by `fsum_rows` (`math.fsum`'s bits), the
-        nearest gap by the same `np.hypot` per element, |G| by `math.hypot` per robot (CPython's,
-        as `_toward`: np.hypot's last bit differs), the rest `_toward`'s operations on arrays."""
+        fatswarm/domain/seam.py): the sums by `fsum_rows` (`math.fsum`'s bits), the nearest gap
+        by `nearest_norms` (the same `np.hypot` per element), then `_toward`'s own operations
+        per robot (`_towards`: CPython's `math.hypot`, whose last bit np.hypot's may differ
+        from)."""
         k, m = views.shape[0], views.shape[1]
         if m == 0:
             return StraightMoves(np.zeros((k, 2)), np.zeros(k, dtype=np.bool_))
         coords = scratch("gathering", (2, k, m))  # every x, then every y: rows contiguous
         np.copyto(coords, views.transpose(2, 0, 1))
-        sums = fsum_rows(coords.reshape(2 * k, m)) / (m + 1)  # the robot itself adds nothing
-        gaps = (nearest_norms(coords[0], coords[1]) - CONTACT) / 2.0
-        centre = sums.reshape(2, k).T  # (k, 2)
-        return _towards(centre, gaps, params.tolerance)
+        sums = fsum_rows(coords.reshape(2 * k, m))  # every x sum, then every y sum
+        nearest = nearest_norms(coords[0], coords[1])
+        return _towards(sums, m + 1, nearest, params.tolerance)  # the robot itself adds nothing
 
     def goal(self, positions: Points, params: GatheringParams) -> bool:
         """No robot would move: every robot's step, from world positions, is <= tolerance.
@@ -175,19 +175,25 @@ def _toward(gx: float, gy: float, gap: float, tolerance: float) -> Path:
     return Path((Line((gx * f, gy * f)),))
 
 
-def _towards(centre: Points, gaps: Values, tolerance: float) -> StraightMoves:
-    """`_toward` of every row of `centre` (k, 2) and `gaps` (k,), the very bits: Python's
-    min(a, b) is b only where b < a, and IEEE products and quotients are the same in numpy."""
-    gx, gy = centre[:, 0].tolist(), centre[:, 1].tolist()
-    to_g = np.fromiter(map(math.hypot, gx, gy), dtype=np.float64, count=len(gx))
+def _towards(sums: Values, n: int, nearest: Values, tolerance: float) -> StraightMoves:
+    """`compute`'s last steps for k robots at once, the very bits: G from `sums` (2k,) (every x
+    sum, then every y sum of the views) over `n` robots, the gap from each view's `nearest` (k,)
+    norm, then `_toward`: |G| by `math.hypot` per robot (CPython's, as `_toward`), the rest its
+    operations on arrays (Python's min(a, b) is b only where b < a; a row that goes all the way
+    is scaled by 1.0, which leaves every float as it is)."""
+    k = len(nearest)
+    centre = sums / n  # (2k,)
+    listed = centre.tolist()
+    to_g = np.fromiter(map(math.hypot, listed[:k], listed[k:]), dtype=np.float64, count=k)
+    gaps = nearest - CONTACT
+    gaps /= 2.0
     step = np.where(gaps < to_g, gaps, to_g)
     goes = step > tolerance
-    short = goes & ~(step >= to_g)  # a step short of G: scaled by step / |G| (|G| > 0 here)
-    ends = np.where(goes[:, None], centre, 0.0)
-    if short.any():
-        f = step[short] / to_g[short]
-        ends[short] = centre[short] * f[:, None]
-    return StraightMoves(ends, goes)
+    short = step < to_g  # a step short of G: scaled by step / |G| (> step > tolerance there)
+    short &= goes
+    scale = np.divide(step, to_g, out=np.ones(k), where=short)
+    ends = np.where(goes, centre.reshape(2, k) * scale, 0.0)
+    return StraightMoves(ends.T, goes)
 
 
 ALGORITHM: Final = Gathering()

@@ -56,23 +56,23 @@ class OblotGoToCoG:
 
     def compute_views(self, views: Views, params: OblotParams) -> StraightMoves:
         """`compute` of every view of `views` (k, m, 2) at once, the very bits (the round hook:
-        fatswarm/domain/seam.py), as arrays: the sums by `fsum_rows` (`math.fsum`'s bits), the
-        distance to the target by `math.hypot` per robot, as `go_to`. A target that is not a
-        finite point raises `go_to`'s error (each robot's own compute then says it alone)."""
+        fatswarm/domain/seam.py): the sums by `fsum_rows` (`math.fsum`'s bits), then `go_to`'s
+        own operations per robot (CPython's `math.hypot`). A target that is not a finite point
+        raises `go_to`'s error (each robot's own compute then says it alone)."""
         k, m = views.shape[0], views.shape[1]
         if m == 0:  # the target is the origin: within any tolerance (>= 0)
             return StraightMoves(np.zeros((k, 2)), np.zeros(k, dtype=np.bool_))
         coords = scratch("oblot-go-to-cog", (2, k, m))  # every x, then every y: rows contiguous
         np.copyto(coords, views.transpose(2, 0, 1))
-        sums = fsum_rows(coords.reshape(2 * k, m)) / (m + 1)  # the robot itself adds nothing
-        centre = sums.reshape(2, k).T  # (k, 2)
-        if not np.isfinite(centre).all():
-            row = int(np.flatnonzero(~np.isfinite(centre).all(axis=1))[0])
-            go_to((float(centre[row, 0]), float(centre[row, 1])), params)  # raises
-        gx, gy = centre[:, 0].tolist(), centre[:, 1].tolist()
-        distance = np.fromiter(map(math.hypot, gx, gy), dtype=np.float64, count=k)
-        goes = ~(distance <= params.tolerance)
-        return StraightMoves(np.where(goes[:, None], centre, 0.0), goes)
+        centre = fsum_rows(coords.reshape(2 * k, m)) / (m + 1)  # every x, then every y
+        listed = centre.tolist()  # (the robot itself, at the origin, adds nothing to the sums)
+        distance = list(map(math.hypot, listed[:k], listed[k:]))
+        if not math.isfinite(sum(distance)):  # hypot is finite where both coordinates are
+            for gx, gy in zip(listed[:k], listed[k:], strict=True):
+                if not (math.isfinite(gx) and math.isfinite(gy)):
+                    go_to((gx, gy), params)  # raises
+        goes = np.array(distance) > params.tolerance  # not <= tolerance: the distance is finite
+        return StraightMoves(np.where(goes, centre.reshape(2, k), 0.0).T, goes)
 
     def goal(self, positions: Points, params: OblotParams) -> bool:
         """Every robot at one point (within GOAL_REL of the largest coordinate)."""

@@ -30,6 +30,10 @@ NOISE_STREAM: Final = 0x9015  # the sensors' error on each position a Look shows
 
 SORT_VALUES: Final = 2048
 """`view_orders` sorts hashes as values from this many in all; below, argsort costs less."""
+HIGH_FROM: Final = 33
+"""splitmix64's last step, x ^ (x >> 31), leaves a hash's bits from this one up as they were:
+`view_orders` sorts by those bits without that step (rows where two hashes share them, about
+k^2 2^-31 of rows of k, are argsorted by their whole hashes instead)."""
 
 
 def view_order(seed: int, round_no: int, robot: int, k: int) -> np.ndarray:
@@ -45,80 +49,150 @@ def view_order(seed: int, round_no: int, robot: int, k: int) -> np.ndarray:
 
 
 def view_orders(
-    seed: int, round_no: int, robots: Sequence[int], k: int, among_all: bool = False
+    seed: int,
+    round_no: int,
+    robots: Sequence[int],
+    k: int,
+    among_all: bool = False,
+    rounds: int = 1,
 ) -> np.ndarray:
     """`view_order` of every robot of `robots` at once: row i is robot robots[i]'s, (m, k) int64;
     with `among_all`, each index j among the others is that robot's among all k + 1 robots
-    (j + 1 from robots[i] on: robots[i] itself skipped), what a round's views gather.
+    (j + 1 from robots[i] on: robots[i] itself skipped), what a round's views gather. With
+    `rounds`, those of rounds round_no, round_no + 1, ... at once: (rounds * m, k), row r * m + i
+    robot robots[i]'s in round round_no + r.
 
     The same hashes; they are distinct within a row (splitmix64's finaliser is a bijection and the
-    keys differ), so any sort gives each row the very order `view_order` gives. The hashes are
-    sorted as values, not argsorted (about three times faster): each with its low bits replaced by
-    its index, which then rides along; a row where two hashes could share their high bits (a
-    chance of about k^2 2^-65) is argsorted whole instead.
+    keys differ), so any sort gives each row the very order `view_order` gives. From SORT_VALUES
+    hashes on, they are sorted as values, not argsorted (about three times faster), and without
+    the finaliser's last step: each one's bits from HIGH_FROM up (which that step leaves as they
+    are) with its index in the low bits, where it rides along; a row where two of them could
+    share those high bits (sorted neighbours less than 2^HIGH_FROM apart) is argsorted by its
+    whole hashes instead.
     """
-    z = _hashes(seed, round_no, robots, k)
-    if z.size < SORT_VALUES or k < 2:
-        order: np.ndarray = z.argsort(axis=1)
-        if among_all:
-            order += order >= np.asarray(robots, dtype=np.int64)[:, None]
-        return order
     bits = k.bit_length() if among_all else (k - 1).bit_length()
-    low = np.uint64((1 << bits) - 1)
-    z &= ~low  # the hash's high bits, then the index in the low ones (increasing along a row)
-    z |= _skipping(k, tuple(robots)) if among_all else _indices(k)[None, :]
+    if len(robots) * k * rounds < SORT_VALUES or k < 2 or bits > HIGH_FROM:
+        ids = np.asarray(robots, dtype=np.uint64)
+        order: np.ndarray = _hashes(seed, round_no, ids, k, True, rounds).argsort(axis=1)
+        if among_all:  # (each round's rows in turn)
+            rows = order if rounds == 1 else order.reshape(rounds, len(ids), k)
+            rows += rows >= ids.view(np.int64)[:, None]
+        return order
+    ids, low = _rows(tuple(robots), k, among_all)
+    z = _hashes(seed, round_no, ids, k, False, rounds)
+    z &= _high_mask(bits)  # the hash's high bits, then the index in the low ones
+    if rounds == 1:
+        z |= low
+    else:
+        z.reshape(rounds, len(ids), k)[...] |= low
     z.sort(axis=1)
-    m = len(z)
-    gaps = np.subtract(z[:, 1:], z[:, :-1], out=scratch("view_orders", (m, k - 1), np.uint64))
-    # sorted and distinct, each gap is positive; one within `low`: the high bits may be equal,
-    # so which hash is the smaller is not sure in that row
-    doubtful = np.flatnonzero((gaps <= low).any(axis=1) if gaps.min() <= low else ())
-    z &= low
+    # sorted, a row's values are distinct; neighbours 2^HIGH_FROM apart or more differ in the
+    # high bits, so such a row is in its hashes' order (a sieve across the rows first, at once)
+    flat = z.reshape(-1)
+    steps = np.subtract(flat[1:], flat[:-1], out=scratch("view_orders", (len(flat) - 1,), _U64))
+    if steps[steps.argmin()] < _NEAR:
+        return _redo(z, seed, round_no, ids, k, bits, among_all)
+    z &= _low_mask(bits)
+    return z.view(np.int64)
+
+
+def _redo(
+    z: np.ndarray, seed: int, round_no: int, ids: np.ndarray, k: int, bits: int, among_all: bool
+) -> np.ndarray:
+    """`view_orders`' sorted values `z` (rounds * m, k) as the order: the index in each one's
+    low bits, but in every row where two neighbours are less than 2^HIGH_FROM apart (their high
+    bits may be the same), the argsort of that row's whole hashes."""
+    near = (z[:, 1:] - z[:, :-1] < _NEAR).any(axis=1)
+    z &= _low_mask(bits)
     order = z.view(np.int64)
-    if len(doubtful):
-        picked = [robots[i] for i in doubtful.tolist()]
-        redone = _hashes(seed, round_no, picked, k).argsort(axis=1)
+    m = len(ids)
+    for row in np.flatnonzero(near).tolist():  # a few rows in a thousand, at n = 256
+        robot = ids[row % m : row % m + 1]
+        redone = _hashes(seed, round_no + row // m, robot, k).argsort(axis=1)
         if among_all:
-            redone += redone >= np.asarray(picked, dtype=np.int64)[:, None]
-        order[doubtful] = redone
+            redone += redone >= robot.view(np.int64)[:, None]
+        order[row] = redone[0]
     return order
 
 
-@functools.lru_cache(maxsize=2)
-def _skipping(k: int, robots: tuple[int, ...]) -> np.ndarray:
-    """(m, k) uint64, read-only: j + 1 where j >= robots[i], else j: index j among robot
-    robots[i]'s others as one among all robots (the same robots look every fsync round)."""
-    j = np.arange(k, dtype=np.int64)[None, :]
-    out = (j + (j >= np.asarray(robots, dtype=np.int64)[:, None])).astype(np.uint64)
-    out.flags.writeable = False
-    return out
+@functools.lru_cache(maxsize=4)
+def _rows(robots: tuple[int, ...], k: int, among_all: bool) -> tuple[np.ndarray, np.ndarray]:
+    """`robots` as uint64 (m,), and what `view_orders` puts in the low bits of a row's k hashes:
+    with `among_all`, (m, k) j + 1 where j >= robots[i], else j (index j among robot robots[i]'s
+    others as one among all robots), else (k,) j; read-only (the same robots look every fsync
+    round)."""
+    ids = np.array(robots, dtype=np.uint64)
+    j = np.arange(k, dtype=np.uint64)
+    low = j[None, :] + (j[None, :] >= ids[:, None]) if among_all else j
+    ids.flags.writeable = low.flags.writeable = False
+    return ids, low
 
 
-def _hashes(seed: int, round_no: int, robots: Sequence[int], k: int) -> np.ndarray:
+@functools.lru_cache(maxsize=64)
+def _high_mask(bits: int) -> np.ndarray:
+    """Every bit but the lowest `bits` (uint64, 0-d)."""
+    return _constant(_MASK64 ^ ((1 << bits) - 1))
+
+
+@functools.lru_cache(maxsize=64)
+def _low_mask(bits: int) -> np.ndarray:
+    """The lowest `bits` bits (uint64, 0-d)."""
+    return _constant((1 << bits) - 1)
+
+
+@functools.lru_cache(maxsize=16)
+def _round_key(seed: int, round_no: int) -> np.ndarray:
+    """The key of round `round_no`'s views (uint64, 0-d): what each robot's id is mixed with
+    (every Look of a round asks it)."""
+    return _constant(_mix64(_mix64(LOOK_STREAM ^ (seed & _MASK64)) ^ round_no))
+
+
+def _hashes(
+    seed: int,
+    round_no: int,
+    robots: Sequence[int] | np.ndarray,
+    k: int,
+    last: bool = True,
+    rounds: int = 1,
+) -> np.ndarray:
     """(m, k) uint64: the keyed splitmix64 hash of index j (1-based) of robot robots[i]'s view
-    in round `round_no`: what `view_orders` sorts (a new array)."""
-    base = _mix64(_mix64(LOOK_STREAM ^ (seed & _MASK64)) ^ round_no)
-    x = np.asarray(robots, dtype=np.uint64) ^ np.uint64(base)  # uint64 arrays wrap silently:
-    x += _C1  # that is the hash (`_mix64` of every robot's key at once, the same bits)
-    x = (x ^ (x >> _S30)) * _C2
-    x = (x ^ (x >> _S27)) * _C3
-    keys = x ^ (x >> _S31)
-    z: np.ndarray = np.add(_spread(k)[None, :], keys[:, None])
-    if z.size < SORT_VALUES:  # few: fewer calls
-        z = (z ^ (z >> _S30)) * _C2
-        z = (z ^ (z >> _S27)) * _C3
-        z ^= z >> _S31
-        return z
-    t = scratch("view_orders", z.shape, np.uint64)  # in place: fresh arrays cost page faults
+    in round `round_no`, what `view_orders` sorts (a new array); without the finaliser's last
+    step, x ^ (x >> 31), unless `last`. With `rounds`, (rounds * m, k): those of round_no,
+    round_no + 1, ... one after the other."""
+    ids = np.asarray(robots, dtype=np.uint64)
+    if rounds == 1:
+        x = np.bitwise_xor(ids, _round_key(seed, round_no))
+    else:
+        keys = np.arange(round_no, round_no + rounds, dtype=np.uint64)
+        keys ^= _constant(_mix64(LOOK_STREAM ^ (seed & _MASK64)))
+        x = np.bitwise_xor(_mix64_all(keys)[:, None], ids).reshape(-1)
+    z: np.ndarray = np.add(_spread(k), _mix64_all(x)[:, None])
+    t = scratch("view_orders", z.shape, _U64)  # in place: fresh arrays cost page faults
     np.right_shift(z, _S30, out=t)
     z ^= t
     z *= _C2
     np.right_shift(z, _S27, out=t)
     z ^= t
     z *= _C3
-    np.right_shift(z, _S31, out=t)
-    z ^= t
+    if last:
+        np.right_shift(z, _S31, out=t)
+        z ^= t
     return z
+
+
+def _mix64_all(x: np.ndarray) -> np.ndarray:
+    """`_mix64` of every value of `x` (uint64, changed in place: returned); uint64 arrays wrap
+    silently, as the hash does."""
+    x += _C1
+    t = x >> _S30
+    x ^= t
+    x *= _C2
+    np.right_shift(x, _S27, out=t)
+    x ^= t
+    x *= _C3
+    np.right_shift(x, _S31, out=t)
+    x ^= t
+    return x
 
 
 def cut_fraction(seed: int, round_no: int, robot: int) -> float:
@@ -156,22 +230,26 @@ def crash_plan(seed: int, n: int, f: int) -> dict[int, int]:
 
 
 _MASK64: Final = (1 << 64) - 1
-_C1, _C2, _C3 = (np.uint64(c) for c in (0x9E3779B97F4A7C15, 0xBF58476D1CE4E5B9, 0x94D049BB133111EB))
-_S30, _S27, _S31 = np.uint64(30), np.uint64(27), np.uint64(31)
+_U64: Final = np.dtype(np.uint64)
 
 
-@functools.lru_cache(maxsize=8)
-def _indices(k: int) -> np.ndarray:
-    """0..k-1 as uint64 (read-only): the low bits `view_orders` sorts its hashes with."""
-    out = np.arange(k, dtype=np.uint64)
+def _constant(value: int) -> np.ndarray:
+    """A uint64 constant as a read-only 0-d array: numpy takes one faster than a scalar."""
+    out = np.array(value, dtype=np.uint64)
     out.flags.writeable = False
     return out
+
+
+# splitmix64's constants (0-d uint64 arrays)
+_C1, _C2, _C3 = (_constant(c) for c in (0x9E3779B97F4A7C15, 0xBF58476D1CE4E5B9, 0x94D049BB133111EB))
+_S30, _S27, _S31 = _constant(30), _constant(27), _constant(31)
+_NEAR: Final = _constant(1 << HIGH_FROM)
 
 
 @functools.lru_cache(maxsize=8)
 def _spread(k: int) -> np.ndarray:
     """(1..k) times splitmix64's increment: the per-index part of view_order's hash (read-only)."""
-    out = np.arange(1, k + 1, dtype=np.uint64) * _C1
+    out: np.ndarray = np.arange(1, k + 1, dtype=np.uint64) * _C1
     out.flags.writeable = False
     return out
 

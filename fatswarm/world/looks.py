@@ -10,9 +10,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection, Iterable, Mapping, Sequence
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from fatswarm.domain.draws import look_noise, view_order, view_orders
 from fatswarm.domain.frames import Frame, FrameRows, draw_frame
@@ -28,6 +30,54 @@ Seen = tuple[Points, tuple[int, ...] | None, int | None]
 AHEAD_LIMIT = 1 << 20
 """`Looks.prepare` builds a round's views at once up to this many points (16 MB); past it, each
 view alone."""
+ORDERS_AHEAD = 1 << 15
+"""`Looks.views_at_once` draws every robot's view orders of rounds ahead, up to this many indices
+(256 kB), once rounds follow one another and two rounds or more fit: one call of each numpy
+operation for all of them (small swarms); 2 rounds the first time, then twice as many as the
+time before, up to ROUNDS_AHEAD."""
+ROUNDS_AHEAD = 64
+"""At most this many rounds' view orders drawn at once (`ORDERS_AHEAD`)."""
+FLIP_LIMIT = 1 << 16
+"""`Looks.views_at_once` keeps the mirror as a factor of every coordinate (x by -1.0 or 1.0, y by
+1.0: one multiplication of whole rows) up to this many points (1 MB); past it, x alone."""
+
+
+Column = NDArray[np.float64]  # (t, 1)
+
+
+@dataclass(frozen=True, slots=True, eq=False)  # holds arrays
+class _Lookers:
+    """The robots of a round's views at once (`Looks.views_at_once`) and their frames: `rows`
+    their ids (None: every robot, in order), `sign` (m,) -1.0 where a frame is a mirror alone,
+    else 1.0 (None: no mirror alone), `flip` the same as a factor of each coordinate (m, k, 2)
+    (None: not built), `turned` the rows whose frame turns, with each one's mirror factor,
+    cosine and sine as columns (None: no frame turns)."""
+
+    robots: tuple[int, ...]
+    rows: NDArray[np.intp] | None
+    sign: NDArray[np.float64] | None
+    flip: NDArray[np.float64] | None
+    turned: tuple[NDArray[np.intp], Column, Column, Column] | None
+
+    def flipped(self, k: int) -> _Lookers:
+        """These lookers with `flip` built for views of k others."""
+        assert self.sign is not None
+        flip = np.ones((len(self.sign), k, 2))
+        flip[:, :, 0] = self.sign[:, None]
+        return replace(self, flip=flip)
+
+
+def _turned_rows(
+    frames: Sequence[Frame], turned: list[int]
+) -> tuple[NDArray[np.intp], Column, Column, Column]:
+    """The rows `turned` of `frames` (those whose frame turns), each one's mirror factor (-1.0
+    where mirrored), cosine and sine of its rotation, as `Frame.to_local` takes them."""
+    return (
+        np.asarray(turned, dtype=np.intp),
+        np.array([-1.0 if frames[i].mirror else 1.0 for i in turned])[:, None],
+        np.array([math.cos(frames[i].rotation) for i in turned])[:, None],
+        np.array([math.sin(frames[i].rotation) for i in turned])[:, None],
+    )
 
 
 class Looks:
@@ -52,6 +102,13 @@ class Looks:
         self._fixed_turns = self._fixed is not None and any(f.rotation for f in self._fixed)
         self._fixed_rows = None if self._fixed is None else FrameRows.of(self._fixed)
         self._everyone = list(range(n))
+        self._everyone_ids = tuple(self._everyone)
+        # the frames of the robots that looked last (`views_at_once`), while frames are fixed
+        self._lookers: _Lookers | None = None
+        # every robot's view orders of the rounds from the first, drawn at once (`_orders`),
+        # and the round whose views were built last
+        self._orders_ahead: tuple[int, np.ndarray] | None = None
+        self._last_round = -1
         # every robot's colour (palette index; the first at the start); none without lights
         self.colours: list[int] | None = [0] * n if self.palette else None
         # whether a view is every other robot, exact, with no colours and nothing recorded
@@ -116,35 +173,72 @@ class Looks:
         k = self.n - 1
         if not self.plain or not robots or len(robots) * k > AHEAD_LIMIT:
             return None
-        rows = np.asarray(robots, dtype=np.intp)
-        order = view_orders(self.seed, look_round, robots, k, True)  # indices among all robots
-        frames: Sequence[Frame]
-        fixed = self._fixed
-        if fixed is not None and self._fixed_sign is not None:  # drawn once
-            sign = self._fixed_sign[rows]
-            frames = [fixed[robot] for robot in robots] if self._fixed_turns else ()
-        else:
-            frames = [self.frame(robot, look_round) for robot in robots]
-            sign = _mirror_signs(frames)
+        lookers = self._lookers_of(tuple(robots), look_round)
+        order = self._orders(look_round, lookers)  # indices among all robots
         # each point as one complex number: one gather, and a complex difference is the two
         # coordinates' differences, the very operations (faster than (m, k, 2) broadcast)
         table = np.ascontiguousarray(positions, dtype=np.float64).view(np.complex128)[:, 0]
-        pairs = np.take(table, order)
-        pairs -= table[rows][:, None]
-        rel: Points = pairs.view(np.float64).reshape(len(rows), k, 2)
-        if (sign < 0.0).any():  # x * 1.0 is x, bit for bit: the mirror of to_local alone
-            rel[:, :, 0] *= sign[:, None]
-        turned = [i for i, frame in enumerate(frames) if frame.rotation]
-        if turned:  # Frame.to_local's operations, on every turned row at once
-            at = np.asarray(turned, dtype=np.intp)
-            mirror = np.array([-1.0 if frames[i].mirror else 1.0 for i in turned])[:, None]
-            c = np.array([math.cos(frames[i].rotation) for i in turned])[:, None]
-            s = np.array([math.sin(frames[i].rotation) for i in turned])[:, None]
+        pairs = table[order]
+        pairs -= (table if lookers.rows is None else table[lookers.rows])[:, None]
+        rel: Points = pairs.view(np.float64).reshape(len(order), k, 2)
+        if lookers.flip is not None:  # x * 1.0 is x, bit for bit: the mirror of to_local alone
+            rel *= lookers.flip
+        elif lookers.sign is not None:
+            rel[:, :, 0] *= lookers.sign[:, None]
+        if lookers.turned is not None:  # Frame.to_local's operations, on every turned row at once
+            at, mirror, c, s = lookers.turned
             x = rel[at, :, 0] * mirror  # -x where mirrored, as to_local's `*= -1.0`
             y = rel[at, :, 1]
             rel[at, :, 0] = c * x - s * y
             rel[at, :, 1] = s * x + c * y
         return rel
+
+    def _orders(self, look_round: int, lookers: _Lookers) -> np.ndarray:
+        """(m, n-1): `view_orders` of `lookers` in round `look_round` (among all robots): rows of
+        the rounds drawn ahead (`ORDERS_AHEAD`) where round after round asks, else drawn now."""
+        k = self.n - 1
+        follows, self._last_round = look_round == self._last_round + 1, look_round
+        ahead = self._orders_ahead
+        if ahead is not None and 0 <= look_round - ahead[0] < len(ahead[1]):
+            orders: np.ndarray = ahead[1][look_round - ahead[0]]
+            return orders if lookers.rows is None else orders[lookers.rows]
+        if not follows or not 0 < 2 * self.n * k <= ORDERS_AHEAD:
+            return view_orders(self.seed, look_round, lookers.robots, k, True)
+        # twice as many rounds as the last time: no more drawn in vain than were used
+        rounds = min(ROUNDS_AHEAD, ORDERS_AHEAD // (self.n * k), 2 * len(ahead[1]) if ahead else 2)
+        orders = view_orders(self.seed, look_round, self._everyone_ids, k, True, rounds)
+        self._orders_ahead = (look_round, orders.reshape(rounds, self.n, k))
+        return orders[: self.n] if lookers.rows is None else orders[lookers.rows]
+
+    def _lookers_of(self, robots: tuple[int, ...], look_round: int) -> _Lookers:
+        """What `views_at_once` needs of `robots`' frames for round `look_round`: kept while the
+        same robots look in frames drawn once (every fsync round), with the mirror as a factor
+        of every coordinate from the second round on."""
+        kept = self._lookers
+        if kept is not None and kept.robots == robots:
+            if kept.flip is None and kept.sign is not None and len(robots) * self.n <= FLIP_LIMIT:
+                kept = self._lookers = kept.flipped(self.n - 1)
+            return kept
+        everyone = len(robots) == self.n and robots == self._everyone_ids
+        rows = None if everyone else np.asarray(robots, dtype=np.intp)
+        frames: Sequence[Frame]
+        if self._fixed is not None and self._fixed_sign is not None:  # drawn once
+            sign = self._fixed_sign if rows is None else self._fixed_sign[rows]
+            frames = [self._fixed[robot] for robot in robots] if self._fixed_turns else ()
+        else:
+            frames = [self.frame(robot, look_round) for robot in robots]
+            sign = _mirror_signs(frames)
+        turned = [i for i, frame in enumerate(frames) if frame.rotation]
+        lookers = _Lookers(
+            robots,
+            rows,
+            sign if bool((sign < 0.0).any()) else None,
+            None,
+            _turned_rows(frames, turned) if turned else None,
+        )
+        if self._fixed is not None:
+            self._lookers = lookers
+        return lookers
 
     def shown(self, positions: Points, robot: int, look_round: int) -> np.ndarray:
         """The ids of the robots robot `robot`'s Look of round `look_round` shows at `positions`,

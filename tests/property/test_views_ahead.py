@@ -109,3 +109,85 @@ def test_hashes_alike_in_their_high_bits_are_argsorted_as_they_are(
     assert got[9].tolist().index(30) < got[9].tolist().index(2)
     skipped = got + (got >= np.arange(70)[:, None])
     assert np.array_equal(view_orders(1, 2, list(range(70)), 64, True), skipped)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.integers(0, 2**64 - 1),
+    st.integers(1, 10**6),
+    st.sampled_from([1, 2, 7, 40, 90]),
+    st.integers(1, 40),
+    st.integers(1, 5),
+    st.booleans(),
+)
+def test_view_orders_of_several_rounds_are_each_rounds_own(
+    seed: int, round_no: int, k: int, m: int, rounds: int, among_all: bool
+) -> None:
+    """`rounds` at once (what a lock step draws ahead): round r's rows are that round's own,
+    below SORT_VALUES hashes and from it on."""
+    robots = list(range(2, 2 + m))
+    got = view_orders(seed, round_no, robots, k, among_all, rounds)
+    want = [view_orders(seed, round_no + r, robots, k, among_all) for r in range(rounds)]
+    assert got.shape == (rounds * m, k) and got.dtype == np.int64
+    assert np.array_equal(got, np.concatenate(want))
+
+
+def test_hashes_alike_from_bit_33_up_are_ordered_by_the_last_step(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Hashes are sorted without splitmix64's last step, x ^ (x >> 31), which leaves bits 33 up
+    as they are; where two of a row share those bits and the last step swaps their order, the
+    row is still in its whole hashes' order."""
+    rng = np.random.default_rng(8)
+    before = rng.integers(0, 2**63, size=(70, 64), dtype=np.uint64) * np.uint64(2)
+    s31 = np.uint64(31)
+    swapped = 0
+    for row in (4, 11, 12):  # three rows with two such hashes each
+        high = before[row, 5] & ~np.uint64(2**33 - 1)
+        while True:
+            low = rng.integers(0, 2**33, size=2, dtype=np.uint64)
+            pair = high | low
+            last = pair ^ (pair >> s31)
+            if (pair[0] < pair[1]) != (last[0] < last[1]):
+                break
+        before[row, 5], before[row, 50] = pair
+        swapped += 1
+
+    def hashes(*a: object, last: bool = True, rounds: int = 1) -> np.ndarray:
+        rows = before[np.asarray(a[2], dtype=np.intp)]
+        if len(a) > 4:
+            last = bool(a[4])
+        return rows ^ (rows >> s31) if last else rows.copy()
+
+    monkeypatch.setattr(draws, "_hashes", hashes)
+    whole = before ^ (before >> s31)
+    assert swapped == 3
+    assert np.array_equal(view_orders(1, 2, list(range(70)), 64), whole.argsort(axis=1))
+    assert not np.array_equal(before.argsort(axis=1), whole.argsort(axis=1))
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    st.integers(2, 24),
+    st.integers(0, 2**32),
+    st.sampled_from(range(len(MODELS))),
+    st.lists(st.integers(1, 3), min_size=1, max_size=150),
+    st.data(),
+)
+def test_views_at_once_round_after_round_are_the_views_built_alone(
+    n: int, seed: int, model: int, steps: list[int], data: st.DataObject
+) -> None:
+    """Round after round, a lock step's views at once come of view orders drawn ahead; rounds
+    that skip ahead and subsets of the robots get the very views each Look builds alone."""
+    setting = Configured.of(ALGORITHM, n)
+    positions = np.round(np.random.default_rng(seed).uniform(-50.0, 50.0, (n, 2)), 6)
+    ahead = Looks(MODELS[model], setting, n, seed, False)
+    alone = Looks(MODELS[model], setting, n, seed, False)
+    look_round = 0
+    for step in steps:
+        look_round += step
+        robots = list(range(n)) if step == 1 else [r for r in range(n) if (r + look_round) % 3]
+        views = ahead.views_at_once(positions, look_round, robots)
+        assert views is not None
+        for row, robot in enumerate(robots):
+            assert views[row].tobytes() == alone.view(positions, robot, look_round)[0].tobytes()

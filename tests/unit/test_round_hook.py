@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 import fatswarm
+from fatswarm.agent import row_sums
 from fatswarm.agent.gathering import ALGORITHM as GATHERING
 from fatswarm.agent.gathering import GatheringParams
 from fatswarm.agent.oblot_common import OblotRuleError, make_oblot_params
@@ -91,6 +92,35 @@ def test_nearest_norms_gives_the_least_hypot_of_every_row_bit_for_bit() -> None:
     # rows of one candidate each (every row's least far from its next): no search for them
     assert bits(nearest_norms(xs[23:], ys[23:])) == bits(want[23:])
     assert nearest_norms(xs[:0], ys[:0]).shape == (0,)
+
+
+def test_fsum_rows_gives_math_fsum_bits_past_few_values() -> None:
+    """More than FEW values (the largest found by a reduction, not by its index): on a grid (the
+    exact path), anywhere, and with a row that does not fit the bound (math.fsum's)."""
+    rng = np.random.default_rng(12)
+    grid = rng.integers(-(2**20), 2**20, size=(90, 60)) / 1024.0
+    anywhere = rng.normal(size=(90, 60)) * 1e3
+    anywhere[7, :] = 1e-320  # subnormal: below TINY, every row to math.fsum
+    assert grid.size > row_sums.FEW
+    for rows in (grid, anywhere, anywhere[8:]):
+        assert bits(fsum_rows(rows)) == bits(fsums(rows))
+
+
+def test_nearest_norms_past_hypot_all_gives_the_least_hypot_bit_for_bit() -> None:
+    """More than HYPOT_ALL elements: np.hypot of each row's candidate alone where every row has
+    one (also where another element's square overflows), the candidates' where some have more,
+    the whole row where its least square is out of range."""
+    rng = np.random.default_rng(13)
+    xs, ys = rng.normal(size=(40, 30)) * 50.0, rng.normal(size=(40, 30)) * 50.0
+    assert xs.size > row_sums.HYPOT_ALL
+    xs[3, 4], ys[5, 6] = 1e200, -3e170  # their squares overflow: not the least of their rows
+    one = xs.copy()
+    xs[9, 1], ys[9, 1] = ys[9, 0], xs[9, 0]  # two candidates
+    huge = xs.copy()
+    huge[11, :], ys[11, :] = 1e160, 2e160  # every square of the row past SQUARE_HUGE
+    with np.errstate(over="ignore"):  # the squares that overflow say so
+        for x in (one, xs, huge):
+            assert bits(nearest_norms(x, ys)) == bits(np.hypot(x, ys).min(axis=1))
 
 
 def views_of(positions: Points, rng: np.random.Generator) -> np.ndarray:
