@@ -69,7 +69,10 @@ class Swarm:
             "info",
         ]
 
-    def coordinator_flags(self, pace: float) -> list[str]:
+    def coordinator_flags(self, pace: float, move_timeout: float | None = None) -> list[str]:
+        """`move_timeout`: the coordinator's --move-timeout (None: its default), how long it waits
+        for an agent gone from a round before it plans without it."""
+        timeout = [] if move_timeout is None else ["--move-timeout", str(move_timeout)]
         return [
             *self._net(),
             "--seed",
@@ -78,6 +81,7 @@ class Swarm:
             self.scheduler,
             "--pace",
             str(pace),
+            *timeout,
             "--log-level",
             "info",
         ]
@@ -92,8 +96,10 @@ class Swarm:
         del flags[at : at + 2]  # it listens there instead
         self._start(name, "world", *flags, "--router", "--listen", self.endpoint)
 
-    def start_coordinator(self, pace: float, name: str = "coordinator") -> None:
-        self._start(name, "coordinator", *self.coordinator_flags(pace))
+    def start_coordinator(
+        self, pace: float, name: str = "coordinator", move_timeout: float | None = None
+    ) -> None:
+        self._start(name, "coordinator", *self.coordinator_flags(pace, move_timeout))
 
     def start_agent(self, robot: int, name: str | None = None) -> None:
         self._start(
@@ -108,9 +114,16 @@ class Swarm:
             "info",
         )
 
-    def start_all(self, pace: float, router: bool = True, in_world: bool = False) -> None:
+    def start_all(
+        self,
+        pace: float,
+        router: bool = True,
+        in_world: bool = False,
+        move_timeout: float | None = None,
+    ) -> None:
         """Every part (`router=False`: on another swarm's router, given as `endpoint`;
-        `in_world`: the world hosts the router, as in `fatswarm run`)."""
+        `in_world`: the world hosts the router, as in `fatswarm run`; `move_timeout`: the
+        coordinator's, see coordinator_flags)."""
         if in_world:
             self.start_world_router()
             self.observe()
@@ -119,7 +132,7 @@ class Swarm:
                 self.start_router()
             self.observe()
             self.start_world()
-        self.start_coordinator(pace)
+        self.start_coordinator(pace, move_timeout=move_timeout)
         for robot in range(self.n):
             self.start_agent(robot)
 

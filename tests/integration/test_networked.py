@@ -110,7 +110,9 @@ def test_a_killed_agent_stays_an_obstacle_and_a_restarted_one_rejoins(
     make_swarm: Callable[..., Swarm],
 ) -> None:
     sw = make_swarm(8, SEED)
-    sw.start_all(pace=0.15)
+    # a move timeout of 1 s, not 5: the coordinator waits that long for the killed agent before
+    # it plans rounds without it (what is pinned here is that it does, not how long)
+    sw.start_all(pace=0.15, move_timeout=1.0)
     sw.wait_for("round 3", lambda: (s := sw.state()) is not None and s.round >= 3)
     victim = 5
     sw.kill9(f"agent {victim}")
@@ -252,7 +254,7 @@ def test_agents_and_world_outlive_a_router_restart_and_keep_the_lockstep_run(
     tmp_path: Path, make_swarm: Callable[..., Swarm], seed: int
 ) -> None:
     sw = make_swarm(8, seed)
-    sw.start_all(pace=0.2)
+    sw.start_all(pace=0.05)  # 25 rounds or more left at the kill: well before the run ends
     sw.wait_for("round 3", lambda: (s := sw.state()) is not None and s.round >= 3)
     sw.kill9("router")
     sw.start_router("router again")  # on the same endpoint
@@ -438,7 +440,7 @@ def test_a_robot_dead_for_good_counts_as_crashed_and_the_run_ends(
     from fatswarm.world.faults import crash_after
 
     sw = make_swarm(6, SEED)
-    sw.start_all(pace=0.02)
+    sw.start_all(pace=0.02, move_timeout=1.0)  # waits 1 s, not 5, for agent 4 to come back
     sw.wait_for("round 2", lambda: (s := sw.state()) is not None and s.round >= 2)
     sw.kill9("agent 4")  # and never restarted
     end = sw.wait_done()

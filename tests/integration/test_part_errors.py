@@ -138,9 +138,12 @@ def _wait_for(what: str, predicate: Callable[[], bool], logs: Callable[[], str])
         time.sleep(0.05)
 
 
-def test_agents_say_every_few_seconds_that_they_wait_for_a_router_and_where(
+def test_every_agent_host_says_that_its_robots_wait_for_a_router_and_where(
     tmp_path: Path,
 ) -> None:
+    # Each host's first notice, over a real Zenoh; that the notice comes again every
+    # WAIT_NOTICE_S, how long so far, is pinned on a clock of its own (a second notice here
+    # would cost another WAIT_NOTICE_S of waiting): tests/unit/test_agent_router_wait.py.
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     net = ["--connect", endpoint, "--swarm", "waiting"]
     hosts = {  # name -> (argv, who the notice names)
@@ -166,10 +169,10 @@ def test_agents_say_every_few_seconds_that_they_wait_for_a_router_and_where(
         for name, (_, who) in hosts.items():
             notice = f"{who}: still waiting for a Zenoh router at {endpoint} ("
 
-            def noticed_twice(notice: str = notice, name: str = name) -> bool:
-                return log(name).count(notice) >= 2
+            def noticed(notice: str = notice, name: str = name) -> bool:
+                return notice in log(name)
 
-            _wait_for(f"{name}'s second notice", noticed_twice, logs)
+            _wait_for(f"{name}'s notice", noticed, logs)
         assert not children.exited(), logs()  # waiting, by design: not giving up
         with open(tmp_path / "router.log", "wb") as out:
             children.start("router", part("router", "--listen", endpoint), stdout=out, stderr=out)
@@ -184,7 +187,7 @@ def test_agents_say_every_few_seconds_that_they_wait_for_a_router_and_where(
         lines = log(name).splitlines()
         assert all(f"] WARNING {who}: " in line for line in lines), logs()  # one speaks per host
         waiting = [line for line in lines if "still waiting" in line]
-        assert len(waiting) >= 2 and all(re.search(r"\(\d+ s so far\)", w) for w in waiting)
+        assert waiting and all(re.search(r"\(\d+ s so far\)", w) for w in waiting)
 
 
 @pytest.mark.parametrize("spawn", ["fork", "exec"])
