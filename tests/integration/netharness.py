@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import os
 import secrets
+import signal
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Callable
@@ -241,6 +244,34 @@ def run_all(
             if proc.poll() is None:
                 proc.kill()
                 proc.wait()
+
+
+def fatswarm_runs(*flag_lists: list[str], deadline_s: float = 240.0) -> list[tuple[int, str]]:
+    """`fatswarm run FLAGS` for each list, side by side (a networked run and its lock-step twin
+    need not wait for each other), each in its own process group: exit codes and outputs
+    (stdout and stderr together), in order; any still running after `deadline_s` is killed."""
+    started: list[tuple[subprocess.Popen[bytes], Any]] = []
+    try:
+        for flags in flag_lists:
+            out = tempfile.TemporaryFile()  # noqa: SIM115 (closed below)
+            argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", *flags]
+            proc = subprocess.Popen(
+                argv, stdout=out, stderr=subprocess.STDOUT, start_new_session=True
+            )
+            started.append((proc, out))
+        end = time.monotonic() + deadline_s
+        done = []
+        for proc, out in started:
+            proc.wait(timeout=max(0.0, end - time.monotonic()))
+            out.seek(0)
+            done.append((proc.returncode, out.read().decode(errors="replace")))
+        return done
+    finally:
+        for proc, out in started:
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+            out.close()
 
 
 def assert_one_line(done: subprocess.CompletedProcess[str], start: str) -> None:
