@@ -123,10 +123,13 @@ class Swarm:
         router: bool = True,
         in_world: bool = False,
         move_timeout: float | None = None,
+        hosted: bool = False,
     ) -> None:
         """Every part (`router=False`: on another swarm's router, given as `endpoint`;
         `in_world`: the world hosts the router, as in `fatswarm run`; `move_timeout`: the
-        coordinator's, see coordinator_flags)."""
+        coordinator's, see coordinator_flags; `hosted`: the agents forked by one `agents` host
+        named "agents", as `fatswarm run` starts them, quicker to start than a process each, for
+        tests that do not stop or read one agent by its name "agent I")."""
         if in_world:
             self.start_world_router()
             self.observe()
@@ -136,6 +139,9 @@ class Swarm:
             self.observe()
             self.start_world()
         self.start_coordinator(pace, move_timeout=move_timeout)
+        if hosted:
+            self._start("agents", "agents", *self._net(), "-n", str(self.n), "--log-level", "info")
+            return
         for robot in range(self.n):
             self.start_agent(robot)
 

@@ -100,7 +100,7 @@ def test_parts_connected_to_a_world_hosting_the_router_record_the_lockstep_run(
     make_swarm: Callable[..., Swarm],
 ) -> None:
     sw = make_swarm(6, SEED)
-    sw.start_all(pace=0.0, in_world=True)
+    sw.start_all(pace=0.0, in_world=True, hosted=True)
     done = sw.wait_done()
     assert done.status == "formed", sw.logs()
     assert_same_run(
@@ -156,7 +156,7 @@ def test_a_killed_world_resumes_from_its_state_file_without_losing_a_round(
     tmp_path: Path, make_swarm: Callable[..., Swarm]
 ) -> None:
     sw = make_swarm(8, SEED)
-    sw.start_all(pace=0.05)  # no round without a world: the kill meets the run running
+    sw.start_all(pace=0.05, hosted=True)  # no round without a world: the kill meets it running
     sw.wait_for("round 4", lambda: (s := sw.state()) is not None and s.round >= 4)
     state = sw.state()
     assert state is not None
@@ -176,7 +176,7 @@ def test_a_restarted_coordinator_continues_from_the_last_committed_round(
     tmp_path: Path, make_swarm: Callable[..., Swarm]
 ) -> None:
     sw = make_swarm(8, SEED)
-    sw.start_all(pace=0.1)
+    sw.start_all(pace=0.1, hosted=True)
     sw.wait_for("round 4", lambda: (s := sw.state()) is not None and s.round >= 4)
     sw.kill9("coordinator")
     sw.start_coordinator(pace=0.0, name="coordinator again")
@@ -191,7 +191,7 @@ def test_a_foreign_client_changes_nothing_and_crashes_nothing(
     tmp_path: Path, make_swarm: Callable[..., Swarm]
 ) -> None:
     sw = make_swarm(8, SEED)
-    sw.start_all(pace=0.1)
+    sw.start_all(pace=0.1, hosted=True)
     sw.wait_for("round 2", lambda: (s := sw.state()) is not None and s.round >= 2)
     s = sw.session
     step = RobotPath((Line((3.0, 0.0)),))
@@ -256,7 +256,7 @@ def test_agents_and_world_outlive_a_router_restart_and_keep_the_lockstep_run(
     tmp_path: Path, make_swarm: Callable[..., Swarm], seed: int
 ) -> None:
     sw = make_swarm(8, seed)
-    sw.start_all(pace=0.05)  # 25 rounds or more left at the kill: well before the run ends
+    sw.start_all(pace=0.05, hosted=True)  # 25 rounds or more left at the kill: mid-run
     sw.wait_for("round 3", lambda: (s := sw.state()) is not None and s.round >= 3)
     sw.kill9("router")
     sw.start_router("router again")  # on the same endpoint
