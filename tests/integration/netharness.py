@@ -124,12 +124,14 @@ class Swarm:
         in_world: bool = False,
         move_timeout: float | None = None,
         hosted: bool = False,
+        apart: int | None = None,
     ) -> None:
         """Every part (`router=False`: on another swarm's router, given as `endpoint`;
         `in_world`: the world hosts the router, as in `fatswarm run`; `move_timeout`: the
         coordinator's, see coordinator_flags; `hosted`: the agents forked by one `agents` host
         named "agents", as `fatswarm run` starts them, quicker to start than a process each, for
-        tests that do not stop or read one agent by its name "agent I")."""
+        tests that do not stop or read one agent by its name "agent I"; `apart`: but robot I's
+        agent, started alone as "agent I", between hosts of the robots below and above it)."""
         if in_world:
             self.start_world_router()
             self.observe()
@@ -139,11 +141,17 @@ class Swarm:
             self.observe()
             self.start_world()
         self.start_coordinator(pace, move_timeout=move_timeout)
-        if hosted:
-            self._start("agents", "agents", *self._net(), "-n", str(self.n), "--log-level", "info")
+        if not hosted:
+            for robot in range(self.n):
+                self.start_agent(robot)
             return
-        for robot in range(self.n):
-            self.start_agent(robot)
+        cut = self.n if apart is None else apart
+        for name, first, count in (("agents", 0, cut), ("agents above", cut + 1, self.n - cut - 1)):
+            if count > 0:
+                net = [*self._net(), "-n", str(count), "--first", str(first)]
+                self._start(name, "agents", *net, "--log-level", "info")
+        if apart is not None:
+            self.start_agent(apart)
 
     def kill9(self, name: str) -> None:
         import signal

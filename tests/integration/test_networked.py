@@ -112,11 +112,11 @@ def test_a_killed_agent_stays_an_obstacle_and_a_restarted_one_rejoins(
     make_swarm: Callable[..., Swarm],
 ) -> None:
     sw = make_swarm(8, SEED)
+    victim = 5
     # a move timeout of 1 s, not 5: the coordinator waits that long for the killed agent before
     # it plans rounds without it (what is pinned here is that it does, not how long)
-    sw.start_all(pace=0.15, move_timeout=1.0)
+    sw.start_all(pace=0.15, move_timeout=1.0, hosted=True, apart=victim)
     sw.wait_for("round 3", lambda: (s := sw.state()) is not None and s.round >= 3)
-    victim = 5
     sw.kill9(f"agent {victim}")
     killed_at = time.monotonic()
     sw.wait_for(
@@ -442,7 +442,8 @@ def test_a_robot_dead_for_good_counts_as_crashed_and_the_run_ends(
     from fatswarm.world.faults import crash_after
 
     sw = make_swarm(6, SEED)
-    sw.start_all(pace=0.02, move_timeout=1.0)  # waits 1 s, not 5, for agent 4 to come back
+    # waits 1 s, not 5, for agent 4 to come back
+    sw.start_all(pace=0.02, move_timeout=1.0, hosted=True, apart=4)
     sw.wait_for("round 2", lambda: (s := sw.state()) is not None and s.round >= 2)
     sw.kill9("agent 4")  # and never restarted
     end = sw.wait_done()
