@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import subprocess
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -18,50 +17,16 @@ import pytest
 pytestmark = pytest.mark.integration
 
 SCRIPT = Path(__file__).resolve().parents[2] / "bench" / "cpu_paths.py"
-# The default run's comparisons: numpy's optional paths off on the model cases and 20 adversarial
-# cases; the model cases with OpenBLAS's no-FMA kernel against this CPU's own (while the plan's
-# dot products went through BLAS, uc-dense's and stepped-async's records differed here).
-DEFAULT_RUN = {
-    "numpy-off": ("--count", "20", "--variants", "numpy-off"),
-    "Nehalem": ("--count", "0", "--variants", "Nehalem"),
-}
-
-
-def start(*args: str) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        [sys.executable, str(SCRIPT), *args],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
 
 
 def compare(*args: str) -> subprocess.CompletedProcess[str]:
-    return finish(start(*args))
-
-
-def finish(proc: subprocess.Popen[str]) -> subprocess.CompletedProcess[str]:
-    try:
-        out, err = proc.communicate(timeout=3600)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-    return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
-
-
-@pytest.fixture(scope="module")
-def started() -> Iterator[dict[str, subprocess.Popen[str]]]:
-    """The default run's comparisons, started at once (each runs its children one after the
-    other; the two side by side): each test collects its own."""
-    procs = {variant: start(*args) for variant, args in DEFAULT_RUN.items()}
-    try:
-        yield procs
-    finally:
-        for proc in procs.values():
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
+    return subprocess.run(
+        [sys.executable, str(SCRIPT), *args],
+        capture_output=True,
+        text=True,
+        timeout=3600,
+        check=False,
+    )
 
 
 def check(done: subprocess.CompletedProcess[str]) -> None:
@@ -71,16 +36,14 @@ def check(done: subprocess.CompletedProcess[str]) -> None:
     assert "differ" not in done.stdout, done.stdout
 
 
-def test_records_do_not_depend_on_numpys_optional_cpu_paths(
-    started: dict[str, subprocess.Popen[str]],
-) -> None:
-    check(finish(started["numpy-off"]))
+def test_records_do_not_depend_on_numpys_optional_cpu_paths() -> None:
+    check(compare("--count", "20", "--variants", "numpy-off"))
 
 
-def test_records_do_not_depend_on_openblas_kernels(
-    started: dict[str, subprocess.Popen[str]],
-) -> None:
-    check(finish(started["Nehalem"]))
+def test_records_do_not_depend_on_openblas_kernels() -> None:
+    # The model cases with OpenBLAS's no-FMA kernel against this CPU's own: while the plan's dot
+    # products went through BLAS, uc-dense's and stepped-async's records differed here.
+    check(compare("--count", "0", "--variants", "Nehalem"))
 
 
 @pytest.mark.slow
