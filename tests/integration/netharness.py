@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import os
 import secrets
+import signal
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Callable
@@ -69,7 +72,10 @@ class Swarm:
             "info",
         ]
 
-    def coordinator_flags(self, pace: float) -> list[str]:
+    def coordinator_flags(self, pace: float, move_timeout: float | None = None) -> list[str]:
+        """`move_timeout`: the coordinator's --move-timeout (None: its default), how long it waits
+        for an agent gone from a round before it plans without it."""
+        timeout = [] if move_timeout is None else ["--move-timeout", str(move_timeout)]
         return [
             *self._net(),
             "--seed",
@@ -78,6 +84,7 @@ class Swarm:
             self.scheduler,
             "--pace",
             str(pace),
+            *timeout,
             "--log-level",
             "info",
         ]
@@ -92,8 +99,10 @@ class Swarm:
         del flags[at : at + 2]  # it listens there instead
         self._start(name, "world", *flags, "--router", "--listen", self.endpoint)
 
-    def start_coordinator(self, pace: float, name: str = "coordinator") -> None:
-        self._start(name, "coordinator", *self.coordinator_flags(pace))
+    def start_coordinator(
+        self, pace: float, name: str = "coordinator", move_timeout: float | None = None
+    ) -> None:
+        self._start(name, "coordinator", *self.coordinator_flags(pace, move_timeout))
 
     def start_agent(self, robot: int, name: str | None = None) -> None:
         self._start(
@@ -108,9 +117,21 @@ class Swarm:
             "info",
         )
 
-    def start_all(self, pace: float, router: bool = True, in_world: bool = False) -> None:
+    def start_all(
+        self,
+        pace: float,
+        router: bool = True,
+        in_world: bool = False,
+        move_timeout: float | None = None,
+        hosted: bool = False,
+        apart: int | None = None,
+    ) -> None:
         """Every part (`router=False`: on another swarm's router, given as `endpoint`;
-        `in_world`: the world hosts the router, as in `fatswarm run`)."""
+        `in_world`: the world hosts the router, as in `fatswarm run`; `move_timeout`: the
+        coordinator's, see coordinator_flags; `hosted`: the agents forked by one `agents` host
+        named "agents", as `fatswarm run` starts them, quicker to start than a process each, for
+        tests that do not stop or read one agent by its name "agent I"; `apart`: but robot I's
+        agent, started alone as "agent I", between hosts of the robots below and above it)."""
         if in_world:
             self.start_world_router()
             self.observe()
@@ -119,9 +140,18 @@ class Swarm:
                 self.start_router()
             self.observe()
             self.start_world()
-        self.start_coordinator(pace)
-        for robot in range(self.n):
-            self.start_agent(robot)
+        self.start_coordinator(pace, move_timeout=move_timeout)
+        if not hosted:
+            for robot in range(self.n):
+                self.start_agent(robot)
+            return
+        cut = self.n if apart is None else apart
+        for name, first, count in (("agents", 0, cut), ("agents above", cut + 1, self.n - cut - 1)):
+            if count > 0:
+                net = [*self._net(), "-n", str(count), "--first", str(first)]
+                self._start(name, "agents", *net, "--log-level", "info")
+        if apart is not None:
+            self.start_agent(apart)
 
     def kill9(self, name: str) -> None:
         import signal
@@ -228,6 +258,34 @@ def run_all(
             if proc.poll() is None:
                 proc.kill()
                 proc.wait()
+
+
+def fatswarm_runs(*flag_lists: list[str], deadline_s: float = 240.0) -> list[tuple[int, str]]:
+    """`fatswarm run FLAGS` for each list, side by side (a networked run and its lock-step twin
+    need not wait for each other), each in its own process group: exit codes and outputs
+    (stdout and stderr together), in order; any still running after `deadline_s` is killed."""
+    started: list[tuple[subprocess.Popen[bytes], Any]] = []
+    try:
+        for flags in flag_lists:
+            out = tempfile.TemporaryFile()  # noqa: SIM115 (closed below)
+            argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", *flags]
+            proc = subprocess.Popen(
+                argv, stdout=out, stderr=subprocess.STDOUT, start_new_session=True
+            )
+            started.append((proc, out))
+        end = time.monotonic() + deadline_s
+        done = []
+        for proc, out in started:
+            proc.wait(timeout=max(0.0, end - time.monotonic()))
+            out.seek(0)
+            done.append((proc.returncode, out.read().decode(errors="replace")))
+        return done
+    finally:
+        for proc, out in started:
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+            out.close()
 
 
 def assert_one_line(done: subprocess.CompletedProcess[str], start: str) -> None:

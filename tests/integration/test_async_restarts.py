@@ -114,7 +114,7 @@ def test_an_async_run_outlives_a_restart_of_its_role_and_keeps_the_lockstep_reco
     tmp_path: Path, make_swarm: Callable[..., Swarm], role: str
 ) -> None:
     sw = make_swarm(5, SEED, "async")
-    sw.start_all(pace=0.02)
+    sw.start_all(pace=0.02, hosted=True)
     _restart(sw, role)
     end = sw.wait_done()
     assert end.status in ("formed", "stalled"), sw.logs()

@@ -4,15 +4,11 @@ verdict are the lock step's, under a round model and an async one."""
 
 from __future__ import annotations
 
-import os
-import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
-from netharness import assert_same_run
+from netharness import assert_same_run, fatswarm_runs
 
 from fatswarm.world.record_read import read_record
 
@@ -32,38 +28,23 @@ CASES = {
 }  # fmt: skip
 
 
-def _fatswarm_run(flags: list[str]) -> tuple[int, str, float]:
-    """`fatswarm run FLAGS` in its own process group: exit code, output and wall seconds (killed
-    after 240 s)."""
-    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", *flags]
-    started = time.monotonic()
-    proc = subprocess.Popen(
-        argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True
-    )
-    try:
-        out, _ = proc.communicate(timeout=240)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-    return proc.returncode, out.decode(errors="replace"), time.monotonic() - started
-
-
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_a_failing_compute_is_recorded_the_same_networked_and_in_lock_step_without_a_timeout(
     tmp_path: Path, case: str
 ) -> None:
     flags = [*CASES[case], "--max-rounds", "200"]
     net, lock = tmp_path / "net.jsonl", tmp_path / "lock.jsonl"
-    code, out, wall = _fatswarm_run(
-        [*flags, "--record", str(net), "--no-dashboard", "--move-timeout", str(MOVE_TIMEOUT_S)]
+    started = time.monotonic()
+    (code, out), (lock_code, lock_out) = fatswarm_runs(  # side by side
+        [*flags, "--record", str(net), "--no-dashboard", "--move-timeout", str(MOVE_TIMEOUT_S)],
+        [*flags, "--record", str(lock), "--lockstep"],
     )
+    wall = time.monotonic() - started  # both runs': the networked one took no longer
     assert code in (0, 1), out
     assert wall < MOVE_TIMEOUT_S, f"a round waited for a failing robot: {wall:.1f} s\n{out}"
     net_verdict = next(line for line in out.splitlines() if line.startswith(VERDICTS))
     assert "; the algorithm failed " in net_verdict and ", first robot " in net_verdict
-    code, lock_out, _ = _fatswarm_run([*flags, "--record", str(lock), "--lockstep"])
-    assert code in (0, 1), lock_out
+    assert lock_code in (0, 1), lock_out
     a, b = read_record(str(net)), read_record(str(lock))
     assert_same_run(a, b)
     failed = [entry.extra["failed"] for entry in b.rounds if "failed" in entry.extra]

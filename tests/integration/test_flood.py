@@ -123,7 +123,7 @@ def test_two_agents_acting_for_one_robot_are_said_once(
     tmp_path: Path, make_swarm: Callable[..., Swarm]
 ) -> None:
     sw = make_swarm(4, 1)
-    sw.start_all(pace=0.1)
+    sw.start_all(pace=0.1, hosted=True)
     sw.start_agent(3, "agent 3 twin")  # the same key twice: the documented "key = identity" limit
     end = sw.wait_done()
     assert end.status == "formed", sw.logs()

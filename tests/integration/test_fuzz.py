@@ -117,7 +117,7 @@ def _fuzzed_run(
     tmp_path: Path, make_swarm: Callable[..., Swarm], count: int, in_world: bool = False
 ) -> None:
     sw = make_swarm(6, SEED)
-    sw.start_all(pace=0.05, in_world=in_world)
+    sw.start_all(pace=0.05, in_world=in_world, hosted=True, apart=0)  # agent 0 logs alone
     sw.wait_for("round 2", lambda: (s := sw.state()) is not None and s.round >= 2)
     world = sw.children.procs["world"].pid
     # Two floods of `count` each: the world may not grow by 20 % from where it started (with

@@ -5,14 +5,10 @@ and async schedulers, non-rigid moves and crashes."""
 
 from __future__ import annotations
 
-import os
-import signal
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
-from netharness import assert_same_run
+from netharness import assert_same_run, fatswarm_runs
 
 from fatswarm.world.record_read import read_record
 
@@ -44,31 +40,18 @@ CASES = {
 }  # fmt: skip
 
 
-def _fatswarm_run(flags: list[str]) -> tuple[int, str]:
-    """`fatswarm run FLAGS` in its own process group: exit code and output (killed after 240 s)."""
-    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", *flags]
-    proc = subprocess.Popen(
-        argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True
-    )
-    try:
-        out, _ = proc.communicate(timeout=240)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-    return proc.returncode, out.decode(errors="replace")
-
-
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_a_model_axis_records_the_same_run_networked_and_in_lock_step(
     tmp_path: Path, case: str
 ) -> None:
     flags = ["-n", "5", "--seed", "4", "--max-rounds", "400", "-q", *CASES[case]]
     net, lock = tmp_path / "net.jsonl", tmp_path / "lock.jsonl"
-    code, out = _fatswarm_run([*flags, "--record", str(net), "--no-dashboard"])
+    (code, out), (lock_code, lock_out) = fatswarm_runs(
+        [*flags, "--record", str(net), "--no-dashboard"],
+        [*flags, "--record", str(lock), "--lockstep"],
+    )
     assert code in (0, 1), out
-    code, out = _fatswarm_run([*flags, "--record", str(lock), "--lockstep"])
-    assert code in (0, 1), out
+    assert lock_code in (0, 1), lock_out
     a, b = read_record(str(net)), read_record(str(lock))
     assert a.header.extra.get("model") == b.header.extra.get("model") is not None
     assert_same_run(a, b)

@@ -90,12 +90,12 @@ def test_a_second_swarm_on_the_same_router_runs_alongside_unmixed(
     tmp_path: Path, make_swarm: Callable[..., Swarm]
 ) -> None:
     first = make_swarm(4, SEED)
-    first.start_all(pace=0.05)
+    first.start_all(pace=0.05, hosted=True)
     first.wait_for(
         "the first swarm's round 1", lambda: (s := first.state()) is not None and s.round >= 1
     )
     second = make_swarm(4, OTHER_SEED, endpoint=first.endpoint)
-    second.start_all(pace=0.05, router=False)
+    second.start_all(pace=0.05, router=False, hosted=True)
     for sw, seed in ((first, SEED), (second, OTHER_SEED)):
         end = sw.wait_done()
         assert end.status == "formed" and end.collisions_total == 0, sw.logs()

@@ -4,15 +4,11 @@ detection, under obstruction by collinearity, round and async schedulers."""
 
 from __future__ import annotations
 
-import os
-import signal
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-from netharness import assert_same_run
+from netharness import assert_same_run, fatswarm_runs
 
 from fatswarm.world.record_read import read_record
 
@@ -32,21 +28,6 @@ CASES = {
 }  # fmt: skip
 
 
-def _fatswarm_run(flags: list[str]) -> tuple[int, str]:
-    """`fatswarm run FLAGS` in its own process group: exit code and output (killed after 240 s)."""
-    argv = [sys.executable, "-m", "fatswarm.deploy.cli", "run", *flags]
-    proc = subprocess.Popen(
-        argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True
-    )
-    try:
-        out, _ = proc.communicate(timeout=240)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-    return proc.returncode, out.decode(errors="replace")
-
-
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_point_robots_record_the_same_run_networked_and_in_lock_step(
     tmp_path: Path, case: str
@@ -54,10 +35,12 @@ def test_point_robots_record_the_same_run_networked_and_in_lock_step(
     flags = ["-n", "5", "--seed", "4", "--max-rounds", "400", "-q", "--bodies", "points"]
     flags += CASES[case]
     net, lock = tmp_path / "net.jsonl", tmp_path / "lock.jsonl"
-    code, out = _fatswarm_run([*flags, "--record", str(net), "--no-dashboard"])
+    (code, out), (lock_code, lock_out) = fatswarm_runs(
+        [*flags, "--record", str(net), "--no-dashboard"],
+        [*flags, "--record", str(lock), "--lockstep"],
+    )
     assert code in (0, 1), out
-    code, out = _fatswarm_run([*flags, "--record", str(lock), "--lockstep"])
-    assert code in (0, 1), out
+    assert lock_code in (0, 1), lock_out
     a, b = read_record(str(net)), read_record(str(lock))
     assert a.header.extra["model"]["bodies"] == b.header.extra["model"]["bodies"] == "points"
     assert_same_run(a, b)
@@ -74,8 +57,10 @@ def test_point_robots_that_start_at_shared_points_run_the_same_networked(tmp_pat
     flags = ["--init", str(init), "--seed", "1", "-q", "--bodies", "points"]
     flags += ["--algorithm", f"{MEET}:ONCE", "--scheduler", "ssync"]
     net, lock = tmp_path / "net.jsonl", tmp_path / "lock.jsonl"
-    code, out = _fatswarm_run([*flags, "--record", str(net), "--no-dashboard"])
+    (code, out), (lock_code, lock_out) = fatswarm_runs(
+        [*flags, "--record", str(net), "--no-dashboard"],
+        [*flags, "--record", str(lock), "--lockstep"],
+    )
     assert code == 0, out
-    code, out = _fatswarm_run([*flags, "--record", str(lock), "--lockstep"])
-    assert code == 0, out
+    assert lock_code == 0, lock_out
     assert_same_run(read_record(str(net)), read_record(str(lock)))

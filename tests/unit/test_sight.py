@@ -88,9 +88,14 @@ def opaque_clearances(positions: Points, o: int) -> dict[int, float]:
     if not js:
         return {}
     ends = positions[js][:, None, :] + ring[None, :, :]  # (m, S, 2)
-    dist = segment_distances(
-        positions[o][None, None, None, :], ends[:, :, None, :], positions[None, None, :, :]
-    )  # (m, S, n)
+    # segment_distances(c_o, ends, every centre), (m, S, n), the same operations on x and y
+    # apart (not as pairs): the same values, without the pairs' strided sums
+    ox, oy = positions[o]
+    abx, aby = (ends[:, :, 0] - ox)[:, :, None], (ends[:, :, 1] - oy)[:, :, None]
+    acx, acy = (positions[:, 0] - ox)[None, None, :], (positions[:, 1] - oy)[None, None, :]
+    length2 = np.maximum(abx * abx + aby * aby, 1e-300)
+    t = np.clip((acx * abx + acy * aby) / length2, 0.0, 1.0)
+    dist = np.hypot(acx - t * abx, acy - t * aby)
     for row, j in enumerate(js):
         dist[row, :, [o, j]] = np.inf
     best = (dist.min(axis=2) - (1 - CLEAR_SLACK)).max(axis=1)
