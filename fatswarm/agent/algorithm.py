@@ -71,9 +71,9 @@ def _with_observer(view: Points, params: Params) -> Points:
                 raise ViewError("the view holds non-finite coordinates")
             raise ViewError(f"the view reaches beyond +-{VIEW_LIMIT:g}, outside the grid's range")
     out = np.empty((len(arr) + 1, 2), dtype=np.float64)
-    out[0] = 0.0
-    out[1:] = arr
-    return snap(out, out=out)
+    out[0] = 0.0  # the observer, on the grid already
+    snap(arr, out=out[1:])
+    return out
 
 
 def plan(points: Points, params: Params) -> Plan:

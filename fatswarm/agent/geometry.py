@@ -105,6 +105,10 @@ def _sec_through(support: list[Point], p: Point) -> tuple[Disc, list[Point]]:
 
 def _sq_distances(xs: np.ndarray, ys: np.ndarray, cx: float, cy: float) -> np.ndarray:
     """(xs - cx)**2 + (ys - cy)**2, in place on two fresh arrays."""
+    if cx == 0.0 and cy == 0.0:  # a canonical form's first robot: x - (+-0.0) squares to x * x
+        sq: np.ndarray = xs * xs
+        sq += ys * ys
+        return sq
     dx = xs - cx
     dx *= dx
     dy = ys - cy
@@ -468,6 +472,11 @@ def _clearance(d0: np.ndarray) -> np.ndarray:
     return need
 
 
+FAR_ENOUGH = (CONTACT - CLEAR_SLACK) - ROUND_ABS
+"""The most `required_clearance` asks of any robot (its rounding is monotonic): a piece of path
+that keeps this from every robot is free whatever their start distances."""
+
+
 def is_free(start: Point, path: Path, others: Points) -> bool:
     """Free path (G6): the unit disc swept along the path, end disc included, meets no other disc.
 
@@ -479,24 +488,27 @@ def is_free(start: Point, path: Path, others: Points) -> bool:
     if m == 0:
         return True
     sx, sy = start
-    ox, oy = others[:, 0] - sx, others[:, 1] - sy
-    d0 = np.hypot(ox, oy)
-    need = _clearance(d0)
     if not path.segments:
-        return bool(np.count_nonzero(d0 >= need) == m)
-    # need is NaN where d0 is, and d0 >= need elsewhere: so only the pieces are checked, each on
-    # its own (all(min(a, b) >= c) is all(a >= c) and all(b >= c), NaN included). The first
-    # piece starts at `start`, where (ox, oy) and d0 already hold the others' offsets and distances.
+        d0 = np.hypot(others[:, 0] - sx, others[:, 1] - sy)
+        return bool(np.count_nonzero(d0 >= _clearance(d0)) == m)
+    # Each piece is checked on its own (all(min(a, b) >= c) is all(a >= c) and all(b >= c), NaN
+    # included: where a start distance is NaN, so is every distance of the path). The start
+    # distances are needed only for a piece that comes closer than FAR_ENOUGH to some robot.
+    need: np.ndarray | None = None
     here = start
     for k, seg in enumerate(path.segments):
         if isinstance(seg, Line) and k == 0:
+            ox, oy = others[:, 0] - sx, others[:, 1] - sy
             d = _to_segment(ox, oy, seg.end[0] - sx, seg.end[1] - sy)
         elif isinstance(seg, Line):
             d = segment_distances(here, seg.end, others)
         else:
-            d = _to_arc(here, seg, others, d0 if k == 0 else None)
-        if np.count_nonzero(d >= need) < m:
-            return False
+            d = _to_arc(here, seg, others, None)
+        if np.count_nonzero(d >= FAR_ENOUGH) < m:
+            if need is None:
+                need = required_clearance(start, others)
+            if np.count_nonzero(d >= need) < m:
+                return False
         here = segment_end(here, seg)
     return True
 
