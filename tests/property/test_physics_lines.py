@@ -126,8 +126,8 @@ def test_apply_lines_without_movers_moves_nobody() -> None:
 @settings(max_examples=60, deadline=None)
 @given(st.integers(1, 80), st.integers(0, 2**32 - 1))
 def test_nearest_corners_are_the_snaps_nearest_corners(m: int, seed: int) -> None:
-    """Both forms of `_nearest_corners` (few points, many) pick `_snap_one`'s first corner,
-    ties (half-grid points) and points near 0 included."""
+    """`_nearest_corners` (each coordinate alone, or by distances near 0) picks `_snap_one`'s
+    first corner, ties (half-grid points) and points near 0 included."""
     rng = np.random.default_rng(seed)
     p = rng.uniform(-1e3, 1e3, (m, 2))
     p[: m // 3] = snap(p[: m // 3]) + GRID / 2.0
@@ -136,5 +136,27 @@ def test_nearest_corners_are_the_snaps_nearest_corners(m: int, seed: int) -> Non
     for x, y in p.tolist():
         corners = np.floor(np.array([x, y]) / GRID) * GRID + CORNERS * GRID
         order = np.argsort(np.hypot(corners[:, 0] - x, corners[:, 1] - y), kind="stable")
+        expected.append(corners[order[0]] + 0.0)
+    assert _nearest_corners(p).tobytes() == np.array(expected).tobytes()
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(-20, 23), st.integers(-3, 3), st.integers(0, 2**32 - 1))
+def test_nearest_corners_of_points_within_ulps_of_a_half_grid_point(
+    exponent: int, ulps: int, seed: int
+) -> None:
+    """Points a few ulps off the middle between grid points, at every magnitude of the range where
+    each coordinate is rounded alone and just outside it, pick `_snap_one`'s first corner."""
+    rng = np.random.default_rng(seed)
+    size = 2.0**exponent * rng.uniform(1.0, 2.0, 40) * rng.choice([-1.0, 1.0], 40)
+    x = np.floor(size / GRID) * GRID + GRID / 2.0
+    for _ in range(abs(ulps)):
+        x = np.nextafter(x, np.inf if ulps > 0 else -np.inf)
+    y = np.where(rng.random(40) < 0.5, x[::-1], np.floor(size / GRID) * GRID)
+    p = np.column_stack([x, y]) if seed % 2 else np.column_stack([y, x])
+    expected = []
+    for px, py in p.tolist():
+        corners = np.floor(np.array([px, py]) / GRID) * GRID + CORNERS * GRID
+        order = np.argsort(np.hypot(corners[:, 0] - px, corners[:, 1] - py), kind="stable")
         expected.append(corners[order[0]] + 0.0)
     assert _nearest_corners(p).tobytes() == np.array(expected).tobytes()
