@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection, Iterable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -37,9 +37,6 @@ operation for all of them (small swarms); 2 rounds the first time, then twice as
 time before, up to ROUNDS_AHEAD."""
 ROUNDS_AHEAD = 64
 """At most this many rounds' view orders drawn at once (`ORDERS_AHEAD`)."""
-FLIP_LIMIT = 1 << 16
-"""`Looks.views_at_once` keeps the mirror as a factor of every coordinate (x by -1.0 or 1.0, y by
-1.0: one multiplication of whole rows) up to this many points (1 MB); past it, x alone."""
 
 
 Column = NDArray[np.float64]  # (t, 1)
@@ -49,22 +46,13 @@ Column = NDArray[np.float64]  # (t, 1)
 class _Lookers:
     """The robots of a round's views at once (`Looks.views_at_once`) and their frames: `rows`
     their ids (None: every robot, in order), `sign` (m,) -1.0 where a frame is a mirror alone,
-    else 1.0 (None: no mirror alone), `flip` the same as a factor of each coordinate (m, k, 2)
-    (None: not built), `turned` the rows whose frame turns, with each one's mirror factor,
-    cosine and sine as columns (None: no frame turns)."""
+    else 1.0 (None: no mirror alone), `turned` the rows whose frame turns, with each one's
+    mirror factor, cosine and sine as columns (None: no frame turns)."""
 
     robots: tuple[int, ...]
     rows: NDArray[np.intp] | None
     sign: NDArray[np.float64] | None
-    flip: NDArray[np.float64] | None
     turned: tuple[NDArray[np.intp], Column, Column, Column] | None
-
-    def flipped(self, k: int) -> _Lookers:
-        """These lookers with `flip` built for views of k others."""
-        assert self.sign is not None
-        flip = np.ones((len(self.sign), k, 2))
-        flip[:, :, 0] = self.sign[:, None]
-        return replace(self, flip=flip)
 
 
 def _turned_rows(
@@ -181,9 +169,7 @@ class Looks:
         pairs = table[order]
         pairs -= (table if lookers.rows is None else table[lookers.rows])[:, None]
         rel: Points = pairs.view(np.float64).reshape(len(order), k, 2)
-        if lookers.flip is not None:  # x * 1.0 is x, bit for bit: the mirror of to_local alone
-            rel *= lookers.flip
-        elif lookers.sign is not None:
+        if lookers.sign is not None:  # x * 1.0 is x, bit for bit: the mirror of to_local alone
             rel[:, :, 0] *= lookers.sign[:, None]
         if lookers.turned is not None:  # Frame.to_local's operations, on every turned row at once
             at, mirror, c, s = lookers.turned
@@ -212,12 +198,9 @@ class Looks:
 
     def _lookers_of(self, robots: tuple[int, ...], look_round: int) -> _Lookers:
         """What `views_at_once` needs of `robots`' frames for round `look_round`: kept while the
-        same robots look in frames drawn once (every fsync round), with the mirror as a factor
-        of every coordinate from the second round on."""
+        same robots look in frames drawn once (every fsync round)."""
         kept = self._lookers
         if kept is not None and kept.robots == robots:
-            if kept.flip is None and kept.sign is not None and len(robots) * self.n <= FLIP_LIMIT:
-                kept = self._lookers = kept.flipped(self.n - 1)
             return kept
         everyone = len(robots) == self.n and robots == self._everyone_ids
         rows = None if everyone else np.asarray(robots, dtype=np.intp)
@@ -233,7 +216,6 @@ class Looks:
             robots,
             rows,
             sign if bool((sign < 0.0).any()) else None,
-            None,
             _turned_rows(frames, turned) if turned else None,
         )
         if self._fixed is not None:
