@@ -579,22 +579,8 @@ class WorldCore:
         """A reply to the coordinator: the world as it stands (and the model's fields).
         `timed_out`: the reply to a Commit's, the robots of the round it committed without a move.
         """
-        held, fields = self._held, self.model.reply_fields()
-        if fields:
-            return ControlReply(
-                ok,
-                reason,
-                self.setup.n,
-                self.committed,
-                self.open_round,
-                self.status,
-                self.collisions_total,
-                tuple(sorted(held)) if held and self.open_round else (),
-                epoch=self.epoch,
-                timed_out=timed_out,
-                **fields,
-            )
-        return ControlReply(  # (a call with no ** is the cheaper: the rounds' every reply)
+        held = self._held
+        return ControlReply(
             ok,
             reason,
             self.setup.n,
@@ -605,6 +591,7 @@ class WorldCore:
             tuple(sorted(held)) if held and self.open_round else (),
             epoch=self.epoch,
             timed_out=timed_out,
+            **self.model.reply_fields(),
         )
 
     def _goal(self, positions: Points) -> bool:
