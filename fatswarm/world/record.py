@@ -164,7 +164,7 @@ class LineMoves(LazyMoves):
     def __init__(
         self, movers: NDArray[np.integer[Any]], ends: Points, traveled: NDArray[np.float64]
     ) -> None:
-        self._made = None  # (LazyMoves.__init__, inlined: a LineMoves is made every round)
+        super().__init__()
         assert movers.dtype.kind in "iu", f"movers must be integers, not {movers.dtype}"
         self.movers = movers
         self.ends = np.asarray(ends, dtype=np.float64)
