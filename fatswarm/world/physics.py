@@ -895,21 +895,20 @@ def _sorted_pairs(boxes_t: FloatArray) -> tuple[IntArray, IntArray] | None:
 def _pair_gather(n: int) -> IntArray:
     """(2, 4, n, n) indices into boxes (2, n, 2) taken flat, for every pair (i, j) (i major):
     `_close`'s minuends (j's low x, y; i's low x, y) and subtrahends (i's high x, y; j's high x,
-    y) (read-only, shared by the rounds)."""
+    y) (shared by the rounds: never written to, yet writeable, as `take` copies a read-only
+    index at every call)."""
     i = np.arange(n, dtype=np.intp)[:, None].repeat(n, axis=1)
     j = i.T
     lows = np.stack((2 * j, 2 * j + 1, 2 * i, 2 * i + 1))
     highs = np.stack((2 * i, 2 * i + 1, 2 * j, 2 * j + 1)) + 2 * n
-    out = np.ascontiguousarray(np.stack((lows, highs)))
-    out.setflags(write=False)
-    return out
+    return np.ascontiguousarray(np.stack((lows, highs)))
 
 
 @lru_cache(maxsize=64)
 def _window(n: int, k: int) -> tuple[IntArray, IntArray, IntArray]:
     """The pairs (p, p + j) for j = 1 .. k, p + j < n, as two flat arrays, and (2, 4, pairs)
     indices into (4, n) boxes taken flat that gather `_close`'s operands of each pair, p as bi
-    (read-only, shared by the rounds)."""
+    (shared by the rounds: read-only but the indices, writeable as `_pair_gather`'s)."""
     first = np.repeat(np.arange(n, dtype=np.intp), k)
     later = first + np.tile(np.arange(1, k + 1, dtype=np.intp), n)
     keep = later < n
@@ -917,7 +916,7 @@ def _window(n: int, k: int) -> tuple[IntArray, IntArray, IntArray]:
     lows = np.stack((later, later + n, first, first + n))
     highs = np.stack((first, first + n, later, later + n)) + 2 * n
     index = np.stack((lows, highs))
-    for out in (first, later, index):
+    for out in (first, later):
         out.setflags(write=False)
     return first, later, index
 
