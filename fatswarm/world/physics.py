@@ -589,9 +589,9 @@ def apply_lines(
     keys = robots.tolist()
     if m == n and keys == list(range(n)) and np.count_nonzero(np.isfinite(e)) == 2 * m:
         return _line_round(start, _every(n), keys, e, points, True)  # increasing, in range
-    if m > 1 and not (robots[1:] > robots[:-1]).all():
+    if m > 1 and np.count_nonzero(robots[1:] > robots[:-1]) < m - 1:
         raise InvalidRoundError("apply_lines takes each mover once, in increasing order")
-    if robots[0] < 0 or robots[-1] >= n or not np.isfinite(e).all():
+    if keys[0] < 0 or keys[-1] >= n or np.count_nonzero(np.isfinite(e)) < 2 * m:
         xy = e.tolist()  # apply_round says what is wrong, as it would for these paths
         paths = {int(r): Path((Line((x, y)),)) for r, (x, y) in zip(keys, xy, strict=True)}
         return apply_round(start, paths, points=points)
