@@ -830,7 +830,7 @@ def _near_pairs(
         pj = _tiled(n, m)
         near &= pi != pj
         return pi[near], pj[near], True
-    pairs = _sorted_pairs(_rows(boxes))
+    pairs = _sorted_pairs(boxes)
     if pairs is None:
         return None
     pa, pb = pairs
@@ -869,23 +869,24 @@ def _close(gathered: FloatArray, reach_squared: FloatArray) -> BoolArray:
     return close
 
 
-def _sorted_pairs(boxes_t: FloatArray) -> tuple[IntArray, IntArray] | None:
-    """Pairs of robots (each pair once, a != b) whose boxes ((4, n): xmin, ymin, xmax, ymax) come
-    within NEAR_REACH by `_boxes_close`'s test, or None if there is none: a sort of the boxes
-    by their low x. A pair within reach has the later low at most the earlier box's high +
-    NEAR_REACH (else the gap on x alone is beyond reach, rounding being monotone), so lies at most
-    k places apart in that order, k the most places any box's window spans: each box is tested
-    against the next k (the earlier one as bi, the later as bj), in the order of `_window`."""
-    n = boxes_t.shape[1]
-    order = boxes_t[0].argsort()
-    boxes = boxes_t.take(order, axis=1)
-    reach = boxes[0].searchsorted(boxes[2] + NEAR_REACH, side="right")
+def _sorted_pairs(boxes: FloatArray) -> tuple[IntArray, IntArray] | None:
+    """Pairs of robots (each pair once, a != b) whose boxes ((2, n, 2): the low corners, then the
+    high ones) come within NEAR_REACH by `_boxes_close`'s test, or None if there is none: a sort
+    of the boxes by their low x. A pair within reach has the later low at most the earlier box's
+    high + NEAR_REACH (else the gap on x alone is beyond reach, rounding being monotone), so lies
+    at most k places apart in that order, k the most places any box's window spans: each box is
+    tested against the next k (the earlier one as bi, the later as bj), in the order of
+    `_window`."""
+    n = boxes.shape[1]
+    order = boxes[0, :, 0].argsort()
+    ordered = boxes.take(order, axis=1)
+    reach = ordered[0, :, 0].searchsorted(ordered[1, :, 0] + NEAR_REACH, side="right")
     reach -= _every(n)
     k = int(np.maximum.reduce(reach)) - 1  # reach[p] > p: a box's low is at most its high
     if k <= 0:
         return None
     first, later, index = _window(n, k)
-    near = _close(boxes.take(index), NEAR_REACH_SQUARED)
+    near = _close(ordered.take(index), NEAR_REACH_SQUARED)
     if not np.count_nonzero(near):
         return None
     return order.take(first[near]), order.take(later[near])
@@ -907,14 +908,14 @@ def _pair_gather(n: int) -> IntArray:
 @lru_cache(maxsize=64)
 def _window(n: int, k: int) -> tuple[IntArray, IntArray, IntArray]:
     """The pairs (p, p + j) for j = 1 .. k, p + j < n, as two flat arrays, and (2, 4, pairs)
-    indices into (4, n) boxes taken flat that gather `_close`'s operands of each pair, p as bi
+    indices into (2, n, 2) boxes taken flat that gather `_close`'s operands of each pair, p as bi
     (shared by the rounds: read-only but the indices, writeable as `_pair_gather`'s)."""
     first = np.repeat(np.arange(n, dtype=np.intp), k)
     later = first + np.tile(np.arange(1, k + 1, dtype=np.intp), n)
     keep = later < n
     first, later = first[keep], later[keep]
-    lows = np.stack((later, later + n, first, first + n))
-    highs = np.stack((first, first + n, later, later + n)) + 2 * n
+    lows = np.stack((2 * later, 2 * later + 1, 2 * first, 2 * first + 1))
+    highs = np.stack((2 * first, 2 * first + 1, 2 * later, 2 * later + 1)) + 2 * n
     index = np.stack((lows, highs))
     for out in (first, later):
         out.setflags(write=False)
