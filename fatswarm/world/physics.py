@@ -119,7 +119,12 @@ def _as_points(positions: Any) -> Points:
         raise InvalidConfigurationError(
             f"positions must be a list of [x, y] number pairs ({exc})"
         ) from None
-    if arr.ndim == 2 and arr.shape[1] == 2 and arr.size and np.isfinite(arr).all():
+    if (
+        arr.ndim == 2
+        and arr.shape[1] == 2
+        and arr.size
+        and np.count_nonzero(np.isfinite(arr)) == arr.size
+    ):
         return arr  # the common case: the checks below all pass
     if arr.size == 0:
         raise InvalidConfigurationError("positions are empty: give at least one robot as [x, y]")
@@ -464,12 +469,18 @@ def _nearest_corners(p: Points) -> Points:
     low = np.minimum.reduce(size, axis=None) if len(p) else CORNERS_EXACT_LOW
     if low < CORNERS_EXACT_LOW or not np.maximum.reduce(size, axis=None) < CORNERS_EXACT_HIGH:
         return _nearest_corners_by_distance(p)
-    nearest = np.multiply(p, 2.0**GRID_BITS, out=size)  # p / GRID, exactly
-    nearest -= 0.5  # exact: |p / GRID| < 2**52
+    nearest: Points = np.multiply(p, _PER_GRID, out=size)  # p / GRID, exactly
+    nearest -= _HALF  # exact: |p / GRID| < 2**52
     np.ceil(nearest, out=nearest)
-    nearest *= GRID
-    nearest += 0.0  # -0.0 -> +0.0, as base + 0.0
+    nearest *= _GRID
+    nearest += _ZERO  # -0.0 -> +0.0, as base + 0.0
     return nearest
+
+
+# `_nearest_corners`' constants as arrays: a Python float costs a conversion in every call
+_PER_GRID: Final = np.array(2.0**GRID_BITS)
+_HALF: Final = np.array(0.5)
+_GRID: Final = np.array(GRID)
 
 
 CORNERS_EXACT_LOW: Final = 2.0**-17
@@ -528,8 +539,9 @@ def apply_round(
     if lines is not None:  # the common round: every path one Line (`apply_lines`)
         keys, ends = lines
         n = len(start)
-        robots = _every(n) if keys == list(range(n)) else np.array(keys, dtype=np.intp)
-        return _line_round(start, robots, keys, ends, points)
+        everyone = keys == list(range(n))
+        robots = _every(n) if everyone else np.array(keys, dtype=np.intp)
+        return _line_round(start, robots, keys, ends, points, everyone)
     moves = _check_moves(paths, len(start))
     traveled = {robot: 0.0 for robot, _ in moves}
     # Simulate in a frame centred on a mover (a grid point: the shift is exact for grid positions
@@ -562,7 +574,7 @@ def apply_lines(
     lines (what `transform(Path((Line(end),)), start)` gives). Raises InvalidRoundError if movers
     and ends do not match in shape or the movers are not increasing.
     """
-    start = _as_points(positions)
+    start = _given_points(positions)  # not written to, nor returned: copied only if returned
     robots = np.asarray(movers)
     e = np.asarray(ends, dtype=np.float64)
     m = len(robots) if robots.ndim == 1 else -1
@@ -572,16 +584,37 @@ def apply_lines(
             f"{robots.dtype} {robots.shape} and {e.shape}"
         )
     if m == 0:
-        return RoundOutcome(positions=start, traveled={})
-    if m > 1 and not (robots[1:] > robots[:-1]).all():
+        return RoundOutcome(positions=start.copy(), traveled={})
+    n = len(start)
+    keys = robots.tolist()
+    if m == n and keys == list(range(n)) and np.count_nonzero(np.isfinite(e)) == 2 * m:
+        return _line_round(start, _every(n), keys, e, points, True)  # increasing, in range
+    if m > 1 and np.count_nonzero(robots[1:] > robots[:-1]) < m - 1:
         raise InvalidRoundError("apply_lines takes each mover once, in increasing order")
-    if robots[0] < 0 or robots[-1] >= len(start) or not np.isfinite(e).all():
+    if keys[0] < 0 or keys[-1] >= n or np.count_nonzero(np.isfinite(e)) < 2 * m:
         xy = e.tolist()  # apply_round says what is wrong, as it would for these paths
-        paths = {
-            int(r): Path((Line((x, y)),)) for r, (x, y) in zip(robots.tolist(), xy, strict=True)
-        }
+        paths = {int(r): Path((Line((x, y)),)) for r, (x, y) in zip(keys, xy, strict=True)}
         return apply_round(start, paths, points=points)
-    return _line_round(start, robots.astype(np.intp, copy=False), robots.tolist(), e, points)
+    return _line_round(start, robots.astype(np.intp, copy=False), keys, e, points, m == n)
+
+
+_FLOAT64: Final = np.dtype(np.float64)
+
+
+def _given_points(positions: Any) -> Points:
+    """`_as_points(positions)`, but `positions` itself where it is a float64 (n, 2) array with
+    n >= 1 and finite values (the lock step's every round): for a caller that neither writes to
+    it nor returns it."""
+    if (
+        type(positions) is np.ndarray
+        and positions.dtype is _FLOAT64
+        and positions.ndim == 2
+        and positions.shape[1] == 2
+        and len(positions)
+        and np.count_nonzero(np.isfinite(positions)) == positions.size
+    ):
+        return positions
+    return _as_points(positions)
 
 
 _INT: Final = frozenset({int})
@@ -621,21 +654,36 @@ def _straight_lines(paths: Mapping[int, Path], n: int) -> tuple[list[int], Point
 
 
 def _line_round(
-    start: Points, robots: IntArray, keys: list[int], ends: Points, points: bool
+    start: Points, robots: IntArray, keys: list[int], ends: Points, points: bool, everyone: bool
 ) -> RoundOutcome:
     """apply_round when every path is one Line, from arrays: `robots` (m,) (`keys` the same as
-    ints), world `ends` (m, 2), checked. The very arithmetic of build_motion's `_single_lines`,
-    the general path and `_outcome`, on arrays; a round whose movers' boxes come nowhere near
-    another robot skips the contact search (as the general path does when it finds no pair)."""
+    ints), world `ends` (m, 2), checked; `everyone`: robots is arange(n). The very arithmetic of
+    build_motion's `_single_lines`, the general path and `_outcome`, on arrays; a round whose
+    movers' boxes come nowhere near another robot skips the contact search (as the general path
+    does when it finds no pair). `start` is not written to, nor returned: the outcome's positions
+    are a new array."""
     n = len(start)
-    everyone = len(keys) == n and keys == list(range(n))  # robots is arange(n)
     ox, oy = snap_point(*start[keys[0]].tolist())  # as the general path: a frame on a mover
     origin = np.array((ox, oy))
     here_w = start if everyone else start.take(robots, axis=0)
     here = here_w - origin  # the local frame's start points: start - origin, row by row
     e = ends - origin  # ends + (-ox, -oy), as _single_lines: x - y is x + (-y)
-    step = e - here
-    np.abs(step, out=step)
+    boxes: FloatArray | None = None
+    if points:
+        step = e - here
+        np.abs(step, out=step)
+    else:  # the boxes: (2, n, 2), the low corners then the high ones (`_near_pairs`)
+        boxes = np.empty((2, n, 2))
+        if everyone:
+            lo = np.minimum(e, here, out=boxes[0])
+            hi = np.maximum(e, here, out=boxes[1])
+        else:
+            boxes[:] = start - origin
+            lo = np.minimum(e, here)
+            hi = np.maximum(e, here)
+            boxes[0, robots] = lo
+            boxes[1, robots] = hi
+        step = hi - lo  # |e - here|, to the bit: max - min is the difference's magnitude
     longest = np.maximum(step[:, 0], step[:, 1])  # 0 only for a line of length 0
     total: list[float] | None = None  # the lines' lengths (CPython's hypot, as _single_lines)
     if np.count_nonzero(longest) < len(keys) or not np.maximum.reduce(longest) < LINE_SAFE:
@@ -653,7 +701,10 @@ def _line_round(
     else:  # a zero-length line moves nobody: not a row, traveled 0.0, no length
         keep = np.array(total) > 0.0
         if not keep.any():
-            return RoundOutcome(positions=start, traveled=dict.fromkeys(keys, 0.0))
+            return RoundOutcome(positions=start.copy(), traveled=dict.fromkeys(keys, 0.0))
+        if boxes is not None:  # the box of one that stays is its point, as it is
+            still = robots[~keep]
+            boxes[:, still] = start.take(still, axis=0) - origin
         robots, here, e = robots[keep], here[keep], e[keep]
         everyone = False
         traveled = dict.fromkeys(keys, 0.0)
@@ -666,19 +717,8 @@ def _line_round(
         final = start.copy()
         final[robots] = snap(e + origin)
         return RoundOutcome(final, traveled, [], lengths)
-    # the boxes: min and max of here and the end (np.where(e < here, e, here) but for the sign
-    # of a zero, which no test of a box sees: they compare, subtract and square)
-    lo = np.minimum(e, here)
-    hi = np.maximum(e, here)
-    if everyone:  # boxes_t: (4, n) xmin, ymin, xmax, ymax of every robot in the local frame
-        boxes_t = np.concatenate((lo.T, hi.T))
-        local = here
-    else:
-        local = start - origin
-        boxes_t = np.concatenate((local.T, local.T))
-        boxes_t[:2, robots] = lo.T
-        boxes_t[2:, robots] = hi.T
-    pairs = _near_pairs(boxes_t, robots, everyone)
+    assert boxes is not None
+    pairs = _near_pairs(boxes, robots, everyone)
     if pairs is None:  # no pair can meet, no mover ends near anyone:
         if everyone:  # every mover to the grid point nearest its end (`_snap_near`)
             return RoundOutcome(_nearest_corners(e + origin), traveled, [], lengths)
@@ -691,6 +731,7 @@ def _line_round(
         final = start.copy()
         final[robots] = e + origin
     si, sj, brute = pairs  # both (a, b) and (b, a) where both move: `_snap_near`
+    boxes_t = _rows(boxes)
     close = _boxes_close(boxes_t, si, sj, 2.0 + BOX_MARGIN)
     if everyone:  # each pair once, as (lower id, higher id)
         close &= sj > si
@@ -709,13 +750,20 @@ def _line_round(
         pi, pj = pi[order], pj[order]
     if total is None:
         total = list(map(hypot, *(e - here).T.tolist()))
-    box = np.concatenate((lo, hi), axis=1)
+    box = np.concatenate((boxes[0].take(robots, axis=0), boxes[1].take(robots, axis=0)), axis=1)
+    local = start - origin
     mo = line_motion(local, robots, here, e, np.array(total, dtype=np.float64), box)
     final, collisions = _contacts(start, mo, (ox, oy), pi, pj, (si, sj))  # final anew
     if collisions:  # as _outcome: the whole path's (world) length unless stopped short
         rows = zip(robots.tolist(), mo.stop.tolist(), total, strict=True)
         traveled.update({r: lengths[r] if stop >= t else stop for r, stop, t in rows})
     return RoundOutcome(final, traveled, collisions, lengths)
+
+
+def _rows(boxes: FloatArray) -> FloatArray:
+    """Boxes (2, n, 2) (low corners, high corners) as (4, n) rows: xmin, ymin, xmax, ymax."""
+    rows: FloatArray = boxes.transpose(0, 2, 1).reshape(4, -1)
+    return rows
 
 
 LINE_SAFE: Final = 1e300
@@ -761,37 +809,38 @@ def _contacts(
 
 
 def _near_pairs(
-    boxes_t: FloatArray, movers: IntArray, everyone: bool
+    boxes: FloatArray, movers: IntArray, everyone: bool
 ) -> tuple[IntArray, IntArray, bool] | None:
-    """Every pair (mover, other robot) whose boxes ((4, n): xmin, ymin, xmax, ymax) come within
-    NEAR_REACH by `_boxes_close`'s test, both ways round where both move, and whether they come
-    in the brute force's order (mover by mover, then robot); None if there is none, the common
-    round, proved in a few numpy calls. `everyone`: movers is arange(n).
+    """Every pair (mover, other robot) whose boxes ((2, n, 2): the low corners, then the high
+    ones) come within NEAR_REACH by `_boxes_close`'s test, both ways round where both move, and
+    whether they come in the brute force's order (mover by mover, then robot); None if there is
+    none, the common round, proved in a few numpy calls. `everyone`: movers is arange(n).
 
-    Up to NEAR_BRUTE pairs, `_boxes_close` on every (mover, robot) pair; beyond, on the few pairs
-    a sort along x leaves (`_sorted_pairs`)."""
-    n = boxes_t.shape[1]
+    Up to NEAR_BRUTE pairs, `_boxes_close`'s arithmetic on every (mover, robot) pair, gathered
+    in one call (`_pair_gather`); beyond, on the few pairs a sort along x leaves
+    (`_sorted_pairs`)."""
+    n = boxes.shape[1]
     m = len(movers)
     if m * n <= NEAR_BRUTE:
-        pi = _repeated(n) if everyone else movers.repeat(n)
-        pj = _tiled(n, m)
-        near = _boxes_close(boxes_t, pi, pj, NEAR_REACH)  # each mover with itself among them
+        index = _pair_gather(n) if everyone else _pair_gather(n)[:, :, movers]
+        near = _close(boxes.take(index), NEAR_REACH_SQUARED).ravel()  # each mover with itself
         if np.count_nonzero(near) == m:
             return None
+        pi = _repeated(n) if everyone else movers.repeat(n)
+        pj = _tiled(n, m)
         near &= pi != pj
         return pi[near], pj[near], True
-    pairs = _sorted_pairs(boxes_t)
+    pairs = _sorted_pairs(boxes)
     if pairs is None:
         return None
     pa, pb = pairs
-    near = _boxes_close(boxes_t, pa, pb, NEAR_REACH)  # symmetric in its pair
     if not everyone:
         moving = np.zeros(n, dtype=np.bool_)
         moving[movers] = True
-        near &= moving.take(pa) | moving.take(pb)  # two still robots are no concern of the round
-    if not np.count_nonzero(near):
-        return None
-    pa, pb = pa[near], pb[near]
+        near = moving.take(pa) | moving.take(pb)  # two still robots are no concern of the round
+        if not np.count_nonzero(near):
+            return None
+        pa, pb = pa[near], pb[near]
     if everyone:
         return np.concatenate((pa, pb)), np.concatenate((pb, pa)), False
     a_moves, b_moves = moving.take(pa), moving.take(pb)
@@ -804,46 +853,73 @@ def _near_pairs(
 
 NEAR_BRUTE = 512
 """Up to this many (mover, robot) pairs, `_near_pairs` tests every pair rather than sort."""
+NEAR_REACH_SQUARED: Final = np.array(NEAR_REACH**2)
+"""`_boxes_close`'s bound at NEAR_REACH, as an array (a Python float costs a conversion a call)."""
+_ZERO: Final = np.array(0.0)
 
 
-def _sorted_pairs(boxes_t: FloatArray) -> tuple[IntArray, IntArray] | None:
-    """Pairs of robots (each pair once, a != b) among which is every pair whose boxes ((4, n))
-    come within NEAR_REACH by `_boxes_close`'s test, or None if there is none: a sort of the boxes
-    by their low x. A pair within reach has the later low at most the earlier box's high +
-    NEAR_REACH (else the gap on x alone is beyond reach, rounding being monotone), so lies at most
-    k places apart in that order, k the most places any box's window spans: each box is tested
-    against the next k, first on each axis alone (cheap, and implied by the test: a gap**2 alone
-    reaches reach**2 else)."""
-    n = boxes_t.shape[1]
-    order = boxes_t[0].argsort()
-    boxes = boxes_t.take(order, axis=1)
-    reach = boxes[0].searchsorted(boxes[2] + NEAR_REACH, side="right")
+def _close(gathered: FloatArray, reach_squared: FloatArray) -> BoolArray:
+    """`_boxes_close` on pairs gathered as (2, 4, ...): the minuends, then the subtrahends, of
+    bj's low - bi's high (x, y), then bi's low - bj's high (x, y); the same arithmetic."""
+    d = gathered[0] - gathered[1]
+    gap = np.maximum(d[:2], d[2:])
+    np.maximum(gap, _ZERO, out=gap)
+    gap *= gap
+    close: BoolArray = gap[0] + gap[1] < reach_squared
+    return close
+
+
+def _sorted_pairs(boxes: FloatArray) -> tuple[IntArray, IntArray] | None:
+    """Pairs of robots (each pair once, a != b) whose boxes ((2, n, 2): the low corners, then the
+    high ones) come within NEAR_REACH by `_boxes_close`'s test, or None if there is none: a sort
+    of the boxes by their low x. A pair within reach has the later low at most the earlier box's
+    high + NEAR_REACH (else the gap on x alone is beyond reach, rounding being monotone), so lies
+    at most k places apart in that order, k the most places any box's window spans: each box is
+    tested against the next k (the earlier one as bi, the later as bj), in the order of
+    `_window`."""
+    n = boxes.shape[1]
+    order = boxes[0, :, 0].argsort()
+    ordered = boxes.take(order, axis=1)
+    reach = ordered[0, :, 0].searchsorted(ordered[1, :, 0] + NEAR_REACH, side="right")
     reach -= _every(n)
     k = int(np.maximum.reduce(reach)) - 1  # reach[p] > p: a box's low is at most its high
     if k <= 0:
         return None
-    first, later, both = _window(n, k)
-    pair = boxes.take(both, axis=1)  # (4, 2 p): the first boxes, then the later ones
-    bi, bj = pair[:, : len(first)], pair[:, len(first) :]
-    gap = np.maximum(bj[:2] - bi[2:], bi[:2] - bj[2:])
-    maybe = np.maximum(gap[0], gap[1], out=gap[0]) < NEAR_REACH
-    if not np.count_nonzero(maybe):
+    first, later, index = _window(n, k)
+    near = _close(ordered.take(index), NEAR_REACH_SQUARED)
+    if not np.count_nonzero(near):
         return None
-    return order.take(first[maybe]), order.take(later[maybe])
+    return order.take(first[near]), order.take(later[near])
+
+
+@lru_cache(maxsize=64)
+def _pair_gather(n: int) -> IntArray:
+    """(2, 4, n, n) indices into boxes (2, n, 2) taken flat, for every pair (i, j) (i major):
+    `_close`'s minuends (j's low x, y; i's low x, y) and subtrahends (i's high x, y; j's high x,
+    y) (shared by the rounds: never written to, yet writeable, as `take` copies a read-only
+    index at every call)."""
+    i = np.arange(n, dtype=np.intp)[:, None].repeat(n, axis=1)
+    j = i.T
+    lows = np.stack((2 * j, 2 * j + 1, 2 * i, 2 * i + 1))
+    highs = np.stack((2 * i, 2 * i + 1, 2 * j, 2 * j + 1)) + 2 * n
+    return np.ascontiguousarray(np.stack((lows, highs)))
 
 
 @lru_cache(maxsize=64)
 def _window(n: int, k: int) -> tuple[IntArray, IntArray, IntArray]:
-    """The pairs (p, p + j) for j = 1 .. k, p + j < n, as two flat arrays and the two end to end
-    (read-only, shared by the rounds)."""
+    """The pairs (p, p + j) for j = 1 .. k, p + j < n, as two flat arrays, and (2, 4, pairs)
+    indices into (2, n, 2) boxes taken flat that gather `_close`'s operands of each pair, p as bi
+    (shared by the rounds: read-only but the indices, writeable as `_pair_gather`'s)."""
     first = np.repeat(np.arange(n, dtype=np.intp), k)
     later = first + np.tile(np.arange(1, k + 1, dtype=np.intp), n)
     keep = later < n
     first, later = first[keep], later[keep]
-    both = np.concatenate((first, later))
-    for out in (first, later, both):
+    lows = np.stack((2 * later, 2 * later + 1, 2 * first, 2 * first + 1))
+    highs = np.stack((2 * first, 2 * first + 1, 2 * later, 2 * later + 1)) + 2 * n
+    index = np.stack((lows, highs))
+    for out in (first, later):
         out.setflags(write=False)
-    return first, later, both
+    return first, later, index
 
 
 @lru_cache(maxsize=64)

@@ -14,9 +14,14 @@ from hypothesis import strategies as st
 from fatswarm.domain.path import Line, Path
 from fatswarm.domain.tolerance import GRID, snap
 from fatswarm.world.physics import (
+    NEAR_BRUTE,
+    NEAR_REACH,
     InvalidRoundError,
     RoundOutcome,
+    _boxes_close,
+    _near_pairs,
     _nearest_corners,
+    _rows,
     apply_lines,
     apply_round,
 )
@@ -121,6 +126,59 @@ def test_apply_lines_without_movers_moves_nobody() -> None:
     start = np.array([[0.0, 0.0], [4.0, 0.0]])
     out = apply_lines(start, np.zeros(0, dtype=np.intp), np.zeros((0, 2)))
     assert out.positions.tobytes() == start.tobytes() and out.traveled == {}
+
+
+@pytest.mark.parametrize(
+    ("movers", "steps"),
+    [
+        ([0, 1, 2], [[1e-4, 0.0], [0.0, 1e-4], [0.5, 0.5]]),  # everyone, nobody near
+        ([0, 1, 2], [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]]),  # everyone, nobody moves
+        ([0, 1, 2], [[0.0, 0.0], [1e-4, 0.0], [0.0, 0.0]]),  # everyone, one moves
+        ([1], [[0.3, 0.0]]),  # some
+        ([0, 1, 2], [[2.0, 0.0], [-2.0, 0.0], [0.0, -1.0]]),  # contacts
+        ([], []),  # nobody
+    ],
+)
+@pytest.mark.parametrize("points", [False, True])
+def test_apply_lines_neither_writes_nor_returns_the_given_positions(
+    movers: list[int], steps: list[list[float]], points: bool
+) -> None:
+    """apply_lines reads the caller's positions without a copy: the outcome is a new array."""
+    start = np.array([[0.0, 0.0], [2.5, 0.0], [0.0, 5.0]])
+    kept = start.copy()
+    ids = np.array(movers, dtype=np.intp)
+    ends = start[ids] + np.array(steps, dtype=np.float64).reshape(-1, 2)
+    out = apply_lines(start, ids, ends, points=points)
+    assert not np.shares_memory(out.positions, start)
+    assert start.tobytes() == kept.tobytes()
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.integers(1, 40), st.integers(0, 2**32 - 1), st.floats(0.1, 1.0))
+def test_near_pairs_are_the_pairs_boxes_close_finds(n: int, seed: int, share: float) -> None:
+    """The gathered near-pair test (every pair, or a sort's window) finds the very (mover, robot)
+    pairs `_boxes_close` finds among all of them, in the brute force's order when it says so."""
+    rng = np.random.default_rng(seed)
+    movers = np.flatnonzero(rng.random(n) < share)
+    if not len(movers):
+        movers = np.array([0], dtype=np.intp)
+    lo = rng.uniform(-3.0, 3.0, (n, 2)) * np.sqrt(n)
+    boxes = np.stack((lo, lo))
+    boxes[1, movers] += rng.uniform(0.0, 1.5, (len(movers), 2))
+    pi, pj = movers.repeat(n), np.tile(np.arange(n), len(movers))
+    close = _boxes_close(_rows(boxes), pi, pj, NEAR_REACH) & (pi != pj)
+    found = _near_pairs(boxes, movers, len(movers) == n)
+    if not close.any():
+        assert found is None
+        return
+    assert found is not None
+    si, sj, brute = found
+    assert brute == (len(movers) * n <= NEAR_BRUTE)
+    if brute:
+        assert si.tolist() == pi[close].tolist() and sj.tolist() == pj[close].tolist()
+    else:
+        got = zip(si.tolist(), sj.tolist(), strict=True)
+        assert sorted(got) == sorted(zip(pi[close].tolist(), pj[close].tolist(), strict=True))
 
 
 @settings(max_examples=60, deadline=None)
