@@ -190,6 +190,12 @@ class LineMoves(LazyMoves):
         movers: list[int] = self.movers.tolist()  # Python ints (`movers` is of integers)
         return movers
 
+    def every(self, n: int) -> bool:
+        """Whether the movers are every robot of an n-robot run, 0..n-1 (increasing: the first 0
+        and the last n - 1 say it)."""
+        movers = self.movers
+        return len(movers) == n and (n == 0 or (movers[0] == 0 and movers[-1] == n - 1))
+
     def lengths(self, before: Points) -> list[float]:
         """Each move's path length from its robot's position in `before` ((n, 2)), as
         `path_length` measures its one Line (the same floats: the differences are IEEE's in
