@@ -78,10 +78,10 @@ def _changed_by_numpy(before: np.ndarray, after: np.ndarray) -> bool:
 
 
 HALF = 0.5 * MOVE_TOLERANCE
+NEAR = (0.0, HALF, np.nextafter(HALF, 0.0), np.nextafter(HALF, 1.0), MOVE_TOLERANCE)
 SHIFTS = st.one_of(
     st.sampled_from(
-        [0.0, HALF, np.nextafter(HALF, 0.0), np.nextafter(HALF, 1.0), MOVE_TOLERANCE]
-        + [np.nextafter(MOVE_TOLERANCE, 1.0), MOVE_TOLERANCE / math.sqrt(2.0), 1e-4]
+        (*NEAR, np.nextafter(MOVE_TOLERANCE, 1.0), MOVE_TOLERANCE / math.sqrt(2.0), 1e-4)
     ).flatmap(lambda d: st.sampled_from([d, -d])),
     st.sampled_from([math.nan, math.inf, -math.inf, 1e308]),
     st.floats(-2e-9, 2e-9),
