@@ -15,6 +15,7 @@ import numpy as np
 from fatswarm.domain.figures import FigureValue, RunFolder
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Points
+from fatswarm.domain.quick import quick_new
 
 # A robot "moved" (the configuration changed) when its centre shifted by more than this. Far above
 # float noise at coordinates ~1e3 (~1e-13), far below any planned move (>= ~1e-6, the algorithm's
@@ -225,7 +226,7 @@ class ProgressTracker:
         else:
             by_robot = tuple(map(everyone.__add__, self._moves) if everyone else self._moves)
             moves = sum(by_robot)
-        return Progress(
+        return _new_progress(
             status=self._status,
             rounds=self._rounds,
             epochs=self._epochs,
@@ -236,6 +237,9 @@ class ProgressTracker:
             crashed=tuple(sorted(self._crashed)) if self._crashed else (),
             derived=self._derived.snapshot(),
         )
+
+
+_new_progress: Final = quick_new(Progress)  # (built every round: no __init__ of 9 setattrs)
 
 
 def _outside(robots: Collection[int], n: int) -> bool:
