@@ -182,6 +182,7 @@ def _pair_squares(
     return first, second, dx * dx + dy * dy
 
 
+_F64: Final = np.dtype(np.float64)
 NEAR_MARGIN: Final = 1.0  # _GapMemo's near pairs: those within the least distance + this
 NEAR_BACKOFF: Final = 8  # rounds without near pairs after a list that served no round, at
 NEAR_BACKOFF_MAX: Final = 256  # first; twice as many after each such list, up to this
@@ -212,9 +213,15 @@ class _GapMemo:
         self._wait = NEAR_BACKOFF // 2  # the backoff after a list that served no round
 
     def min_gap(self, positions: Points) -> float | None:
-        pts = positions.reshape(-1, 2)
-        if len(pts) < KEPT_FROM:  # (every pair at once: cheaper than keeping any)
-            return math.sqrt(_closest(pts)[0]) - 2 * RADIUS if len(pts) >= 2 else None
+        shape = positions.shape  # (a reshape to (n, 2) costs more than the test of one)
+        pts = positions if len(shape) == 2 and shape[1] == 2 else positions.reshape(-1, 2)
+        n = len(pts)
+        if n < KEPT_FROM:  # (every pair at once: cheaper than keeping any)
+            if n < 2:
+                return None
+            return (
+                math.sqrt((_closest_few(pts) if n <= FEW_UP_TO else _closest(pts))[0]) - 2 * RADIUS
+            )
         found = self._near_ones(pts)  # (finite positions only: a NaN or infinity fails it)
         if found is None:
             if not np.isfinite(pts).all():
@@ -533,7 +540,11 @@ def summarise(how: Summary, so_far: FigureValue, value: FigureValue) -> FigureVa
     `value` (None: the figure does not apply to it, and the run's value stays)."""
     if value is None:
         return so_far
-    if so_far is None or how == _LAST:
+    if so_far is None or how is _LAST:
+        return value
+    if how is _ADDED[0] or how is _ADDED[1]:  # (the members themselves: no text compared)
+        return so_far + value  # type: ignore[operator]
+    if how == _LAST:
         return value
     if how == _FIRST:
         return so_far
@@ -547,6 +558,7 @@ def summarise(how: Summary, so_far: FigureValue, value: FigureValue) -> FigureVa
 # (the members read once: an enum's member read from its class costs more than the test, and the
 # folder summarises every derived figure every round)
 _LAST, _FIRST, _MIN, _MAX = Summary.LAST, Summary.FIRST, Summary.MIN, Summary.MAX
+_ADDED = (Summary.SUM, Summary.COUNT)
 
 
 class RunFolder:
@@ -564,7 +576,11 @@ class RunFolder:
     def add(
         self, positions: Points, round_no: int = 0, line: Mapping[str, Any] | None = None
     ) -> None:
-        pts = np.asarray(positions, dtype=np.float64)
+        pts = (  # (np.asarray(..., dtype=np.float64) costs more than the test of an array that is)
+            positions
+            if type(positions) is np.ndarray and positions.dtype is _F64
+            else np.asarray(positions, dtype=np.float64)
+        )
         figures = derived_figures()
         seen = (pts.shape, pts.tobytes())  # the positions to the bit
         last = self._last

@@ -77,7 +77,8 @@ class ProgressTracker:
         self._some = False
         self._robots = frozenset(range(n))
         self._every_robot = range(n)  # `observe`'s movers when every robot moved, each once
-        # the last active tuple given whose robots were each of 0..n-1, and its set (not changed)
+        # the last active tuple given whose robots were each of 0..n-1, and its set (not changed):
+        # a round's active robots are often the last round's (every robot, under fsync)
         self._active_known: tuple[tuple[int, ...], Set[int]] = ((), frozenset())
         self._distance = 0.0
         self._collisions = 0
@@ -141,7 +142,7 @@ class ProgressTracker:
         n, robots = self.n, self._robots  # (each equal to one of 0..n-1: as its int, in a set)
         known = self._active_known
         active_set: Set[int]
-        if active is known[0]:  # the last round's active tuple (the world core keeps it): known
+        if active is known[0] or (type(active) is tuple and active == known[0]):  # as last round's
             active_set, active_ok = known[1], True
         else:
             active_set = set(active)
@@ -163,8 +164,11 @@ class ProgressTracker:
         if self._crashed:  # a crashed robot stays, as if active and asking to stay
             active_set = active_set | self._crashed
         self._count(active_set, movers, everyone, traveled, collisions)
-        before_arr = np.asarray(before, dtype=np.float64)
-        after_arr = np.asarray(after, dtype=np.float64)
+        # (as np.asarray(..., dtype=np.float64), which costs more than the test for arrays that are)
+        before_arr = (
+            before if type(before) is np.ndarray and before.dtype is _F64 else _floats(before)
+        )
+        after_arr = after if type(after) is np.ndarray and after.dtype is _F64 else _floats(after)
         self._derived.add(after_arr, self._rounds, line)
         if changed if changed is not None else configuration_changed(before_arr, after_arr):
             # The robots active this round looked at the old configuration: start counting afresh.
@@ -237,6 +241,13 @@ class ProgressTracker:
             crashed=tuple(sorted(self._crashed)) if self._crashed else (),
             derived=self._derived.snapshot(),
         )
+
+
+_F64: Final = np.dtype(np.float64)
+
+
+def _floats(points: Points) -> Points:
+    return np.asarray(points, dtype=np.float64)
 
 
 _new_progress: Final = quick_new(Progress)  # (built every round: no __init__ of 9 setattrs)
