@@ -26,6 +26,7 @@ from fatswarm.domain.path import Points
 
 RADIUS: Final = 1.0  # every robot is a unit disc: the rim-to-rim gap is the centres' less 2
 PAIRWISE_UP_TO: Final = 80  # min_gap measures every pair up to this many robots (faster there)
+FEW_UP_TO: Final = 5  # up to this many robots, every pair in Python floats (no numpy call)
 KEPT_FROM: Final = 48  # a run's min_gap is kept from round to round (`_GapMemo`) from this many
 
 
@@ -107,6 +108,8 @@ def _closest(pts: Points) -> tuple[float, int, int]:
     """The least squared centre distance of two of the (n, 2) `pts` (n >= 2), and a pair of
     robots (i, j) at it (`min_gap`'s measure; NaN if a coordinate is: then i, j say nothing)."""
     n = len(pts)
+    if n <= FEW_UP_TO:
+        return _closest_few(pts)
     if n <= PAIRWISE_UP_TO:
         first, second, squares = _pair_squares(pts)
         k = int(squares.argmin())  # (the first NaN, if any: the least is NaN then, as np.min's)
@@ -134,6 +137,36 @@ def _closest(pts: Points) -> tuple[float, int, int]:
     return best2, int(order[pair[0]]), int(order[pair[1]])
 
 
+def _closest_few(pts: Points) -> tuple[float, int, int]:
+    """`_closest` of a few (n, 2) `pts` (2 <= n <= FEW_UP_TO) in Python floats: the same squares
+    (`dx * dx + dy * dy` of dx = x_i - x_j, dy = y_i - y_j: IEEE's operations, one at a time, as
+    numpy's), the first of the least in the pairs' order (i < j, by i then j), the first NaN if
+    there is one (as `argmin`: a square is never negative, so the sum is NaN just then)."""
+    flat: list[float] = pts.ravel().tolist()
+    if len(flat) == 4:  # two robots: one pair
+        dx, dy = flat[0] - flat[2], flat[1] - flat[3]
+        return dx * dx + dy * dy, 0, 1
+    pairs = _few_pairs(len(pts))
+    squares = [
+        (dx := flat[a] - flat[b]) * dx + (dy := flat[a + 1] - flat[b + 1]) * dy for a, b in pairs
+    ]
+    best2 = min(squares)
+    total = sum(squares)
+    if total != total:  # a NaN (min would not say which)
+        k = next(k for k, square in enumerate(squares) if square != square)
+        best2 = squares[k]
+    else:
+        k = squares.index(best2)
+    a, b = pairs[k]
+    return best2, a // 2, b // 2
+
+
+@functools.lru_cache(maxsize=FEW_UP_TO + 1)
+def _few_pairs(n: int) -> tuple[tuple[int, int], ...]:
+    """Every pair i < j of n robots, as their x's places (2 i, 2 j) in the flat positions."""
+    return tuple((2 * i, 2 * j) for i in range(n) for j in range(i + 1, n))
+
+
 def _pair_squares(
     pts: Points, first: NDArray[np.intp] | None = None, second: NDArray[np.intp] | None = None
 ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float64]]:
@@ -149,6 +182,7 @@ def _pair_squares(
     return first, second, dx * dx + dy * dy
 
 
+_F64: Final = np.dtype(np.float64)
 NEAR_MARGIN: Final = 1.0  # _GapMemo's near pairs: those within the least distance + this
 NEAR_BACKOFF: Final = 8  # rounds without near pairs after a list that served no round, at
 NEAR_BACKOFF_MAX: Final = 256  # first; twice as many after each such list, up to this
@@ -179,9 +213,15 @@ class _GapMemo:
         self._wait = NEAR_BACKOFF // 2  # the backoff after a list that served no round
 
     def min_gap(self, positions: Points) -> float | None:
-        pts = positions.reshape(-1, 2)
-        if len(pts) < KEPT_FROM:  # (every pair at once: cheaper than keeping any)
-            return math.sqrt(_closest(pts)[0]) - 2 * RADIUS if len(pts) >= 2 else None
+        shape = positions.shape  # (a reshape to (n, 2) costs more than the test of one)
+        pts = positions if len(shape) == 2 and shape[1] == 2 else positions.reshape(-1, 2)
+        n = len(pts)
+        if n < KEPT_FROM:  # (every pair at once: cheaper than keeping any)
+            if n < 2:
+                return None
+            return (
+                math.sqrt((_closest_few(pts) if n <= FEW_UP_TO else _closest(pts))[0]) - 2 * RADIUS
+            )
         found = self._near_ones(pts)  # (finite positions only: a NaN or infinity fails it)
         if found is None:
             if not np.isfinite(pts).all():
@@ -500,20 +540,25 @@ def summarise(how: Summary, so_far: FigureValue, value: FigureValue) -> FigureVa
     `value` (None: the figure does not apply to it, and the run's value stays)."""
     if value is None:
         return so_far
-    if so_far is None or how == _LAST:
+    if so_far is None or how is _LAST:
+        return value
+    if how is _ADDED[0] or how is _ADDED[1]:  # (the members themselves: no text compared)
+        return so_far + value  # type: ignore[operator]
+    if how == _LAST:
         return value
     if how == _FIRST:
         return so_far
-    if how == _MIN:
-        return min(so_far, value)
-    if how == _MAX:
-        return max(so_far, value)
+    if how == _MIN:  # (`min(so_far, value)`: the first of the least)
+        return value if value < so_far else so_far  # type: ignore[operator]
+    if how == _MAX:  # (`max(so_far, value)`: the first of the largest)
+        return value if value > so_far else so_far  # type: ignore[operator]
     return so_far + value  # type: ignore[operator]
 
 
 # (the members read once: an enum's member read from its class costs more than the test, and the
 # folder summarises every derived figure every round)
 _LAST, _FIRST, _MIN, _MAX = Summary.LAST, Summary.FIRST, Summary.MIN, Summary.MAX
+_ADDED = (Summary.SUM, Summary.COUNT)
 
 
 class RunFolder:
@@ -531,26 +576,46 @@ class RunFolder:
     def add(
         self, positions: Points, round_no: int = 0, line: Mapping[str, Any] | None = None
     ) -> None:
-        pts = np.asarray(positions, dtype=np.float64)
+        pts = (  # (np.asarray(..., dtype=np.float64) costs more than the test of an array that is)
+            positions
+            if type(positions) is np.ndarray and positions.dtype is _F64
+            else np.asarray(positions, dtype=np.float64)
+        )
         figures = derived_figures()
         seen = (pts.shape, pts.tobytes())  # the positions to the bit
         last = self._last
         if last is not None and last[0] == seen:
             rounds = last[1]  # (the same bits: the same values)
         else:
-            rounds = {
-                f.name: self._gap.min_gap(pts) if f.derive is min_gap else f.derive(pts)
-                for f in figures
-                if f.derive is not None
-            }
+            rounds = {}
+            for f in figures:
+                derive = f.derive
+                if derive is not None:
+                    rounds[f.name] = self._gap.min_gap(pts) if derive is min_gap else derive(pts)
             self._last = (seen, rounds)
         values, of_line = self.values, line or {}
         for f in figures:
-            value = rounds.get(f.name) if f.tally is None else f.tally(round_no, of_line)
-            values[f.name] = summarise(f.summary, values.get(f.name), value)
+            name, tally = f.name, f.tally
+            value = rounds.get(name) if tally is None else tally(round_no, of_line)
+            if value is not None:
+                values[name] = summarise(f.summary, values.get(name), value)
+            elif name not in values:  # (a value None leaves the run's as it was)
+                values[name] = None
 
     def snapshot(self) -> dict[str, FigureValue]:
-        return {f.name: self.values.get(f.name) for f in derived_figures()}
+        global _names_cache  # made again when the derived figures are another tuple
+        figures = derived_figures()
+        of, names = _names_cache
+        if of is not figures:
+            names = tuple(f.name for f in figures)
+            _names_cache = (figures, names)
+        values = self.values
+        if len(values) == len(names) and tuple(values) == names:  # (every one, in order)
+            return dict(values)
+        return {name: values.get(name) for name in names}
+
+
+_names_cache: tuple[tuple[Figure, ...] | None, tuple[str, ...]] = (None, ())
 
 
 class RoundLine(Protocol):

@@ -12,6 +12,7 @@ end test are the core's (`world.physics.apply_round`, `world.progress`).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections import Counter
 from collections.abc import Collection, Iterable, KeysView, Mapping, Sequence
@@ -55,6 +56,13 @@ FIRST_LOOK: Final = LookRequest()  # an agent's first Look: any round
 # read (then its Path takes this place): never seen outside the core; a NaN path, were it to leak,
 # physics refuses loudly.
 _IN_LINES: Final = Path((Line((math.nan, math.nan)),))
+
+
+@functools.lru_cache(maxsize=8)
+def _every_robot(n: int) -> tuple[range, tuple[int, ...]]:
+    """Every robot of an n-robot run, as `range(n)` (how `account` tells the tracker that every
+    robot moved) and as the tuple (0, ..., n-1): made once."""
+    return range(n), tuple(range(n))
 
 
 @dataclass(slots=True)
@@ -262,21 +270,28 @@ class WorldCore:
         if booking.recovered:
             self.tracker.recover(booking.recovered)
         self.views_changed()
-        last_active = self.last_active
-        for robot in active:
-            last_active[robot] = round_no
+        n, last_active = self.setup.n, self.last_active
+        every_robot, all_robots = _every_robot(n)
+        if len(active) == n and active == all_robots:  # every robot active
+            last_active[:] = [round_no] * n
+        else:
+            for robot in active:
+                last_active[robot] = round_no
         for robot in timed_out:
             self.timeouts[robot] += 1
         before, collisions = booking.before, booking.collisions
-        self._book_lengths(before, paths, booking.lengths)
         movers: Collection[int]
         traveled: Mapping[int, float] | list[float] | None
         if isinstance(paths, LineMoves):  # the common round as arrays: no Path per robot
-            movers, traveled = paths.robots(), paths.traveled.tolist()
-            moved = tuple(movers)
+            if paths.every(n):  # every robot moved, each once: told the tracker as range(n)
+                movers, moved = every_robot, all_robots
+            else:
+                movers = moved = tuple(paths.robots())
+            traveled = paths.traveled.tolist()
         else:
             movers, traveled = paths.keys(), booking.traveled
             moved = tuple(sorted(paths))
+        self._book_lengths(before, paths, booking.lengths, moved, movers is every_robot)
         self.collisions_total += len(collisions)
         self.tracker.observe(
             [r for r in active if r not in timed_out] if timed_out else active,
@@ -300,22 +315,31 @@ class WorldCore:
         before: Points,
         paths: Mapping[int, Path] | LineMoves,
         measured: Mapping[int, float] | NDArray[np.float64] | None,
+        moved: tuple[int, ...],
+        every: bool,
     ) -> None:
         """Each mover's path length (the agents' books): physics' where it measured it (a
         mapping of movers, or with LineMoves an array of every one), else measured here as
-        `path_length` from its position `before`."""
+        `path_length` from its position `before`. `moved`: the movers, increasing; `every`:
+        they are every robot, 0..n-1."""
         last_length = self.last_length
         if isinstance(paths, LineMoves):
             lengths: Iterable[tuple[int, float]]
             if isinstance(measured, np.ndarray):
-                lengths = zip(paths.robots(), measured.tolist(), strict=True)
+                if every:  # (0..n-1, in order)
+                    last_length[:] = measured.tolist()
+                    return
+                lengths = zip(moved, measured.tolist(), strict=True)
             elif measured is not None and len(measured) == len(paths):
                 lengths = measured.items()  # every mover's (its keys are movers'): none to measure
+            elif measured is None and every:
+                last_length[:] = paths.lengths(before)  # every robot's, in order
+                return
             else:
                 known = {} if measured is None else measured
                 lengths = (
                     (robot, known.get(robot, here))
-                    for robot, here in zip(paths.robots(), paths.lengths(before), strict=True)
+                    for robot, here in zip(moved, paths.lengths(before), strict=True)
                 )
             for robot, each in lengths:
                 last_length[robot] = each

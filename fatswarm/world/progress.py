@@ -6,7 +6,7 @@ world so both decide `formed`, `stalled` and `max_rounds` the same way.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence, Set
 from dataclasses import dataclass, field
 from typing import Any, Final
 
@@ -15,11 +15,13 @@ import numpy as np
 from fatswarm.domain.figures import FigureValue, RunFolder
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Points
+from fatswarm.domain.quick import quick_new
 
 # A robot "moved" (the configuration changed) when its centre shifted by more than this. Far above
 # float noise at coordinates ~1e3 (~1e-13), far below any planned move (>= ~1e-6, the algorithm's
 # "at a point" tolerance); a path fully blocked at its start leaves the configuration unchanged.
 MOVE_TOLERANCE: Final = 1e-9
+FEW_SHIFTS: Final = 4  # up to this many robots, `configuration_changed` reads shifts in Python
 
 
 @dataclass(frozen=True, slots=True)
@@ -68,8 +70,16 @@ class ProgressTracker:
         self.max_rounds = max_rounds
         self._rounds = 0
         self._epochs = 0
+        # moves by robot: `_everyone` rounds in which every robot moved once, plus `_moves`, those
+        # of the other rounds (`_some`: some such round was counted, so `_moves` may not be 0s)
         self._moves = [0] * n
+        self._everyone = 0
+        self._some = False
         self._robots = frozenset(range(n))
+        self._every_robot = range(n)  # `observe`'s movers when every robot moved, each once
+        # the last active tuple given whose robots were each of 0..n-1, and its set (not changed):
+        # a round's active robots are often the last round's (every robot, under fsync)
+        self._active_known: tuple[tuple[int, ...], Set[int]] = ((), frozenset())
         self._distance = 0.0
         self._collisions = 0
         self._epoch_seen: set[int] = set()
@@ -129,30 +139,51 @@ class ProgressTracker:
         """
         if self._status is not None:
             raise RuntimeError(f"the run already ended ({self._status}); no more rounds")
-        active_set, mover_set = set(active), set(movers)
-        robots = self._robots  # (each equal to one of 0..n-1: as its int, in a set)
-        each_once = robots.issuperset(active_set) and robots.issuperset(mover_set)
+        n, robots = self.n, self._robots  # (each equal to one of 0..n-1: as its int, in a set)
+        known = self._active_known
+        active_set: Set[int]
+        if active is known[0] or (type(active) is tuple and active == known[0]):  # as last round's
+            active_set, active_ok = known[1], True
+        else:
+            active_set = set(active)
+            active_ok = robots.issuperset(active_set)
+            if active_ok and type(active) is tuple:
+                self._active_known = (active, active_set)  # (never changed: unions make new)
+        if type(movers) is range and movers == self._every_robot:  # every robot, each once
+            mover_set: Set[int] = robots
+            everyone = each_once = active_ok
+        else:
+            mover_set = set(movers)
+            each_once = active_ok and robots.issuperset(mover_set)
+            everyone = each_once and len(mover_set) == len(movers) == n  # every robot, once
         if not each_once:  # some robot is not an int of 0..n-1: as its int, or refused
             active_set = set(map(int, active))
-            if _outside(active_set, self.n) or _outside(movers, self.n):
-                bad = [r for r in active_set | mover_set if not 0 <= r < self.n]
-                raise ValueError(f"robots {sorted(bad)} are not in 0..{self.n - 1}")
-        active_set |= self._crashed  # a crashed robot stays, as if active and asking to stay
-        everyone = each_once and len(mover_set) == len(movers) == self.n  # every robot, once
+            if _outside(active_set, n) or _outside(movers, n):
+                bad = [r for r in active_set | mover_set if not 0 <= r < n]
+                raise ValueError(f"robots {sorted(bad)} are not in 0..{n - 1}")
+        if self._crashed:  # a crashed robot stays, as if active and asking to stay
+            active_set = active_set | self._crashed
         self._count(active_set, movers, everyone, traveled, collisions)
-        before_arr = np.asarray(before, dtype=np.float64)
-        after_arr = np.asarray(after, dtype=np.float64)
+        # (as np.asarray(..., dtype=np.float64), which costs more than the test for arrays that are)
+        before_arr = (
+            before if type(before) is np.ndarray and before.dtype is _F64 else _floats(before)
+        )
+        after_arr = after if type(after) is np.ndarray and after.dtype is _F64 else _floats(after)
         self._derived.add(after_arr, self._rounds, line)
-        failed = (line or {}).get("failed") or {}
         if changed if changed is not None else configuration_changed(before_arr, after_arr):
             # The robots active this round looked at the old configuration: start counting afresh.
-            self._seen_since_change = set()
-            self._wanting_since_change = set()
+            if self._seen_since_change:
+                self._seen_since_change = set()
+            if self._wanting_since_change:
+                self._wanting_since_change = set()
         else:
+            failed = line.get("failed") if line else None
             if not stale:
                 self._seen_since_change |= active_set
-                self._wanting_since_change |= mover_set | {int(r) for r in failed}
-            if len(self._seen_since_change) == self.n:
+                self._wanting_since_change |= mover_set
+                if failed:
+                    self._wanting_since_change |= {int(r) for r in failed}
+            if len(self._seen_since_change) == n:
                 formed = not self._wanting_since_change and bool(self.goal(after_arr))
                 self._status = Status.FORMED if formed else Status.STALLED
         if self._status is None and self.max_rounds is not None and self._rounds >= self.max_rounds:
@@ -161,7 +192,7 @@ class ProgressTracker:
 
     def _count(
         self,
-        active: set[int],
+        active: Set[int],
         movers: Collection[int],
         everyone: bool,
         traveled: Mapping[int, float] | Sequence[float] | None,
@@ -171,8 +202,9 @@ class ProgressTracker:
         movers are every robot, each once)."""
         self._rounds += 1
         if everyone:
-            self._moves = list(map(_ONE_MORE, self._moves))
+            self._everyone += 1
         else:
+            self._some = True
             moves = self._moves
             for robot in movers:
                 moves[robot] += 1
@@ -180,6 +212,11 @@ class ProgressTracker:
             each = traveled.values() if isinstance(traveled, Mapping) else traveled
             self._distance += float(sum(each))
         self._collisions += collisions
+        if len(active) == self.n:  # every robot active (each of 0..n-1): the epoch ends
+            self._epochs += 1
+            if self._epoch_seen:
+                self._epoch_seen = set()
+            return
         self._epoch_seen |= active
         if len(self._epoch_seen) == self.n:
             self._epochs += 1
@@ -187,20 +224,33 @@ class ProgressTracker:
 
     def snapshot(self) -> Progress:
         """The figures so far."""
-        return Progress(
+        everyone, n = self._everyone, self.n
+        if not self._some:  # (every round counted was one where every robot moved)
+            by_robot, moves = (everyone,) * n, everyone * n
+        else:
+            by_robot = tuple(map(everyone.__add__, self._moves) if everyone else self._moves)
+            moves = sum(by_robot)
+        return _new_progress(
             status=self._status,
             rounds=self._rounds,
             epochs=self._epochs,
-            moves=sum(self._moves),
+            moves=moves,
             total_distance=self._distance,
             collisions=self._collisions,
-            moves_by_robot=tuple(self._moves),
-            crashed=tuple(sorted(self._crashed)),
+            moves_by_robot=by_robot,
+            crashed=tuple(sorted(self._crashed)) if self._crashed else (),
             derived=self._derived.snapshot(),
         )
 
 
-_ONE_MORE: Final = (1).__add__  # m -> 1 + m
+_F64: Final = np.dtype(np.float64)
+
+
+def _floats(points: Points) -> Points:
+    return np.asarray(points, dtype=np.float64)
+
+
+_new_progress: Final = quick_new(Progress)  # (built every round: no __init__ of 9 setattrs)
 
 
 def _outside(robots: Collection[int], n: int) -> bool:
@@ -215,6 +265,15 @@ def configuration_changed(before: Points, after: Points) -> bool:
     if before.size == 0:
         return False
     delta = after - before
+    if delta.size <= 2 * FEW_SHIFTS:  # the shifts as Python floats (fewer numpy calls)
+        shifts = list(map(abs, delta.ravel().tolist()))
+        total = sum(shifts)  # (of non-negatives: NaN or infinite just when one is, or it grew so)
+        if total - total == 0.0:  # every one finite: the largest says it, unless it is near
+            most = max(shifts)
+            if most > MOVE_TOLERANCE:
+                return True
+            if most <= 0.5 * MOVE_TOLERANCE:  # hypot(dx, dy) <= sqrt(2) * most < the tolerance
+                return False
     if np.abs(delta).max() > MOVE_TOLERANCE:  # hypot(dx, dy) >= |dx|, |dy|: some shift is above
         return True
     shift = np.hypot(delta[:, 0], delta[:, 1])  # (NaN, or every |dx|, |dy| within: measured)

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from fatswarm.domain import figures, record_lines
 from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Arc, Line, Path, Points, to_record
+from fatswarm.domain.quick import quick_new
 from fatswarm.domain.seam import ParamValue
 from fatswarm.world.physics import Collision
 
@@ -157,7 +158,9 @@ class LineMoves(LazyMoves):
     one straight line from its position before the round to `ends[i]` ((k, 2) float64, world
     frame), covering `traveled[i]` ((k,) float64). Move i is exactly
     `Move(movers[i], Path((Line((ends[i, 0], ends[i, 1])),)), traveled[i])` in Python numbers.
-    The arrays are kept as given, not copied: they are not to be changed after."""
+    The arrays are kept as given, not copied: they are not to be changed after. The movers'
+    order is the caller's to keep (the world core's `held_lines` sorts them): not checked here,
+    where a check cost a round more than the rest of this (about 14k instructions)."""
 
     __slots__ = ("ends", "movers", "traveled")
 
@@ -167,10 +170,9 @@ class LineMoves(LazyMoves):
         super().__init__()
         assert movers.dtype.kind in "iu", f"movers must be integers, not {movers.dtype}"
         self.movers = movers
-        self.ends = np.asarray(ends, dtype=np.float64)
-        self.traveled = np.asarray(traveled, dtype=np.float64)
+        self.ends = _floats(ends)
+        self.traveled = _floats(traveled)
         assert self.ends.shape == (len(movers), 2) and self.traveled.shape == (len(movers),)
-        assert len(movers) < 2 or (movers[1:] > movers[:-1]).all(), "movers must increase"
 
     def _make(self) -> tuple[Move, ...]:
         return tuple(
@@ -189,6 +191,12 @@ class LineMoves(LazyMoves):
     def robots(self) -> list[int]:
         movers: list[int] = self.movers.tolist()  # Python ints (`movers` is of integers)
         return movers
+
+    def every(self, n: int) -> bool:
+        """Whether the movers are every robot of an n-robot run, 0..n-1 (increasing: the first 0
+        and the last n - 1 say it)."""
+        movers = self.movers
+        return len(movers) == n and (n == 0 or (movers[0] == 0 and movers[-1] == n - 1))
 
     def lengths(self, before: Points) -> list[float]:
         """Each move's path length from its robot's position in `before` ((n, 2)), as
@@ -210,6 +218,16 @@ class LineMoves(LazyMoves):
 
 
 Moves = tuple[Move, ...] | LazyMoves  # a round's moves: read as a sequence of Move
+
+_F64: Final = np.dtype(np.float64)
+
+
+def _floats(values: NDArray[Any]) -> NDArray[np.float64]:
+    """`np.asarray(values, dtype=np.float64)`, the array itself when it is one of float64 (the
+    test costs less than asarray's reading of its dtype argument)."""
+    if type(values) is np.ndarray and values.dtype is _F64:
+        return values
+    return np.asarray(values, dtype=np.float64)
 
 
 @dataclass(frozen=True, slots=True)
@@ -261,8 +279,8 @@ def round_entry(
     """
     extra: dict[str, Any] = dict(times) if times else {}
     for key, listed in robots:
-        assert key in record_lines.ROBOT_LISTS, f"{key!r} is no robot list of the round line"
         if len(listed):
+            assert key in record_lines.ROBOT_LISTS, f"{key!r} is no robot list of the round line"
             extra[key] = list(listed)
     if model:
         extra.update(model)
@@ -273,14 +291,17 @@ def round_entry(
         moves: LazyMoves = paths
     else:
         moves = PathMoves(sorted(paths), paths, covered or {})
-    return RoundEntry(
-        round_no,
-        active if type(active) is tuple else tuple(active),
-        moves,
-        positions,
-        tuple(collisions),
-        extra,
+    return _new_entry(
+        round=round_no,
+        active=active if type(active) is tuple else tuple(active),
+        moves=moves,
+        positions=positions,
+        collisions=tuple(collisions),
+        extra=extra,
     )
+
+
+_new_entry: Final = quick_new(RoundEntry)  # (built every round: no __init__ of 6 setattrs)
 
 
 @dataclass(frozen=True, slots=True)
