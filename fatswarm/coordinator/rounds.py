@@ -258,14 +258,17 @@ class CoordinatorCore:
         """The world holds these robots' moves; notices of other rounds (or robots), or of another
         world process than the one that answered last (one since restarted), are ignored."""
         if notice.round == self._round and notice.epoch == self._epoch:
-            active_set = self.active_set
-            robots = (
-                active_set  # (every active robot: the set as it is)
-                if notice.robots == self.active
-                else active_set.intersection(notice.robots)
-            )
-            self._held |= robots  # kept while the world keeps the round open
-            self._waiting -= robots
+            planned, robots = self._planned, notice.robots
+            active = planned[1] if planned is not None and planned[0] == self._round else ()
+            if active and (robots is active or robots == active):
+                # every active robot: the set as it is (a lock step's notice carries the very
+                # tuple planned); what was held is among them, and nobody is waited for
+                self._held = set(self._active_set)  # kept while the world keeps the round open
+                self._waiting.clear()
+            else:
+                held = self.active_set.intersection(robots)
+                self._held |= held  # kept while the world keeps the round open
+                self._waiting -= held
         if self._phase is Phase.COLLECT:
             return self._collected(now)
         return []
@@ -420,8 +423,12 @@ class CoordinatorCore:
             return self._next[1]
         assert self._scheduler is not None
         live = self._plan_over_live()
-        self._next = (round_no, tuple(self._scheduler.active(round_no, live)))
-        return self._next[1]
+        active = tuple(self._scheduler.active(round_no, live))
+        planned = self._planned
+        if planned is not None and active == planned[1]:
+            active = planned[1]  # the same set again: the very tuple (compared by `is` after)
+        self._next = (round_no, active)
+        return active
 
     def _plan_over_live(self) -> tuple[int, ...]:
         """Note a new plan over the live agents (`_plan` calls it): the agents gone before it are
@@ -436,7 +443,7 @@ class CoordinatorCore:
         """Make `round`'s planned active set the current one (a new round: nothing held yet)."""
         if self._planned is None or self._planned[0] != self._round:
             active = self._plan(self._round)
-            if self._planned is None or active != self._planned[1]:  # (else the same set)
+            if self._planned is None or active is not self._planned[1]:  # (`_plan`: else equal)
                 self._active_set = frozenset(active)
             self._planned, self._next = (self._round, active), None
             self._held = set()
@@ -466,6 +473,8 @@ class CoordinatorCore:
         self._waiting = set(active) if live.issuperset(active) else live.intersection(active)
         if self._held:
             self._waiting -= self._held
+        if self._waiting and now < self._deadline:  # (`_collected` would wait: saved a call)
+            return []
         return self._collected(now)
 
     def _collected(self, now: float) -> list[Action]:
@@ -473,14 +482,22 @@ class CoordinatorCore:
         assert self._deadline is not None
         if self._waiting and now < self._deadline:
             return []
-        active, held = self.active, self._held
-        timed_out = () if held.issuperset(active) else tuple(r for r in active if r not in held)
+        planned, held, round_no = self._planned, self._held, self._round
+        active = planned[1] if planned is not None and planned[0] == round_no else ()
+        timed_out = (
+            ()
+            if len(held) == len(self._active_set) or held.issuperset(active)  # (held: of active)
+            else tuple(r for r in active if r not in held)
+        )
         self._phase, self._deadline = Phase.COMMIT, None
-        paced = self._began_at is not None and now < self._began_at + self.times.pace_s
-        self._chained = bool(self._live) and not paced and not self.rejoining(now)
-        then = self._plan(self._round + 1) if self._chained else ()
+        began = self._began_at
+        paced = began is not None and now < began + self.times.pace_s
+        self._chained = (
+            bool(self._live) and not paced and not (self._gone_at and self.rejoining(now))
+        )
+        then = self._plan(round_no + 1) if self._chained else ()
         self._asked_at = now
-        return [Ask(Commit(round=self._round, timed_out=timed_out, then_active=then))]
+        return [Ask(Commit(round=round_no, timed_out=timed_out, then_active=then))]
 
     def _on_committed(self, reply: ControlReply | None, now: float) -> list[Action]:
         if reply is None or not reply.ok:
