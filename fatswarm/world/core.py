@@ -524,7 +524,7 @@ class WorldCore:
                 for robot, (x, y), go in zip(robots, ends.tolist(), each, strict=True):
                     self.hold(robot, round_no, Path((Line((x, y)),)) if go else STAY, None)
                 return
-        if goes is None or False not in goes:  # (`in`: in C, no Python wrapper of numpy's)
+        if goes is None or np.count_nonzero(goes) == len(robots):
             movers = robots
         else:  # the others stay (to_world of a stay is a stay)
             movers = list(compress(robots, goes.tolist()))

@@ -591,11 +591,11 @@ class _Bus:
         ):
             return False
         # plain_path of one Line of floats: finite and inside the wire's bounds (NaN fails);
-        # `False in a` (ndarray.__contains__: a comparison and any(), in C, no Python call of
-        # numpy's own) where `a.all()` or `np.count_nonzero` add Python wrappers
-        every = False not in goes
+        # count_nonzero: one C loop where .all() is a ufunc reduction (the same answer), and
+        # `False in a` a comparison ufunc and a reduction: both about 4 to 9 times its cost
+        every = np.count_nonzero(goes) == k
         going = ends if every else ends[goes]
-        if False in (np.abs(going) <= MAX_COORD):
+        if np.count_nonzero(np.abs(going) <= MAX_COORD) != going.size:
             return False
         if all(admitted):
             robots = lookers
@@ -603,7 +603,7 @@ class _Bus:
             ok = np.array(admitted, dtype=np.bool_)
             robots = [robot for robot, admit in zip(lookers, admitted, strict=True) if admit]
             ends, goes = ends[ok], goes[ok]
-            every = every or False not in goes
+            every = every or np.count_nonzero(goes) == len(robots)
         self.looks += len(robots)
         self.world.hold_lines(robots, round_no, ends, None if every else goes)
         return True
