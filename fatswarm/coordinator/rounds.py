@@ -469,8 +469,10 @@ class CoordinatorCore:
         )
         self._phase, self._deadline = Phase.COLLECT, now + self.times.move_timeout_s
         active, live = self._active_set, self._live
-        # (every active robot live, as a lock step's: a copy of the set, no new hashing)
-        self._waiting = set(active) if live.issuperset(active) else live.intersection(active)
+        # (every active robot live, as a lock step's: a copy of the set, no new hashing; every
+        # robot of the run live: so is every active one, robots of this run that were live)
+        everyone = len(live) == self._n or live.issuperset(active)
+        self._waiting = set(active) if everyone else live.intersection(active)
         if self._held:
             self._waiting -= self._held
         if self._waiting and now < self._deadline:  # (`_collected` would wait: saved a call)

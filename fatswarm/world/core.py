@@ -116,6 +116,7 @@ class WorldCore:
         # the held moves of every active robot's line held at once, for the active tuple that
         # came the round before too (`_held_of_lines` copies it)
         self._lines_held: tuple[Sequence[int], dict[int, Path] | None] = ((), None)
+        self._then_checked: tuple[int, ...] = ()  # the last Commit's next active set checked
         self.looked: set[int] = set()
         # the held moves (`held`): every held robot's, world axes, relative to it; the lines held
         # at once are kept as arrays (`held_lines`) and their place here is _IN_LINES until read
@@ -610,8 +611,13 @@ class WorldCore:
         if isinstance(req, Begin):
             refused, changed = self.model.begin(req)
             return self.reply(refused is None, refused or ""), changed
-        if req.then_active and max(req.then_active) >= self.setup.n:  # refused whole, not halfway
-            return self.reply(False, "next round's active set names robots not of this run"), False
+        then_active = req.then_active
+        if then_active and then_active is not self._then_checked:
+            if max(then_active) >= self.setup.n:  # refused whole, not halfway
+                why = "next round's active set names robots not of this run"
+                return self.reply(False, why), False
+            if type(then_active) is tuple:  # (a tuple that passed passes again: not checked)
+                self._then_checked = then_active
         refused, changed = self.model.commit(req)
         if refused is None and changed:
             then = req.then
