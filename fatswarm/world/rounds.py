@@ -43,8 +43,9 @@ class Rounds:
         if req.active is not w.active and req.active != w.active:
             w.active_set, w.active = frozenset(req.active), req.active
         # (else the last round's active robots: their set, and the very tuple, kept)
-        w.open_round = req.round
-        w.looked, w.held, w.noticed, w.failed = set(), {}, None, {}
+        if w.open_round:  # a round was open: what it held goes (else its commit cleared it)
+            w.looked, w.held, w.failed = set(), {}, {}
+        w.open_round, w.noticed = req.round, None
         # the live ones (every one: the set as it is)
         w.missing = (
             set(w.active_set)
