@@ -189,13 +189,13 @@ class WorldCore:
         return robots, lines.ends
 
     def _rows(self) -> tuple[NDArray[np.intp], bool]:
-        """`active` as an array of rows (read only: it is kept) and whether it ascends, made once
-        for each tuple `active` is."""
+        """`active` as an array of rows (read only: it is kept) and whether it ascends strictly
+        (each robot once), made once for each tuple `active` is."""
         active, kept = self.active, self._active_rows
         if kept is None or kept[0] is not active:
             rows = np.array(active, dtype=np.intp)
             rows.flags.writeable = False
-            kept = self._active_rows = (active, rows, list(active) == sorted(active))
+            kept = self._active_rows = (active, rows, list(active) == sorted(set(active)))
         return kept[1], kept[2]
 
     def _settle_lines(self) -> None:
