@@ -31,6 +31,7 @@ from fatswarm.coordinator.schedule import Scheduler
 from fatswarm.domain.adversary import ASYNC_NAMES, AsyncModel
 from fatswarm.world.protocol import Begin, Commit, ControlReply
 
+_BEGIN: Final = Phase.BEGIN  # (read off its Enum class once: ~20 times a global's cost a read)
 MAX_REPLANS: Final = 1_000_000  # Begins the world may answer "not yet" in a row (each a move's
 # end): far above any run; past it the world and the coordinator disagree (a bug), said plainly
 
@@ -55,7 +56,7 @@ class AsyncCoordinatorCore(CoordinatorCore):
         if reply is not None and reply.ok:
             self._last = reply
         if (
-            self.phase is Phase.BEGIN
+            self.phase is _BEGIN
             and reply is not None
             and reply.ok
             and reply.open_round != self.round
@@ -102,7 +103,7 @@ class AsyncCoordinatorCore(CoordinatorCore):
         if not self.active:
             return self._retry(now)  # nothing to plan from yet: ask the world again
         self._began_at = self._asked_at = now
-        self._phase, self._deadline = Phase.BEGIN, None
+        self._phase, self._deadline = _BEGIN, None
         return [Ask(Begin(round=self.round, active=self.active, at=self._at, looks=self._first))]
 
     def _replan(self, now: float) -> list[Action]:

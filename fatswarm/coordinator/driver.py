@@ -81,7 +81,8 @@ def driving(core: CoordinatorCore, link: Link) -> Generator[None, None, Finished
                 break
             for event in events:
                 todo.extend(feed(core, event, now()))
-            todo.extend(core.on_tick(now()))
+            if not todo:  # (else an Ask is out: the core waits on its reply, and no deadline)
+                todo.extend(core.on_tick(now()))
             continue
         action = todo.popleft()
         if isinstance(action, Finished):
@@ -108,6 +109,8 @@ def run_out(steps: Generator[None, None, T]) -> T:
 
 def feed(core: CoordinatorCore, event: Event, now: float) -> list[Action]:
     """Hand one event to the core; the actions it asks for."""
+    if type(event) is MovesHeld:  # (the one event of every round)
+        return core.on_held(event, now)
     if isinstance(event, WorldSeen):
         return core.on_world(event.alive, now)
     if isinstance(event, AgentSeen):

@@ -42,12 +42,17 @@ class Phase(enum.Enum):
     MOVING = "moving"
 
 
+# The phases read off their Enum class once: under CPython 3.11 a member read off its class costs
+# about 20 times a global (the metaclass's __getattr__ hook), and the clock reads them per robot
+_WAITING, _COMPUTING, _MOVING = Phase.WAITING, Phase.COMPUTING, Phase.MOVING
+
+
 @dataclass(slots=True)
 class _Robot:
     """One robot's cycle in progress (the core's own mutable bookkeeping)."""
 
     at: float  # WAITING: its next Look; COMPUTING: its move's start
-    phase: Phase = Phase.WAITING
+    phase: Phase = _WAITING
     cycle: int = 0  # cycles begun (its Looks)
     look: float = 0.0
     start: float = 0.0
@@ -108,16 +113,16 @@ class AsyncWorld:
         """The next event: a Look, the start or the natural end of a move (never before now)."""
         times = []
         for r, robot in enumerate(self._robots):
-            if r in self.crashed and robot.phase is not Phase.MOVING:
+            if r in self.crashed and robot.phase is not _MOVING:
                 continue
-            times.append(self.now + robot.left if robot.phase is Phase.MOVING else robot.at)
+            times.append(self.now + robot.left if robot.phase is _MOVING else robot.at)
         return max(self.now, min(times)) if times else self.now
 
     def phase(self, robot: int) -> Phase:
         return self._robots[robot].phase
 
     def moving(self) -> list[int]:
-        return [r for r, robot in enumerate(self._robots) if robot.phase is Phase.MOVING]
+        return [r for r, robot in enumerate(self._robots) if robot.phase is _MOVING]
 
     def advance(self, t: float) -> None:
         """Move every mover on to virtual time `t` (one window of physics; contacts stop)."""
@@ -152,30 +157,30 @@ class AsyncWorld:
         order; each robot then waits its cycle's wait before its next Look."""
         done = []
         for r, robot in enumerate(self._robots):
-            if robot.phase is Phase.MOVING and (robot.left <= ENDED or robot.stopped):
-                robot.phase, robot.at = Phase.WAITING, self.now + robot.wait
+            if robot.phase is _MOVING and (robot.left <= ENDED or robot.stopped):
+                robot.phase, robot.at = _WAITING, self.now + robot.wait
                 done.append(self._done(r, self.now))
         return done
 
     def start_moves(self) -> None:
         """The computed moves whose start has come begin (robots in order)."""
         for robot in self._robots:
-            if robot.phase is Phase.COMPUTING and robot.at <= self.now:
-                robot.phase, robot.start = Phase.MOVING, self.now  # from where it Looked
+            if robot.phase is _COMPUTING and robot.at <= self.now:
+                robot.phase, robot.start = _MOVING, self.now  # from where it Looked
 
     def looking(self) -> list[int]:
         """The live robots whose Look is due now, in order."""
         return [
             r
             for r, robot in enumerate(self._robots)
-            if robot.phase is Phase.WAITING and robot.at <= self.now and r not in self.crashed
+            if robot.phase is _WAITING and robot.at <= self.now and r not in self.crashed
         ]
 
     def set_look(self, robot: int, t: float) -> None:
         """Robot `robot`'s first Look comes at `t` (the adversary's choice); only for a robot
         waiting with no Look time yet. Raises ValueError otherwise, or for a time in the past."""
         state = self._robots[robot]
-        if state.phase is not Phase.WAITING or math.isfinite(state.at):
+        if state.phase is not _WAITING or math.isfinite(state.at):
             raise ValueError(f"robot {robot} already has its next Look at {state.at}")
         if not math.isfinite(t) or t < self.now:
             raise ValueError(f"robot {robot}'s Look at {t} is not a time from now ({self.now}) on")
@@ -185,7 +190,7 @@ class AsyncWorld:
         """(each live waiting robot's next Look time, the live waiting robots without one)."""
         known, unset = [], []
         for r, state in enumerate(self._robots):
-            if state.phase is Phase.WAITING and r not in self.crashed:
+            if state.phase is _WAITING and r not in self.crashed:
                 if math.isfinite(state.at):
                     known.append((r, state.at))
                 else:
@@ -216,15 +221,15 @@ class AsyncWorld:
         state.collisions = []
         if length <= ENDED:
             state.start = self.now
-            state.phase, state.at = Phase.WAITING, self.now + compute + wait
+            state.phase, state.at = _WAITING, self.now + compute + wait
             return self._done(robot, self.now)
-        state.phase, state.at = Phase.COMPUTING, self.now + compute
+        state.phase, state.at = _COMPUTING, self.now + compute
         return None
 
     def crash(self, robot: int) -> None:
         """Robot `robot` crashes instead of Looking (it is waiting): it never Looks again and
         stays where it is, a still obstacle."""
-        if self._robots[robot].phase is not Phase.WAITING:
+        if self._robots[robot].phase is not _WAITING:
             raise ValueError(f"robot {robot} crashes only between cycles")
         self.crashed.add(robot)
 

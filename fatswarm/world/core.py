@@ -52,6 +52,7 @@ from fatswarm.world.rounds import Rounds
 from fatswarm.world.setup import WorldSetup
 
 FIRST_LOOK: Final = LookRequest()  # an agent's first Look: any round
+_RUNNING: Final = Status.RUNNING  # (read off its Enum class once: ~20x a global's cost a read)
 # The held move of a robot whose line is kept among the held lines (`HeldLines`) until `held` is
 # read (then its Path takes this place): never seen outside the core; a NaN path, were it to leak,
 # physics refuses loudly.
@@ -70,7 +71,7 @@ class HeldLines:
     """Moves of the open round held at once (`WorldCore.hold_lines`): robots[i] goes in a straight
     line to ends[i] (world axes, relative to it)."""
 
-    robots: list[int]  # in the order they were held
+    robots: Sequence[int]  # in the order they were held (the active tuple itself, if all)
     ends: Points  # (m, 2)
 
 
@@ -118,6 +119,13 @@ class WorldCore:
         self.open_round = 0
         self.active: tuple[int, ...] = ()
         self.active_set: frozenset[int] = frozenset()  # the same, for O(1) membership
+        # `active` as rows (read only) and whether it ascends, for the very tuple `active` is
+        # (a model keeps that tuple while the set stays the same: fsync's whole run)
+        self._active_rows: tuple[tuple[int, ...], NDArray[np.intp], bool] | None = None
+        # the held moves of every active robot's line held at once, for the active tuple that
+        # came the round before too (`_held_of_lines` copies it)
+        self._lines_held: tuple[Sequence[int], dict[int, Path] | None] = ((), None)
+        self._then_checked: tuple[int, ...] = ()  # the last Commit's next active set checked
         self.looked: set[int] = set()
         # the held moves (`held`): every held robot's, world axes, relative to it; the lines held
         # at once are kept as arrays (`held_lines`) and their place here is _IN_LINES until read
@@ -178,11 +186,25 @@ class WorldCore:
         if lines is None:
             return np.empty(0, dtype=np.intp), np.empty((0, 2), dtype=np.float64)
         listed = lines.robots
-        robots = np.asarray(listed, dtype=np.intp)
-        if len(listed) > 1 and listed != sorted(listed):  # (no robot twice: sorted is ascending)
+        if listed is self.active:  # every active robot's line, held at once
+            robots, ascending = self._rows()
+        else:
+            robots = np.asarray(listed, dtype=np.intp)
+            ascending = len(listed) < 2 or list(listed) == sorted(listed)
+        if not ascending:  # (no robot twice: sorted is ascending)
             order = np.argsort(robots, kind="stable")
             return robots[order], lines.ends[order]
         return robots, lines.ends
+
+    def _rows(self) -> tuple[NDArray[np.intp], bool]:
+        """`active` as an array of rows (read only: it is kept) and whether it ascends strictly
+        (each robot once), made once for each tuple `active` is."""
+        active, kept = self.active, self._active_rows
+        if kept is None or kept[0] is not active:
+            rows = np.array(active, dtype=np.intp)
+            rows.flags.writeable = False
+            kept = self._active_rows = (active, rows, list(active) == sorted(set(active)))
+        return kept[1], kept[2]
 
     def _settle_lines(self) -> None:
         """The held lines made Paths in `held` (Python floats: `Path((Line((x, y)),))`)."""
@@ -366,16 +388,16 @@ class WorldCore:
         after = request.after if request.epoch == self.epoch else 0
         return self.open_round > after and robot in self.active_set and robot not in self._held
 
-    def lookers(self, robots: Sequence[int]) -> list[int]:
+    def lookers(self, robots: Sequence[int]) -> Sequence[int]:
         """The robots of `robots` whose first Look is answered now (`may_look` of each, at once):
         a lock step's round, its Looks all asked as it opens."""
         if not self.open_round:
             return []
-        held = self._held
-        if not held and robots == self.active:  # a round just opened: all of its active robots
-            return list(robots)
-        active = self.active_set
-        return [robot for robot in robots if robot in active and robot not in held]
+        held, active = self._held, self.active
+        if not held and (robots is active or robots == active):
+            return active  # a round just opened: all of its active robots (the tuple itself)
+        active_set = self.active_set
+        return [robot for robot in robots if robot in active_set and robot not in held]
 
     def look(self, robot: int) -> Snapshot | None:
         """Robot `robot`'s snapshot, or None (refused, counted) if it is not active now."""
@@ -444,6 +466,8 @@ class WorldCore:
     def _every_active(self, robots: Sequence[int]) -> bool:
         """Whether `robots` are the open round's active robots, in their order, each once."""
         active = self.active
+        if robots is active:  # (a lock step's lookers: the tuple itself)
+            return len(active) == len(self.active_set)
         return (
             len(robots) == len(active) == len(self.active_set)
             and (robots if type(robots) is tuple else tuple(robots)) == active
@@ -507,7 +531,6 @@ class WorldCore:
         stay; no colour, none failed. The moves are checked as `hold` checks each, refusals
         counted the same (in turn, by `hold` itself, if any would be refused); the lines are
         kept as arrays (`held_lines`, world axes) and made Paths only if `held` is read."""
-        robots = list(robots)
         held = self._held
         chosen: Collection[int]
         if (
@@ -537,18 +560,38 @@ class WorldCore:
             held.update(dict.fromkeys(robots, STAY))
             ends = ends[goes]
         if movers:
-            world = self.looks.lines_to_world(movers, round_no, ends)
+            # (a list: `Looks.lines_to_world` knows every robot's rows by a list of them)
+            world = self.looks.lines_to_world(
+                movers if type(movers) is list else list(movers), round_no, ends
+            )
             if held:
                 held.update(dict.fromkeys(movers, _IN_LINES))
             else:  # (the same dict, made at once)
-                self._held = dict.fromkeys(movers, _IN_LINES)
+                self._held = self._held_of_lines(movers)
             lines = self._lines
-            if lines is None:
-                self._lines = HeldLines(movers, world)
+            if lines is None:  # (a list of the caller's copied: kept beyond this call)
+                self._lines = HeldLines(movers if type(movers) is tuple else list(movers), world)
             else:  # a second batch in one round
-                lines.robots.extend(movers)
+                lines.robots = [*lines.robots, *movers]
                 lines.ends = np.concatenate((lines.ends, world))
-        self.missing.difference_update(chosen)
+        if chosen is self.active_set:  # (the missing are active robots: none is left)
+            self.missing.clear()
+        else:
+            self.missing.difference_update(chosen)
+
+    def _held_of_lines(self, movers: Sequence[int]) -> dict[int, Path]:
+        """`dict.fromkeys(movers, _IN_LINES)`, made as a copy of one kept where `movers` is the
+        active tuple of the round before too (a copy is about ten times cheaper than a dict made
+        key by key: fsync's every round but the first two)."""
+        kept, template = self._lines_held
+        if kept is movers:
+            if template is None:
+                template = dict.fromkeys(movers, _IN_LINES)
+                self._lines_held = (movers, template)
+            return template.copy()
+        if movers is self.active:
+            self._lines_held = (movers, None)
+        return dict.fromkeys(movers, _IN_LINES)
 
     def _said(self, robot: int, round_no: int, failed: str) -> None:
         """Log a failed compute the first time one of its kind comes (`failure_kind`: the
@@ -573,7 +616,12 @@ class WorldCore:
         moved (once, and again only when a late move joins them); None otherwise."""
         if not self.open_round or self.missing:
             return None
-        robots = tuple(sorted(self._held))
+        held = self._held
+        robots = (
+            self.active  # every active robot (held are active): sorted, if it ascends
+            if len(held) == len(self.active_set) and self._rows()[1]
+            else tuple(sorted(held))
+        )
         if self.noticed == (self.open_round, robots):
             return None
         self.noticed = (self.open_round, robots)
@@ -583,17 +631,22 @@ class WorldCore:
         """Answer a coordinator request; the flag says whether the state changed (publish it)."""
         if isinstance(req, Hello):
             return self.reply(True), False
-        if self.status != Status.RUNNING:
+        if self.status != _RUNNING:
             return self.reply(False, f"the run has ended ({self.status})"), False
         if isinstance(req, Begin):
             refused, changed = self.model.begin(req)
             return self.reply(refused is None, refused or ""), changed
-        if req.then_active and max(req.then_active) >= self.setup.n:  # refused whole, not halfway
-            return self.reply(False, "next round's active set names robots not of this run"), False
+        then_active = req.then_active
+        if then_active and then_active is not self._then_checked:
+            if max(then_active) >= self.setup.n:  # refused whole, not halfway
+                why = "next round's active set names robots not of this run"
+                return self.reply(False, why), False
+            if type(then_active) is tuple:  # (a tuple that passed passes again: not checked)
+                self._then_checked = then_active
         refused, changed = self.model.commit(req)
         if refused is None and changed:
             then = req.then
-            if then is not None and self.status == Status.RUNNING:
+            if then is not None and self.status == _RUNNING:
                 refused = self.model.begin(then)[0]
             if refused is None:  # the round committed (and the next one opened, if asked)
                 return self.reply(True, timed_out=self.last_timed_out), True

@@ -28,6 +28,9 @@ class Rounds:
 
     def __init__(self, books: Books) -> None:
         self.books = books
+        # the run's settings that hold for every round (looked up once)
+        self._rigid = books.setup.non_rigid is None
+        self._crash_limit = crash_after(books.setup.n)
 
     def begin(self, req: Begin) -> Answer:
         w = self.books
@@ -37,10 +40,12 @@ class Rounds:
             return "active set empty or not robots of this run", False
         if w.open_round == req.round and w.active == req.active:
             return None, False  # a coordinator retrying: keep what is held
-        if req.active != w.active:  # (else the set of the last round's active robots is this)
-            w.active_set = frozenset(req.active)
-        w.open_round, w.active = req.round, req.active
-        w.looked, w.held, w.noticed, w.failed = set(), {}, None, {}
+        if req.active is not w.active and req.active != w.active:
+            w.active_set, w.active = frozenset(req.active), req.active
+        # (else the last round's active robots: their set, and the very tuple, kept)
+        if w.open_round:  # a round was open: what it held goes (else its commit cleared it)
+            w.looked, w.held, w.failed = set(), {}, {}
+        w.open_round, w.noticed = req.round, None
         # the live ones (every one: the set as it is)
         w.missing = (
             set(w.active_set)
@@ -76,7 +81,7 @@ class Rounds:
         round_no, before = w.open_round, w.positions
         stuck = stuck_in(w.crash_plan, round_no) if w.crash_plan else []
         gone = w.stuck | frozenset(stuck) if stuck else w.stuck  # their moves are not applied
-        lines = w.held_lines() if w.setup.non_rigid is None else None
+        lines = w.held_lines() if self._rigid else None
         line_moves: LineMoves | None = None
         paths: Mapping[int, Path] = {}
         if lines is not None:
@@ -101,8 +106,11 @@ class Rounds:
         failed = dict(sorted(w.failed.items())) if w.failed else {}
         for robot in gone if failed else ():
             failed.pop(robot, None)
-        colours, w.held_colours = w.held_colours, {}
-        relit = w.looks.show(colours, skip=gone)  # as the moves start
+        colours = w.held_colours
+        relit = False
+        if colours:  # (none: no colour shown changes, nothing to renew)
+            w.held_colours = {}
+            relit = w.looks.show(colours, skip=gone)  # as the moves start
         points = w.looks.points  # point bodies: no contact (world/physics.py)
         traveled: Mapping[int, float] | None
         if lines is not None:  # physics' traveled is in the movers' order: the line's arrays
@@ -121,7 +129,11 @@ class Rounds:
         after = np.asarray(outcome.positions, dtype=np.float64)
         moved: Mapping[int, Path] | LineMoves = paths if line_moves is None else line_moves
         holding = w.held_robots()
-        timed_out = [] if holding >= w.active_set else [r for r in w.active if r not in holding]
+        timed_out = (  # (the held are active: as many as the active are every one)
+            []
+            if len(holding) == len(w.active_set) or holding >= w.active_set
+            else [r for r in w.active if r not in holding]
+        )
         w.last_timed_out = tuple(timed_out)
         down, back = self._crashes(round_no)
         entry = round_entry(
@@ -186,17 +198,16 @@ class Rounds:
         """(robots that count as crashed from this round, crashed robots whose agent is back):
         the rule of the record's `crashed` and `recovered` round fields (README, "Faults")."""
         w = self.books
-        limit = crash_after(w.setup.n)
         crashed, gone_since = w.tracker.crashed, w.gone_since
-        down = (
-            []
-            if gone_since.count(None) == len(gone_since)  # every agent there (a lock step's)
-            else [
+        if gone_since.count(None) == len(gone_since):  # every agent there (a lock step's)
+            down = []
+        else:
+            limit = self._crash_limit
+            down = [
                 r
                 for r, since in enumerate(gone_since)
                 if since is not None and round_no - since >= limit and r not in crashed
             ]
-        )
         back = sorted(r for r in crashed if w.alive[r] and r not in w.stuck) if crashed else []
         return down, back
 

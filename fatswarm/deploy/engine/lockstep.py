@@ -591,7 +591,8 @@ class _Bus:
         ):
             return False
         # plain_path of one Line of floats: finite and inside the wire's bounds (NaN fails);
-        # count_nonzero: one C loop where .all() is a ufunc reduction (the same answer)
+        # count_nonzero: one C loop where .all() is a ufunc reduction (the same answer), and
+        # `False in a` a comparison ufunc and a reduction: both about 4 to 9 times its cost
         every = np.count_nonzero(goes) == k
         going = ends if every else ends[goes]
         if np.count_nonzero(np.abs(going) <= MAX_COORD) != going.size:
