@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
+import os
 import secrets
 import sys
 import time
@@ -49,6 +51,7 @@ if TYPE_CHECKING:
     from fatswarm.deploy.engine.lockstep import RoundReport, RunResult
 
 PROGRESS_SECONDS: Final = 1.0  # at most one progress line per this many seconds
+TAIL_BYTES: Final = 1 << 16  # `last_round` reads a record's end by this much, then 4x as much
 
 
 def _fail(message: str) -> ExitCode:
@@ -236,16 +239,42 @@ def _run_setup(
 def _stopped(
     word: str, args: argparse.Namespace, setup: RunSetup, watch: _Watch, *, fix: bool = False
 ) -> str:
-    """`stopped_line` for this lock-step run."""
+    """`stopped_line` for this lock-step run: after the round its record ends with, if it has
+    one (a signal may land between a line's write and the watch's count of it)."""
     return stopped_line(
         word,
-        watch.done,
+        watch.done if not args.record else last_round(args.record, watch.done),
         record=args.record,
         scheduler=setup.scheduler.name,
         lockstep=True,
         seed=setup.seed,
         fix=fix,
     )
+
+
+def last_round(path: str, otherwise: int) -> int:
+    """The round of the last complete line of the record at `path` if that is a round line (a
+    torn end after it is not a line: `--resume` drops it), else `otherwise` (a header alone, a
+    file that cannot be read)."""
+    try:
+        with open(path, "rb") as f:
+            size = f.seek(0, os.SEEK_END)
+            chunk = TAIL_BYTES
+            while True:  # read back until the last complete line is whole
+                start = max(0, size - chunk)
+                f.seek(start)
+                tail = f.read(size - start)
+                end = tail.rfind(b"\n")
+                begin = tail.rfind(b"\n", 0, max(end, 0)) + 1
+                if start == 0 or (end >= 0 and begin > 0):
+                    break
+                chunk *= 4
+        line = json.loads(tail[begin:end]) if end >= 0 else None
+    except (OSError, ValueError):
+        return otherwise
+    if isinstance(line, dict) and line.get("type") == "round" and type(line.get("round")) is int:
+        return int(line["round"])
+    return otherwise
 
 
 def _run_lockstep(
