@@ -26,7 +26,11 @@ from fatswarm.domain.tolerance import CONTACT
 Values = NDArray[np.float64]  # (k,)
 DEFAULT_TOLERANCE: Final = 1e-3
 GOAL_BLOCK: Final = 512  # rows of the pairwise distance matrix `goal` holds at once (memory bound)
+EACH_UP_TO: Final = 96
+"""`compute_views` takes each robot's sums and step in Python up to this many view rows in all
+(k * m): fewer calls than the arrays' way for a small swarm's round."""
 ROUNDING_REL: Final = 1e-12  # G from world positions vs a robot's view: a few ulps of the span
+_NOWHERE: Final = (0.0, 0.0)  # a staying robot's row of `_each`'s ends (read by nobody)
 
 
 @dataclass(frozen=True, slots=True)
@@ -127,12 +131,15 @@ class Gathering:
         fatswarm/domain/seam.py): the sums by `fsum_rows` (`math.fsum`'s bits), the nearest gap
         by `nearest_norms` (the same `np.hypot` per element), then `_toward`'s own operations
         per robot (`_towards`: CPython's `math.hypot`, whose last bit np.hypot's may differ
-        from)."""
+        from); up to EACH_UP_TO view rows in all, robot by robot (`_each`)."""
         k, m = views.shape[0], views.shape[1]
         if m == 0:
             return StraightMoves(np.zeros((k, 2)), np.zeros(k, dtype=np.bool_))
+        if k * m <= EACH_UP_TO:
+            return _each(views, params.tolerance)
         coords = scratch("gathering", (2, k, m))  # every x, then every y: rows contiguous
-        np.copyto(coords, views.transpose(2, 0, 1))
+        # (+ 0.0: -0.0 as 0.0, which changes no sum nor norm and spares fsum_rows a comparison)
+        np.add(views.transpose(2, 0, 1), 0.0, out=coords)
         sums = fsum_rows(coords.reshape(2 * k, m))  # every x sum, then every y sum
         nearest = nearest_norms(coords[0], coords[1])
         return _towards(sums, m + 1, nearest, params.tolerance)  # the robot itself adds nothing
@@ -165,14 +172,39 @@ class Gathering:
 def _toward(gx: float, gy: float, gap: float, tolerance: float) -> Path:
     """A Line toward G = (gx, gy) by at most `gap` (half the room to the nearest neighbour), or
     STAY when that step is not above `tolerance` (also a touching or overlapping neighbour)."""
+    end = _toward_end(gx, gy, gap, tolerance)
+    return STAY if end is None else Path((Line(end),))
+
+
+def _toward_end(gx: float, gy: float, gap: float, tolerance: float) -> tuple[float, float] | None:
+    """Where `_toward`'s Line ends, or None where it stays."""
     to_g = math.hypot(gx, gy)
     step = min(to_g, gap)
     if not step > tolerance:
-        return STAY
+        return None
     if step >= to_g:
-        return Path((Line((gx, gy)),))
+        return (gx, gy)
     f = step / to_g
-    return Path((Line((gx * f, gy * f)),))
+    return (gx * f, gy * f)
+
+
+def _each(views: Views, tolerance: float) -> StraightMoves:
+    """`compute` of every view of `views` (k, m, 2), m >= 1, robot by robot (a small round, in
+    fewer calls than as arrays): its sums by `math.fsum`, its nearest gap by `nearest_norms`,
+    then `_toward_end`."""
+    n = views.shape[1] + 1  # the robot itself, at the origin, adds nothing to the sums
+    xs, ys = views[:, :, 0], views[:, :, 1]
+    nearest = nearest_norms(xs, ys).tolist()
+    fsum = math.fsum
+    ends: list[float] = []
+    goes: list[bool] = []
+    for row_x, row_y, d_min in zip(xs.tolist(), ys.tolist(), nearest, strict=True):
+        end = _toward_end(fsum(row_x) / n, fsum(row_y) / n, (d_min - CONTACT) / 2.0, tolerance)
+        goes.append(end is not None)
+        ends += _NOWHERE if end is None else end
+    return StraightMoves(
+        np.array(ends, dtype=np.float64).reshape(len(goes), 2), np.array(goes, dtype=np.bool_)
+    )
 
 
 def _towards(sums: Values, n: int, nearest: Values, tolerance: float) -> StraightMoves:
@@ -180,19 +212,21 @@ def _towards(sums: Values, n: int, nearest: Values, tolerance: float) -> Straigh
     sum, then every y sum of the views) over `n` robots, the gap from each view's `nearest` (k,)
     norm, then `_toward`: |G| by `math.hypot` per robot (CPython's, as `_toward`), the rest its
     operations on arrays (Python's min(a, b) is b only where b < a; a row that goes all the way
-    is scaled by 1.0, which leaves every float as it is)."""
+    is scaled by 1.0, which leaves every float as it is; a row that stays by 0.0, read by
+    nobody)."""
     k = len(nearest)
     centre = sums / n  # (2k,)
     listed = centre.tolist()
     to_g = np.fromiter(map(math.hypot, listed[:k], listed[k:]), dtype=np.float64, count=k)
     gaps = nearest - CONTACT
     gaps /= 2.0
-    step = np.where(gaps < to_g, gaps, to_g)
+    short = gaps < to_g  # a step short of G (min(to_g, gap) is gap exactly there)
+    step = np.where(short, gaps, to_g)
     goes = step > tolerance
-    short = step < to_g  # a step short of G: scaled by step / |G| (> step > tolerance there)
-    short &= goes
-    scale = np.divide(step, to_g, out=np.ones(k), where=short)
-    ends = np.where(goes, centre.reshape(2, k) * scale, 0.0)
+    short &= goes  # scaled by step / |G| (> step > tolerance there)
+    scale = np.divide(step, to_g, out=goes.astype(np.float64), where=short)
+    ends = centre.reshape(2, k)
+    ends *= scale
     return StraightMoves(ends.T, goes)
 
 

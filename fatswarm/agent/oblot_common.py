@@ -104,11 +104,16 @@ def go_to(target: tuple[float, float], params: OblotParams) -> Path:
     """A straight move to `target` (the peer's `LinearPath`), or STAY when it is within
     `tolerance` of the origin (exactly the origin under the peer's rule, tolerance 0)."""
     x, y = target
+    return Path((Line((x, y)),)) if goes_to(target, params) else STAY
+
+
+def goes_to(target: tuple[float, float], params: OblotParams) -> bool:
+    """Whether `go_to` moves to `target` (False: STAY); raises its OblotRuleError where the
+    target is not a finite point."""
+    x, y = target
     if not (math.isfinite(x) and math.isfinite(y)):
         raise OblotRuleError(f"the target ({x}, {y}) is not a finite point")
-    if math.hypot(x, y) <= params.tolerance:
-        return STAY
-    return Path((Line((x, y)),))
+    return not math.hypot(x, y) <= params.tolerance
 
 
 def same_point(a: tuple[float, float], b: tuple[float, float]) -> bool:
@@ -146,6 +151,7 @@ __all__ = [
     "circle_of",
     "gathered",
     "go_to",
+    "goes_to",
     "make_oblot_params",
     "same_point",
     "spread",

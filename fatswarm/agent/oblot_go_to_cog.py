@@ -15,6 +15,7 @@ from fatswarm.agent.oblot_common import (
     OblotParams,
     gathered,
     go_to,
+    goes_to,
     make_oblot_params,
     peer_assumptions,
     spread,
@@ -27,6 +28,11 @@ from fatswarm.domain.seam import ParamSpec, ParamValue, Views
 
 # The peer's robots see every robot (`Simulator/Simulation.java:101`), one row per robot
 # (multiplicity), as points; the centre of gravity needs no agreement on axes (any frame).
+
+
+EACH_UP_TO: Final = 48
+"""`compute_views` takes each robot's sums in Python up to this many view rows in all (k * m):
+fewer calls than the arrays' way for a small swarm's round."""
 
 
 class OblotGoToCoG:
@@ -62,8 +68,11 @@ class OblotGoToCoG:
         k, m = views.shape[0], views.shape[1]
         if m == 0:  # the target is the origin: within any tolerance (>= 0)
             return StraightMoves(np.zeros((k, 2)), np.zeros(k, dtype=np.bool_))
+        if k * m <= EACH_UP_TO:
+            return _each(views, params)
         coords = scratch("oblot-go-to-cog", (2, k, m))  # every x, then every y: rows contiguous
-        np.copyto(coords, views.transpose(2, 0, 1))
+        # (+ 0.0: -0.0 as 0.0, which changes no sum and spares fsum_rows a comparison)
+        np.add(views.transpose(2, 0, 1), 0.0, out=coords)
         centre = fsum_rows(coords.reshape(2 * k, m)) / (m + 1)  # every x, then every y
         listed = centre.tolist()  # (the robot itself, at the origin, adds nothing to the sums)
         distance = list(map(math.hypot, listed[:k], listed[k:]))
@@ -82,6 +91,24 @@ class OblotGoToCoG:
         return spread(positions)
 
 
+def _each(views: Views, params: OblotParams) -> StraightMoves:
+    """`compute` of every view of `views` (k, m, 2), m >= 1, robot by robot (a small round): its
+    sums by `math.fsum`, then `go_to`'s test (`goes_to`, which raises its error)."""
+    n = views.shape[1] + 1  # the robot itself, at the origin, adds nothing to the sums
+    fsum = math.fsum
+    ends: list[float] = []
+    goes: list[bool] = []
+    for row_x, row_y in zip(views[:, :, 0].tolist(), views[:, :, 1].tolist(), strict=True):
+        end = (fsum(row_x) / n, fsum(row_y) / n)
+        go = goes_to(end, params)
+        goes.append(go)
+        ends += end if go else _NOWHERE
+    return StraightMoves(
+        np.array(ends, dtype=np.float64).reshape(len(goes), 2), np.array(goes, dtype=np.bool_)
+    )
+
+
+_NOWHERE: Final = (0.0, 0.0)  # a staying robot's row of `_each`'s ends (read by nobody)
 ALGORITHM: Final = OblotGoToCoG()
 
 __all__ = ["ALGORITHM", "OblotGoToCoG"]

@@ -81,6 +81,8 @@ class FrameRows:
     cos_back: NDArray[np.float64]  # (k,) math.cos(-rotation) (1.0 where it does not turn)
     sin_back: NDArray[np.float64]  # (k,) math.sin(-rotation) (0.0 where it does not turn)
     turned_sign: NDArray[np.float64]  # (k,) -1.0 where the frame mirrors, else 1.0
+    factors: NDArray[np.float64]  # (k, 2) row i (sign[i], 1.0): x mirrored alone, y as it is
+    turning: int  # how many frames turn (turns' count)
 
     @staticmethod
     def of(frames: Sequence[Frame]) -> FrameRows:
@@ -89,7 +91,7 @@ class FrameRows:
             (math.cos(-f.rotation), math.sin(-f.rotation)) if f.rotation else (1.0, 0.0)
             for f in frames
         ]
-        return FrameRows(
+        return FrameRows.made(
             sign=np.array([-1.0 if f.mirror and not f.rotation else 1.0 for f in frames]),
             turns=np.array([bool(f.rotation) for f in frames], dtype=np.bool_),
             cos_back=np.array([c for c, _ in back], dtype=np.float64),
@@ -97,9 +99,23 @@ class FrameRows:
             turned_sign=np.array([-1.0 if f.mirror else 1.0 for f in frames]),
         )
 
+    @staticmethod
+    def made(
+        sign: NDArray[np.float64],
+        turns: NDArray[np.bool_],
+        cos_back: NDArray[np.float64],
+        sin_back: NDArray[np.float64],
+        turned_sign: NDArray[np.float64],
+    ) -> FrameRows:
+        """The rows of these arrays, with what every round would ask of them made once."""
+        factors = np.ones((len(sign), 2), dtype=np.float64)
+        factors[:, 0] = sign
+        turning = int(np.count_nonzero(turns))
+        return FrameRows(sign, turns, cos_back, sin_back, turned_sign, factors, turning)
+
     def take(self, rows: NDArray[np.intp]) -> FrameRows:
         """The frames of `rows`, in their order."""
-        return FrameRows(
+        return FrameRows.made(
             self.sign[rows],
             self.turns[rows],
             self.cos_back[rows],
@@ -110,16 +126,15 @@ class FrameRows:
     def lines_to_world(self, ends: Points) -> Points:
         """(k, 2): row i the end of a straight line computed in frame i (relative to its robot),
         in world axes (a new array): `Frame.path_to_world` of `Path((Line(ends[i]),))` for every
-        row, with its very operations, so the very bits (x * 1.0 is x; the turned rows alone
-        are turned, each float as `back` makes it)."""
+        row, with its very operations, so the very bits (x * 1.0 is x, y * 1.0 is y; the turned
+        rows alone are turned, each float as `back` makes it)."""
         local = np.asarray(ends, dtype=np.float64)
-        world = local.copy()
-        world[:, 0] *= self.sign  # the mirror alone: -x, bit for bit; x elsewhere
-        if self.turns.all():  # every frame turns (as drawn rotations do): whole columns
+        world: Points = local * self.factors  # the mirror alone: -x, bit for bit; x elsewhere
+        if self.turning == len(self.turns):  # every frame turns (as drawn rotations do)
             x, y, c, s = local[:, 0], local[:, 1], self.cos_back, self.sin_back
             world[:, 0] = self.turned_sign * (c * x - s * y)
             world[:, 1] = s * x + c * y
-        elif self.turns.any():
+        elif self.turning:
             at = np.flatnonzero(self.turns)
             x, y = local[at, 0], local[at, 1]
             c, s = self.cos_back[at], self.sin_back[at]

@@ -45,13 +45,13 @@ Column = NDArray[np.float64]  # (t, 1)
 @dataclass(frozen=True, slots=True, eq=False)  # holds arrays
 class _Lookers:
     """The robots of a round's views at once (`Looks.views_at_once`) and their frames: `rows`
-    their ids (None: every robot, in order), `sign` (m,) -1.0 where a frame is a mirror alone,
+    their ids (None: every robot, in order), `sign` (m, 1) -1.0 where a frame is a mirror alone,
     else 1.0 (None: no mirror alone), `turned` the rows whose frame turns, with each one's
     mirror factor, cosine and sine as columns (None: no frame turns)."""
 
     robots: tuple[int, ...]
     rows: NDArray[np.intp] | None
-    sign: NDArray[np.float64] | None
+    sign: Column | None
     turned: tuple[NDArray[np.intp], Column, Column, Column] | None
 
 
@@ -95,7 +95,7 @@ class Looks:
         self._lookers: _Lookers | None = None
         # every robot's view orders of the rounds from the first, drawn at once (`_orders`),
         # and the round whose views were built last
-        self._orders_ahead: tuple[int, np.ndarray] | None = None
+        self._orders_ahead: tuple[int, list[np.ndarray]] | None = None
         self._last_round = -1
         # every robot's colour (palette index; the first at the start); none without lights
         self.colours: list[int] | None = [0] * n if self.palette else None
@@ -163,14 +163,15 @@ class Looks:
             return None
         lookers = self._lookers_of(tuple(robots), look_round)
         order = self._orders(look_round, lookers)  # indices among all robots
-        # each point as one complex number: one gather, and a complex difference is the two
-        # coordinates' differences, the very operations (faster than (m, k, 2) broadcast)
-        table = np.ascontiguousarray(positions, dtype=np.float64).view(np.complex128)[:, 0]
-        pairs = table[order]
-        pairs -= (table if lookers.rows is None else table[lookers.rows])[:, None]
+        # each point as one complex number (a column: what each row's differences are of): one
+        # gather, and a complex difference is the two coordinates' differences, the very
+        # operations (faster than (m, k, 2) broadcast)
+        table = np.ascontiguousarray(positions, dtype=np.float64).view(np.complex128)
+        pairs = table.take(order)  # (the column taken as flat)
+        pairs -= table if lookers.rows is None else table[lookers.rows]
         rel: Points = pairs.view(np.float64).reshape(len(order), k, 2)
         if lookers.sign is not None:  # x * 1.0 is x, bit for bit: the mirror of to_local alone
-            rel[:, :, 0] *= lookers.sign[:, None]
+            rel[:, :, 0] *= lookers.sign
         if lookers.turned is not None:  # Frame.to_local's operations, on every turned row at once
             at, mirror, c, s = lookers.turned
             x = rel[at, :, 0] * mirror  # -x where mirrored, as to_local's `*= -1.0`
@@ -193,7 +194,7 @@ class Looks:
         # twice as many rounds as the last time: no more drawn in vain than were used
         rounds = min(ROUNDS_AHEAD, ORDERS_AHEAD // (self.n * k), 2 * len(ahead[1]) if ahead else 2)
         orders = view_orders(self.seed, look_round, self._everyone_ids, k, True, rounds)
-        self._orders_ahead = (look_round, orders.reshape(rounds, self.n, k))
+        self._orders_ahead = (look_round, list(orders.reshape(rounds, self.n, k)))
         return orders[: self.n] if lookers.rows is None else orders[lookers.rows]
 
     def _lookers_of(self, robots: tuple[int, ...], look_round: int) -> _Lookers:
@@ -215,7 +216,7 @@ class Looks:
         lookers = _Lookers(
             robots,
             rows,
-            sign if bool((sign < 0.0).any()) else None,
+            sign[:, None] if bool((sign < 0.0).any()) else None,
             _turned_rows(frames, turned) if turned else None,
         )
         if self._fixed is not None:
