@@ -12,17 +12,22 @@ C = TypeVar("C", bound=type)
 T = TypeVar("T")
 
 
+def _check_slotted(cls: type, maker: str) -> None:
+    """Raise TypeError unless `cls` is a frozen dataclass with slots and no `__post_init__`."""
+    params = getattr(cls, "__dataclass_params__", None)
+    if params is None or not params.frozen or "__slots__" not in cls.__dict__:
+        raise TypeError(f"{maker} takes a frozen dataclass with slots, not {cls.__name__}")
+    if hasattr(cls, "__post_init__"):
+        raise TypeError(f"{maker} cannot keep {cls.__name__}.__post_init__")
+
+
 def quick_init(cls: C) -> C:
     """`cls`, a frozen dataclass with slots, with an `__init__` that sets each field straight
     through its slot (the slot's own descriptor) instead of `object.__setattr__(self, name, ...)`
     as the dataclass's does: the same parameters (order, defaults, keyword-only ones), the same
     object made, at about half the cost. Raises TypeError for a class it cannot do that for (no
     slots, a field with a default factory or left out of `__init__`, a `__post_init__`)."""
-    params = getattr(cls, "__dataclass_params__", None)
-    if params is None or not params.frozen or "__slots__" not in cls.__dict__:
-        raise TypeError(f"quick_init takes a frozen dataclass with slots, not {cls.__name__}")
-    if hasattr(cls, "__post_init__"):
-        raise TypeError(f"quick_init cannot keep {cls.__name__}.__post_init__")
+    _check_slotted(cls, "quick_init")
     names: dict[str, Any] = {}
     positional: list[str] = []
     keywords: list[str] = []
@@ -55,11 +60,7 @@ def quick_new(cls: type[T]) -> Callable[..., T]:
     out (defaults and factories are the caller's): each set straight through its slot, as
     `quick_init`'s, for a class whose `__init__` it cannot replace (a field with a default
     factory) built every round. The same object as `cls(**values)`."""
-    params = getattr(cls, "__dataclass_params__", None)
-    if params is None or not params.frozen or "__slots__" not in cls.__dict__:
-        raise TypeError(f"quick_new takes a frozen dataclass with slots, not {cls.__name__}")
-    if hasattr(cls, "__post_init__"):
-        raise TypeError(f"quick_new cannot keep {cls.__name__}.__post_init__")
+    _check_slotted(cls, "quick_new")
     names: dict[str, Any] = {"_new": object.__new__, "_cls": cls}
     fields = [f.name for f in dataclasses.fields(cls)]  # type: ignore[arg-type]
     for name in fields:
