@@ -141,24 +141,29 @@ def _closest_few(pts: Points) -> tuple[float, int, int]:
     """`_closest` of a few (n, 2) `pts` (2 <= n <= FEW_UP_TO) in Python floats: the same squares
     (`dx * dx + dy * dy` of dx = x_i - x_j, dy = y_i - y_j: IEEE's operations, one at a time, as
     numpy's), the first of the least in the pairs' order (i < j, by i then j), the first NaN if
-    there is one (as `argmin`: a square is never negative, so the sum is NaN just then)."""
+    there is one (as `argmin`: a square is never negative, so the sum is NaN just then). A NaN
+    goes to numpy's own squares: the sign bit of a NaN made by Python's float operations need not
+    be numpy's."""
     flat: list[float] = pts.ravel().tolist()
     if len(flat) == 4:  # two robots: one pair
         dx, dy = flat[0] - flat[2], flat[1] - flat[3]
-        return dx * dx + dy * dy, 0, 1
-    pairs = _few_pairs(len(pts))
-    squares = [
-        (dx := flat[a] - flat[b]) * dx + (dy := flat[a + 1] - flat[b + 1]) * dy for a, b in pairs
-    ]
-    best2 = min(squares)
-    total = sum(squares)
-    if total != total:  # a NaN (min would not say which)
-        k = next(k for k, square in enumerate(squares) if square != square)
-        best2 = squares[k]
+        square = dx * dx + dy * dy
+        if square == square:
+            return square, 0, 1
     else:
-        k = squares.index(best2)
-    a, b = pairs[k]
-    return best2, a // 2, b // 2
+        pairs = _few_pairs(len(pts))
+        squares = [
+            (dx := flat[a] - flat[b]) * dx + (dy := flat[a + 1] - flat[b + 1]) * dy
+            for a, b in pairs
+        ]
+        best2 = min(squares)
+        total = sum(squares)
+        if total == total:  # no NaN (min would not say which)
+            a, b = pairs[squares.index(best2)]
+            return best2, a // 2, b // 2
+    first, second, every = _pair_squares(pts)
+    k = int(every.argmin())  # the first NaN, as `_closest`'s pairwise path
+    return float(every[k]), int(first[k]), int(second[k])
 
 
 @functools.lru_cache(maxsize=FEW_UP_TO + 1)
