@@ -181,6 +181,17 @@ def test_near_pairs_are_the_pairs_boxes_close_finds(n: int, seed: int, share: fl
         assert sorted(got) == sorted(zip(pi[close].tolist(), pj[close].tolist(), strict=True))
 
 
+def _first_corners(p: np.ndarray) -> np.ndarray:
+    """Each point's nearest grid corner as `_snap_one` picks it: the first of the four by
+    distance (a stable sort: ties to the first)."""
+    expected = []
+    for x, y in p.tolist():
+        corners = np.floor(np.array([x, y]) / GRID) * GRID + CORNERS * GRID
+        order = np.argsort(np.hypot(corners[:, 0] - x, corners[:, 1] - y), kind="stable")
+        expected.append(corners[order[0]] + 0.0)
+    return np.array(expected)
+
+
 @settings(max_examples=60, deadline=None)
 @given(st.integers(1, 80), st.integers(0, 2**32 - 1))
 def test_nearest_corners_are_the_snaps_nearest_corners(m: int, seed: int) -> None:
@@ -190,12 +201,7 @@ def test_nearest_corners_are_the_snaps_nearest_corners(m: int, seed: int) -> Non
     p = rng.uniform(-1e3, 1e3, (m, 2))
     p[: m // 3] = snap(p[: m // 3]) + GRID / 2.0
     p[m // 3 : m // 2] = rng.uniform(-3 * GRID, 3 * GRID, (m // 2 - m // 3, 2))
-    expected = []
-    for x, y in p.tolist():
-        corners = np.floor(np.array([x, y]) / GRID) * GRID + CORNERS * GRID
-        order = np.argsort(np.hypot(corners[:, 0] - x, corners[:, 1] - y), kind="stable")
-        expected.append(corners[order[0]] + 0.0)
-    assert _nearest_corners(p).tobytes() == np.array(expected).tobytes()
+    assert _nearest_corners(p).tobytes() == _first_corners(p).tobytes()
 
 
 @settings(max_examples=60, deadline=None)
@@ -212,9 +218,4 @@ def test_nearest_corners_of_points_within_ulps_of_a_half_grid_point(
         x = np.nextafter(x, np.inf if ulps > 0 else -np.inf)
     y = np.where(rng.random(40) < 0.5, x[::-1], np.floor(size / GRID) * GRID)
     p = np.column_stack([x, y]) if seed % 2 else np.column_stack([y, x])
-    expected = []
-    for px, py in p.tolist():
-        corners = np.floor(np.array([px, py]) / GRID) * GRID + CORNERS * GRID
-        order = np.argsort(np.hypot(corners[:, 0] - px, corners[:, 1] - py), kind="stable")
-        expected.append(corners[order[0]] + 0.0)
-    assert _nearest_corners(p).tobytes() == np.array(expected).tobytes()
+    assert _nearest_corners(p).tobytes() == _first_corners(p).tobytes()
