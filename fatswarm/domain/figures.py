@@ -22,7 +22,7 @@ from typing import Any, Final, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from fatswarm.domain.path import Points
+from fatswarm.domain.path import Points, float64_array
 
 RADIUS: Final = 1.0  # every robot is a unit disc: the rim-to-rim gap is the centres' less 2
 PAIRWISE_UP_TO: Final = 80  # min_gap measures every pair up to this many robots (faster there)
@@ -187,7 +187,6 @@ def _pair_squares(
     return first, second, dx * dx + dy * dy
 
 
-_F64: Final = np.dtype(np.float64)
 NEAR_MARGIN: Final = 1.0  # _GapMemo's near pairs: those within the least distance + this
 NEAR_BACKOFF: Final = 8  # rounds without near pairs after a list that served no round, at
 NEAR_BACKOFF_MAX: Final = 256  # first; twice as many after each such list, up to this
@@ -581,11 +580,7 @@ class RunFolder:
     def add(
         self, positions: Points, round_no: int = 0, line: Mapping[str, Any] | None = None
     ) -> None:
-        pts = (  # (np.asarray(..., dtype=np.float64) costs more than the test of an array that is)
-            positions
-            if type(positions) is np.ndarray and positions.dtype is _F64
-            else np.asarray(positions, dtype=np.float64)
-        )
+        pts = float64_array(positions)
         figures = derived_figures()
         seen = (pts.shape, pts.tobytes())  # the positions to the bit
         last = self._last

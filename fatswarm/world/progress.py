@@ -14,7 +14,7 @@ import numpy as np
 
 from fatswarm.domain.figures import FigureValue, RunFolder
 from fatswarm.domain.outcome import Status
-from fatswarm.domain.path import Points
+from fatswarm.domain.path import Points, float64_array
 from fatswarm.domain.quick import quick_new
 
 # A robot "moved" (the configuration changed) when its centre shifted by more than this. Far above
@@ -164,11 +164,7 @@ class ProgressTracker:
         if self._crashed:  # a crashed robot stays, as if active and asking to stay
             active_set = active_set | self._crashed
         self._count(active_set, movers, everyone, traveled, collisions)
-        # (as np.asarray(..., dtype=np.float64), which costs more than the test for arrays that are)
-        before_arr = (
-            before if type(before) is np.ndarray and before.dtype is _F64 else _floats(before)
-        )
-        after_arr = after if type(after) is np.ndarray and after.dtype is _F64 else _floats(after)
+        before_arr, after_arr = float64_array(before), float64_array(after)
         self._derived.add(after_arr, self._rounds, line)
         if changed if changed is not None else configuration_changed(before_arr, after_arr):
             # The robots active this round looked at the old configuration: start counting afresh.
@@ -241,13 +237,6 @@ class ProgressTracker:
             crashed=tuple(sorted(self._crashed)) if self._crashed else (),
             derived=self._derived.snapshot(),
         )
-
-
-_F64: Final = np.dtype(np.float64)
-
-
-def _floats(points: Points) -> Points:
-    return np.asarray(points, dtype=np.float64)
 
 
 _new_progress: Final = quick_new(Progress)  # (built every round: no __init__ of 9 setattrs)

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from fatswarm.domain import figures, record_lines
 from fatswarm.domain.outcome import Status
-from fatswarm.domain.path import Arc, Line, Path, Points, to_record
+from fatswarm.domain.path import Arc, Line, Path, Points, float64_array, to_record
 from fatswarm.domain.quick import quick_new
 from fatswarm.domain.seam import ParamValue
 from fatswarm.world.physics import Collision
@@ -170,8 +170,8 @@ class LineMoves(LazyMoves):
         super().__init__()
         assert movers.dtype.kind in "iu", f"movers must be integers, not {movers.dtype}"
         self.movers = movers
-        self.ends = _floats(ends)
-        self.traveled = _floats(traveled)
+        self.ends = float64_array(ends)
+        self.traveled = float64_array(traveled)
         assert self.ends.shape == (len(movers), 2) and self.traveled.shape == (len(movers),)
 
     def _make(self) -> tuple[Move, ...]:
@@ -218,16 +218,6 @@ class LineMoves(LazyMoves):
 
 
 Moves = tuple[Move, ...] | LazyMoves  # a round's moves: read as a sequence of Move
-
-_F64: Final = np.dtype(np.float64)
-
-
-def _floats(values: NDArray[Any]) -> NDArray[np.float64]:
-    """`np.asarray(values, dtype=np.float64)`, the array itself when it is one of float64 (the
-    test costs less than asarray's reading of its dtype argument)."""
-    if type(values) is np.ndarray and values.dtype is _F64:
-        return values
-    return np.asarray(values, dtype=np.float64)
 
 
 @dataclass(frozen=True, slots=True)
