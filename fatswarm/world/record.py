@@ -24,6 +24,7 @@ from fatswarm.domain.outcome import Status
 from fatswarm.domain.path import Arc, Line, Path, Points, float64_array, to_record
 from fatswarm.domain.quick import quick_new
 from fatswarm.domain.seam import ParamValue
+from fatswarm.world.float_text import floats_text
 from fatswarm.world.physics import Collision
 
 VERSION: Final = 1
@@ -209,12 +210,19 @@ class LineMoves(LazyMoves):
 
     def text(self) -> str:
         k = len(self.movers)
-        values: list[Any] = [None] * (4 * k)
-        values[0::4] = self.movers.tolist()
-        values[1::4] = self.ends[:, 0].tolist()
-        values[2::4] = self.ends[:, 1].tolist()
-        values[3::4] = self.traveled.tolist()
-        return "[" + _repeated(_LINE_MOVE, k) % tuple(values) + "]"
+        ends, traveled = floats_text(self.ends), floats_text(self.traveled)
+        if ends is None or traveled is None or k == 0:  # not proven repr's: repr it is
+            values: list[Any] = [None] * (4 * k)
+            values[0::4] = self.movers.tolist()
+            values[1::4] = self.ends[:, 0].tolist()
+            values[2::4] = self.ends[:, 1].tolist()
+            values[3::4] = self.traveled.tolist()
+            return "[" + _repeated(_LINE_MOVE, k) % tuple(values) + "]"
+        texts: list[Any] = [None] * (3 * k)  # "[[x,y],[x,y]]" and "[t,t]" cut into their items
+        texts[0::3] = self.movers.tolist()
+        texts[1::3] = ends[2:-2].split("],[")
+        texts[2::3] = traveled[1:-1].split(",")
+        return "[" + _repeated(_LINE_MOVE_TEXT, k) % tuple(texts) + "]"
 
 
 Moves = tuple[Move, ...] | LazyMoves  # a round's moves: read as a sequence of Move
@@ -365,6 +373,7 @@ def _dumps(value: Any) -> str:
 # format a whole list of numbers in one call; NaN and infinity are the only numbers whose text
 # holds an `n`, and they go the dict's way, to be refused as `_dumps` refuses them.
 _LINE_MOVE: Final = '{"robot":%d,"path":[{"line":[%r,%r]}],"traveled":%r}'
+_LINE_MOVE_TEXT: Final = '{"robot":%d,"path":[{"line":[%s]}],"traveled":%s}'  # floats as text
 _POINT: Final = "[%r,%r]"
 _ROW: Final = "%r,%r"  # a point without its brackets (PointsMemo)
 _ROUND_HEAD: Final = frozenset(("type", "round", "active", "moves", "positions", "collisions"))
@@ -422,6 +431,9 @@ def _points_text(positions: Points, memo: PointsMemo | None = None) -> str:
         return _dumps(_positions_list(positions))  # refused there as before
     if memo is not None:
         return memo.text(arr)
+    made = floats_text(arr)
+    if made is not None:
+        return made
     return "[" + _repeated(_POINT, len(arr)) % tuple(arr.ravel().tolist()) + "]"
 
 
@@ -444,7 +456,12 @@ class PointsMemo:
         last = self._bits
         changed = None if last is None or last.shape != bits.shape else (last != bits).any(1)
         if changed is None or 2 * int(np.count_nonzero(changed)) > n:
-            self._inner = _repeated(_ROW, n, "],[") % tuple(arr.ravel().tolist())
+            made = floats_text(arr)
+            self._inner = (
+                _repeated(_ROW, n, "],[") % tuple(arr.ravel().tolist())
+                if made is None
+                else made[2:-2]  # "[[x,y],[x,y]]" less its outer brackets
+            )
             self._rows = None
         else:
             rows = self._rows if self._rows is not None else self._inner.split("],[")
@@ -478,6 +495,7 @@ def round_text(entry: RoundEntry, memo: PointsMemo | None = None) -> str:
     TypeError for a value JSON has no form of, as `json.dumps` does."""
     extra = entry.extra
     moves = entry.moves
+    active = entry.active if type(entry.active) is tuple else tuple(entry.active)
     moved = moves.text() if isinstance(moves, LazyMoves) else _moves_text(_by_robot(moves))
     points = _points_text(entry.positions, memo)
     if not all(isinstance(key, str) for key in extra):
@@ -488,7 +506,7 @@ def round_text(entry: RoundEntry, memo: PointsMemo | None = None) -> str:
         '{"type":"round","round":',
         str(int(entry.round)),
         ',"active":[',
-        ",".join([str(int(r)) for r in entry.active]),
+        _repeated("%d", len(active)) % active,
         '],"moves":',
         moved,
         ',"positions":',
