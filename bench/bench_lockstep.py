@@ -11,7 +11,8 @@ nothing (every robot steps 1e-4 to its right), so its cost per Look is the emula
 `no-compute-views` is the same through the round hook (`compute_views`: the lock step builds the
 round's views as one array and takes every move of the round in one call, as arrays:
 `StraightMoves`). `gathering` and `oblot-go-to-cog` (on point robots) have the round hook;
-`uniform-circle` plans each round once.
+`uniform-circle` plans each round once. `gathering+record` is `gathering` writing its run record
+(`--record`, a file in a temporary folder): what the round line and its writer cost.
 Each side runs in its own process, with its checkout's python (`--baseline-python`, default
 DIR/../basevenv/bin/python if it exists), from its checkout's folder. `--peer CMD` runs a shell
 command after each side, in turn, `--repeats` times: it must print one JSON object a line,
@@ -29,6 +30,7 @@ import os
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Mapping, Sequence
 from typing import Any, Final
@@ -46,7 +48,9 @@ ALGORITHMS: Final = (
     "gathering",
     "oblot-go-to-cog",
     "uniform-circle",
+    "gathering+record",
 )
+RECORDED: Final = "+record"  # an algorithm's name and this: the same runs, each writing its record
 MODELS: Final[Mapping[str, Mapping[str, Any]]] = {"oblot-go-to-cog": {"bodies": "points"}}
 OWN: Final = {"no-compute": "NO_COMPUTE", "no-compute-views": "NO_COMPUTE_VIEWS"}
 
@@ -118,21 +122,27 @@ def measure(algorithm: str, n: int, budget: float) -> dict[str, float]:
     1, ...), from each run's first committed round to its last, until `budget` seconds pass."""
     import fatswarm  # function-local: a worker imports the fatswarm of its own checkout
 
-    ref = _ref(algorithm)
+    name = algorithm.removesuffix(RECORDED)
+    ref = _ref(name)
     totals = {"looks": 0.0, "secs": 0.0, "cpu": 0.0}
     seed = 0
-    while totals["secs"] < budget:
-        with contextlib.suppress(_Budget):
-            fatswarm.run(
-                n,
-                algorithm=ref,
-                seed=seed,
-                start="spread",
-                scheduler="fsync",
-                on_round=_Counter(totals, budget),
-                **MODELS.get(algorithm, {}),
-            )
-        seed += 1
+    with tempfile.TemporaryDirectory() as folder:
+        while totals["secs"] < budget:
+            record = os.path.join(folder, f"{seed}.jsonl") if name != algorithm else None
+            with contextlib.suppress(_Budget):
+                fatswarm.run(
+                    n,
+                    algorithm=ref,
+                    seed=seed,
+                    start="spread",
+                    scheduler="fsync",
+                    on_round=_Counter(totals, budget),
+                    record=record,
+                    **MODELS.get(name, {}),
+                )
+            if record is not None and os.path.exists(record):
+                os.unlink(record)
+            seed += 1
     return totals
 
 

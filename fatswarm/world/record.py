@@ -218,7 +218,12 @@ class LineMoves(LazyMoves):
             values[2::4] = self.ends[:, 1].tolist()
             values[3::4] = self.traveled.tolist()
             return "[" + _repeated(_LINE_MOVE, k) % tuple(values) + "]"
-        texts: list[Any] = [None] * (3 * k)  # "[[x,y],[x,y]]" and "[t,t]" cut into their items
+        if self.movers[0] == 0 and self.movers[-1] == k - 1:  # every robot (movers increase)
+            texts: list[Any] = [None] * (2 * k)  # "[[x,y],[x,y]]" and "[t,t]" cut into items
+            texts[0::2] = ends[2:-2].split("],[")
+            texts[1::2] = traveled[1:-1].split(",")
+            return _every_robot_moves(k) % tuple(texts)
+        texts = [None] * (3 * k)
         texts[0::3] = self.movers.tolist()
         texts[1::3] = ends[2:-2].split("],[")
         texts[2::3] = traveled[1:-1].split(",")
@@ -383,6 +388,13 @@ _ROUND_HEAD: Final = frozenset(("type", "round", "active", "moves", "positions",
 def _repeated(item: str, k: int, between: str = ",") -> str:
     """`k` copies of the format `item`, `between` each two."""
     return between.join([item] * k)
+
+
+@functools.lru_cache(maxsize=16)
+def _every_robot_moves(k: int) -> str:
+    """The format of the moves of robots 0..k-1 in order, each a straight line: their ids
+    written in, each line's end and distance left as `%s`."""
+    return "[" + ",".join([_LINE_MOVE_TEXT % (r, "%s", "%s") for r in range(k)]) + "]"
 
 
 def _path_text(path: Path) -> str:

@@ -107,7 +107,8 @@ def test_a_round_line_as_arrays_is_the_text_of_its_paths_either_way(
     n = data.draw(st.integers(1, 8))
     floats = st.one_of(TAKEN, ANY.filter(lambda x: x == x and abs(x) != float("inf")))
     pick = data.draw(st.sampled_from([TAKEN, floats]))
-    movers = np.array(sorted(data.draw(st.sets(st.integers(0, n - 1), min_size=1))))
+    some = data.draw(st.sets(st.integers(0, n - 1), min_size=1))
+    movers = np.arange(n) if data.draw(st.booleans()) else np.array(sorted(some))  # every, some
     ends = data.draw(hnp.arrays(np.float64, (len(movers), 2), elements=pick))
     traveled = np.abs(data.draw(hnp.arrays(np.float64, len(movers), elements=pick)))
     positions = data.draw(hnp.arrays(np.float64, (n, 2), elements=pick))
