@@ -452,7 +452,8 @@ def _points_text(positions: Points, memo: PointsMemo | None = None) -> str:
 class PointsMemo:
     """The text of the positions of the round line written last, row by row: a row whose two
     floats are the same bits (so the same `repr`) is not formatted again. A writer's: most
-    rounds leave most robots where they were, and a float's text is the line's main cost."""
+    rounds of ssync and async leave most robots where they were, and `repr` of a float is
+    costly; where more than n / 16 rows changed, `floats_text` writes them all instead."""
 
     def __init__(self) -> None:
         self._bits: NDArray[np.int64] | None = None  # the positions' bits, (n, 2)
@@ -467,14 +468,13 @@ class PointsMemo:
         bits = arr.view(np.int64) if arr.flags.c_contiguous else arr.copy().view(np.int64)
         last = self._bits
         changed = None if last is None or last.shape != bits.shape else (last != bits).any(1)
-        if changed is None or 2 * int(np.count_nonzero(changed)) > n:
-            made = floats_text(arr)
-            self._inner = (
-                _repeated(_ROW, n, "],[") % tuple(arr.ravel().tolist())
-                if made is None
-                else made[2:-2]  # "[[x,y],[x,y]]" less its outer brackets
-            )
-            self._rows = None
+        count = n if changed is None else int(np.count_nonzero(changed))
+        # orjson writes every row anew for about what `repr` takes for n / 16 of them
+        made = floats_text(arr) if 16 * count > n else None
+        if made is not None:
+            self._inner, self._rows = made[2:-2], None  # "[[x,y],[x,y]]" less its brackets
+        elif changed is None or 2 * count > n:
+            self._inner, self._rows = _repeated(_ROW, n, "],[") % tuple(arr.ravel().tolist()), None
         else:
             rows = self._rows if self._rows is not None else self._inner.split("],[")
             for i in np.flatnonzero(changed).tolist():
