@@ -29,7 +29,7 @@ import numpy as np
 from fatswarm.agent import algorithm, expansion, formation, planning
 from fatswarm.agent.params import Params
 from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy.engine.lockstep import RoundReport, run_lockstep
+from fatswarm.deploy.engine.lockstep import RoundReport, run_lockstep, start_lockstep
 from fatswarm.deploy.scenarios.starts import KINDS, degenerate_starts, random_start
 from fatswarm.domain.path import Path, Points
 
@@ -336,19 +336,24 @@ _PHASE_WRAPS: dict[str, tuple[str, ...]] = {
 
 
 def _sample_views(n: int, count: int) -> list[Points]:
-    """Views robots actually see during a run (clustered start, fsync), one per sampled Look."""
+    """Views robots actually see during a run (clustered start, centralized), one per sampled
+    Look: the run's first `count` (fewer if it ends first). The run is advanced a step at a time
+    and left once they are in, so no compute is made to fail to stop it (the engine would count
+    and log that as the algorithm's failure)."""
     views: list[Points] = []
 
     def keep(view: Points, params: Params) -> Path:
-        if len(views) >= count:
-            raise _Budget
-        views.append(view.copy())
+        if len(views) < count:
+            views.append(view.copy())
         return algorithm.compute(view, params)
 
     # Centralized: one Look a round, so the sample spans the phases of the run, not one round.
     start = random_start(n, 1, "clustered")
-    with contextlib.suppress(_Budget):
-        run_lockstep(start, Params(n), make_scheduler("centralized", n, 1), seed=1, compute=keep)
+    run = start_lockstep(
+        start, Params(n), make_scheduler("centralized", n, 1), seed=1, compute=keep
+    )
+    while len(views) < count and run.advance():
+        pass
     return views
 
 

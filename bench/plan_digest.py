@@ -11,7 +11,7 @@ configurations that real runs reach, to compare one checkout with another (issue
 Against another checkout, run the script by absolute path from that checkout with it on the path:
 `cd /work/pre && PYTHONPATH=/work/pre python /work/main/bench/plan_digest.py --save F`.
 
-Collection runs lock-step runs (`run_lockstep`, shared plans) with `algorithm.plan` wrapped, and
+Collection runs lock-step runs (`start_lockstep`, shared plans) with `algorithm.plan` wrapped, and
 keeps every distinct canonical configuration (canonical points, a) a plan is made on: random starts
 of every kind (sizes 2 to 260), the adversarial families (sizes 2 to 256), the named degenerate
 starts, under fsync, ssync and centralized, and asynchronous and non-rigid runs (robots Look while
@@ -50,7 +50,7 @@ import numpy as np
 from fatswarm.agent import algorithm
 from fatswarm.agent.params import Params
 from fatswarm.coordinator.schedule import make_scheduler
-from fatswarm.deploy.engine.lockstep import run_lockstep
+from fatswarm.deploy.engine.lockstep import start_lockstep
 from fatswarm.deploy.scenarios.adversarial import (
     FAMILIES,
     SIDES,
@@ -175,29 +175,31 @@ def all_runs(quick: bool) -> list[Run]:
     ]
 
 
-class _Enough(Exception):
-    """Raised from the wrapped plan when a run has given PER_RUN configurations."""
-
-
 def collect_run(run: Run) -> tuple[str, list[np.ndarray], str]:
-    """The distinct canonical configurations the run plans on, in order, and how it ended."""
+    """The distinct canonical configurations the run plans on, in order, and how it ended ("cut"
+    once a plan is asked on a new one after PER_RUN were kept). The run is advanced a step at a
+    time and left there, so no plan is made to fail to stop it (where a robot's own compute
+    calls it, the engine would count and log that as the algorithm's failure)."""
     seen: set[bytes] = set()
     found: list[np.ndarray] = []
+    enough = False
     original = algorithm.plan
 
     def recording(points: Points, params: Params) -> algorithm.Plan:
+        nonlocal enough
         key = points.tobytes()
         if key not in seen:
             if len(found) >= PER_RUN:
-                raise _Enough
-            if len(seen) % run.stride == 0:
-                found.append(np.array(points, dtype=np.float64))
-            seen.add(key)
+                enough = True
+            else:
+                if len(seen) % run.stride == 0:
+                    found.append(np.array(points, dtype=np.float64))
+                seen.add(key)
         return original(points, params)
 
     algorithm.plan = recording
     try:
-        result = run_lockstep(
+        lockstep = start_lockstep(
             run.start(),
             Params(run.n, run.a),
             make_scheduler(run.scheduler, run.n, run.seed),
@@ -205,9 +207,9 @@ def collect_run(run: Run) -> tuple[str, list[np.ndarray], str]:
             non_rigid=run.non_rigid,
             max_rounds=run.max_rounds,
         )
-        status = str(result.status)
-    except _Enough:
-        status = "cut"
+        while not enough and lockstep.advance():
+            pass
+        status = "cut" if enough else str(lockstep.finish().status)
     except Exception as exc:  # a failing run still gave its configurations
         status = f"error {type(exc).__name__}"
     finally:

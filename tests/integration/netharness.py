@@ -17,8 +17,10 @@ from typing import Any
 import numpy as np
 import pytest
 
+from fatswarm.agent.service import AgentConfig, serve
 from fatswarm.deploy.net.children import Children
 from fatswarm.deploy.net.zconf import loopback_endpoint, make_config
+from fatswarm.domain.seam import Algorithm
 from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.observers import WorldState
 from fatswarm.world.protocol import state_key
@@ -42,6 +44,7 @@ class Swarm:
         self.session: Any = None
         self.latest: WorldState | None = None
         self._lock = threading.Lock()
+        self._here: tuple[threading.Thread, threading.Event] | None = None  # an agent in-process
 
     # -- processes ------------------------------------------------------------------------------
 
@@ -125,13 +128,16 @@ class Swarm:
         move_timeout: float | None = None,
         hosted: bool = False,
         apart: int | None = None,
+        apart_here: Algorithm[Any] | None = None,
     ) -> None:
         """Every part (`router=False`: on another swarm's router, given as `endpoint`;
         `in_world`: the world hosts the router, as in `fatswarm run`; `move_timeout`: the
         coordinator's, see coordinator_flags; `hosted`: the agents forked by one `agents` host
         named "agents", as `fatswarm run` starts them, quicker to start than a process each, for
         tests that do not stop or read one agent by its name "agent I"; `apart`: but robot I's
-        agent, started alone as "agent I", between hosts of the robots below and above it)."""
+        agent, started alone as "agent I", between hosts of the robots below and above it;
+        `apart_here`: robot I's agent runs in this test process instead, with this algorithm
+        (`start_agent_here`))."""
         if in_world:
             self.start_world_router()
             self.observe()
@@ -150,8 +156,25 @@ class Swarm:
             if count > 0:
                 net = [*self._net(), "-n", str(count), "--first", str(first)]
                 self._start(name, "agents", *net, "--log-level", "info")
-        if apart is not None:
+        if apart is not None and apart_here is not None:
+            self.start_agent_here(apart, apart_here)
+        elif apart is not None:
             self.start_agent(apart)
+
+    def start_agent_here(self, robot: int, algorithm: Algorithm[Any]) -> None:
+        """Robot `robot`'s agent in this test process: the agent's own loop (`serve`) in a thread,
+        on a Zenoh session of its own, with `algorithm` (e.g. one whose compute the test holds,
+        so that a round stays open); stopped by `close`. Zenoh's default lease, not an agent's
+        2 s: a test process slowed by the load must not be taken for a hung agent."""
+        assert self._here is None, "one agent in the test process at a time"
+        stop = threading.Event()
+        conf = make_config("client", [self.endpoint], shared_memory=False)
+        cfg = AgentConfig(self.swarm, robot, algorithm.name)
+        thread = threading.Thread(
+            target=serve, args=(cfg, conf, stop, None, algorithm), name=f"agent {robot}"
+        )
+        thread.start()
+        self._here = (thread, stop)
 
     def kill9(self, name: str) -> None:
         import signal
@@ -225,11 +248,17 @@ class Swarm:
         return state
 
     def close(self) -> None:
+        here, self._here = self._here, None
+        if here is not None:
+            here[1].set()  # its Look ends when the world stops (or after LOOK_WAIT_S)
         try:
             self.children.stop_all()
         finally:
+            if here is not None:
+                here[0].join(DEADLINE_S)
             if self.session is not None:
                 self.session.close()
+        assert here is None or not here[0].is_alive(), "the agent in the test process went on"
 
 
 def part(name: str, *flags: str) -> list[str]:

@@ -8,6 +8,7 @@ import re
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -15,6 +16,7 @@ from typing import Any
 
 import pytest
 from netharness import (
+    DEADLINE_S,
     Swarm,
     assert_one_line,
     assert_same_run,
@@ -23,8 +25,11 @@ from netharness import (
     running,
 )
 
-from fatswarm.domain.path import Line
+from fatswarm.domain.path import Line, Points
 from fatswarm.domain.path import Path as RobotPath
+from fatswarm.domain.registry import DEFAULT as DEFAULT_ALGORITHM
+from fatswarm.domain.registry import load_algorithm
+from fatswarm.domain.seam import Algorithm
 from fatswarm.domain.wire import ProtocolError
 from fatswarm.world.observers import WorldState
 from fatswarm.world.protocol import (
@@ -36,6 +41,7 @@ from fatswarm.world.protocol import (
     snapshot_key,
     state_key,
 )
+from fatswarm.world.record import RunRecord
 from fatswarm.world.record_read import read_record
 
 pytestmark = pytest.mark.integration
@@ -190,53 +196,90 @@ def test_a_restarted_coordinator_continues_from_the_last_committed_round(
 def test_a_foreign_client_changes_nothing_and_crashes_nothing(
     tmp_path: Path, make_swarm: Callable[..., Swarm]
 ) -> None:
+    lock = lockstep_record(tmp_path / "lock.jsonl", 8, SEED)
+    held_round, robot = _first_round_held(lock, 8)
+    held = _HeldCompute(load_algorithm(DEFAULT_ALGORITHM))
     sw = make_swarm(8, SEED)
-    sw.start_all(pace=0.1, hosted=True)
-    sw.wait_for("round 2", lambda: (s := sw.state()) is not None and s.round >= 2)
+    # The held robot's agent runs here, its first compute held: its round stays open (it has not
+    # moved) until the test lets it go, so every foreign message meets one known state. A move
+    # timeout past every deadline: the coordinator must not give up on it meanwhile.
+    sw.start_all(pace=0.1, hosted=True, apart=robot, apart_here=held, move_timeout=DEADLINE_S)
     s = sw.session
-    step = RobotPath((Line((3.0, 0.0)),))
+    try:
+        sw.wait_for(f"robot {robot}'s first compute", held.holding.is_set)
+        sw.wait_for(
+            f"round {held_round} open",
+            lambda: (x := sw.state()) is not None and x.open_round == held_round,
+        )
+        state = sw.state()
+        assert state is not None and robot in state.active
+        _foreign_messages(sw, state)  # the idle robots' moves meet their round open: not active
+        sw.wait_for(
+            "every refusal on the world's log",
+            lambda: all(f"rejected ({reason})" in sw.log("world") for reason in _REFUSED),
+        )
+    finally:
+        held.go.set()
     opened: queue.Queue[WorldState] = queue.Queue()  # the state names a round's robots as it opens
-    s.declare_subscriber(state_key(sw.swarm), lambda sample: _offer_open(opened, sample))
-    seen = 0
+    _sub = s.declare_subscriber(state_key(sw.swarm), lambda sample: _offer_open(opened, sample))
+    seen = held_round
     while (state := sw.state()) is not None and state.status == "running":
-        try:
+        try:  # more of the same in the rounds after, whichever state each meets
             state = opened.get(timeout=0.5)
         except queue.Empty:
             continue
-        if state.open_round == seen:
+        if state.open_round <= seen:
             continue
-        seen = r = state.open_round
-        active = state.active
-        idle = [robot for robot in range(8) if robot not in active]
-        for robot in idle:  # not active in this round: first, while the round is still open
-            s.put(move_key(sw.swarm, robot), MoveSubmitted(robot, r, step).encode())
-        s.put(move_key(sw.swarm, 0), b"\x93garbage")
-        s.put(move_key(sw.swarm, 0), b"\xc1")
-        s.put(f"fatswarm/{sw.swarm}/robot/99999/move", MoveSubmitted(0, r, step).encode())
-        for robot in active:  # someone else's robot, and a replay of round 1
-            other = (robot + 1) % 8
-            s.put(move_key(sw.swarm, other), MoveSubmitted(robot, r, step).encode())
-            s.put(move_key(sw.swarm, robot), MoveSubmitted(robot, 1, step).encode())
-        replies = list(s.get(snapshot_key(sw.swarm, 1000), timeout=2.0))
-        assert replies and all(x.ok is None for x in replies), "a snapshot for no robot"
-        replies = list(s.get(snapshot_key(sw.swarm, 0), payload=b"\x81", timeout=2.0))
-        assert replies and all(x.ok is None for x in replies), "a snapshot for a garbage look"
-        for bad in (b"\x00\x01", Begin(1, (0,)).encode(), Commit(1).encode()):
-            list(s.get(control_key(sw.swarm), payload=bad, timeout=2.0))
+        seen = state.open_round
+        _foreign_messages(sw, state)
     end = sw.wait_done()
     assert end.status == "formed"
-    log = sw.log("world")
-    for reason in (
-        "move-garbage",
-        "move-wrong-robot",
-        "move-wrong-round",
-        "move-not-active",
-        "control-garbage",
-        "look-garbage",
-    ):
-        assert f"rejected ({reason})" in log, reason
     assert sw.children.procs["world"].poll() is None, "the world crashed"
-    assert_same_run(read_record(sw.state_path), lockstep_record(tmp_path / "lock.jsonl", 8, SEED))
+    assert_same_run(read_record(sw.state_path), lock)
+
+
+# what a foreign client's messages are refused as, each pinned while a round is held open
+_REFUSED = (
+    "move-garbage",
+    "move-wrong-robot",
+    "move-wrong-round",
+    "move-not-active",
+    "control-garbage",
+    "look-garbage",
+)
+
+
+class _HeldCompute:
+    """An algorithm whose first compute waits until `go` is set (the round it is made for stays
+    open: its robot has not moved); every later one goes straight through."""
+
+    def __init__(self, algorithm: Algorithm[Any]) -> None:
+        self._algorithm = algorithm
+        self.holding = threading.Event()  # the first compute has begun
+        self.go = threading.Event()
+
+    def __getattr__(self, name: str) -> Any:  # all but compute: the algorithm's own
+        return getattr(self._algorithm, name)
+
+    def compute(self, view: Points, params: Any) -> RobotPath:
+        self.holding.set()
+        self.go.wait(DEADLINE_S)  # (the test sets it, failing or not: a bound, never reached)
+        return self._algorithm.compute(view, params)
+
+
+def _first_round_held(lock: RunRecord, n: int) -> tuple[int, int]:
+    """A round of the lock-step run, 2 or later, that leaves robots idle, and a robot first
+    active in it: its first compute, held, holds that round open. (Round 2 or later: the
+    foreign messages replay round 1, and a replay of the open round would be taken.)"""
+    first: dict[int, int] = {}
+    for entry in lock.rounds:
+        for robot in entry.active:
+            first.setdefault(robot, entry.round)
+    idle = {entry.round for entry in lock.rounds if len(entry.active) < n}
+    found = sorted((round_no, robot) for robot, round_no in first.items() if round_no >= 2)
+    found = [(round_no, robot) for round_no, robot in found if round_no in idle]
+    assert found, "no robot is first active in a round of 2 or later that leaves robots idle"
+    return found[0]
 
 
 def _offer_open(opened: queue.Queue[WorldState], sample: Any) -> None:
@@ -247,6 +290,30 @@ def _offer_open(opened: queue.Queue[WorldState], sample: Any) -> None:
         return
     if state.open_round:
         opened.put(state)
+
+
+def _foreign_messages(sw: Swarm, state: WorldState) -> None:
+    """A foreign client's messages, as it sees the state (`open_round` and its robots): moves
+    for idle robots, garbage, a robot of no run, someone else's robot, a replay of round 1,
+    snapshots for no robot and for a garbage Look, garbage and stale control requests."""
+    s, r, active = sw.session, state.open_round, state.active
+    step = RobotPath((Line((3.0, 0.0)),))
+    for robot in range(sw.n):
+        if robot not in active:  # not active in this round (refused as late if it has closed)
+            s.put(move_key(sw.swarm, robot), MoveSubmitted(robot, r, step).encode())
+    s.put(move_key(sw.swarm, 0), b"\x93garbage")
+    s.put(move_key(sw.swarm, 0), b"\xc1")
+    s.put(f"fatswarm/{sw.swarm}/robot/99999/move", MoveSubmitted(0, r, step).encode())
+    for robot in active:  # someone else's robot, and a replay of round 1
+        other = (robot + 1) % sw.n
+        s.put(move_key(sw.swarm, other), MoveSubmitted(robot, r, step).encode())
+        s.put(move_key(sw.swarm, robot), MoveSubmitted(robot, 1, step).encode())
+    replies = list(s.get(snapshot_key(sw.swarm, 1000), timeout=2.0))
+    assert replies and all(x.ok is None for x in replies), "a snapshot for no robot"
+    replies = list(s.get(snapshot_key(sw.swarm, 0), payload=b"\x81", timeout=2.0))
+    assert replies and all(x.ok is None for x in replies), "a snapshot for a garbage look"
+    for bad in (b"\x00\x01", Begin(1, (0,)).encode(), Commit(1).encode()):
+        list(s.get(control_key(sw.swarm), payload=bad, timeout=2.0))
 
 
 @pytest.mark.parametrize(  # the seeds of issue 21's report; the second only in the slow run
