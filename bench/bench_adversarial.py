@@ -74,8 +74,10 @@ CSV_FIELDS: Final = (
 )
 
 
-class RunTimeout(Exception):
-    """A run used more than its time limit (an algorithm loop that never ends is a finding)."""
+class RunTimeout(BaseException):
+    """A run used more than its time limit (an algorithm loop that never ends is a finding).
+    Not an Exception: raised inside a compute, the engine would count it as the algorithm's
+    failure, the robot would stay and the run go on with no limit left."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -197,7 +199,7 @@ def run_one(job: tuple[Case, str, float]) -> Outcome:
                 make_scheduler(scheduler, case.n, case.seed),
                 seed=case.seed,
             )
-    except Exception as exc:  # a crash is a finding: record it, keep the matrix going
+    except (Exception, RunTimeout) as exc:  # a crash is a finding: record it, keep going
         return Outcome(
             case,
             scheduler,
