@@ -3,9 +3,11 @@ is proven to give the same bytes: the round line's floats were most of a recorde
 
 JSON (`json.dumps`) writes a float as its `repr`: the shortest digits that read back to the same
 float, positional from 1e-4 up to 1e16 and in exponent form outside. orjson writes the same
-shortest digits but its own exponent form (`1e-5`, not `1e-05`), so its text is taken only for
-arrays whose every value is 0 or of magnitude in [1e-4, 1e16), where both are positional; any
-other array (NaN, infinity, tiny or huge values) is left to `repr`. Where the two were compared
+shortest digits, but moves between the two forms at other magnitudes and writes its exponents its
+own way (`0.00003945909461200336` for repr's `3.945909461200336e-05`, `4.33278198636691e-6` for
+`4.33278198636691e-06`), so its text is taken only for arrays whose every value is 0 or of
+magnitude in [1e-4, 1e16), where both are positional; any other array (NaN, infinity, tiny or
+huge values) is left to `repr`. Where the two were compared
 (tests/property/test_float_text.py, bench/float_text_check.py) they agreed on every such value;
 `AGREES` repeats a sample of that check at import, so that an orjson that formats otherwise turns
 this path off instead of changing a record.

@@ -500,6 +500,15 @@ def round_fields(entry: RoundEntry) -> dict[str, Any]:
     }
 
 
+def _active_text(active: tuple[int, ...]) -> str:
+    """The active robots' ids, "0,1,2": one `%d` format; what it refuses (a str, say) as
+    `int` reads it, as the line's dict does."""
+    try:
+        return _repeated("%d", len(active)) % active
+    except TypeError:
+        return ",".join([str(int(r)) for r in active])
+
+
 def round_text(entry: RoundEntry, memo: PointsMemo | None = None) -> str:
     """The round line's text in the record, without its newline: exactly `_dumps(round_fields(
     entry))` (a test holds the two together), built faster. `memo`: the positions' text of the
@@ -518,7 +527,7 @@ def round_text(entry: RoundEntry, memo: PointsMemo | None = None) -> str:
         '{"type":"round","round":',
         str(int(entry.round)),
         ',"active":[',
-        _repeated("%d", len(active)) % active,
+        _active_text(active),
         '],"moves":',
         moved,
         ',"positions":',

@@ -31,6 +31,7 @@ from fatswarm.world.record import (
     RoundEntry,
     line_text,
     round_entry,
+    round_fields,
     round_text,
 )
 from fatswarm.world.setup import WorldSetup
@@ -120,6 +121,14 @@ def test_a_round_line_is_the_text_json_dumps_made_of_it(entry: RoundEntry) -> No
 def test_a_round_line_of_moves_given_as_a_tuple_is_the_same_text(entry: RoundEntry) -> None:
     as_tuple = replace(entry, moves=tuple(entry.moves))
     assert round_text(as_tuple) == round_text(entry)
+
+
+def test_active_robots_given_as_other_numbers_are_written_as_the_lines_dict_writes_them() -> None:
+    entry = round_entry(4, [0, 1, 2], {}, {}, np.zeros((3, 2)))
+    odd_ones: list[tuple[Any, ...]] = [(np.int64(0), 1, 2), ("0", 1, 2.0), (True, 1, 2)]
+    for active in odd_ones:
+        odd = replace(entry, active=active)
+        assert round_text(odd) == json.dumps(round_fields(odd), separators=(",", ":"))
 
 
 @pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
