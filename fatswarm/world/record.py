@@ -367,9 +367,13 @@ def collision_to_record(c: Collision) -> dict[str, Any]:
     }
 
 
+_ENCODER: Final = json.JSONEncoder(separators=(",", ":"), allow_nan=False)
+"""What `json.dumps(value, separators=(",", ":"), allow_nan=False)` makes anew at every call."""
+
+
 def _dumps(value: Any) -> str:
     """JSON as every record line is written: compact, ASCII, no NaN or infinity (ValueError)."""
-    return json.dumps(value, separators=(",", ":"), allow_nan=False)
+    return _ENCODER.encode(value)
 
 
 # The record's round line written piece by piece: the very text `_dumps` gives of the line as a
@@ -535,8 +539,8 @@ def round_text(entry: RoundEntry, memo: PointsMemo | None = None) -> str:
         ',"collisions":',
         _dumps([collision_to_record(c) for c in entry.collisions]) if entry.collisions else "[]",
     ]
-    for key, value in extra.items():
-        parts += (",", _dumps(key), ":", _dumps(value))
+    if extra:  # its keys are str (above): the dict's text less its braces is theirs in order
+        parts += (",", _dumps(extra)[1:-1])
     parts.append("}")
     return "".join(parts)
 
