@@ -296,18 +296,21 @@ def profile(spec: str, rounds: int) -> None:
     import fatswarm  # function-local: the checkout it runs from
 
     algorithm, n = spec.split(":")
+    name = algorithm.removesuffix(RECORDED)
     prof = cProfile.Profile()
-    prof.enable()
-    fatswarm.run(
-        int(n),
-        algorithm=_ref(algorithm),
-        seed=0,
-        start="spread",
-        scheduler="fsync",
-        max_rounds=rounds,
-        **MODELS.get(algorithm, {}),
-    )
-    prof.disable()
+    with tempfile.TemporaryDirectory() as folder:
+        prof.enable()
+        fatswarm.run(
+            int(n),
+            algorithm=_ref(name),
+            seed=0,
+            start="spread",
+            scheduler="fsync",
+            max_rounds=rounds,
+            record=os.path.join(folder, "run.jsonl") if name != algorithm else None,
+            **MODELS.get(name, {}),
+        )
+        prof.disable()
     pstats.Stats(prof).sort_stats("tottime").print_stats(25)
 
 
