@@ -218,15 +218,13 @@ class LineMoves(LazyMoves):
             values[2::4] = self.ends[:, 1].tolist()
             values[3::4] = self.traveled.tolist()
             return "[" + _repeated(_LINE_MOVE, k) % tuple(values) + "]"
+        points, lengths = ends[2:-2].split("],["), traveled[1:-1].split(",")  # "x,y" and "t"s
         if self.movers[0] == 0 and self.movers[-1] == k - 1:  # every robot (movers increase)
-            texts: list[Any] = [None] * (2 * k)  # "[[x,y],[x,y]]" and "[t,t]" cut into items
-            texts[0::2] = ends[2:-2].split("],[")
-            texts[1::2] = traveled[1:-1].split(",")
+            texts: list[Any] = [None] * (2 * k)
+            texts[0::2], texts[1::2] = points, lengths
             return _every_robot_moves(k) % tuple(texts)
         texts = [None] * (3 * k)
-        texts[0::3] = self.movers.tolist()
-        texts[1::3] = ends[2:-2].split("],[")
-        texts[2::3] = traveled[1:-1].split(",")
+        texts[0::3], texts[1::3], texts[2::3] = self.movers.tolist(), points, lengths
         return "[" + _repeated(_LINE_MOVE_TEXT, k) % tuple(texts) + "]"
 
 
@@ -504,9 +502,11 @@ def round_fields(entry: RoundEntry) -> dict[str, Any]:
     }
 
 
-def _active_text(active: tuple[int, ...]) -> str:
+def _active_text(active: Sequence[int]) -> str:
     """The active robots' ids, "0,1,2": one `%d` format; what it refuses (a str, say) as
     `int` reads it, as the line's dict does."""
+    if type(active) is not tuple:
+        active = tuple(active)
     try:
         return _repeated("%d", len(active)) % active
     except TypeError:
@@ -520,7 +520,6 @@ def round_text(entry: RoundEntry, memo: PointsMemo | None = None) -> str:
     TypeError for a value JSON has no form of, as `json.dumps` does."""
     extra = entry.extra
     moves = entry.moves
-    active = entry.active if type(entry.active) is tuple else tuple(entry.active)
     moved = moves.text() if isinstance(moves, LazyMoves) else _moves_text(_by_robot(moves))
     points = _points_text(entry.positions, memo)
     if not all(isinstance(key, str) for key in extra):
@@ -531,7 +530,7 @@ def round_text(entry: RoundEntry, memo: PointsMemo | None = None) -> str:
         '{"type":"round","round":',
         str(int(entry.round)),
         ',"active":[',
-        _active_text(active),
+        _active_text(entry.active),
         '],"moves":',
         moved,
         ',"positions":',
