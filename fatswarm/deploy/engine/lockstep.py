@@ -78,6 +78,9 @@ _BOOL: Final = np.dtype(np.bool_)
 log = logging.getLogger("fatswarm.lockstep")
 
 ComputeFn = Callable[[Points, Any], Path]
+Decided = tuple[Path, int | None] | str
+"""A robot's Compute as the lock step hands it over: its path (own frame) and next colour, or why
+its compute failed (`failure_text`)."""
 
 
 class HistoryMismatchError(ValueError):
@@ -432,6 +435,12 @@ class _Bus:
         # the round hook: every active robot's path in one call, each from its own view (used
         # where the world builds the round's views at once, `WorldCore.views_of`)
         self.batch = setting.views_compute() if compute is None and self.planner is None else None
+        # an algorithm without either: each robot's own compute on its row of the round's views,
+        # built at once where the world can, its moves handed over as arrays where they allow
+        # (`_act_each`); a luminous one goes per robot (its colours)
+        self.each = (
+            compute is None and self.planner is None and self.batch is None and not setting.luminous
+        )
         self.flips = [self.readout.frame(robot, 0).mirror for robot in range(setup.n)]
 
     def steps(self, scheduler: Scheduler) -> Generator[None, None, Finished]:
@@ -505,7 +514,7 @@ class _Bus:
         lookers = world.lookers(active)
         if self.planner is not None:
             planned = self.planner.paths(self.readout.positions, active, self.flips)
-        elif self.batch is not None and self._act_at_once(round_no, lookers):
+        elif self._acted_at_once(round_no, lookers):
             return
         else:
             world.prepare_looks(lookers)
@@ -513,20 +522,30 @@ class _Bus:
             if planned is not None:
                 if not world.admit_look(robot):
                     continue
-                decided: tuple[Path, int | None] | str = (planned[robot], None)
+                decided: Decided = (planned[robot], None)
             else:
                 seen = world.view_of(robot)  # what its snapshot would carry
                 if seen is None:
                     continue
                 decided = self._computed(seen)
             self.looks += 1
-            move = (
-                decided if isinstance(decided, str) else self._delivered(robot, round_no, *decided)
-            )
-            if isinstance(move, str):  # its compute raised: it stays and says why, as an agent
-                world.hold(robot, round_no, Path(), None, move)
-            elif move is not None:  # else as a move the world refuses: it times out
-                world.hold(robot, round_no, *move)
+            self._hand_over(robot, round_no, decided)
+
+    def _acted_at_once(self, round_no: int, lookers: Sequence[int]) -> bool:
+        """Whether the round was acted with its views built at once: through the round hook, or
+        each robot's compute on its row of them."""
+        if self.batch is not None:
+            return self._act_at_once(round_no, lookers)
+        return self.each and self._act_each(round_no, lookers)
+
+    def _hand_over(self, robot: int, round_no: int, decided: Decided) -> None:
+        """Robot `robot`'s decision (its path and colour, or why its compute failed) to the world
+        as its agent's move would reach it (`_delivered`)."""
+        move = decided if isinstance(decided, str) else self._delivered(robot, round_no, *decided)
+        if isinstance(move, str):  # its compute raised: it stays and says why, as an agent
+            self.world.hold(robot, round_no, Path(), None, move)
+        elif move is not None:  # else as a move the world refuses: it times out
+            self.world.hold(robot, round_no, *move)
 
     def _act_at_once(self, round_no: int, lookers: Sequence[int]) -> bool:
         """`_act` through the round hook: the lookers' views as one array, their paths in one
@@ -557,19 +576,39 @@ class _Bus:
                 raise TypeError(f"compute_views gave {len(paths)} paths for {len(lookers)} views")
         except Exception:  # each robot's own compute then says what it says alone
             paths = [None] * len(lookers)
-        hold, deliver = world.hold, self._delivered
         for robot, ok, view, path in zip(lookers, admitted, views, paths, strict=True):
             if not ok:
                 continue
-            decided: tuple[Path, int | None] | str = (
+            decided: Decided = (
                 (path, None) if type(path) is Path else self._computed((view, None, None))
             )
             self.looks += 1
-            move = decided if isinstance(decided, str) else deliver(robot, round_no, *decided)
-            if isinstance(move, str):  # its compute raised: it stays and says why, as an agent
-                hold(robot, round_no, Path(), None, move)
-            elif move is not None:  # else as a move the world refuses: it times out
-                hold(robot, round_no, *move)
+            self._hand_over(robot, round_no, decided)
+        return True
+
+    def _act_each(self, round_no: int, lookers: Sequence[int]) -> bool:
+        """`_act` for an algorithm without a round hook where the world builds the round's views
+        at once: each looker's own compute on its row of them (the very view `view_of` gives),
+        in turn; their moves handed over as arrays (`_straight`) where every one is a straight
+        line or a stay of floats without a colour, else each as `_act` hands it over; False
+        (nothing done) where the world cannot build the views at once."""
+        world = self.world
+        views = world.views_of(lookers)
+        if views is None:
+            return False
+        admitted = world.admit_looks(lookers)
+        computed = self._computed
+        decided = [
+            computed((view, None, None)) if ok else None
+            for ok, view in zip(admitted, views, strict=True)
+        ]
+        lines = straight_lines(decided)
+        if lines is not None and self._straight(round_no, lookers, admitted, lines):
+            return True
+        for robot, each in zip(lookers, decided, strict=True):
+            if each is not None:  # (None: its Look was refused, counted)
+                self.looks += 1
+                self._hand_over(robot, round_no, each)
         return True
 
     def _straight(
@@ -608,7 +647,7 @@ class _Bus:
         self.world.hold_lines(robots, round_no, ends, None if every else goes)
         return True
 
-    def _computed(self, seen: Seen) -> tuple[Path, int | None] | str:
+    def _computed(self, seen: Seen) -> Decided:
         """The robot's path in its frame and next colour, or why its compute failed (raised, or
         returned something that is not a path: `failure_text`), as its agent would send it."""
         try:
@@ -654,6 +693,45 @@ class _Bus:
             for committed in perform(effects, self.record):
                 if self.on_round is not None:
                     self.on_round(committed)
+
+
+def straight_lines(decided: Sequence[Decided | None]) -> StraightMoves | None:
+    """The decisions as StraightMoves, row i decided[i]'s, where every one is a straight line or a
+    stay in its robot's frame, of Python floats, with no colour (None, a robot whose Look was
+    refused: a stay nobody reads); None where any is not (a failure, a colour, an arc, several
+    pieces, another type of path, point or number): those go robot by robot."""
+    ends: list[float] = []
+    goes: list[bool] = []
+    for each in decided:
+        if each is None:
+            ends += _NOWHERE
+            goes.append(False)
+            continue
+        if type(each) is not tuple:  # why its compute failed
+            return None
+        path, colour = each
+        if colour is not None or type(path) is not Path or type(path.segments) is not tuple:
+            return None
+        if not path.segments:  # a stay
+            ends += _NOWHERE
+            goes.append(False)
+            continue
+        if len(path.segments) != 1 or type(path.segments[0]) is not Line:
+            return None
+        end = path.segments[0].end
+        if not (type(end) is tuple and len(end) == 2):
+            return None
+        x, y = end
+        if not (type(x) is float and type(y) is float):
+            return None
+        ends += end
+        goes.append(True)
+    return StraightMoves(
+        np.array(ends, dtype=np.float64).reshape(len(goes), 2), np.array(goes, dtype=np.bool_)
+    )
+
+
+_NOWHERE: Final = (0.0, 0.0)  # `straight_lines`' end of a stay (read by nobody)
 
 
 def plain_path(path: Path) -> bool:
