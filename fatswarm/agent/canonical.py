@@ -152,13 +152,25 @@ class SharedForm:
         """Bytes equal for exactly the configurations with equal canonical points."""
         return self.form.points.tobytes()
 
+    def observer(self, robot: int, flip: bool) -> int:
+        """`for_robot(robot, flip).observer`, without the rest: where robot `robot` sits in the
+        canonical form it makes."""
+        rank = self.rank_up if self._sign(flip) > 0.0 else self.rank_down
+        return int(rank[robot])
+
+    def _sign(self, flip: bool) -> float:
+        """Which world order the image taken by a robot with this `flip` lists the robots in (+1:
+        up): the world's image, or, in a mirror-symmetric swarm, the one 'up' in its own frame."""
+        form = self.form
+        if form.symmetric:
+            return -1.0 if flip else 1.0
+        return form.sign
+
     def for_robot(self, robot: int, flip: bool) -> Canonical:
         """What `canonical` gives robot `robot` on its own view in its own frame."""
         f = -1.0 if flip else 1.0
         form = self.form
-        # The image the robot takes: the world's, or, in a mirror-symmetric swarm, the one that
-        # is 'up' in its own frame. `sign` says which world order that image lists the robots in.
-        sign = f if form.symmetric else form.sign
+        sign = self._sign(flip)
         order, rank = (form.up, self.rank_up) if sign > 0.0 else (form.down, self.rank_down)
         ref = int(order[0])
         # The reference robot in the robot's own (snapped) view, as `canonical` reads it there.

@@ -57,11 +57,14 @@ class SharedPlans:
         if not len(robots):
             return {}
         form = SharedForm.of(positions)
-        made = self.plan_of(form)
+        moves = self.plan_of(form).moves
         out: dict[int, Path] = {}
         for robot in robots:
-            canon = form.for_robot(robot, flips[robot])
-            out[robot] = canon.to_frame(made.moves.get(canon.observer, STAY))
+            # a robot the plan does not move stays, in any frame: its way in is not needed
+            path = moves.get(form.observer(robot, flips[robot]))
+            out[robot] = (
+                STAY if path is None else form.for_robot(robot, flips[robot]).to_frame(path)
+            )
         return out
 
 

@@ -189,3 +189,4 @@ def test_the_shared_form_gives_every_robot_its_own_canonical_form(
             own.mirror_symmetric,
         )
         assert np.array(mine.offset).tobytes() == np.array(own.offset).tobytes()
+        assert shared.observer(robot, flip) == own.observer  # the shortcut for robots that stay

@@ -157,3 +157,31 @@ def test_straight_lines_takes_lines_and_stays_of_floats_only() -> None:
     ]
     for each in refused:
         assert straight_lines([line, each]) is None, each
+
+
+@pytest.mark.parametrize("scheduler", ["fsync", "ssync", "centralized", "async"])
+@pytest.mark.parametrize("start", ["spread", "clumped"])
+def test_the_papers_shared_plans_go_as_arrays_with_the_records_of_robot_by_robot(
+    tmp_path: FsPath, monkeypatch: pytest.MonkeyPatch, scheduler: str, start: str
+) -> None:
+    """The paper's model (one shared plan a round): a round whose paths are straight lines or
+    stays goes to the world as arrays, with the record of each path handed over alone."""
+    went = 0
+    real = lockstep._Bus._straight
+
+    def counted(self: Any, *args: Any) -> bool:
+        nonlocal went
+        done = bool(real(self, *args))
+        went += done
+        return done
+
+    def record(name: str) -> bytes:
+        target = tmp_path / f"{name}.jsonl"
+        fatswarm.run(9, seed=5, start=start, scheduler=scheduler, max_rounds=80, record=target)
+        return target.read_bytes()
+
+    monkeypatch.setattr(lockstep._Bus, "_straight", counted)
+    arrays = record("arrays")
+    assert went > 0
+    monkeypatch.setattr(lockstep, "straight_lines", lambda decided: None)
+    assert record("alone") == arrays

@@ -509,27 +509,25 @@ class _Bus:
         """Every active robot's Look, Compute and Move; a move reaches the world one way only,
         through the wire codec (`_delivered`), as a networked agent's does."""
         world = self.world
-        planned = None
         # the others' Looks stay held (robots the async adversary crashed)
         lookers = world.lookers(active)
         if self.planner is not None:
             planned = self.planner.paths(self.readout.positions, active, self.flips)
-        elif self._acted_at_once(round_no, lookers):
+            admitted = world.admit_looks(lookers)
+            decided: list[Decided | None] = [
+                (planned[robot], None) if ok else None
+                for robot, ok in zip(lookers, admitted, strict=True)
+            ]
+            self._hand_over_round(round_no, lookers, admitted, decided)
             return
-        else:
-            world.prepare_looks(lookers)
+        if self._acted_at_once(round_no, lookers):
+            return
+        world.prepare_looks(lookers)
         for robot in lookers:
-            if planned is not None:
-                if not world.admit_look(robot):
-                    continue
-                decided: Decided = (planned[robot], None)
-            else:
-                seen = world.view_of(robot)  # what its snapshot would carry
-                if seen is None:
-                    continue
-                decided = self._computed(seen)
-            self.looks += 1
-            self._hand_over(robot, round_no, decided)
+            seen = world.view_of(robot)  # what its snapshot would carry
+            if seen is not None:
+                self.looks += 1
+                self._hand_over(robot, round_no, self._computed(seen))
 
     def _acted_at_once(self, round_no: int, lookers: Sequence[int]) -> bool:
         """Whether the round was acted with its views built at once: through the round hook, or
@@ -602,14 +600,26 @@ class _Bus:
             computed((view, None, None)) if ok else None
             for ok, view in zip(admitted, views, strict=True)
         ]
+        self._hand_over_round(round_no, lookers, admitted, decided)
+        return True
+
+    def _hand_over_round(
+        self,
+        round_no: int,
+        lookers: Sequence[int],
+        admitted: Sequence[bool],
+        decided: Sequence[Decided | None],
+    ) -> None:
+        """The lookers' decisions (None: its Look was refused, counted) to the world: as arrays
+        (`_straight`) where every one is a straight line or a stay (`straight_lines`), else each
+        as `_hand_over` gives it."""
         lines = straight_lines(decided)
         if lines is not None and self._straight(round_no, lookers, admitted, lines):
-            return True
+            return
         for robot, each in zip(lookers, decided, strict=True):
-            if each is not None:  # (None: its Look was refused, counted)
+            if each is not None:
                 self.looks += 1
                 self._hand_over(robot, round_no, each)
-        return True
 
     def _straight(
         self, round_no: int, lookers: Sequence[int], admitted: Sequence[bool], moves: StraightMoves
