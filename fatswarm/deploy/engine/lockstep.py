@@ -514,20 +514,20 @@ class _Bus:
         if self.planner is not None:
             planned = self.planner.paths(self.readout.positions, active, self.flips)
             admitted = world.admit_looks(lookers)
-            decided: list[Decided | None] = [
+            planned_paths: list[Decided | None] = [
                 (planned[robot], None) if ok else None
                 for robot, ok in zip(lookers, admitted, strict=True)
             ]
-            self._hand_over_round(round_no, lookers, admitted, decided)
+            self._hand_over_round(round_no, lookers, admitted, planned_paths)
             return
         if self._acted_at_once(round_no, lookers):
             return
         world.prepare_looks(lookers)
+        decided: list[Decided | None] = []
         for robot in lookers:
-            seen = world.view_of(robot)  # what its snapshot would carry
-            if seen is not None:
-                self.looks += 1
-                self._hand_over(robot, round_no, self._computed(seen))
+            seen = world.view_of(robot)  # what its snapshot would carry (None: refused, counted)
+            decided.append(None if seen is None else self._computed(seen))
+        self._hand_over_round(round_no, lookers, [each is not None for each in decided], decided)
 
     def _acted_at_once(self, round_no: int, lookers: Sequence[int]) -> bool:
         """Whether the round was acted with its views built at once: through the round hook, or
