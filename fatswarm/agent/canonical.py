@@ -158,6 +158,11 @@ class SharedForm:
         rank = self.rank_up if self._sign(flip) > 0.0 else self.rank_down
         return int(rank[robot])
 
+    def robots_at(self, observer: int) -> set[int]:
+        """The robots that may sit at row `observer` of the canonical form they make: the one there
+        in either order (which one does, `observer` says by its flip)."""
+        return {int(self.form.up[observer]), int(self.form.down[observer])}
+
     def _sign(self, flip: bool) -> float:
         """Which world order the image taken by a robot with this `flip` lists the robots in (+1:
         up): the world's image, or, in a mirror-symmetric swarm, the one 'up' in its own frame."""

@@ -57,14 +57,12 @@ class SharedPlans:
         if not len(robots):
             return {}
         form = SharedForm.of(positions)
-        moves = self.plan_of(form).moves
-        out: dict[int, Path] = {}
-        for robot in robots:
-            # a robot the plan does not move stays, in any frame: its way in is not needed
-            path = moves.get(form.observer(robot, flips[robot]))
-            out[robot] = (
-                STAY if path is None else form.for_robot(robot, flips[robot]).to_frame(path)
-            )
+        out = dict.fromkeys(robots, STAY)  # a robot the plan does not move stays, in any frame
+        for observer, path in self.plan_of(form).moves.items():
+            for robot in form.robots_at(observer):
+                flip = flips[robot] if robot in out else None
+                if flip is not None and form.observer(robot, flip) == observer:
+                    out[robot] = form.for_robot(robot, flip).to_frame(path)
         return out
 
 

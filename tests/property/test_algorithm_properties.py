@@ -190,3 +190,4 @@ def test_the_shared_form_gives_every_robot_its_own_canonical_form(
         )
         assert np.array(mine.offset).tobytes() == np.array(own.offset).tobytes()
         assert shared.observer(robot, flip) == own.observer  # the shortcut for robots that stay
+        assert robot in shared.robots_at(own.observer)  # and the way back from a mover's row
