@@ -42,6 +42,16 @@ RUNS = [
 ]
 
 
+ARRAYS_FROM = lockstep.ARRAYS_FROM  # the lock step's own, before the fixture below
+
+
+@pytest.fixture(autouse=True)
+def every_round_as_arrays(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Rounds of one looker as arrays too (the lock step gives those robot by robot, cheaper):
+    so that centralized and async rounds go the arrays' way here as well."""
+    monkeypatch.setattr(lockstep, "ARRAYS_FROM", 1)
+
+
 def robot_by_robot(monkeypatch: pytest.MonkeyPatch) -> None:
     """The lock step as before `_act_each` and `straight_lines`: every robot's Look, Compute and
     Move in turn."""
@@ -197,3 +207,23 @@ def test_the_papers_shared_plans_go_as_arrays_with_the_records_of_robot_by_robot
     assert went > 0
     monkeypatch.setattr(lockstep, "straight_lines", lambda decided: None)
     assert record("alone") == arrays
+
+
+def test_a_round_of_one_looker_goes_robot_by_robot(
+    tmp_path: FsPath, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Centralized rounds (one robot each) hand their move over as a Path: cheaper than arrays."""
+    monkeypatch.setattr(lockstep, "ARRAYS_FROM", ARRAYS_FROM)
+    went = []
+    real = lockstep._Bus._straight
+
+    def counted(self: Any, round_no: int, lookers: Any, *args: Any) -> bool:
+        went.append(len(lookers))
+        return bool(real(self, round_no, lookers, *args))
+
+    monkeypatch.setattr(lockstep._Bus, "_straight", counted)
+    kw = {"scheduler": "centralized", "frames": "both-axes", "bodies": "points"}
+    record_of(tmp_path, "centralized", "oblot-go-to-rightmost", 0, kw)
+    assert went == []
+    record_of(tmp_path, "fsync", "oblot-go-to-rightmost", 0, {**kw, "scheduler": "fsync"})
+    assert went and min(went) >= ARRAYS_FROM
