@@ -59,6 +59,21 @@ def robot_by_robot(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(lockstep, "straight_lines", lambda decided: None)
 
 
+def arrays_taken(monkeypatch: pytest.MonkeyPatch) -> list[int]:
+    """Have `_straight` note, in the list returned, the lookers of each round it takes as arrays."""
+    taken: list[int] = []
+    real = lockstep._Bus._straight
+
+    def noted(self: Any, round_no: int, lookers: Any, *args: Any) -> bool:
+        done = bool(real(self, round_no, lookers, *args))
+        if done:
+            taken.append(len(lookers))
+        return done
+
+    monkeypatch.setattr(lockstep._Bus, "_straight", noted)
+    return taken
+
+
 def record_of(tmp_path: FsPath, name: str, algorithm: Any, seed: int, kw: dict[str, Any]) -> bytes:
     target = tmp_path / f"{name}.jsonl"
     kw = {"max_rounds": 30, **kw}
@@ -75,19 +90,10 @@ def test_a_record_is_the_same_with_a_round_at_once_and_robot_by_robot(
     kw: dict[str, Any],
     seed: int,
 ) -> None:
-    went = 0
-    real = lockstep._Bus._straight
-
-    def counted(self: Any, *args: Any) -> bool:
-        nonlocal went
-        done = bool(real(self, *args))
-        went += done
-        return done
-
-    monkeypatch.setattr(lockstep._Bus, "_straight", counted)
+    taken = arrays_taken(monkeypatch)
     at_once = record_of(tmp_path, "at-once", algorithm, seed, kw)
     if algorithm not in ("oblot-move-along-sec", "uniform-circle-lights"):  # arcs, colours
-        assert went > 0  # some rounds went as arrays
+        assert taken  # some rounds went as arrays
     robot_by_robot(monkeypatch)
     assert record_of(tmp_path, "alone", algorithm, seed, kw) == at_once
 
@@ -143,17 +149,9 @@ def test_a_wild_algorithms_record_is_the_same_with_views_at_once_and_robot_by_ro
             )
         return target.read_bytes()
 
-    kinds = {True: 0, False: 0}  # rounds handed over as arrays, and robot by robot
-    real = lockstep._Bus._straight
-
-    def counted(self: Any, *args: Any) -> bool:
-        went = real(self, *args)
-        kinds[went] += 1
-        return bool(went)
-
-    monkeypatch.setattr(lockstep._Bus, "_straight", counted)
+    taken = arrays_taken(monkeypatch)
     at_once = record("at-once")
-    assert kinds[True] > 0  # some rounds as arrays
+    assert taken  # some rounds as arrays
     assert b"timed_out" in at_once or b"boom" in at_once  # and wild answers were met
     robot_by_robot(monkeypatch)
     assert record("alone") == at_once
@@ -188,23 +186,15 @@ def test_the_papers_shared_plans_go_as_arrays_with_the_records_of_robot_by_robot
 ) -> None:
     """The paper's model (one shared plan a round): a round whose paths are straight lines or
     stays goes to the world as arrays, with the record of each path handed over alone."""
-    went = 0
-    real = lockstep._Bus._straight
-
-    def counted(self: Any, *args: Any) -> bool:
-        nonlocal went
-        done = bool(real(self, *args))
-        went += done
-        return done
 
     def record(name: str) -> bytes:
         target = tmp_path / f"{name}.jsonl"
         fatswarm.run(9, seed=5, start=start, scheduler=scheduler, max_rounds=80, record=target)
         return target.read_bytes()
 
-    monkeypatch.setattr(lockstep._Bus, "_straight", counted)
+    taken = arrays_taken(monkeypatch)
     arrays = record("arrays")
-    assert went > 0
+    assert taken
     monkeypatch.setattr(lockstep, "straight_lines", lambda decided: None)
     assert record("alone") == arrays
 
@@ -214,16 +204,9 @@ def test_a_round_of_one_looker_goes_robot_by_robot(
 ) -> None:
     """Centralized rounds (one robot each) hand their move over as a Path: cheaper than arrays."""
     monkeypatch.setattr(lockstep, "ARRAYS_FROM", ARRAYS_FROM)
-    went = []
-    real = lockstep._Bus._straight
-
-    def counted(self: Any, round_no: int, lookers: Any, *args: Any) -> bool:
-        went.append(len(lookers))
-        return bool(real(self, round_no, lookers, *args))
-
-    monkeypatch.setattr(lockstep._Bus, "_straight", counted)
+    taken = arrays_taken(monkeypatch)
     kw = {"scheduler": "centralized", "frames": "both-axes", "bodies": "points"}
     record_of(tmp_path, "centralized", "oblot-go-to-rightmost", 0, kw)
-    assert went == []
+    assert taken == []
     record_of(tmp_path, "fsync", "oblot-go-to-rightmost", 0, {**kw, "scheduler": "fsync"})
-    assert went and min(went) >= ARRAYS_FROM
+    assert taken and min(taken) >= ARRAYS_FROM
