@@ -485,7 +485,8 @@ RAW_LOG_LINE = re.compile(r"^\d{4}-\d\d-\d\d \d\d:\d\d:\d\d,\d+ fatswarm\.", re.
 def test_an_async_runs_progress_lines_count_ended_cycles_as_its_record_and_summary(
     tmp_path: Path,
 ) -> None:
-    # async-slowest, n = 8, seed 1: 244 ended cycles in 202 of the coordinator's instants
+    # async-slowest, n = 8, seed 1: 244 ended cycles in 202 of the coordinator's instants, each
+    # the lock step's (the default run's networked async-slowest record against the lock step)
     record = tmp_path / "net.jsonl"
     flags = ["-n", "8", "--seed", "1", "--scheduler", "async-slowest", "--no-dashboard"]
     code, out = _fatswarm_run([*flags, "--pace", "0", "--record", str(record)])
@@ -501,6 +502,7 @@ def test_an_async_runs_progress_lines_count_ended_cycles_as_its_record_and_summa
     outcome = f"FORMED: uniform-circle goal reached by 8 robots after {cycles} cycles, 0 collisions"
     assert outcome in lines, out
     assert f"formed in {cycles} cycles, collision-free" in lines, out  # the summary's words
+    assert_same_run(net, lockstep_record(tmp_path / "lock.jsonl", 8, 1, "async-slowest"))
 
 
 def test_a_robot_dead_for_good_counts_as_crashed_and_the_run_ends(
@@ -603,11 +605,14 @@ def test_a_crash_run_records_the_lockstep_run_with_the_same_crashes(tmp_path: Pa
     assert_same_run(net, read_record(str(lock)))
 
 
+# The plain async and async-slowest runs only in the slow run: the default run pins async instant
+# by instant with crashes and non-rigid cuts (below), plain async across restarts
+# (test_async_restarts.py) and async-slowest in the progress-lines test below.
 @pytest.mark.parametrize(
     ("scheduler", "flags"),
     [
-        ("async", []),
-        ("async-slowest", []),
+        pytest.param("async", [], marks=pytest.mark.slow),
+        pytest.param("async-slowest", [], marks=pytest.mark.slow),
         ("async", ["--crash", "1", "--non-rigid", "0.5"]),
     ],
 )
