@@ -17,8 +17,8 @@ from fatswarm.world import motion, physics
 from fatswarm.world.motion import IntArray, Motion, build_motion
 from fatswarm.world.physics import BOX_MARGIN, BRUTE_PAIRS, SNAP_FEW, _candidate_pairs, _snap_movers
 
-# Examples: 150 reach every line and branch of world/physics.py and world/motion.py that 300 did
-# (measured with coverage --branch, the derandomized draws), in half the time.
+# Examples: 150 reach every line and branch of fatswarm that 300 did (coverage --branch of this
+# file's derandomized draws, measured), in half the time.
 
 _CORNERS = np.array([[0, 0], [0, 1], [1, 0], [1, 1]], dtype=np.float64)
 

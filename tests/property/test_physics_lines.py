@@ -26,9 +26,6 @@ from fatswarm.world.physics import (
     apply_round,
 )
 
-# Examples: 150 reach every line and branch of world/physics.py (and domain/path.py, tolerance.py)
-# that 300 did (measured with coverage --branch, the derandomized draws), in two thirds the time.
-
 CORNERS = np.array([[0, 0], [0, 1], [1, 0], [1, 1]], dtype=np.float64)  # _snap_one's order
 STEPS = (0.0, 1e-9, 1e-4, 0.3, 1.0, 2.5, 6.0)  # lengths of moves: none, tiny, small, contacts
 
@@ -77,7 +74,7 @@ def as_paths(movers: np.ndarray, ends: np.ndarray, kind: type = float) -> Mappin
     }
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=300, deadline=None)
 @given(line_rounds())
 def test_apply_lines_gives_apply_rounds_bits(case: tuple[Any, ...]) -> None:
     start, movers, ends, points = case
@@ -85,7 +82,7 @@ def test_apply_lines_gives_apply_rounds_bits(case: tuple[Any, ...]) -> None:
     assert bits(lambda: apply_lines(start, movers, ends, points=points)) == by_paths
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=300, deadline=None)
 @given(line_rounds())
 def test_single_lines_give_the_general_paths_bits(case: tuple[Any, ...]) -> None:
     """Ends as numpy floats take apply_round's general path (segment tables), the same values."""
