@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 from netharness import Swarm, assert_same_run, lockstep_record
 
+from fatswarm.deploy import cli
 from fatswarm.world.record_read import read_record
 
 pytestmark = pytest.mark.integration
@@ -61,17 +62,21 @@ RESUMED = {
 def test_run_resume_continues_a_cut_async_record_networked_and_in_lock_step_byte_for_byte(
     tmp_path: Path, model: str
 ) -> None:
+    # The lock-step runs in this process (cli.main); the networked resume is `fatswarm run`'s.
     whole = tmp_path / "whole.jsonl"
-    code, out = _fatswarm_run(["--lockstep", *RESUMED[model], "--record", str(whole), "-q"])
-    assert code in (0, 1), out
+    assert cli.main(["run", "--lockstep", *RESUMED[model], "--record", str(whole), "-q"]) in (0, 1)
     lines = whole.read_text().splitlines(keepends=True)
     k = len(lines) // 3
     for mode in ("networked", "lockstep"):
         cut = tmp_path / f"{mode}.jsonl"
         # the header and k - 1 cycles, and half of the next line: a crash while writing it
         cut.write_text("".join(lines[:k]) + lines[k][:40])
-        flags = ["--lockstep"] if mode == "lockstep" else ["--no-dashboard"]
-        code, out = _fatswarm_run([*flags, "--record", str(cut), "--resume", "-q"])
+        if mode == "lockstep":
+            code = cli.main(["run", "--lockstep", "--record", str(cut), "--resume", "-q"])
+            out = ""
+        else:
+            flags = ["--no-dashboard", "--record", str(cut), "--resume", "-q"]
+            code, out = _fatswarm_run(flags)
         assert code in (0, 1), out
         assert cut.read_bytes() == whole.read_bytes(), mode
 

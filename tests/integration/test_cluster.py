@@ -1,6 +1,8 @@
 """`fatswarm sweep` and `fatswarm hunt --cluster` on a real Dask LocalCluster (two worker
 processes on loopback, started and closed here): the same CSV rows (less the wall time) and the
-same hunt folders as one and two local worker processes; an unreachable address is one line."""
+same hunt folders as a local run of one worker (that two local workers give those of one is
+pinned by test_sweep_models_workers.py and test_hunt_workers.py); an unreachable address is one
+line."""
 
 from __future__ import annotations
 
@@ -70,34 +72,28 @@ def folders_of(out: Path) -> dict[str, dict[str, str]]:
     }
 
 
-def test_a_sweep_on_a_cluster_writes_the_rows_of_one_and_two_local_workers(
+def test_a_sweep_on_a_cluster_writes_the_rows_of_a_local_worker(
     scheduler: str, tmp_path: Path
 ) -> None:
     tables = {}
-    for where in (["--jobs", "1"], ["--jobs", "2"], ["--cluster", scheduler]):
+    for where in (["--jobs", "1"], ["--cluster", scheduler]):
         out = tmp_path / f"{where[1].replace('/', '_').replace(':', '_')}.csv"
         assert cli.main(["sweep", *SWEEP, *where, "--out", str(out)]) == 0
         tables[where[0] + where[1]] = rows_of(out)
     local = tables["--jobs1"]
     assert len(local) == 12
-    assert tables["--jobs2"] == local
     assert tables["--cluster" + scheduler] == local
 
 
-def test_a_hunt_on_a_cluster_saves_the_folders_of_one_and_two_local_workers(
+def test_a_hunt_on_a_cluster_saves_the_folders_of_a_local_worker(
     scheduler: str, tmp_path: Path
 ) -> None:
     saved = {}
-    for name, where in (
-        ("1", ["--jobs", "1"]),
-        ("2", ["--jobs", "2"]),
-        ("c", ["--cluster", scheduler]),
-    ):
+    for name, where in (("1", ["--jobs", "1"]), ("c", ["--cluster", scheduler])):
         out = tmp_path / f"hunt{name}"
         assert cli.main(["hunt", *HUNT, *where, "--out", str(out)]) == 1
         saved[name] = folders_of(out)
     assert len(saved["1"]) == 2
-    assert saved["2"] == saved["1"]
     assert saved["c"] == saved["1"]
 
 
@@ -148,7 +144,7 @@ def test_a_python_sweep_on_a_client_gives_the_rows_of_the_cli_and_leaves_it_open
 def test_an_unreachable_cluster_is_one_line_and_exit_2(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(executor, "CONNECT_S", 1.0)
+    monkeypatch.setattr(executor, "CONNECT_S", 0.2)  # nothing listens: refused however long
     address = "tcp://127.0.0.1:9"  # the discard port: nothing listens there
     out = tmp_path / "runs.csv"
     code = cli.main(["sweep", "-n", "4", "--seeds", "1", "--cluster", address, "--out", str(out)])

@@ -325,7 +325,7 @@ def test_fatswarm_run_shows_the_live_dashboard_and_leaves_the_final_frame_on_scr
     # second), which then never sees two states and cannot measure a rate.
     child = PtyProcess(
         [sys.executable, "-m", "fatswarm.deploy.cli", "run", "-n", "5", "--seed", "3",
-         "--scheduler", "fsync", "--max-rounds", "400", "--pace", "0.5", "--svg", str(svg)]
+         "--scheduler", "fsync", "--max-rounds", "400", "--pace", "0.3", "--svg", str(svg)]
     )  # fmt: skip
     try:
         deadline = time.monotonic() + 300  # a deadline, not a duration: a loaded CI host

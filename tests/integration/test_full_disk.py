@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 from netharness import assert_same_run
 
+from fatswarm.deploy import cli
 from fatswarm.world.record_read import read_record
 
 pytestmark = pytest.mark.integration
@@ -50,9 +51,10 @@ def _fatswarm(*argv: str, limit: int | None = None) -> subprocess.CompletedProce
 def test_a_full_disk_stops_the_run_with_one_line_and_resume_finishes_it_identically(
     tmp_path: Path,
 ) -> None:
+    # the uninterrupted run in this process (cli.main); the others are `fatswarm run` processes
     run = ["--lockstep", "-n", "8", "--seed", "3", "--scheduler", "ssync"]
     whole = tmp_path / "whole.jsonl"
-    assert _fatswarm(*run, "--record", str(whole)).returncode == 0
+    assert cli.main(["run", "-q", *run, "--record", str(whole)]) == 0
     cut = tmp_path / "cut.jsonl"
     stopped = _fatswarm(*run, "--record", str(cut), limit=whole.stat().st_size // 2)
     assert stopped.returncode == 4, stopped.stdout + stopped.stderr

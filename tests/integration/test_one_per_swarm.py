@@ -26,9 +26,11 @@ def _refusal(part_name: str, swarm: str) -> str:
     )
 
 
-def test_a_second_world_or_coordinator_on_a_swarm_is_refused_in_one_line(
+def test_a_second_world_coordinator_or_fatswarm_run_on_a_swarm_is_refused_in_one_line(
     tmp_path: Path, make_swarm: Callable[..., Swarm]
 ) -> None:
+    # One swarm in use for the four refusals, side by side: a second world (a new run, and the
+    # same command twice), a second coordinator, and `fatswarm run` on that swarm
     sw = make_swarm(4, SEED)
     sw.start_router()
     sw.observe()
@@ -40,50 +42,33 @@ def test_a_second_world_or_coordinator_on_a_swarm_is_refused_in_one_line(
     )
     state_before = sw.state_path.read_bytes()
     other_state = tmp_path / "second.jsonl"
-    world_new, world_same, coordinator = run_all(
+    record = tmp_path / "run.jsonl"
+    world_new, world_same, coordinator, run = run_all(
         part("world", *sw.world_flags(other_state)),  # a new run on the same swarm
         part("world", *sw.world_flags()),  # the same command twice (the same state file)
         part("coordinator", *sw.coordinator_flags(0.0)),
-    )
+        [
+            sys.executable, "-m", "fatswarm.deploy.cli", "run", "--connect", sw.endpoint,
+            "--swarm", sw.swarm, "--no-dashboard", "-n", "4", "--record", str(record),
+        ],
+    )  # fmt: skip
     assert_one_line(world_new, _refusal("world", sw.swarm))
     assert_one_line(world_same, _refusal("world", sw.swarm))
     assert_one_line(coordinator, _refusal("coordinator", sw.swarm))
+    # `fatswarm run` before anything: no seed line, no progress line of the other run, no
+    # refusal of each part: this one line
+    assert_one_line(run, _refusal("world", sw.swarm).replace("world", "run", 1))
+    assert run.stdout == ""
+    assert not record.exists()
     assert not other_state.exists()  # nothing visible: no state file created...
     assert sw.state_path.read_bytes() == state_before  # ...nor touched
     assert not sw.children.exited(), sw.logs()  # the first world and coordinator serve on
-    for robot in range(sw.n):
-        sw.start_agent(robot)
+    sw.start_agents()
     end = sw.wait_done()  # and run as if nothing had happened
     assert end.status == "formed" and end.collisions_total == 0, sw.logs()
     assert_same_run(
         read_record(sw.state_path), lockstep_record(tmp_path / "lock.jsonl", sw.n, SEED)
     )
-
-
-def test_fatswarm_run_on_a_swarm_in_use_is_refused_in_one_line_before_anything(
-    tmp_path: Path, make_swarm: Callable[..., Swarm]
-) -> None:
-    sw = make_swarm(4, SEED)
-    sw.start_router()
-    sw.observe()
-    sw.start_world()
-    sw.start_coordinator(pace=0.0)  # no agents: both stay up, the world publishing its state
-    sw.wait_for(
-        "the world's and the coordinator's tokens",
-        lambda: sw.live(world_alive_key(sw.swarm)) and sw.live(coordinator_alive_key(sw.swarm)),
-    )
-    record = tmp_path / "second.jsonl"
-    (done,) = run_all(
-        [
-            sys.executable, "-m", "fatswarm.deploy.cli", "run", "--connect", sw.endpoint,
-            "--swarm", sw.swarm, "--no-dashboard", "-n", "4", "--record", str(record),
-        ]
-    )  # fmt: skip
-    # no seed line, no progress line of the other run, no refusal of each part: this one line
-    assert_one_line(done, _refusal("world", sw.swarm).replace("world", "run", 1))
-    assert done.stdout == ""
-    assert not record.exists()
-    assert not sw.children.exited(), sw.logs()  # the swarm in use goes on
 
 
 def test_a_second_swarm_on_the_same_router_runs_alongside_unmixed(

@@ -37,6 +37,9 @@ from fatswarm.world.progress import (
 from fatswarm.world.record import LineMoves
 from fatswarm.world.setup import WorldSetup
 
+# Examples: 250 and 200 reach every line and branch of fatswarm that 500 and 400 did (coverage
+# --branch of this file's derandomized draws, measured), in three quarters of the time.
+
 ODD = (-0.0, 0.0, 1e-300, 5e-324, 1e16, -1e16, 1e308, -1e308, 3.0, -7.0, 2.0**60)
 FLOATS = st.one_of(st.sampled_from(ODD), st.floats(allow_nan=False, allow_infinity=False))
 ANY_FLOATS = st.one_of(FLOATS, st.sampled_from([math.nan, -math.nan, math.inf, -math.inf]))
@@ -47,7 +50,7 @@ def bits(values: Any) -> list[int]:
     return [struct.unpack("<q", struct.pack("<d", v))[0] for v in values]
 
 
-@settings(max_examples=400, deadline=None)
+@settings(max_examples=200, deadline=None)
 @given(
     st.integers(2, FEW_UP_TO).flatmap(
         lambda n: st.lists(st.tuples(ANY_FLOATS, ANY_FLOATS), min_size=n, max_size=n)
@@ -89,7 +92,7 @@ SHIFTS = st.one_of(
 )
 
 
-@settings(max_examples=500, deadline=None)
+@settings(max_examples=250, deadline=None)
 @given(st.data())
 def test_a_few_shifts_read_in_python_answer_as_numpy(data: st.DataObject) -> None:
     """Up to FEW_SHIFTS robots (and one more, numpy's alone), shifts about half the tolerance and

@@ -17,6 +17,9 @@ from fatswarm.world import motion, physics
 from fatswarm.world.motion import IntArray, Motion, build_motion
 from fatswarm.world.physics import BOX_MARGIN, BRUTE_PAIRS, SNAP_FEW, _candidate_pairs, _snap_movers
 
+# Examples: 150 reach every line and branch of fatswarm that 300 did (coverage --branch of this
+# file's derandomized draws, measured), in half the time.
+
 _CORNERS = np.array([[0, 0], [0, 1], [1, 0], [1, 1]], dtype=np.float64)
 
 
@@ -91,7 +94,7 @@ LIMITS = pytest.mark.parametrize("limit", [0, BRUTE_PAIRS], ids=["sweep", "every
 
 
 @LIMITS
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=150, deadline=None)
 @given(case=swarms())
 def test_candidate_pairs_are_the_brute_force_ones_in_its_order(
     limit: int, case: tuple[np.ndarray, dict[int, Path], list[int]]
@@ -107,7 +110,7 @@ def test_candidate_pairs_are_the_brute_force_ones_in_its_order(
 
 
 @LIMITS
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=150, deadline=None)
 @given(case=swarms(), nudge=st.floats(-2e-9, 2e-9, allow_nan=False))
 def test_snap_is_the_brute_force_snap(
     limit: int, case: tuple[np.ndarray, dict[int, Path], list[int]], nudge: float
