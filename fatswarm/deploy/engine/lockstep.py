@@ -551,8 +551,8 @@ class _Bus:
 
     def _act_at_once(self, round_no: int, lookers: Sequence[int]) -> bool:
         """`_act` through the round hook: the lookers' views as one array, their paths in one
-        call, each delivered and held as `_act` does one robot's; False (nothing done) where the
-        world cannot build the views at once. A hook that raises, or gives something that is
+        call, handed over as `_act` hands a round (`_hand_over_round`); False (nothing done) where
+        the world cannot build the views at once. A hook that raises, or gives something that is
         not a Path for a robot, has that robot's own compute say why (its failure, as alone)."""
         assert self.batch is not None
         world = self.world
@@ -578,14 +578,15 @@ class _Bus:
                 raise TypeError(f"compute_views gave {len(paths)} paths for {len(lookers)} views")
         except Exception:  # each robot's own compute then says what it says alone
             paths = [None] * len(lookers)
-        for robot, ok, view, path in zip(lookers, admitted, views, paths, strict=True):
+        decided: list[Decided | None] = []
+        for ok, view, path in zip(admitted, views, paths, strict=True):
             if not ok:
-                continue
-            decided: Decided = (
-                (path, None) if type(path) is Path else self._computed((view, None, None))
-            )
-            self.looks += 1
-            self._hand_over(robot, round_no, decided)
+                decided.append(None)  # its Look was refused, counted
+            elif type(path) is Path:
+                decided.append((path, None))
+            else:  # the hook gave it no path: its own compute says what it says alone
+                decided.append(self._computed((view, None, None)))
+        self._hand_over_round(round_no, lookers, admitted, decided)
         return True
 
     def _act_each(self, round_no: int, lookers: Sequence[int]) -> bool:
