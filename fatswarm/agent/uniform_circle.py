@@ -60,9 +60,8 @@ class SharedPlans:
         out = dict.fromkeys(robots, STAY)  # a robot the plan does not move stays, in any frame
         for observer, path in self.plan_of(form).moves.items():
             for robot in form.robots_at(observer):
-                flip = flips[robot] if robot in out else None
-                if flip is not None and form.observer(robot, flip) == observer:
-                    out[robot] = form.for_robot(robot, flip).to_frame(path)
+                if robot in out and form.observer(robot, flips[robot]) == observer:
+                    out[robot] = form.for_robot(robot, flips[robot]).to_frame(path)
         return out
 
 
